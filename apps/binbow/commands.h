@@ -1,0 +1,11 @@
+// Each subcommand lives in its own file and registers itself on the app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace binbow::cli {
+
+void add_info_command(CLI::App& app);
+void add_build_vocab_command(CLI::App& app);
+
+}  // namespace binbow::cli

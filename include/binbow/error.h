@@ -1,0 +1,39 @@
+// Exceptions thrown by binbow. Every error derives from binbow::Error, so one
+// catch clause is enough; the subclasses let callers react to the cause.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace binbow {
+
+// Base of every exception binbow throws.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A caller passed an argument that cannot be used (wrong descriptor length,
+// unknown entry id, zero branching factor, ...). The message names the argument.
+class InvalidArgument : public Error {
+ public:
+  using Error::Error;
+};
+
+// A file could not be opened, read or written, or its content is not valid for
+// the format it claims (truncated, corrupted, unsupported version, ...).
+// what() is "<path>: <problem>"; both parts are also available separately.
+class FileError : public Error {
+ public:
+  FileError(std::string path, std::string problem)
+      : Error(path + ": " + problem), path_(std::move(path)), problem_(std::move(problem)) {}
+
+  const std::string& path() const noexcept { return path_; }
+  const std::string& problem() const noexcept { return problem_; }
+
+ private:
+  std::string path_;
+  std::string problem_;
+};
+
+}  // namespace binbow

@@ -1,0 +1,90 @@
+#include "support/test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <sys/wait.h>
+
+namespace binbow::test {
+
+namespace fs = std::filesystem;
+
+std::string shared_data(const std::string& relative) {
+  const std::string path = std::string(BINBOW_SHARED_DATA_DIR) + "/" + relative;
+  if (!fs::exists(path)) {
+    ADD_FAILURE() << "missing test data: " << path
+                  << "\n  The tests need the real data folder ../shared/data beside the checkout"
+                  << " (or -DBINBOW_SHARED_DATA_DIR=...); see README.md, section Tests.";
+    throw std::runtime_error("missing test data: " + path);
+  }
+  return path;
+}
+
+std::string source_path(const std::string& relative) {
+  return std::string(BINBOW_SOURCE_DIR) + "/" + relative;
+}
+
+std::string cli_path() { return BINBOW_CLI; }
+
+TempDir::TempDir() {
+  std::string pattern = (fs::temp_directory_path() / "binbow-test-XXXXXX").string();
+  if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+  path_ = pattern;
+}
+
+TempDir::~TempDir() {
+  std::error_code ignored;
+  fs::remove_all(path_, ignored);
+}
+
+DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size, std::mt19937_64& rng) {
+  DescriptorMatrix m(rows, code_size);
+  for (std::size_t i = 0; i < rows * code_size; ++i) m.data()[i] = static_cast<std::uint8_t>(rng());
+  return m;
+}
+
+DescriptorMatrix clustered_descriptors(std::size_t rows, std::size_t code_size,
+                                       std::size_t centers, double noise, std::mt19937_64& rng) {
+  const DescriptorMatrix c = random_descriptors(centers, code_size, rng);
+  DescriptorMatrix m(rows, code_size);
+  std::bernoulli_distribution flip(noise);
+  for (std::size_t r = 0; r < rows; ++r) {
+    const std::uint8_t* center = c.row(rng() % centers);
+    for (std::size_t b = 0; b < code_size; ++b) {
+      std::uint8_t v = center[b];
+      for (int bit = 0; bit < 8; ++bit)
+        if (flip(rng)) v ^= static_cast<std::uint8_t>(1u << bit);
+      m.row(r)[b] = v;
+    }
+  }
+  return m;
+}
+
+std::vector<std::uint8_t> read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_file(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+int run_command(const std::string& command, std::string* output) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return -1;
+  std::string text;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) text.append(buffer, n);
+  const int status = pclose(pipe);
+  if (output != nullptr) *output = text;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace binbow::test

@@ -1,0 +1,50 @@
+// Helpers shared by the test executables: where real data lives, temporary
+// directories, random descriptors.
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/descriptors.h"
+
+namespace binbow::test {
+
+// Path of a file under ../shared/data (see its README). Fails the current test
+// with a clear message, and throws to stop it, when the file is missing.
+std::string shared_data(const std::string& relative);
+// Path of a file in the repository (e.g. "data/...").
+std::string source_path(const std::string& relative);
+// Path of the binbow CLI built beside the tests.
+std::string cli_path();
+
+// A fresh empty directory, removed when the object dies.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::string& path() const { return path_; }
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+// `rows` uniformly random descriptors of `code_size` bytes.
+DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size, std::mt19937_64& rng);
+// Descriptors clustered around `centers` random centres, each bit flipped
+// with probability `noise`: data with real structure for k-medians.
+DescriptorMatrix clustered_descriptors(std::size_t rows, std::size_t code_size,
+                                       std::size_t centers, double noise, std::mt19937_64& rng);
+
+// Reads a whole file; empty vector if missing.
+std::vector<std::uint8_t> read_file(const std::string& path);
+void write_file(const std::string& path, const std::vector<std::uint8_t>& bytes);
+
+// Runs a shell command, returns its exit status; stdout+stderr go to `output`.
+int run_command(const std::string& command, std::string* output);
+
+}  // namespace binbow::test
