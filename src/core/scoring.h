@@ -1,0 +1,66 @@
+// DBoW2's six scores written as a sum over the words two BoW vectors share,
+// so that the same arithmetic serves a pairwise score and an inverted-index
+// query (which only ever sees shared words).
+//
+//   score(q, e) = finish(Σ_{shared words} term(q_i, e_i), base(q))
+//
+// base(q) is 0 except for KL, whose sum also runs over the query's words that
+// the entry lacks (DBoW2 charges them v·(log v − log ε)).
+#pragma once
+
+#include <cfloat>
+#include <cmath>
+
+#include "binbow/bow_vector.h"
+#include "binbow/types.h"
+
+namespace binbow::detail {
+
+inline const double kLogEpsilon = std::log(DBL_EPSILON);
+
+inline double kl_missing_term(double v) { return v * (std::log(v) - kLogEpsilon); }
+
+inline double score_term(Scoring scoring, double v, double w) {
+  switch (scoring) {
+    case Scoring::kL1:
+      return std::fabs(v - w) - std::fabs(v) - std::fabs(w);
+    case Scoring::kL2:
+    case Scoring::kDotProduct:
+      return v * w;
+    case Scoring::kChiSquare:
+      return v + w != 0.0 ? v * w / (v + w) : 0.0;
+    case Scoring::kKL:
+      return v != 0.0 && w != 0.0 ? v * std::log(v / w) - kl_missing_term(v) : 0.0;
+    case Scoring::kBhattacharyya:
+      return std::sqrt(v * w);
+  }
+  return 0.0;
+}
+
+// Query-only part of the score (non-zero for KL only).
+inline double score_base(Scoring scoring, const BowVector& query) {
+  if (scoring != Scoring::kKL) return 0.0;
+  double base = 0.0;
+  for (const BowEntry& e : query)
+    if (e.value != 0.0f) base += kl_missing_term(e.value);
+  return base;
+}
+
+inline double finish_score(Scoring scoring, double shared_sum, double base) {
+  switch (scoring) {
+    case Scoring::kL1:
+      return -shared_sum / 2.0;
+    case Scoring::kL2:
+      return shared_sum >= 1.0 ? 1.0 : 1.0 - std::sqrt(1.0 - shared_sum);
+    case Scoring::kChiSquare:
+      return 2.0 * shared_sum;
+    case Scoring::kKL:
+      return base + shared_sum;
+    case Scoring::kBhattacharyya:
+    case Scoring::kDotProduct:
+      return shared_sum;
+  }
+  return shared_sum;
+}
+
+}  // namespace binbow::detail
