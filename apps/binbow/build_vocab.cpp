@@ -1,0 +1,200 @@
+// binbow build-vocab: train a vocabulary tree from images.
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/error.h"
+#include "binbow/formats.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "binbow/vocabulary.h"
+#include "commands.h"
+#include "progress.h"
+
+namespace binbow::cli {
+namespace {
+
+struct BuildVocabArguments {
+  std::string descriptor = "orb";
+  std::uint32_t branching = 10;
+  std::uint32_t levels = 6;
+  std::string weighting = "tf-idf";
+  std::string scoring = "l1";
+  unsigned threads = 0;
+  std::uint64_t seed = 0;
+  std::size_t max_descriptors = 0;
+  int features_per_image = 0;
+  std::string output;
+  std::vector<std::string> inputs;
+};
+
+// The descriptors of every image, one contiguous block; image i owns rows
+// [offsets[i], offsets[i + 1]).
+struct TrainingSet {
+  DescriptorMatrix descriptors;
+  std::vector<std::size_t> offsets{0};
+
+  std::size_t images() const { return offsets.size() - 1; }
+  std::vector<DescriptorView> views() const {
+    std::vector<DescriptorView> result;
+    result.reserve(images());
+    for (std::size_t i = 0; i < images(); ++i) {
+      result.push_back(descriptors.view().slice(offsets[i], offsets[i + 1] - offsets[i]));
+    }
+    return result;
+  }
+};
+
+TrainingSet extract_training_set(const BuildVocabArguments& arguments) {
+  const auto extractor = vision::make_extractor(arguments.descriptor, arguments.features_per_image);
+  vision::ImageSource source(arguments.inputs);
+  const long long known_size = source.size();
+  Progress progress("reading images", known_size > 0 ? static_cast<std::size_t>(known_size) : 0);
+  TrainingSet set;
+  set.descriptors = DescriptorMatrix(extractor->code_size());
+  vision::Frame frame;
+  while (source.next(frame)) {
+    const vision::Features features = extractor->extract(frame.image);
+    set.descriptors.append(features.descriptors.view());
+    set.offsets.push_back(set.descriptors.rows());
+    progress.update(set.images());
+  }
+  progress.finish();
+  if (set.images() == 0) throw InvalidArgument("build-vocab: no images found in the inputs");
+  if (set.descriptors.empty()) {
+    throw InvalidArgument("build-vocab: no features found in " + std::to_string(set.images()) +
+                          " images");
+  }
+  return set;
+}
+
+// Keeps `limit` descriptors chosen uniformly at random (seeded), in their
+// original order so every image keeps its own rows.
+TrainingSet subsample(const TrainingSet& set, std::size_t limit, std::uint64_t seed) {
+  const std::size_t total = set.descriptors.rows();
+  if (limit == 0 || limit >= total) return set;
+  std::vector<std::uint32_t> order(total);
+  std::iota(order.begin(), order.end(), 0u);
+  std::mt19937_64 rng(seed ^ 0x5eedf00dcafe1234ull);
+  // Partial Fisher–Yates with an explicit formula: std::shuffle and the
+  // standard distributions are not portable across standard libraries.
+  for (std::size_t i = 0; i < limit; ++i) {
+    const std::size_t j = i + static_cast<std::size_t>(rng() % (total - i));
+    std::swap(order[i], order[j]);
+  }
+  std::vector<bool> keep(total, false);
+  for (std::size_t i = 0; i < limit; ++i) keep[order[i]] = true;
+
+  TrainingSet result;
+  result.descriptors = DescriptorMatrix(set.descriptors.code_size());
+  result.descriptors.reserve(limit);
+  for (std::size_t image = 0; image < set.images(); ++image) {
+    for (std::size_t row = set.offsets[image]; row < set.offsets[image + 1]; ++row) {
+      if (keep[row]) result.descriptors.append(set.descriptors.row(row));
+    }
+    result.offsets.push_back(result.descriptors.rows());
+  }
+  return result;
+}
+
+double mean_quantisation_error(const Vocabulary& vocabulary, const DescriptorView& descriptors) {
+  std::vector<WordId> words(descriptors.rows);
+  vocabulary.quantize(descriptors, words.data());
+  const std::vector<NodeId> leaves = vocabulary.word_nodes();
+  double total = 0;
+  for (std::size_t i = 0; i < descriptors.rows; ++i) {
+    total += hamming_distance(descriptors.row(i), vocabulary.node_descriptor(leaves[words[i]]),
+                              descriptors.code_size);
+  }
+  return descriptors.rows == 0 ? 0.0 : total / static_cast<double>(descriptors.rows);
+}
+
+void run_build_vocab(const BuildVocabArguments& arguments) {
+  BuildOptions options;
+  options.branching = arguments.branching;
+  options.levels = arguments.levels;
+  options.weighting = parse_weighting(arguments.weighting);
+  options.scoring = parse_scoring(arguments.scoring);
+  options.threads = arguments.threads;
+  options.seed = arguments.seed;
+  // Checked before reading any image: a typo should not cost a long extraction.
+  if (options.branching < 2 || options.branching > 255) {
+    throw InvalidArgument("--branching must be in 2..255, got " +
+                          std::to_string(options.branching));
+  }
+  if (options.levels < 1 || options.levels > 16) {
+    throw InvalidArgument("--levels must be in 1..16, got " + std::to_string(options.levels));
+  }
+  format_for_output(arguments.output);
+
+  const auto start = std::chrono::steady_clock::now();
+  const TrainingSet set =
+      subsample(extract_training_set(arguments), arguments.max_descriptors, arguments.seed);
+  const double extraction_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  Progress progress("clustering", set.descriptors.rows());
+  options.progress = [&progress](const BuildProgress& state) {
+    progress.update(state.clustered_descriptors);
+  };
+  const auto build_start = std::chrono::steady_clock::now();
+  const Vocabulary vocabulary = Vocabulary::build(set.views(), options);
+  const double build_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
+  progress.finish();
+
+  save_vocabulary(vocabulary, arguments.output);
+  std::printf("%s: %s\n", arguments.output.c_str(), vocabulary.description().c_str());
+  std::printf("trained on %zu descriptors from %zu images\n", set.descriptors.rows(), set.images());
+  std::printf("words: %zu, nodes: %zu\n", vocabulary.word_count(), vocabulary.node_count());
+  std::printf("time: %.2f s features, %.2f s clustering\n", extraction_seconds, build_seconds);
+  std::printf("mean quantisation error: %.2f bits\n",
+              mean_quantisation_error(vocabulary, set.descriptors.view()));
+}
+
+}  // namespace
+
+void add_build_vocab_command(CLI::App& app) {
+  auto arguments = std::make_shared<BuildVocabArguments>();
+  CLI::App* command = app.add_subcommand(
+      "build-vocab", "Train a vocabulary tree (hierarchical k-medians) from images");
+  command->add_option("--descriptor", arguments->descriptor, "Binary descriptor: orb or brief")
+      ->check(CLI::IsMember({"orb", "brief"}))
+      ->capture_default_str();
+  command->add_option("--branching", arguments->branching, "Children per node, k (2..255)")
+      ->capture_default_str();
+  command->add_option("--levels", arguments->levels, "Depth of the tree, L (1..16)")
+      ->capture_default_str();
+  command
+      ->add_option("--weighting", arguments->weighting, "Word weighting: tf-idf, tf, idf, binary")
+      ->capture_default_str();
+  command
+      ->add_option("--scoring", arguments->scoring,
+                   "Scoring: l1, l2, chi-square, kl, bhattacharyya, dot-product")
+      ->capture_default_str();
+  command->add_option("--threads", arguments->threads, "Worker threads (0: all cores)")
+      ->capture_default_str();
+  command
+      ->add_option("--seed", arguments->seed,
+                   "Random seed; the same seed gives the same file for any --threads")
+      ->capture_default_str();
+  command->add_option("--max-descriptors", arguments->max_descriptors,
+                      "Train on a seeded random subset of at most N descriptors (0: all)");
+  command->add_option("--features-per-image", arguments->features_per_image,
+                      "Features extracted per image (0: the extractor's default)");
+  command->add_option("-o,--output", arguments->output, "Output vocabulary (.bbw, .yml.gz, ...)")
+      ->required();
+  command
+      ->add_option("inputs", arguments->inputs,
+                   "Image files, directories, videos or text lists of images")
+      ->required();
+  command->callback([arguments] { run_build_vocab(*arguments); });
+}
+
+}  // namespace binbow::cli
