@@ -2,10 +2,22 @@
 // their weights) for fast similarity queries, and optionally a direct index
 // (entry → FeatureVector) for finding correspondences between two images.
 //
+// Scores: a query touches only the entries that share at least one word with
+// the query vector, and every result's score equals, to the last bit, what
+// vocabulary().score(query, entry_bow) returns (the same terms, summed in the
+// same order of increasing word id). "Best" is the highest score, except for
+// Scoring::kKL, a divergence, where it is the lowest (as in DBoW2).
+//
+// Removal: remove() marks the entry dead at once (it never appears in a
+// result again); its postings are dropped from the posting lists lazily, in
+// one pass over the index when dead postings exceed a third of all postings,
+// so remove() is O(1) amortised over the entries added.
+//
 // Concurrency: any number of threads may call the const methods (query,
-// feature_vector, ...) at the same time; add, remove, clear and load need
+// feature_vector, ...) at the same time; add, remove, clear and set_label need
 // exclusive access. The class enforces this with an internal reader-writer
 // lock, so mixing them from several threads is safe, writers simply wait.
+// Moving or destroying a Database while another thread uses it is not.
 #pragma once
 
 #include <cstddef>
@@ -24,8 +36,12 @@ namespace binbow {
 
 struct QueryResult {
   EntryId entry = 0;
-  double score = 0;                 // the vocabulary's score(query, entry)
-  std::uint32_t shared_words = 0;   // words present in both vectors
+  double score = 0;                // the vocabulary's score(query, entry)
+  std::uint32_t shared_words = 0;  // words present in both vectors (whatever their values)
+
+  friend bool operator==(const QueryResult& a, const QueryResult& b) {
+    return a.entry == b.entry && a.score == b.score && a.shared_words == b.shared_words;
+  }
 };
 
 struct DatabaseOptions {
@@ -37,8 +53,21 @@ struct DatabaseOptions {
 
 inline constexpr EntryId kAllEntries = std::numeric_limits<EntryId>::max();
 
+// What the header of a .bbdb file says, read without loading the index.
+struct DatabaseFileInfo {
+  std::uint32_t version = 0;
+  std::size_t entries = 0;  // live entries
+  EntryId next_entry_id = 0;
+  bool direct_index = false;
+  unsigned direct_index_levels_up = 0;
+  bool vocabulary_included = false;
+  std::uint32_t vocabulary_checksum = 0;
+  std::string vocabulary_description;  // Vocabulary::description() at save time
+};
+
 class Database {
  public:
+  // An empty database. Throws InvalidArgument if the vocabulary is empty.
   explicit Database(Vocabulary vocabulary, DatabaseOptions options = {});
   Database(Database&&) noexcept;
   Database& operator=(Database&&) noexcept;
@@ -46,40 +75,67 @@ class Database {
 
   // Transforms the descriptors and adds the image. Returns its entry id: ids
   // are dense and increasing (0, 1, 2, ...), never reused after remove().
+  // Throws InvalidArgument if the code size differs from the vocabulary's.
   EntryId add(const DescriptorView& descriptors);
-  // Adds an image already transformed with this database's vocabulary.
+  // Adds an image already transformed with this database's vocabulary. The
+  // feature vector is kept only if the database has a direct index. Throws
+  // InvalidArgument for a word or node id outside the vocabulary, or a
+  // non-finite value; nothing is added then.
   EntryId add(const BowVector& bow, const FeatureVector& features = {});
 
   // The `max_results` entries most similar to `bow`, best first; ties are
   // ordered by increasing entry id. Only entries with id ≤ `max_entry_id` are
-  // considered. Entries sharing no word with the query are not returned.
+  // considered. Entries sharing no word with the query are not returned, so an
+  // empty `bow` or `max_results` = 0 give an empty result. Throws
+  // InvalidArgument for a word id outside the vocabulary.
   std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
                                  EntryId max_entry_id = kAllEntries) const;
 
-  // Removes an entry; throws InvalidArgument if it does not exist.
+  // Removes an entry; throws InvalidArgument if it does not exist (never
+  // added, or already removed).
   void remove(EntryId entry);
   bool contains(EntryId entry) const;
   // The direct index of an entry; throws InvalidArgument if the entry does
   // not exist or the database keeps no direct index.
   FeatureVector feature_vector(EntryId entry) const;
 
-  std::size_t size() const;      // live entries
-  EntryId next_entry_id() const; // the id the next add() returns
-  void clear();                  // removes every entry; ids restart at 0
+  // An optional name per entry (the CLI stores image file names), saved with
+  // the database. label() is empty for entries without one; both throw
+  // InvalidArgument if the entry does not exist.
+  void set_label(EntryId entry, std::string label);
+  std::string label(EntryId entry) const;
+
+  std::size_t size() const;       // live entries
+  EntryId next_entry_id() const;  // the id the next add() returns
+  void clear();                   // removes every entry; ids restart at 0
+  // Bytes of heap memory held by the index (posting lists, direct index,
+  // per-entry state, labels), excluding the vocabulary.
+  std::size_t memory_usage() const;
 
   const Vocabulary& vocabulary() const noexcept;
   const DatabaseOptions& options() const noexcept;
 
-  // binbow's database format (.bbdb). Atomic save. With `include_vocabulary`,
-  // the file is self-contained; otherwise it records the vocabulary's checksum
-  // and load() must be given the same vocabulary.
+  // binbow's database format (.bbdb): magic, version, little-endian sections
+  // with a CRC32C each; saved atomically (temporary file, then rename). With
+  // `include_vocabulary`, the file is self-contained; otherwise it records the
+  // vocabulary's checksum and load() must be given the same vocabulary.
   void save(const std::string& path, bool include_vocabulary = true) const;
-  // Throws FileError (damaged file, or a vocabulary that does not match).
+  // Throws FileError naming the file and the problem (damaged file, a file
+  // without vocabulary, or a vocabulary whose checksum does not match).
   static Database load(const std::string& path);
   static Database load(const std::string& path, Vocabulary vocabulary);
+  // The exact bytes save() writes, and their parsing; `name` is used in error
+  // messages (FileError) in place of a path.
+  std::vector<std::uint8_t> serialize(bool include_vocabulary = true) const;
+  static Database deserialize(const std::uint8_t* data, std::size_t size, const std::string& name);
+  static Database deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
+                              Vocabulary vocabulary);
+  // Reads and checks only the header of a .bbdb file. Throws FileError.
+  static DatabaseFileInfo inspect(const std::string& path);
 
  private:
   struct Impl;
+  explicit Database(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 

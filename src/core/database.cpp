@@ -1,0 +1,479 @@
+// The image database: posting lists, packed direct index, queries through the
+// inverted index. The .bbdb format lives in database_file.cpp.
+#include "binbow/database.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+#include <new>
+#include <utility>
+
+#include "binbow/error.h"
+#include "core/database_impl.h"
+#include "core/scoring.h"
+
+namespace binbow {
+
+namespace detail {
+
+PostingList::PostingList(PostingList&& other) noexcept
+    : ids_(std::exchange(other.ids_, nullptr)),
+      size_(std::exchange(other.size_, 0)),
+      capacity_(std::exchange(other.capacity_, 0)) {}
+
+PostingList& PostingList::operator=(PostingList&& other) noexcept {
+  if (this != &other) {
+    std::free(ids_);
+    ids_ = std::exchange(other.ids_, nullptr);
+    size_ = std::exchange(other.size_, 0);
+    capacity_ = std::exchange(other.capacity_, 0);
+  }
+  return *this;
+}
+
+PostingList::~PostingList() {
+  std::free(ids_);
+}
+
+void PostingList::reallocate(std::uint32_t capacity) {
+  if (capacity == 0) {
+    std::free(ids_);
+    ids_ = nullptr;
+    capacity_ = 0;
+    return;
+  }
+  // malloc'd storage: the ids and the floats after them are implicitly created.
+  auto* block = static_cast<EntryId*>(std::malloc(std::size_t{capacity} * 8));
+  if (block == nullptr) throw std::bad_alloc();
+  if (size_ > 0) {
+    std::memcpy(block, ids_, std::size_t{size_} * sizeof(EntryId));
+    std::memcpy(block + capacity, weights(), std::size_t{size_} * sizeof(float));
+  }
+  std::free(ids_);
+  ids_ = block;
+  capacity_ = capacity;
+}
+
+void PostingList::push_back(EntryId entry, float weight) {
+  if (size_ == capacity_) reallocate(capacity_ < 4 ? capacity_ + 2 : capacity_ + capacity_ / 2);
+  ids_[size_] = entry;
+  mutable_weights()[size_] = weight;
+  ++size_;
+}
+
+void PostingList::assign(const EntryId* entries, const float* weights, std::uint32_t count) {
+  size_ = 0;
+  reallocate(count);
+  if (count == 0) return;
+  std::memcpy(ids_, entries, std::size_t{count} * sizeof(EntryId));
+  std::memcpy(mutable_weights(), weights, std::size_t{count} * sizeof(float));
+  size_ = count;
+}
+
+std::size_t PostingList::erase_dead(const std::vector<std::uint8_t>& alive) {
+  float* values = mutable_weights();
+  std::uint32_t kept = 0;
+  for (std::uint32_t i = 0; i < size_; ++i) {
+    if (alive[ids_[i]] == 0) continue;
+    ids_[kept] = ids_[i];
+    values[kept] = values[i];
+    ++kept;
+  }
+  const std::size_t removed = size_ - kept;
+  size_ = kept;
+  if (size_ == 0) reallocate(0);  // frees, cannot throw
+  return removed;
+}
+
+std::size_t PostingList::memory_usage() const noexcept {
+  return std::size_t{capacity_} * 8;
+}
+
+PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
+    : node_count_(static_cast<std::uint32_t>(features.size())),
+      feature_count_(static_cast<std::uint32_t>(features.feature_count())) {
+  const auto& indices = features.feature_indices();
+  wide_ = feature_count_ > 0xFFFF ||
+          std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
+  const std::size_t width = wide_ ? 4 : 2;
+  bytes_.resize(std::size_t{node_count_} * (4 + width) + std::size_t{feature_count_} * width);
+  std::uint8_t* out = bytes_.data();
+  if (node_count_ > 0) std::memcpy(out, features.nodes().data(), std::size_t{node_count_} * 4);
+  out += std::size_t{node_count_} * 4;
+  const auto put = [&](std::uint32_t v) {
+    if (wide_) {
+      std::memcpy(out, &v, 4);
+    } else {
+      const auto narrow = static_cast<std::uint16_t>(v);
+      std::memcpy(out, &narrow, 2);
+    }
+    out += width;
+  };
+  for (std::size_t i = 1; i <= node_count_; ++i) put(features.offsets()[i]);
+  for (std::uint32_t index : indices) put(index);
+}
+
+std::uint32_t PackedFeatureVector::value(std::size_t byte_offset) const noexcept {
+  if (wide_) {
+    std::uint32_t v;
+    std::memcpy(&v, bytes_.data() + byte_offset, 4);
+    return v;
+  }
+  std::uint16_t v;
+  std::memcpy(&v, bytes_.data() + byte_offset, 2);
+  return v;
+}
+
+FeatureVector PackedFeatureVector::unpack() const {
+  const std::size_t width = wide_ ? 4 : 2;
+  std::vector<NodeId> nodes(node_count_);
+  if (node_count_ > 0) std::memcpy(nodes.data(), bytes_.data(), std::size_t{node_count_} * 4);
+  std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
+  std::size_t at = std::size_t{node_count_} * 4;
+  for (std::size_t i = 1; i <= node_count_; ++i, at += width) offsets[i] = value(at);
+  std::vector<std::uint32_t> indices(feature_count_);
+  for (auto& index : indices) {
+    index = value(at);
+    at += width;
+  }
+  return FeatureVector::from_arrays(std::move(nodes), std::move(offsets), std::move(indices));
+}
+
+}  // namespace detail
+
+namespace {
+
+struct Accumulator {
+  double sum = 0;
+  std::uint32_t shared = 0;
+};
+
+// Per-thread buffers reused by every query: the dense score array (all zero
+// between queries), the ids touched by the current query, the candidates.
+struct QueryScratch {
+  std::vector<Accumulator> accumulators;
+  std::vector<EntryId> touched;
+  std::vector<QueryResult> candidates;
+};
+
+thread_local QueryScratch scratch;
+
+// Every term is computed and summed exactly as Vocabulary::score does, in the
+// same order (increasing word id), so scores agree to the last bit.
+struct IndexView {
+  const std::uint32_t* slot_of_word;
+  const detail::PostingList* lists;
+};
+
+template <Scoring kScoring>
+std::size_t accumulate(IndexView index, const BowVector& bow, EntryId last_entry,
+                       Accumulator* accumulators, EntryId* touched) {
+  std::size_t touched_count = 0;
+  for (const BowEntry& query_entry : bow) {
+    const std::uint32_t slot = index.slot_of_word[query_entry.word];
+    if (slot == 0) continue;
+    const detail::PostingList& list = index.lists[slot - 1];
+    const EntryId* ids = list.ids();
+    const float* weights = list.weights();
+    std::uint32_t count = list.size();
+    if (count > 0 && ids[count - 1] > last_entry)
+      count = static_cast<std::uint32_t>(std::upper_bound(ids, ids + count, last_entry) - ids);
+    const double v = query_entry.value;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      Accumulator& accumulator = accumulators[ids[i]];
+      touched[touched_count] = ids[i];
+      touched_count += accumulator.shared == 0;
+      ++accumulator.shared;
+      accumulator.sum += detail::score_term(kScoring, v, weights[i]);
+    }
+  }
+  return touched_count;
+}
+
+std::size_t accumulate(Scoring scoring, IndexView impl, const BowVector& bow, EntryId last_entry,
+                       Accumulator* accumulators, EntryId* touched) {
+  switch (scoring) {
+    case Scoring::kL1:
+      return accumulate<Scoring::kL1>(impl, bow, last_entry, accumulators, touched);
+    case Scoring::kL2:
+      return accumulate<Scoring::kL2>(impl, bow, last_entry, accumulators, touched);
+    case Scoring::kChiSquare:
+      return accumulate<Scoring::kChiSquare>(impl, bow, last_entry, accumulators, touched);
+    case Scoring::kKL:
+      return accumulate<Scoring::kKL>(impl, bow, last_entry, accumulators, touched);
+    case Scoring::kBhattacharyya:
+      return accumulate<Scoring::kBhattacharyya>(impl, bow, last_entry, accumulators, touched);
+    case Scoring::kDotProduct:
+      return accumulate<Scoring::kDotProduct>(impl, bow, last_entry, accumulators, touched);
+  }
+  return 0;
+}
+
+// Orders best first, then by entry id. A NaN score (only from vectors with
+// negative values) ranks last, so the order stays a strict weak ordering.
+struct BetterResult {
+  bool lower_is_better;
+
+  double key(double score) const {
+    if (std::isnan(score)) return lower_is_better ? INFINITY : -INFINITY;
+    return score;
+  }
+  bool operator()(const QueryResult& a, const QueryResult& b) const {
+    const double ka = key(a.score);
+    const double kb = key(b.score);
+    if (ka != kb) return lower_is_better ? ka < kb : ka > kb;
+    return a.entry < b.entry;
+  }
+};
+
+void check_bow(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
+  if (!bow.empty() && bow[bow.size() - 1].word >= vocabulary.word_count())
+    throw InvalidArgument(
+        std::string(what) + ": word id " + std::to_string(bow[bow.size() - 1].word) +
+        " is outside the vocabulary (" + std::to_string(vocabulary.word_count()) + " words)");
+  for (const BowEntry& entry : bow)
+    if (!std::isfinite(entry.value))
+      throw InvalidArgument(std::string(what) + ": word " + std::to_string(entry.word) +
+                            " has a non-finite value");
+}
+
+std::string no_entry_message(EntryId entry, EntryId next) {
+  if (entry >= next)
+    return "entry " + std::to_string(entry) + " does not exist (the database has ids below " +
+           std::to_string(next) + ")";
+  return "entry " + std::to_string(entry) + " was removed";
+}
+
+}  // namespace
+
+Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
+    : vocabulary(std::move(vocabulary_in)), options(options_in) {
+  if (vocabulary.empty()) throw InvalidArgument("Database: the vocabulary is empty");
+  slot_of_word.assign(vocabulary.word_count(), 0);
+}
+
+EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& features) {
+  if (alive.size() >= kAllEntries)
+    throw InvalidArgument("Database: no entry id left (" + std::to_string(alive.size()) +
+                          " entries added)");
+  const auto entry = static_cast<EntryId>(alive.size());
+  try {
+    alive.push_back(0);
+    word_counts.push_back(static_cast<std::uint32_t>(bow.size()));
+    if (options.direct_index) direct.emplace_back(features);
+    if (!labels.empty()) labels.emplace_back();
+    if (lists.capacity() < lists.size() + bow.size())
+      lists.reserve(
+          std::max(lists.size() + bow.size(), std::min(lists.capacity() * 2, slot_of_word.size())));
+    for (const BowEntry& word : bow) {
+      std::uint32_t& slot = slot_of_word[word.word];
+      if (slot == 0) {
+        lists.emplace_back();  // no reallocation: reserved above
+        slot = static_cast<std::uint32_t>(lists.size());
+      }
+      lists[slot - 1].push_back(entry, word.value);
+    }
+  } catch (...) {
+    for (const BowEntry& word : bow) {
+      const std::uint32_t slot = slot_of_word[word.word];
+      if (slot == 0) continue;
+      detail::PostingList& list = lists[slot - 1];
+      if (list.size() > 0 && list.ids()[list.size() - 1] == entry) list.pop_back();
+    }
+    alive.resize(entry);
+    word_counts.resize(entry);
+    if (direct.size() > entry) direct.resize(entry);
+    if (labels.size() > entry) labels.resize(entry);
+    throw;
+  }
+  alive[entry] = 1;
+  ++live_entries;
+  postings += bow.size();
+  return entry;
+}
+
+void Database::Impl::compact_if_worthwhile() {
+  if (dead_postings * 3 > postings) compact();
+}
+
+void Database::Impl::compact() {
+  for (detail::PostingList& list : lists) postings -= list.erase_dead(alive);
+  dead_postings = 0;
+}
+
+Database::Database(Vocabulary vocabulary, DatabaseOptions options)
+    : impl_(std::make_unique<Impl>(std::move(vocabulary), options)) {}
+Database::Database(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Database::Database(Database&&) noexcept = default;
+Database& Database::operator=(Database&&) noexcept = default;
+Database::~Database() = default;
+
+EntryId Database::add(const DescriptorView& descriptors) {
+  BowVector bow;
+  FeatureVector features;
+  if (impl_->options.direct_index)
+    impl_->vocabulary.transform(descriptors, bow, features, impl_->options.direct_index_levels_up);
+  else
+    impl_->vocabulary.transform(descriptors, bow);
+  std::unique_lock lock(impl_->mutex);
+  return impl_->append(bow, features);
+}
+
+EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
+  check_bow(bow, impl_->vocabulary, "Database::add");
+  if (impl_->options.direct_index && !features.empty() &&
+      features.node(features.size() - 1) >= impl_->vocabulary.node_count())
+    throw InvalidArgument("Database::add: feature vector node " +
+                          std::to_string(features.node(features.size() - 1)) +
+                          " is outside the vocabulary (" +
+                          std::to_string(impl_->vocabulary.node_count()) + " nodes)");
+  std::unique_lock lock(impl_->mutex);
+  return impl_->append(bow, features);
+}
+
+std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
+                                         EntryId max_entry_id) const {
+  check_bow(bow, impl_->vocabulary, "Database::query");
+  std::vector<QueryResult> results;
+  if (bow.empty() || max_results == 0) return results;
+  const Scoring scoring = impl_->vocabulary.scoring();
+  const double base = detail::score_base(scoring, bow);
+
+  std::shared_lock lock(impl_->mutex);
+  const std::size_t entry_count = impl_->alive.size();
+  if (entry_count == 0) return results;
+  QueryScratch& buffers = scratch;
+  if (buffers.accumulators.size() < entry_count) {
+    buffers.accumulators.resize(entry_count);
+    buffers.touched.resize(entry_count);
+  }
+  const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
+  const IndexView index{impl_->slot_of_word.data(), impl_->lists.data()};
+  const std::size_t touched = accumulate(scoring, index, bow, last_entry,
+                                         buffers.accumulators.data(), buffers.touched.data());
+
+  // Collecting candidates also zeroes the accumulators for the next query;
+  // reserve first so nothing can throw with dirty accumulators.
+  std::vector<QueryResult>& candidates = buffers.candidates;
+  candidates.clear();
+  try {
+    candidates.reserve(touched);
+  } catch (...) {
+    for (std::size_t i = 0; i < touched; ++i) buffers.accumulators[buffers.touched[i]] = {};
+    throw;
+  }
+  for (std::size_t i = 0; i < touched; ++i) {
+    const EntryId entry = buffers.touched[i];
+    Accumulator& accumulator = buffers.accumulators[entry];
+    if (impl_->alive[entry] != 0)
+      candidates.push_back(
+          {entry, detail::finish_score(scoring, accumulator.sum, base), accumulator.shared});
+    accumulator = {};
+  }
+  lock.unlock();
+
+  const BetterResult better{scoring == Scoring::kKL};
+  if (candidates.size() > max_results) {
+    std::nth_element(candidates.begin(),
+                     candidates.begin() + static_cast<std::ptrdiff_t>(max_results),
+                     candidates.end(), better);
+    candidates.resize(max_results);
+  }
+  std::sort(candidates.begin(), candidates.end(), better);
+  results.assign(candidates.begin(), candidates.end());
+  return results;
+}
+
+void Database::remove(EntryId entry) {
+  std::unique_lock lock(impl_->mutex);
+  if (!impl_->is_live(entry))
+    throw InvalidArgument("Database::remove: " +
+                          no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
+  impl_->alive[entry] = 0;
+  --impl_->live_entries;
+  impl_->dead_postings += impl_->word_counts[entry];
+  if (!impl_->direct.empty()) impl_->direct[entry] = {};
+  if (!impl_->labels.empty()) std::string().swap(impl_->labels[entry]);
+  impl_->compact_if_worthwhile();
+}
+
+bool Database::contains(EntryId entry) const {
+  std::shared_lock lock(impl_->mutex);
+  return impl_->is_live(entry);
+}
+
+FeatureVector Database::feature_vector(EntryId entry) const {
+  std::shared_lock lock(impl_->mutex);
+  if (!impl_->options.direct_index)
+    throw InvalidArgument("Database::feature_vector: this database keeps no direct index");
+  if (!impl_->is_live(entry))
+    throw InvalidArgument("Database::feature_vector: " +
+                          no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
+  return impl_->direct[entry].unpack();
+}
+
+void Database::set_label(EntryId entry, std::string label) {
+  std::unique_lock lock(impl_->mutex);
+  if (!impl_->is_live(entry))
+    throw InvalidArgument("Database::set_label: " +
+                          no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
+  if (impl_->labels.size() < impl_->alive.size()) impl_->labels.resize(impl_->alive.size());
+  impl_->labels[entry] = std::move(label);
+}
+
+std::string Database::label(EntryId entry) const {
+  std::shared_lock lock(impl_->mutex);
+  if (!impl_->is_live(entry))
+    throw InvalidArgument("Database::label: " +
+                          no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
+  return impl_->labels.empty() ? std::string() : impl_->labels[entry];
+}
+
+std::size_t Database::size() const {
+  std::shared_lock lock(impl_->mutex);
+  return impl_->live_entries;
+}
+
+EntryId Database::next_entry_id() const {
+  std::shared_lock lock(impl_->mutex);
+  return static_cast<EntryId>(impl_->alive.size());
+}
+
+void Database::clear() {
+  std::unique_lock lock(impl_->mutex);
+  std::fill(impl_->slot_of_word.begin(), impl_->slot_of_word.end(), 0);
+  std::vector<detail::PostingList>().swap(impl_->lists);
+  std::vector<std::uint8_t>().swap(impl_->alive);
+  std::vector<std::uint32_t>().swap(impl_->word_counts);
+  std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
+  std::vector<std::string>().swap(impl_->labels);
+  impl_->live_entries = 0;
+  impl_->postings = 0;
+  impl_->dead_postings = 0;
+}
+
+std::size_t Database::memory_usage() const {
+  std::shared_lock lock(impl_->mutex);
+  const Impl& impl = *impl_;
+  std::size_t bytes = impl.slot_of_word.capacity() * sizeof(std::uint32_t) +
+                      impl.lists.capacity() * sizeof(detail::PostingList) + impl.alive.capacity() +
+                      impl.word_counts.capacity() * sizeof(std::uint32_t) +
+                      impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
+                      impl.labels.capacity() * sizeof(std::string);
+  for (const auto& list : impl.lists) bytes += list.memory_usage();
+  for (const auto& features : impl.direct) bytes += features.memory_usage();
+  for (const auto& label : impl.labels)
+    if (label.capacity() > 15) bytes += label.capacity() + 1;  // beyond the small-string buffer
+  return bytes;
+}
+
+const Vocabulary& Database::vocabulary() const noexcept {
+  return impl_->vocabulary;
+}
+const DatabaseOptions& Database::options() const noexcept {
+  return impl_->options;
+}
+
+}  // namespace binbow
