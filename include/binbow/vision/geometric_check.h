@@ -1,0 +1,73 @@
+// Geometric verification of a loop candidate: putative correspondences
+// between two images' binary descriptors, then a fundamental matrix by RANSAC
+// (the last stage of the paper's loop detector, Section V-D).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "binbow/bow_vector.h"
+#include "binbow/descriptors.h"
+#include "binbow/span.h"
+#include "binbow/vision/features.h"
+
+namespace binbow::vision {
+
+// Feature `first` of one image corresponds to feature `second` of the other
+// (indices of rows of their descriptor matrices / keypoint vectors).
+struct Correspondence {
+  std::uint32_t first = 0;
+  std::uint32_t second = 0;
+
+  friend bool operator==(const Correspondence& a, const Correspondence& b) {
+    return a.first == b.first && a.second == b.second;
+  }
+};
+
+// Putative correspondences, nearest-neighbour ratio test (Lowe): feature i of
+// `first` is matched to its nearest feature j of `second` when
+// d(i, j) ≤ max_neighbor_ratio × d(i, second nearest) (and strictly below
+// it); a feature with a single candidate has no second neighbour and passes,
+// as in DLoopDetector. Each feature of `second` keeps at most one partner:
+// the nearest of the features that chose it. Sorted by `first`.
+
+// Every feature of `first` against every feature of `second`.
+std::vector<Correspondence> match_exhaustive(const DescriptorView& first,
+                                             const DescriptorView& second,
+                                             double max_neighbor_ratio);
+
+// Through the direct index: only features under the same vocabulary node
+// (FeatureVector built at the same level for both images) are compared —
+// DLoopDetector's GEOM_DI. Much faster than exhaustive matching, but pairs
+// whose descriptors descend to different nodes are missed.
+std::vector<Correspondence> match_direct_index(const DescriptorView& first,
+                                               const FeatureVector& first_nodes,
+                                               const DescriptorView& second,
+                                               const FeatureVector& second_nodes,
+                                               double max_neighbor_ratio);
+
+struct FundamentalCheckParams {
+  int min_inliers = 12;                 // also the minimum number of correspondences tried
+  double max_reprojection_error = 2.0;  // pixels, point to epipolar line (RANSAC threshold)
+  double confidence = 0.99;             // RANSAC success probability
+  int max_iterations = 500;             // RANSAC iterations
+};
+
+struct FundamentalCheckResult {
+  bool consistent = false;                         // inliers.size() ≥ min_inliers
+  cv::Matx33d fundamental = cv::Matx33d::zeros();  // maps first-image points to lines in second
+  std::vector<Correspondence> inliers;  // the correspondences RANSAC kept, in input order
+};
+
+// Fits a fundamental matrix x_secondᵀ F x_first = 0 to the correspondences with
+// OpenCV's RANSAC. Fewer than max(8, min_inliers) correspondences: not
+// consistent, no fit attempted. Deterministic (OpenCV seeds its RANSAC).
+// Throws InvalidArgument if a correspondence indexes past a keypoint vector.
+FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> second,
+                                         const std::vector<Correspondence>& correspondences,
+                                         const FundamentalCheckParams& params = {});
+
+}  // namespace binbow::vision

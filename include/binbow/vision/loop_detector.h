@@ -1,0 +1,186 @@
+// The paper's loop detector (Gálvez-López & Tardós 2012, Section V;
+// DLoopDetector): every image of a sequence is turned into a BoW vector,
+// queried against the earlier images, and a loop is reported when
+//   1. the normalised similarity η = s(v_t, v_j) / s(v_t, v_{t−Δt}) of the
+//      candidates reaches α (frames whose s(v_t, v_{t−Δt}) is too small to
+//      normalise by are skipped),
+//   2. the candidates, grouped into islands of nearby entries, give a best
+//      island (highest H = Σ η) that
+//   3. agrees with the islands of the k previous queries (temporal
+//      consistency), and
+//   4. the best entry of that island and the query have a fundamental matrix
+//      with enough RANSAC inliers (geometric consistency).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/descriptors.h"
+#include "binbow/span.h"
+#include "binbow/types.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/geometric_check.h"
+#include "binbow/vocabulary.h"
+
+namespace binbow::vision {
+
+// How candidate correspondences for the fundamental matrix are found.
+enum class GeometricCheck : std::uint8_t {
+  kDirectIndex,  // features under the same vocabulary node at `direct_index_levels` (paper)
+  kExhaustive,   // every feature against every feature
+  kNone,         // no geometric check: temporally consistent candidates are loops
+};
+
+// "direct-index", "exhaustive", "none".
+const char* to_string(GeometricCheck check);
+// Accepts the names above ('_' for '-' too); throws InvalidArgument listing them.
+GeometricCheck parse_geometric_check(const std::string& name);
+
+// Every parameter of the detector. The defaults are the paper's (and
+// DLoopDetector's) at a frequency of 1 Hz; for_frequency() scales the
+// frame-count parameters to another image rate as DLoopDetector does.
+struct LoopDetectorParams {
+  // Images per second the parameters below were derived for (informative).
+  double frequency = 1;
+
+  // --- Normalised similarity score (paper Section V-A)
+  bool use_normalised_score = true;  // η instead of the raw score
+  double alpha = 0.3;                // α: minimum η (or raw score) of a candidate
+  // Frames with s(v_t, v_{t−Δt}) below this are skipped (status
+  // kLowNormalisationScore): η would divide by a meaningless score.
+  double min_normalisation_score = 0.005;
+
+  // --- Database query
+  int dislocal = 20;        // the last `dislocal` images are never candidates (20 f)
+  int max_db_results = 50;  // candidates taken from each query (50 f)
+
+  // --- Islands (Section V-B)
+  int max_intra_island_gap = 3;    // entries j < j' join the same island when j' − j < gap (3 f)
+  int min_matches_per_island = 1;  // minimum island length, last − first + 1 (f)
+
+  // --- Temporal consistency (Section V-C)
+  int k = 3;  // consistent previous queries needed
+  int max_distance_between_islands =
+      3;  // islands of consecutive queries this far apart still agree (3 f)
+  int max_distance_between_queries = 2;  // queries further apart break the chain (2 f)
+
+  // --- Geometric check (Section V-D)
+  GeometricCheck geometric_check = GeometricCheck::kDirectIndex;
+  int direct_index_levels = 2;  // l: direct index this many levels above the words
+  // binbow's addition, on by default: when the direct index yields no
+  // consistent fundamental matrix, retry once with exhaustive matching. The
+  // direct index is an accelerator whose recall depends on how well the
+  // vocabulary fits the images (a descriptor and its true partner often fall
+  // under different nodes when it does not); RANSAC still guards precision,
+  // and the extra cost is one exhaustive match for the single candidate that
+  // passed every other test. See docs/loop-detection.md.
+  bool exhaustive_fallback = true;
+  double max_neighbor_ratio = 0.6;      // nearest-neighbour ratio test of correspondences
+  int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix
+  double max_reprojection_error = 2.0;  // pixels, RANSAC threshold
+  double ransac_confidence = 0.99;
+  int max_ransac_iterations = 500;
+
+  // The defaults with frame-count parameters scaled to `frequency` Hz
+  // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
+  // max_distance_between_queries 2 f; at least 1 each where it matters).
+  static LoopDetectorParams for_frequency(double frequency);
+
+  // Reads a JSON file (content starting with '{', or a .json name) or a YAML
+  // file (OpenCV FileStorage). Keys are the field names above; a "frequency"
+  // key first derives the frame-count defaults from it (for_frequency), the
+  // other keys then override. geometric_check takes the to_string() names.
+  // Unknown keys, wrong types and invalid values are FileErrors naming the
+  // file and the key.
+  static LoopDetectorParams load(const std::string& path);
+  // Same from JSON text; `name` is used in error messages.
+  static LoopDetectorParams from_json(const std::string& text, const std::string& name = "<json>");
+  // Every field as a JSON object (the format load() reads), pretty-printed.
+  std::string to_json() const;
+
+  // Throws InvalidArgument naming the first field out of range.
+  void validate() const;
+};
+
+// Why a frame did or did not close a loop (DLoopDetector's DetectionStatus).
+enum class LoopStatus : std::uint8_t {
+  kLoopDetected,
+  kNoDatabaseResults,       // no earlier image (outside `dislocal`) shares a word
+  kLowNormalisationScore,   // s(v_t, v_{t−Δt}) < min_normalisation_score: frame skipped
+  kLowScores,               // no candidate reaches α
+  kNoIslands,               // no island long enough
+  kNoTemporalConsistency,   // best island disagrees with the previous queries' islands
+  kNoGeometricConsistency,  // fundamental-matrix check failed
+};
+
+// "loop-detected", "no-database-results", "low-normalisation-score",
+// "low-scores", "no-islands", "no-temporal-consistency",
+// "no-geometric-consistency".
+const char* to_string(LoopStatus status);
+
+// Wall-clock time of each stage of one process() call, milliseconds.
+struct LoopStageTimes {
+  double transform_ms = 0;     // descriptors → BoW vector (and direct index)
+  double query_ms = 0;         // database query and η
+  double islands_ms = 0;       // islands and temporal consistency
+  double verification_ms = 0;  // correspondences and RANSAC
+  double insertion_ms = 0;     // adding the image to the database and feature store
+};
+
+struct LoopResult {
+  LoopStatus status = LoopStatus::kNoDatabaseResults;
+  EntryId query = 0;  // entry id of the processed image (= its 0-based index)
+  // The loop when detected; otherwise the best candidate so far (the best
+  // entry of the best island, or the best-scoring entry), if any.
+  bool has_candidate = false;
+  EntryId match = 0;
+  double score = 0;                // s(v_t, v_match)
+  double normalisation_score = 0;  // s(v_t, v_{t−Δt}), 0 before the first query
+  double normalised_score = 0;     // η of the match (= score without normalisation)
+  double island_score = 0;         // H of the best island
+  EntryId island_first = 0, island_last = 0;
+  int consistent_queries = 0;       // queries agreeing so far, this one included
+  std::size_t correspondences = 0;  // putative correspondences given to RANSAC
+  bool exhaustive_fallback_used = false;
+  // RANSAC inliers: first = feature of the query, second = feature of the match.
+  std::vector<Correspondence> inliers;
+  LoopStageTimes times;
+
+  bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }
+};
+
+class LoopDetector {
+ public:
+  // Throws InvalidArgument for invalid parameters or an empty vocabulary.
+  explicit LoopDetector(Vocabulary vocabulary, LoopDetectorParams params = {});
+  LoopDetector(LoopDetector&&) noexcept;
+  LoopDetector& operator=(LoopDetector&&) noexcept;
+  ~LoopDetector();
+
+  // Adds the next image of the sequence and looks for a loop with the earlier
+  // ones. Keypoint i is described by descriptor row i (their counts must
+  // match, and the code size must be the vocabulary's: InvalidArgument).
+  // An image without features is added too (it can match nothing).
+  LoopResult process(const Features& features);
+  LoopResult process(Span<Keypoint> keypoints, const DescriptorView& descriptors);
+
+  std::size_t size() const noexcept;  // images processed
+  const LoopDetectorParams& params() const noexcept;
+  const Database& database() const noexcept;
+  // Features kept for the geometric check (empty with GeometricCheck::kNone).
+  Span<Keypoint> keypoints(EntryId entry) const;
+  DescriptorView descriptors(EntryId entry) const;
+
+  // Forgets every image; the next one gets entry id 0.
+  void clear();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace binbow::vision

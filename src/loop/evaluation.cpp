@@ -1,0 +1,475 @@
+#include "binbow/vision/evaluation.h"
+
+#include <unistd.h>
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include <matio.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "binbow/error.h"
+
+namespace binbow::vision {
+namespace {
+
+using Pairs = std::vector<std::pair<std::size_t, std::size_t>>;
+
+// No loop-closure sequence comes near this; bounds what a damaged header can make us allocate.
+constexpr std::size_t kMaxFrames = 50'000'000;
+constexpr std::size_t kMaxTextBytes = std::size_t{1} << 31;
+// Dense .mat matrices are read this many cells at a time.
+constexpr std::size_t kMatBlockBytes = std::size_t{128} << 20;
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));
+  std::string text;
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    text.append(buffer, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxTextBytes) throw FileError(path, "file larger than 2 GiB");
+  }
+  if (in.bad()) throw FileError(path, "read error");
+  return text;
+}
+
+GroundTruth from_image(const std::string& path) {
+  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (image.empty()) throw FileError(path, "cannot read as an image");
+  const std::size_t frames = static_cast<std::size_t>(std::max(image.rows, image.cols));
+  Pairs pairs;
+  for (int r = 0; r < image.rows; ++r) {
+    const std::uint8_t* row = image.ptr<std::uint8_t>(r);
+    for (int c = 0; c < image.cols; ++c)
+      if (row[c] != 0) pairs.emplace_back(r, c);
+  }
+  return GroundTruth(frames, pairs);
+}
+
+// Cells of a dense block as "non-zero?", whatever the MATLAB class.
+template <class T>
+void collect_nonzero(const void* data, std::size_t rows, std::size_t first_column,
+                     std::size_t columns, Pairs& pairs) {
+  const T* cells = static_cast<const T*>(data);
+  for (std::size_t c = 0; c < columns; ++c)
+    for (std::size_t r = 0; r < rows; ++r)
+      if (cells[c * rows + r] != T(0)) pairs.emplace_back(r, first_column + c);
+}
+
+struct MatCloser {
+  void operator()(mat_t* m) const { Mat_Close(m); }
+};
+struct VarFreer {
+  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+};
+
+GroundTruth from_mat(const std::string& path) {
+  std::unique_ptr<mat_t, MatCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
+  if (!file) throw FileError(path, "not a readable MATLAB .mat file");
+  std::unique_ptr<matvar_t, VarFreer> var;
+  while (true) {
+    var.reset(Mat_VarReadNextInfo(file.get()));
+    if (!var) throw FileError(path, "no two-dimensional numeric or logical variable");
+    if (var->rank == 2 && var->dims != nullptr && var->class_type != MAT_C_CHAR &&
+        var->class_type != MAT_C_CELL && var->class_type != MAT_C_STRUCT &&
+        var->class_type != MAT_C_OBJECT && var->class_type != MAT_C_FUNCTION &&
+        var->class_type != MAT_C_OPAQUE && var->class_type != MAT_C_EMPTY && !var->isComplex)
+      break;
+  }
+  const std::string name = var->name != nullptr ? var->name : "?";
+  const std::size_t rows = var->dims[0], columns = var->dims[1];
+  if (rows > kMaxFrames || columns > kMaxFrames)
+    throw FileError(path, "variable '" + name + "' is " + std::to_string(rows) + "x" +
+                              std::to_string(columns) + ", too large for a ground truth");
+  Pairs pairs;
+  if (var->class_type == MAT_C_SPARSE) {
+    if (Mat_VarReadDataAll(file.get(), var.get()) != 0 || var->data == nullptr)
+      throw FileError(path, "cannot read sparse variable '" + name + "'");
+    const auto* sparse = static_cast<const mat_sparse_t*>(var->data);
+    if (sparse->jc == nullptr || sparse->ir == nullptr ||
+        sparse->njc != static_cast<decltype(sparse->njc)>(columns + 1))
+      throw FileError(path, "damaged sparse variable '" + name + "'");
+    for (std::size_t c = 0; c < columns; ++c) {
+      const std::size_t begin = sparse->jc[c], end = sparse->jc[c + 1];
+      if (begin > end || end > static_cast<std::size_t>(sparse->nir))
+        throw FileError(path, "damaged sparse variable '" + name + "'");
+      // A stored zero is not a loop, but logical sparse matrices store no values worth checking.
+      for (std::size_t k = begin; k < end; ++k) {
+        if (static_cast<std::size_t>(sparse->ir[k]) >= rows)
+          throw FileError(path, "damaged sparse variable '" + name + "'");
+        pairs.emplace_back(sparse->ir[k], c);
+      }
+    }
+  } else {
+    std::size_t cell_bytes = 0;
+    switch (var->class_type) {
+      case MAT_C_DOUBLE:
+      case MAT_C_INT64:
+      case MAT_C_UINT64:
+        cell_bytes = 8;
+        break;
+      case MAT_C_SINGLE:
+      case MAT_C_INT32:
+      case MAT_C_UINT32:
+        cell_bytes = 4;
+        break;
+      case MAT_C_INT16:
+      case MAT_C_UINT16:
+        cell_bytes = 2;
+        break;
+      case MAT_C_INT8:
+      case MAT_C_UINT8:
+        cell_bytes = 1;
+        break;
+      default:
+        throw FileError(path, "variable '" + name + "' has an unsupported class");
+    }
+    const std::size_t block_columns =
+        std::max<std::size_t>(1, kMatBlockBytes / std::max<std::size_t>(1, rows * cell_bytes));
+    std::vector<std::uint8_t> buffer;
+    for (std::size_t first = 0; first < columns; first += block_columns) {
+      const std::size_t count = std::min(block_columns, columns - first);
+      buffer.assign(rows * count * cell_bytes, 0);
+      int start[2] = {0, static_cast<int>(first)};
+      int stride[2] = {1, 1};
+      int edge[2] = {static_cast<int>(rows), static_cast<int>(count)};
+      if (Mat_VarReadData(file.get(), var.get(), buffer.data(), start, stride, edge) != 0)
+        throw FileError(path, "cannot read variable '" + name + "' (truncated or damaged)");
+      switch (var->class_type) {
+        case MAT_C_DOUBLE:
+          collect_nonzero<double>(buffer.data(), rows, first, count, pairs);
+          break;
+        case MAT_C_SINGLE:
+          collect_nonzero<float>(buffer.data(), rows, first, count, pairs);
+          break;
+        case MAT_C_INT64:
+        case MAT_C_UINT64:
+          collect_nonzero<std::uint64_t>(buffer.data(), rows, first, count, pairs);
+          break;
+        case MAT_C_INT32:
+        case MAT_C_UINT32:
+          collect_nonzero<std::uint32_t>(buffer.data(), rows, first, count, pairs);
+          break;
+        case MAT_C_INT16:
+        case MAT_C_UINT16:
+          collect_nonzero<std::uint16_t>(buffer.data(), rows, first, count, pairs);
+          break;
+        default:
+          collect_nonzero<std::uint8_t>(buffer.data(), rows, first, count, pairs);
+          break;
+      }
+    }
+  }
+  return GroundTruth(std::max(rows, columns), pairs);
+}
+
+int detect_index_base(const std::string& text) {
+  std::istringstream lines(text);
+  std::string line;
+  bool zero_seen = false;
+  while (std::getline(lines, line)) {
+    const std::size_t start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos) continue;
+    if (line[start] == '#') {
+      const std::string l = lower(line);
+      if (l.find("1-based") != std::string::npos) return 1;
+      if (l.find("0-based") != std::string::npos) return 0;
+      continue;
+    }
+    for (std::size_t i = start; i < line.size(); ++i) {
+      const bool boundary_before = i == 0 || !std::isdigit(static_cast<unsigned char>(line[i - 1]));
+      const bool boundary_after =
+          i + 1 == line.size() || !std::isdigit(static_cast<unsigned char>(line[i + 1]));
+      if (line[i] == '0' && boundary_before && boundary_after) zero_seen = true;
+    }
+  }
+  return zero_seen ? 0 : -1;
+}
+
+GroundTruth from_pairs_text(const std::string& path, const GroundTruthOptions& options) {
+  const std::string text = read_text(path);
+  int base = options.pairs_index_base;
+  if (base != 0 && base != 1) {
+    base = detect_index_base(text);
+    if (base < 0)
+      throw FileError(path,
+                      "cannot tell whether the pairs are 0-based or 1-based: "
+                      "add a comment line saying \"0-based\" or \"1-based\", or give the base");
+  }
+  Pairs pairs;
+  std::size_t frames = 0, line_number = 0;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    ++line_number;
+    const std::size_t start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos || line[start] == '#') continue;
+    for (char& c : line)
+      if (c == ',' || c == ';' || c == '\t' || c == '\r') c = ' ';
+    std::istringstream fields(line);
+    std::string a, b, extra;
+    fields >> a >> b;
+    const auto parse = [&](const std::string& s) -> std::size_t {
+      if (s.empty() || s.size() > 12 || !std::all_of(s.begin(), s.end(), [](char c) {
+            return std::isdigit(static_cast<unsigned char>(c)) != 0;
+          }))
+        throw FileError(path, "line " + std::to_string(line_number) +
+                                  ": expected two non-negative indices \"query match\"");
+      const std::size_t v = std::strtoull(s.c_str(), nullptr, 10);
+      if (v < static_cast<std::size_t>(base) || v - base >= kMaxFrames)
+        throw FileError(path, "line " + std::to_string(line_number) + ": index " + s +
+                                  " out of range for " + std::to_string(base) + "-based pairs");
+      return v - base;
+    };
+    const std::size_t query = parse(a), match = parse(b);
+    if (fields >> extra)
+      throw FileError(path, "line " + std::to_string(line_number) + ": more than two fields");
+    pairs.emplace_back(query, match);
+    frames = std::max({frames, query + 1, match + 1});
+  }
+  return GroundTruth(frames, pairs);
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string quoted = "\"";
+  for (char c : s) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+// Splits one CSV record (RFC 4180) starting at `pos`; advances `pos` past it.
+bool next_record(const std::string& text, std::size_t& pos, std::vector<std::string>& fields,
+                 bool& malformed) {
+  fields.clear();
+  malformed = false;
+  if (pos >= text.size()) return false;
+  std::string field;
+  bool quoted = false, in_quotes = false;
+  while (pos < text.size()) {
+    const char c = text[pos++];
+    if (in_quotes) {
+      if (c == '"') {
+        if (pos < text.size() && text[pos] == '"') {
+          field += '"';
+          ++pos;
+        } else {
+          in_quotes = false;
+        }
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      if (!field.empty() || quoted) malformed = true;
+      in_quotes = quoted = true;
+    } else if (c == ',') {
+      fields.push_back(std::move(field));
+      field.clear();
+      quoted = false;
+    } else if (c == '\n') {
+      break;
+    } else if (c != '\r') {
+      if (quoted) malformed = true;
+      field += c;
+    }
+  }
+  if (in_quotes) malformed = true;
+  fields.push_back(std::move(field));
+  return true;
+}
+
+}  // namespace
+
+GroundTruth::GroundTruth(std::size_t frames,
+                         const std::vector<std::pair<std::size_t, std::size_t>>& pairs)
+    : frames_(frames) {
+  if (frames > kMaxFrames) throw InvalidArgument("ground truth too large");
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> later_earlier;
+  later_earlier.reserve(pairs.size());
+  for (const auto& [a, b] : pairs) {
+    if (a >= frames || b >= frames)
+      throw InvalidArgument("ground-truth pair (" + std::to_string(a) + ", " + std::to_string(b) +
+                            ") outside " + std::to_string(frames) + " frames");
+    if (a == b) continue;
+    later_earlier.emplace_back(static_cast<std::uint32_t>(std::max(a, b)),
+                               static_cast<std::uint32_t>(std::min(a, b)));
+  }
+  std::sort(later_earlier.begin(), later_earlier.end());
+  later_earlier.erase(std::unique(later_earlier.begin(), later_earlier.end()), later_earlier.end());
+  offsets_.assign(frames + 1, 0);
+  earlier_.reserve(later_earlier.size());
+  for (const auto& [later, earlier] : later_earlier) {
+    ++offsets_[later + 1];
+    earlier_.push_back(earlier);
+  }
+  for (std::size_t q = 0; q < frames; ++q) {
+    if (offsets_[q + 1] > 0) ++queries_with_loops_;
+    offsets_[q + 1] += offsets_[q];
+  }
+}
+
+GroundTruth GroundTruth::load(const std::string& path, const GroundTruthOptions& options) {
+  const std::string name = lower(path);
+  try {
+    for (const char* ext : {".bmp", ".png", ".pgm", ".pbm", ".tif", ".tiff", ".jpg", ".jpeg"})
+      if (ends_with(name, ext)) return from_image(path);
+    if (ends_with(name, ".mat")) return from_mat(path);
+    return from_pairs_text(path, options);
+  } catch (const InvalidArgument& e) {
+    throw FileError(path, e.what());
+  }
+}
+
+bool GroundTruth::is_loop(std::size_t query, std::size_t match) const {
+  const std::size_t later = std::max(query, match), earlier = std::min(query, match);
+  if (later >= frames_ || later == earlier) return false;
+  const Span<std::uint32_t> m = earlier_matches(later);
+  return std::binary_search(m.begin(), m.end(), static_cast<std::uint32_t>(earlier));
+}
+
+bool GroundTruth::has_loop(std::size_t query) const {
+  return query < frames_ && offsets_[query + 1] > offsets_[query];
+}
+
+Span<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
+  if (query >= frames_) return {};
+  return {earlier_.data() + offsets_[query], offsets_[query + 1] - offsets_[query]};
+}
+
+void write_detections_csv(const std::string& path, const std::vector<Detection>& detections) {
+  std::string temporary = path + ".tmp-XXXXXX";
+  const int fd = mkstemp(temporary.data());
+  if (fd < 0) throw FileError(path, std::string("cannot create: ") + std::strerror(errno));
+  close(fd);
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << "query_index,match_index,query_file,match_file,score,inliers\n";
+    char score[64];
+    for (const Detection& d : detections) {
+      std::snprintf(score, sizeof score, "%.9g", d.score);
+      out << d.query << ',' << d.match << ',' << csv_field(d.query_file) << ','
+          << csv_field(d.match_file) << ',' << score << ',' << d.inliers << '\n';
+    }
+    out.flush();
+    if (!out) {
+      std::remove(temporary.c_str());
+      throw FileError(path, "write error");
+    }
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    const std::string problem = std::strerror(errno);
+    std::remove(temporary.c_str());
+    throw FileError(path, "cannot replace: " + problem);
+  }
+}
+
+std::vector<Detection> read_detections_csv(const std::string& path) {
+  const std::string text = read_text(path);
+  std::size_t pos = 0, line = 0;
+  std::vector<std::string> fields;
+  bool malformed = false;
+  if (!next_record(text, pos, fields, malformed) ||
+      fields != std::vector<std::string>{"query_index", "match_index", "query_file", "match_file",
+                                         "score", "inliers"})
+    throw FileError(path,
+                    "line 1: expected the header "
+                    "query_index,match_index,query_file,match_file,score,inliers");
+  ++line;
+  std::vector<Detection> detections;
+  while (next_record(text, pos, fields, malformed)) {
+    ++line;
+    if (fields.size() == 1 && fields[0].empty()) continue;
+    const std::string where = "line " + std::to_string(line) + ": ";
+    if (malformed || fields.size() != 6)
+      throw FileError(path, where + "expected 6 comma-separated fields");
+    const auto index = [&](const std::string& s) -> std::size_t {
+      if (s.empty() || s.size() > 12 || !std::all_of(s.begin(), s.end(), [](char c) {
+            return std::isdigit(static_cast<unsigned char>(c)) != 0;
+          }))
+        throw FileError(path, where + "\"" + s + "\" is not a non-negative index");
+      return std::strtoull(s.c_str(), nullptr, 10);
+    };
+    Detection d;
+    d.query = index(fields[0]);
+    d.match = index(fields[1]);
+    d.query_file = fields[2];
+    d.match_file = fields[3];
+    char* end = nullptr;
+    d.score = std::strtod(fields[4].c_str(), &end);
+    if (fields[4].empty() || end != fields[4].c_str() + fields[4].size())
+      throw FileError(path, where + "score \"" + fields[4] + "\" is not a number");
+    d.inliers = index(fields[5]);
+    detections.push_back(std::move(d));
+  }
+  return detections;
+}
+
+PrecisionRecall evaluate_detections(const std::vector<Detection>& detections,
+                                    const GroundTruth& truth) {
+  PrecisionRecall r;
+  r.queries_with_loops = truth.queries_with_loops();
+  std::vector<std::uint8_t> found(truth.frames(), 0);
+  for (const Detection& d : detections) {
+    if (d.query >= truth.frames() || d.match >= truth.frames())
+      throw InvalidArgument("detection (" + std::to_string(d.query) + ", " +
+                            std::to_string(d.match) + ") outside the ground truth's " +
+                            std::to_string(truth.frames()) + " frames");
+    ++r.detections;
+    if (truth.is_loop(d.query, d.match)) {
+      ++r.true_positives;
+      if (d.match < d.query && !found[d.query]) {
+        found[d.query] = 1;
+        ++r.queries_found;
+      }
+    } else {
+      ++r.false_positives;
+    }
+  }
+  r.precision = r.detections == 0 ? 1.0 : double(r.true_positives) / double(r.detections);
+  r.recall =
+      r.queries_with_loops == 0 ? 0.0 : double(r.queries_found) / double(r.queries_with_loops);
+  return r;
+}
+
+double recall_at_full_precision(const std::vector<PrCurvePoint>& curve) {
+  double best = 0;
+  for (const PrCurvePoint& p : curve)
+    if (p.result.detections > 0 && p.result.false_positives == 0)
+      best = std::max(best, p.result.recall);
+  return best;
+}
+
+std::vector<PrCurvePoint> pr_curve_by_score(const std::vector<Detection>& detections,
+                                            const GroundTruth& truth) {
+  std::vector<double> thresholds;
+  for (const Detection& d : detections) thresholds.push_back(d.score);
+  std::sort(thresholds.begin(), thresholds.end());
+  thresholds.erase(std::unique(thresholds.begin(), thresholds.end()), thresholds.end());
+  std::vector<PrCurvePoint> curve;
+  std::vector<Detection> kept;
+  for (double t : thresholds) {
+    kept.clear();
+    for (const Detection& d : detections)
+      if (d.score >= t) kept.push_back(d);
+    curve.push_back({t, evaluate_detections(kept, truth)});
+  }
+  return curve;
+}
+
+}  // namespace binbow::vision

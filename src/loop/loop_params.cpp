@@ -1,0 +1,274 @@
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core/persistence.hpp>
+
+#include "binbow/error.h"
+#include "binbow/vision/loop_detector.h"
+
+namespace binbow::vision {
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr std::uintmax_t kMaxParamsFileBytes = 1 << 20;
+
+std::string normalise_name(std::string name) {
+  for (char& c : name)
+    c = c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name;
+}
+
+// One table drives reading, writing and error messages, so the three cannot diverge.
+struct Field {
+  const char* key;
+  std::function<void(LoopDetectorParams&, const Json&)> read;  // throws std::string on type errors
+  std::function<Json(const LoopDetectorParams&)> write;
+};
+
+template <class T>
+Field number_field(const char* key, T LoopDetectorParams::*member) {
+  return {key,
+          [key, member](LoopDetectorParams& p, const Json& v) {
+            if (!v.is_number()) throw std::string("\"") + key + "\" must be a number";
+            if constexpr (std::is_integral_v<T>) {
+              const double x = v.get<double>();
+              if (x != std::floor(x) || std::abs(x) > 1e9)
+                throw std::string("\"") + key + "\" must be an integer";
+              p.*member = static_cast<T>(x);
+            } else {
+              p.*member = v.get<T>();
+            }
+          },
+          [member](const LoopDetectorParams& p) { return Json(p.*member); }};
+}
+
+Field bool_field(const char* key, bool LoopDetectorParams::*member) {
+  return {key,
+          [key, member](LoopDetectorParams& p, const Json& v) {
+            if (v.is_boolean()) {
+              p.*member = v.get<bool>();
+            } else if (v.is_number_integer() && (v.get<int>() == 0 || v.get<int>() == 1)) {
+              p.*member = v.get<int>() == 1;  // YAML through FileStorage has no booleans
+            } else if (v.is_string() && (v == "true" || v == "false")) {
+              p.*member = v == "true";
+            } else {
+              throw std::string("\"") + key + "\" must be true or false";
+            }
+          },
+          [member](const LoopDetectorParams& p) { return Json(p.*member); }};
+}
+
+const std::vector<Field>& fields() {
+  using P = LoopDetectorParams;
+  static const std::vector<Field> table = {
+      number_field("frequency", &P::frequency),
+      bool_field("use_normalised_score", &P::use_normalised_score),
+      number_field("alpha", &P::alpha),
+      number_field("min_normalisation_score", &P::min_normalisation_score),
+      number_field("dislocal", &P::dislocal),
+      number_field("max_db_results", &P::max_db_results),
+      number_field("max_intra_island_gap", &P::max_intra_island_gap),
+      number_field("min_matches_per_island", &P::min_matches_per_island),
+      number_field("k", &P::k),
+      number_field("max_distance_between_islands", &P::max_distance_between_islands),
+      number_field("max_distance_between_queries", &P::max_distance_between_queries),
+      Field{"geometric_check",
+            [](P& p, const Json& v) {
+              if (!v.is_string()) throw std::string("\"geometric_check\" must be a string");
+              try {
+                p.geometric_check = parse_geometric_check(v.get<std::string>());
+              } catch (const InvalidArgument& e) {
+                throw std::string(e.what());
+              }
+            },
+            [](const P& p) { return Json(to_string(p.geometric_check)); }},
+      number_field("direct_index_levels", &P::direct_index_levels),
+      bool_field("exhaustive_fallback", &P::exhaustive_fallback),
+      number_field("max_neighbor_ratio", &P::max_neighbor_ratio),
+      number_field("min_inliers", &P::min_inliers),
+      number_field("max_reprojection_error", &P::max_reprojection_error),
+      number_field("ransac_confidence", &P::ransac_confidence),
+      number_field("max_ransac_iterations", &P::max_ransac_iterations),
+  };
+  return table;
+}
+
+LoopDetectorParams from_object(const Json& object, const std::string& name) {
+  if (!object.is_object()) throw FileError(name, "loop detector parameters must be an object");
+  LoopDetectorParams params;
+  if (object.contains("frequency")) {
+    const Json& f = object["frequency"];
+    if (!f.is_number() || !(f.get<double>() > 0))
+      throw FileError(name, "\"frequency\" must be a positive number");
+    params = LoopDetectorParams::for_frequency(f.get<double>());
+  }
+  for (const auto& [key, value] : object.items()) {
+    const auto field = std::find_if(fields().begin(), fields().end(),
+                                    [&key = key](const Field& f) { return key == f.key; });
+    if (field == fields().end()) {
+      std::string known;
+      for (const Field& f : fields()) known += std::string(known.empty() ? "" : ", ") + f.key;
+      throw FileError(name,
+                      "unknown loop detector parameter \"" + key + "\" (known: " + known + ")");
+    }
+    try {
+      field->read(params, value);
+    } catch (const std::string& problem) {
+      throw FileError(name, problem);
+    }
+  }
+  try {
+    params.validate();
+  } catch (const InvalidArgument& e) {
+    throw FileError(name, e.what());
+  }
+  return params;
+}
+
+Json yaml_node_to_json(const cv::FileNode& node, const std::string& name, const std::string& key) {
+  if (node.isInt()) return Json(static_cast<int>(node));
+  if (node.isReal()) return Json(static_cast<double>(node));
+  if (node.isString()) return Json(static_cast<std::string>(node));
+  throw FileError(name, "\"" + key + "\" must be a number or a string");
+}
+
+}  // namespace
+
+const char* to_string(GeometricCheck check) {
+  switch (check) {
+    case GeometricCheck::kDirectIndex:
+      return "direct-index";
+    case GeometricCheck::kExhaustive:
+      return "exhaustive";
+    case GeometricCheck::kNone:
+      return "none";
+  }
+  return "?";
+}
+
+GeometricCheck parse_geometric_check(const std::string& name) {
+  const std::string n = normalise_name(name);
+  if (n == "direct-index") return GeometricCheck::kDirectIndex;
+  if (n == "exhaustive") return GeometricCheck::kExhaustive;
+  if (n == "none") return GeometricCheck::kNone;
+  throw InvalidArgument("unknown geometric check \"" + name +
+                        "\" (expected direct-index, exhaustive or none)");
+}
+
+const char* to_string(LoopStatus status) {
+  switch (status) {
+    case LoopStatus::kLoopDetected:
+      return "loop-detected";
+    case LoopStatus::kNoDatabaseResults:
+      return "no-database-results";
+    case LoopStatus::kLowNormalisationScore:
+      return "low-normalisation-score";
+    case LoopStatus::kLowScores:
+      return "low-scores";
+    case LoopStatus::kNoIslands:
+      return "no-islands";
+    case LoopStatus::kNoTemporalConsistency:
+      return "no-temporal-consistency";
+    case LoopStatus::kNoGeometricConsistency:
+      return "no-geometric-consistency";
+  }
+  return "?";
+}
+
+LoopDetectorParams LoopDetectorParams::for_frequency(double f) {
+  if (!(f > 0) || f > 1e4) throw InvalidArgument("frequency must be in (0, 10000] Hz");
+  const auto scaled = [f](double base, int at_least) {
+    return std::max(at_least, static_cast<int>(base * f));
+  };
+  LoopDetectorParams p;
+  p.frequency = f;
+  p.dislocal = scaled(20, 0);
+  p.max_db_results = scaled(50, 1);
+  p.min_matches_per_island = scaled(1, 1);
+  p.max_intra_island_gap = scaled(3, 1);
+  p.max_distance_between_islands = scaled(3, 0);
+  p.max_distance_between_queries = scaled(2, 1);
+  return p;
+}
+
+void LoopDetectorParams::validate() const {
+  const auto require = [](bool ok, const char* what) {
+    if (!ok) throw InvalidArgument(std::string("loop detector parameter ") + what);
+  };
+  require(frequency > 0, "frequency must be positive");
+  require(alpha >= 0, "alpha must be ≥ 0");
+  require(min_normalisation_score >= 0, "min_normalisation_score must be ≥ 0");
+  require(dislocal >= 0, "dislocal must be ≥ 0");
+  require(max_db_results >= 1, "max_db_results must be ≥ 1");
+  require(max_intra_island_gap >= 1, "max_intra_island_gap must be ≥ 1");
+  require(min_matches_per_island >= 1, "min_matches_per_island must be ≥ 1");
+  require(k >= 0, "k must be ≥ 0");
+  require(max_distance_between_islands >= 0, "max_distance_between_islands must be ≥ 0");
+  require(max_distance_between_queries >= 1, "max_distance_between_queries must be ≥ 1");
+  require(direct_index_levels >= 0 && direct_index_levels <= 16,
+          "direct_index_levels must be in [0, 16]");
+  require(max_neighbor_ratio > 0 && max_neighbor_ratio <= 1,
+          "max_neighbor_ratio must be in (0, 1]");
+  require(min_inliers >= 8, "min_inliers must be ≥ 8 (a fundamental matrix needs 8 points)");
+  require(max_reprojection_error > 0, "max_reprojection_error must be positive");
+  require(ransac_confidence > 0 && ransac_confidence < 1, "ransac_confidence must be in (0, 1)");
+  require(max_ransac_iterations >= 1, "max_ransac_iterations must be ≥ 1");
+}
+
+LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name) {
+  Json object;
+  try {
+    object = Json::parse(text);
+  } catch (const Json::exception& e) {
+    throw FileError(name, std::string("invalid JSON: ") + e.what());
+  }
+  return from_object(object, name);
+}
+
+LoopDetectorParams LoopDetectorParams::load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileError(path, "cannot open loop detector parameters");
+  std::string text;
+  char buffer[4096];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    text.append(buffer, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxParamsFileBytes)
+      throw FileError(path, "parameter file larger than 1 MiB");
+  }
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  const bool json = (first != std::string::npos && text[first] == '{') ||
+                    (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0);
+  if (json) return from_json(text, path);
+
+  // YAML (or XML) through OpenCV: converted to JSON to share one validator.
+  Json object = Json::object();
+  try {
+    cv::FileStorage storage(
+        text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    if (!storage.isOpened()) throw FileError(path, "neither JSON nor YAML");
+    const cv::FileNode root = storage.root();
+    if (!root.isMap()) throw FileError(path, "loop detector parameters must be a mapping");
+    for (const std::string& key : root.keys())
+      object[key] = yaml_node_to_json(root[key], path, key);
+  } catch (const cv::Exception& e) {
+    throw FileError(path, "invalid YAML: " + e.msg);
+  }
+  return from_object(object, path);
+}
+
+std::string LoopDetectorParams::to_json() const {
+  nlohmann::ordered_json object = nlohmann::ordered_json::object();
+  for (const Field& f : fields()) object[f.key] = f.write(*this);
+  return object.dump(2);
+}
+
+}  // namespace binbow::vision

@@ -1,0 +1,166 @@
+#include "binbow/vision/geometric_check.h"
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+#include <opencv2/calib3d.hpp>
+
+#include "binbow/error.h"
+
+namespace binbow::vision {
+namespace {
+
+constexpr std::uint32_t kNoPartner = std::numeric_limits<std::uint32_t>::max();
+
+// Ratio-test matching of index sets of `first` against index sets of
+// `second`, keeping one partner per feature of `second` across calls.
+class RatioMatcher {
+ public:
+  RatioMatcher(const DescriptorView& first, const DescriptorView& second, double max_ratio)
+      : first_(first),
+        second_(second),
+        max_ratio_(max_ratio),
+        slot_of_second_(second.rows, kNoPartner) {
+    if (first.code_size != second.code_size && !first.empty() && !second.empty())
+      throw InvalidArgument("matching descriptors of different sizes (" +
+                            std::to_string(first.code_size) + " and " +
+                            std::to_string(second.code_size) + " bytes)");
+  }
+
+  template <class FirstIndex, class SecondIndex>
+  void match(std::size_t first_count, FirstIndex first_index, std::size_t second_count,
+             SecondIndex second_index) {
+    if (second_count == 0) return;
+    for (std::size_t i = 0; i < first_count; ++i) {
+      const std::uint32_t a = first_index(i);
+      const std::uint8_t* da = first_.row(a);
+      std::uint32_t best = kNoPartner, second_best = kNoPartner, best_b = 0;
+      for (std::size_t j = 0; j < second_count; ++j) {
+        const std::uint32_t b = second_index(j);
+        const std::uint32_t d = hamming_distance(da, second_.row(b), first_.code_size);
+        if (d < best) {
+          second_best = best;
+          best = d;
+          best_b = b;
+        } else if (d < second_best) {
+          second_best = d;
+        }
+      }
+      const bool distinctive =
+          second_best == kNoPartner || (best < second_best && best <= max_ratio_ * second_best);
+      if (!distinctive) continue;
+      std::uint32_t& slot = slot_of_second_[best_b];
+      if (slot == kNoPartner) {
+        slot = static_cast<std::uint32_t>(matches_.size());
+        matches_.push_back({a, best_b});
+        distances_.push_back(best);
+      } else if (best < distances_[slot]) {
+        matches_[slot].first = a;
+        distances_[slot] = best;
+      }
+    }
+  }
+
+  std::vector<Correspondence> take() {
+    std::sort(matches_.begin(), matches_.end(),
+              [](const Correspondence& x, const Correspondence& y) { return x.first < y.first; });
+    return std::move(matches_);
+  }
+
+ private:
+  DescriptorView first_, second_;
+  double max_ratio_;
+  std::vector<std::uint32_t> slot_of_second_;
+  std::vector<Correspondence> matches_;
+  std::vector<std::uint32_t> distances_;
+};
+
+void check_ratio(double max_neighbor_ratio) {
+  if (!(max_neighbor_ratio > 0 && max_neighbor_ratio <= 1))
+    throw InvalidArgument("max_neighbor_ratio must be in (0, 1], got " +
+                          std::to_string(max_neighbor_ratio));
+}
+
+}  // namespace
+
+std::vector<Correspondence> match_exhaustive(const DescriptorView& first,
+                                             const DescriptorView& second,
+                                             double max_neighbor_ratio) {
+  check_ratio(max_neighbor_ratio);
+  RatioMatcher matcher(first, second, max_neighbor_ratio);
+  const auto identity = [](std::size_t i) { return static_cast<std::uint32_t>(i); };
+  matcher.match(first.rows, identity, second.rows, identity);
+  return matcher.take();
+}
+
+std::vector<Correspondence> match_direct_index(const DescriptorView& first,
+                                               const FeatureVector& first_nodes,
+                                               const DescriptorView& second,
+                                               const FeatureVector& second_nodes,
+                                               double max_neighbor_ratio) {
+  check_ratio(max_neighbor_ratio);
+  if (first_nodes.feature_count() > first.rows || second_nodes.feature_count() > second.rows)
+    throw InvalidArgument("direct index lists more features than there are descriptors");
+  const auto in_range = [](const FeatureVector& nodes, std::size_t rows) {
+    for (std::uint32_t f : nodes.feature_indices())
+      if (f >= rows) return false;
+    return true;
+  };
+  if (!in_range(first_nodes, first.rows) || !in_range(second_nodes, second.rows))
+    throw InvalidArgument("direct index refers to a feature past the descriptors");
+
+  RatioMatcher matcher(first, second, max_neighbor_ratio);
+  std::size_t i = 0, j = 0;
+  while (i < first_nodes.size() && j < second_nodes.size()) {
+    const NodeId a = first_nodes.node(i), b = second_nodes.node(j);
+    if (a < b) {
+      ++i;
+    } else if (b < a) {
+      ++j;
+    } else {
+      const Span<std::uint32_t> fa = first_nodes.features(i), fb = second_nodes.features(j);
+      matcher.match(
+          fa.size(), [&](std::size_t k) { return fa[k]; }, fb.size(),
+          [&](std::size_t k) { return fb[k]; });
+      ++i;
+      ++j;
+    }
+  }
+  return matcher.take();
+}
+
+FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> second,
+                                         const std::vector<Correspondence>& correspondences,
+                                         const FundamentalCheckParams& params) {
+  if (params.min_inliers < 0 || !(params.max_reprojection_error > 0) ||
+      !(params.confidence > 0 && params.confidence < 1) || params.max_iterations <= 0)
+    throw InvalidArgument("fundamental check parameters out of range");
+  FundamentalCheckResult result;
+  const std::size_t needed = static_cast<std::size_t>(std::max(8, params.min_inliers));
+  if (correspondences.size() < needed) return result;
+
+  std::vector<cv::Point2f> points_first, points_second;
+  points_first.reserve(correspondences.size());
+  points_second.reserve(correspondences.size());
+  for (const Correspondence& c : correspondences) {
+    if (c.first >= first.size() || c.second >= second.size())
+      throw InvalidArgument("correspondence refers to a keypoint past the end");
+    points_first.emplace_back(first[c.first].x, first[c.first].y);
+    points_second.emplace_back(second[c.second].x, second[c.second].y);
+  }
+  std::vector<std::uint8_t> mask;
+  const cv::Mat fundamental = cv::findFundamentalMat(
+      points_first, points_second, cv::FM_RANSAC, params.max_reprojection_error, params.confidence,
+      params.max_iterations, mask);
+  // Several solutions (7-point) come stacked; RANSAC returns one 3x3 or none.
+  if (fundamental.rows != 3 || fundamental.cols != 3 || mask.size() != correspondences.size())
+    return result;
+  for (std::size_t i = 0; i < mask.size(); ++i)
+    if (mask[i] != 0) result.inliers.push_back(correspondences[i]);
+  fundamental.convertTo(cv::Mat(3, 3, CV_64F, result.fundamental.val), CV_64F);
+  result.consistent = result.inliers.size() >= static_cast<std::size_t>(params.min_inliers);
+  return result;
+}
+
+}  // namespace binbow::vision
