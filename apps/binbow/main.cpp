@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "binbow 0.1.0");
   binbow::cli::add_info_command(app);
   binbow::cli::add_build_vocab_command(app);
+  binbow::cli::add_features_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

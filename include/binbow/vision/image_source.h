@@ -11,20 +11,31 @@
 namespace binbow::vision {
 
 struct Frame {
-  cv::Mat image;        // 8-bit grey
-  std::string name;     // file path, or "video.mp4#123" for video frames
+  cv::Mat image;          // 8-bit grey
+  std::string name;       // file path, or "video.mp4#123" for video frames
   std::size_t index = 0;  // 0-based position in the sequence (after stride)
 };
 
 struct ImageSourceOptions {
-  std::size_t stride = 1;   // keep every stride-th frame
-  int max_width = 0;        // downscale wider frames to this width; 0 keeps the size
+  std::size_t stride =
+      1;              // keep every stride-th frame (counted over the whole sequence); 0 acts as 1
+  int max_width = 0;  // downscale wider frames to this width (aspect kept); 0 keeps the size
+  // Videos only: sample at most this many frames per second of video time,
+  // before the stride applies; 0 keeps every frame. Ignored when the video
+  // does not report its frame rate.
+  double video_fps = 0;
 };
 
 // A sequence of frames from several inputs, in order. Each input is an image
-// file (any format OpenCV reads), a directory (its images in natural order:
-// 2.jpg before 10.jpg), a video file (through cv::VideoCapture) or a text file
-// listing one path per line (relative paths are relative to the list).
+// file (any format OpenCV reads), a directory (its image files, not
+// recursively, in natural order: 2.jpg before 10.jpg; hidden files skipped), a
+// video file (through cv::VideoCapture) or a text list (.txt, .lst, .list) of
+// one image, directory or video per line (relative paths are relative to the
+// list; blank lines and lines starting with '#' are skipped; lists do not nest).
+// Frames are converted to 8-bit grey and resized as the options ask.
+// The constructor expands directories and lists, throwing FileError naming
+// the path for anything missing, unreadable, or a directory without images;
+// InvalidArgument for an empty input list.
 class ImageSource {
  public:
   explicit ImageSource(const std::vector<std::string>& inputs, ImageSourceOptions options = {});
@@ -33,7 +44,8 @@ class ImageSource {
   ~ImageSource();
 
   // The next frame, or false at the end. Throws FileError naming the file
-  // when an image cannot be decoded.
+  // when an image cannot be decoded or a video cannot be opened; the source
+  // can continue with the next frame after such an error.
   bool next(Frame& frame);
   // Number of frames, when known before reading (-1 otherwise).
   long long size() const;
@@ -43,7 +55,10 @@ class ImageSource {
   std::unique_ptr<Impl> impl_;
 };
 
-// Reads one image file as 8-bit grey; throws FileError naming the file.
+// Reads one image file as 8-bit grey. Throws FileError naming the file when it
+// is missing, a directory, empty (0 bytes), a truncated JPEG (no end-of-image
+// marker after its last scan: libjpeg would silently fill the rest grey), not
+// decodable by OpenCV, or decodes to 0×0 pixels.
 cv::Mat read_grey_image(const std::string& path);
 
 }  // namespace binbow::vision

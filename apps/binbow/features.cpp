@@ -1,0 +1,103 @@
+// binbow features: detect and describe keypoints in one image.
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "binbow/error.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "commands.h"
+
+namespace binbow::cli {
+namespace {
+
+struct FeaturesArguments {
+  std::string image;
+  std::string descriptor = "brief";
+  int max_features = 0;
+  int fast_threshold = -1;
+  std::string pattern;
+  std::string draw;
+};
+
+std::unique_ptr<vision::FeatureExtractor> make_configured_extractor(
+    const FeaturesArguments& arguments) {
+  if (arguments.descriptor == "brief") {
+    vision::BriefOptions options;
+    if (arguments.max_features > 0) options.max_features = arguments.max_features;
+    if (arguments.fast_threshold >= 0) options.fast_threshold = arguments.fast_threshold;
+    options.pattern_file = arguments.pattern;
+    return vision::make_brief_extractor(options);
+  }
+  if (!arguments.pattern.empty()) throw InvalidArgument("--pattern applies to brief only");
+  if (arguments.descriptor == "orb") {
+    vision::OrbOptions options;
+    if (arguments.max_features > 0) options.max_features = arguments.max_features;
+    if (arguments.fast_threshold >= 0) options.fast_threshold = arguments.fast_threshold;
+    return vision::make_orb_extractor(options);
+  }
+  if (arguments.fast_threshold >= 0) {
+    throw InvalidArgument("--fast-threshold applies to brief and orb only");
+  }
+  return vision::make_extractor(arguments.descriptor, arguments.max_features);
+}
+
+void draw_features(const cv::Mat& image, const vision::Features& features,
+                   const std::string& path) {
+  cv::Mat canvas;
+  cv::drawKeypoints(image, vision::to_opencv(features.keypoints), canvas, cv::Scalar(0, 255, 0),
+                    cv::DrawMatchesFlags::DRAW_RICH_KEYPOINTS);
+  bool written = false;
+  try {
+    written = cv::imwrite(path, canvas);
+  } catch (const cv::Exception& e) {
+    throw FileError(path, "cannot write image: " + e.msg);
+  }
+  if (!written) throw FileError(path, "cannot write image (unknown extension or unwritable)");
+}
+
+void run_features(const FeaturesArguments& arguments) {
+  const auto extractor = make_configured_extractor(arguments);
+  const cv::Mat image = vision::read_grey_image(arguments.image);
+  const auto start = std::chrono::steady_clock::now();
+  const vision::Features features = extractor->extract(image);
+  const double milliseconds =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  std::printf("image: %s (%dx%d)\n", arguments.image.c_str(), image.cols, image.rows);
+  std::printf("descriptor: %s (%zu bytes)\n", extractor->name().c_str(), extractor->code_size());
+  std::printf("keypoints: %zu\n", features.keypoints.size());
+  std::printf("time: %.3f ms\n", milliseconds);
+  if (!arguments.draw.empty()) {
+    draw_features(image, features, arguments.draw);
+    std::printf("drawn: %s\n", arguments.draw.c_str());
+  }
+}
+
+}  // namespace
+
+void add_features_command(CLI::App& app) {
+  auto arguments = std::make_shared<FeaturesArguments>();
+  CLI::App* command = app.add_subcommand(
+      "features",
+      "Detect keypoints and compute binary descriptors in one image; print the count "
+      "and the extraction time");
+  command->add_option("image", arguments->image, "Image file (any format OpenCV reads)")
+      ->required();
+  command->add_option("--descriptor", arguments->descriptor, "brief, orb, akaze or brisk")
+      ->capture_default_str();
+  command->add_option("-n,--features", arguments->max_features,
+                      "Keep at most this many keypoints (default: brief 300, orb 1000)");
+  command->add_option("--fast-threshold", arguments->fast_threshold,
+                      "FAST threshold for brief (default 10) and orb (default 20)");
+  command->add_option("--pattern", arguments->pattern,
+                      "BRIEF test pattern file (OpenCV YAML with x1 y1 x2 y2; default built in)");
+  command->add_option("--draw", arguments->draw, "Write the image with its keypoints to this file");
+  command->callback([arguments] { run_features(*arguments); });
+}
+
+}  // namespace binbow::cli

@@ -1,0 +1,148 @@
+// The paper's BRIEF extractor; see BriefOptions in binbow/vision/features.h for
+// the exact compatibility contract with DLoopDetector's DVision::BRIEF.
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "binbow/error.h"
+#include "binbow/vision/features.h"
+#include "vision/brief_pattern.h"
+#include "vision/check_image.h"
+
+namespace binbow::vision {
+namespace {
+
+// DVision::BRIEF smooths with this kernel before the tests.
+const cv::Size kSmoothingKernel(9, 9);
+constexpr double kSmoothingSigma = 2.0;
+// The patch size the paper and DLoopDetector report for the default pattern.
+constexpr float kPatchSize = 48.f;
+
+class BriefExtractor final : public FeatureExtractor {
+ public:
+  BriefExtractor(const BriefOptions& options, BriefPattern pattern)
+      : options_(options), pattern_(std::move(pattern)), radius_(pattern_.radius()) {
+    if (options_.fast_threshold < 0 || options_.fast_threshold > 255) {
+      throw InvalidArgument("BRIEF fast_threshold must be in [0, 255], got " +
+                            std::to_string(options_.fast_threshold));
+    }
+  }
+
+  Features extract(const cv::Mat& image) const override {
+    check_grey_image(image, "BRIEF");
+    Features features;
+    features.descriptors = DescriptorMatrix(code_size());
+    if (image.empty()) return features;
+
+    std::vector<cv::KeyPoint> corners;
+    cv::FAST(image, corners, options_.fast_threshold, options_.non_max_suppression);
+    const std::vector<cv::KeyPoint> kept = strongest_inside(corners, image.size());
+    if (kept.empty()) return features;
+
+    const cv::Mat smoothed = smooth_around(image, kept);
+    features.keypoints.reserve(kept.size());
+    features.descriptors.resize(kept.size());
+    describe(smoothed, kept, features.descriptors);
+    for (const cv::KeyPoint& corner : kept) {
+      Keypoint keypoint;
+      keypoint.x = corner.pt.x;
+      keypoint.y = corner.pt.y;
+      keypoint.size = kPatchSize;
+      keypoint.angle = -1;
+      keypoint.response = corner.response;
+      keypoint.octave = 0;
+      features.keypoints.push_back(keypoint);
+    }
+    return features;
+  }
+
+  std::size_t code_size() const override { return pattern_.tests() / 8; }
+  std::string name() const override { return "brief"; }
+
+ private:
+  // Corners whose every test lies inside the image, the strongest first
+  // (stable, so equal responses keep FAST's raster order), at most max_features.
+  std::vector<cv::KeyPoint> strongest_inside(const std::vector<cv::KeyPoint>& corners,
+                                             cv::Size size) const {
+    std::vector<cv::KeyPoint> inside;
+    inside.reserve(corners.size());
+    for (const cv::KeyPoint& corner : corners) {
+      const int x = static_cast<int>(corner.pt.x);
+      const int y = static_cast<int>(corner.pt.y);
+      if (x >= radius_ && y >= radius_ && x < size.width - radius_ && y < size.height - radius_) {
+        inside.push_back(corner);
+      }
+    }
+    const auto stronger = [](const cv::KeyPoint& a, const cv::KeyPoint& b) {
+      return a.response > b.response;
+    };
+    std::stable_sort(inside.begin(), inside.end(), stronger);
+    if (options_.max_features > 0 &&
+        inside.size() > static_cast<std::size_t>(options_.max_features)) {
+      inside.resize(static_cast<std::size_t>(options_.max_features));
+    }
+    return inside;
+  }
+
+  // The image smoothed as DVision does, computed only over the bounding box of
+  // the tests: cv::GaussianBlur on a region of interest reads the real pixels
+  // around it, so the values inside equal those of a whole-image blur.
+  cv::Mat smooth_around(const cv::Mat& image, const std::vector<cv::KeyPoint>& keypoints) const {
+    int min_x = image.cols, min_y = image.rows, max_x = 0, max_y = 0;
+    for (const cv::KeyPoint& keypoint : keypoints) {
+      const int x = static_cast<int>(keypoint.pt.x);
+      const int y = static_cast<int>(keypoint.pt.y);
+      min_x = std::min(min_x, x);
+      min_y = std::min(min_y, y);
+      max_x = std::max(max_x, x);
+      max_y = std::max(max_y, y);
+    }
+    const cv::Rect box(min_x - radius_, min_y - radius_, max_x - min_x + 2 * radius_ + 1,
+                       max_y - min_y + 2 * radius_ + 1);
+    cv::Mat smoothed(image.size(), CV_8UC1);
+    cv::GaussianBlur(image(box), smoothed(box), kSmoothingKernel, kSmoothingSigma, kSmoothingSigma,
+                     cv::BORDER_REFLECT_101);
+    return smoothed;
+  }
+
+  void describe(const cv::Mat& smoothed, const std::vector<cv::KeyPoint>& keypoints,
+                DescriptorMatrix& descriptors) const {
+    const std::size_t tests = pattern_.tests();
+    const auto step = static_cast<std::ptrdiff_t>(smoothed.step1());
+    std::vector<std::ptrdiff_t> first(tests), second(tests);
+    for (std::size_t i = 0; i < tests; ++i) {
+      first[i] = pattern_.y1[i] * step + pattern_.x1[i];
+      second[i] = pattern_.y2[i] * step + pattern_.x2[i];
+    }
+    for (std::size_t k = 0; k < keypoints.size(); ++k) {
+      const std::uint8_t* center = smoothed.ptr<std::uint8_t>(static_cast<int>(keypoints[k].pt.y)) +
+                                   static_cast<int>(keypoints[k].pt.x);
+      std::uint8_t* out = descriptors.row(k);
+      for (std::size_t byte = 0; byte < tests / 8; ++byte) {
+        unsigned value = 0;
+        for (unsigned bit = 0; bit < 8; ++bit) {
+          const std::size_t test = byte * 8 + bit;
+          value |= static_cast<unsigned>(center[first[test]] < center[second[test]]) << bit;
+        }
+        out[byte] = static_cast<std::uint8_t>(value);
+      }
+    }
+  }
+
+  BriefOptions options_;
+  BriefPattern pattern_;
+  int radius_;
+};
+
+}  // namespace
+
+std::unique_ptr<FeatureExtractor> make_brief_extractor(const BriefOptions& options) {
+  BriefPattern pattern = options.pattern_file.empty() ? default_brief_pattern()
+                                                      : load_brief_pattern(options.pattern_file);
+  return std::make_unique<BriefExtractor>(options, std::move(pattern));
+}
+
+}  // namespace binbow::vision

@@ -1,0 +1,31 @@
+// BRIEF test patterns: the point pairs compared by each descriptor bit.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace binbow::vision {
+
+// Test i compares the pixels at (x1[i], y1[i]) and (x2[i], y2[i]), offsets from
+// the keypoint; the four vectors have the same length, a multiple of 8.
+struct BriefPattern {
+  std::vector<int> x1, y1, x2, y2;
+
+  std::size_t tests() const { return x1.size(); }
+  // Largest |offset| over all coordinates: the keypoint must be this far
+  // inside the image for every test to be inside too.
+  int radius() const;
+};
+
+// The largest |offset| a pattern may use; keeps hostile files from asking for
+// absurd patches.
+inline constexpr int kMaxBriefPatternRadius = 64;
+
+// DLoopDetector's / VINS' brief_pattern.yml, built in.
+const BriefPattern& default_brief_pattern();
+// Reads an OpenCV FileStorage file (YAML, XML, JSON; optionally .gz) with the
+// integer sequences x1 y1 x2 y2. Throws FileError naming the file for anything
+// missing, unequal, not a multiple of 8, or outside ±kMaxBriefPatternRadius.
+BriefPattern load_brief_pattern(const std::string& path);
+
+}  // namespace binbow::vision

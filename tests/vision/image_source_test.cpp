@@ -1,0 +1,310 @@
+#include "binbow/vision/image_source.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "binbow/error.h"
+#include "support/test_support.h"
+#include "vision/natural_order.h"
+
+namespace binbow::vision {
+namespace {
+
+using test::TempDir;
+
+// A 40x30 colour image whose pixels depend on `seed`, so frames differ.
+cv::Mat colour_image(int seed, int width = 40, int height = 30) {
+  cv::Mat image(height, width, CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      image.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>((x * 5 + seed * 40) % 256),
+                                            static_cast<uchar>((y * 7 + seed * 20) % 256),
+                                            static_cast<uchar>((x + y + seed) % 256));
+    }
+  }
+  return image;
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::vector<std::string> read_all_names(ImageSource& source) {
+  std::vector<std::string> names;
+  Frame frame;
+  while (source.next(frame)) {
+    EXPECT_EQ(frame.index, names.size());
+    EXPECT_EQ(frame.image.type(), CV_8UC1);
+    names.push_back(frame.name);
+  }
+  return names;
+}
+
+std::string filename(const std::string& path) {
+  return std::filesystem::path(path).filename().string();
+}
+
+// Expects `action` to throw FileError whose message names `path`.
+template <typename Action>
+void expect_file_error_naming(const std::string& path, Action action) {
+  try {
+    action();
+    ADD_FAILURE() << "no FileError for " << path;
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_EQ(e.path(), path);
+  }
+}
+
+TEST(NaturalOrder, DigitRunsCompareAsNumbers) {
+  EXPECT_TRUE(natural_less("2.jpg", "10.jpg"));
+  EXPECT_FALSE(natural_less("10.jpg", "2.jpg"));
+  EXPECT_TRUE(natural_less("frame9.png", "frame10.png"));
+  EXPECT_TRUE(natural_less("a.png", "B.png"));
+  EXPECT_TRUE(natural_less("img2_3", "img2_10"));
+  EXPECT_TRUE(natural_less("99999999999999999999999.png", "100000000000000000000000.png"));
+  // Equal as numbers: total order through the exact text, never both ways.
+  EXPECT_NE(natural_less("007.png", "7.png"), natural_less("7.png", "007.png"));
+  EXPECT_FALSE(natural_less("x1", "x1"));
+
+  std::vector<std::string> names = {"10.jpg", "1.jpg", "img10.png", "2.jpg", "img9.png", "20.jpg"};
+  std::sort(names.begin(), names.end(), natural_less);
+  EXPECT_EQ(names, (std::vector<std::string>{"1.jpg", "2.jpg", "10.jpg", "20.jpg", "img9.png",
+                                             "img10.png"}));
+}
+
+TEST(ReadGreyImage, ConvertsColourToGrey) {
+  TempDir dir;
+  const cv::Mat colour = colour_image(3);
+  ASSERT_TRUE(cv::imwrite(dir.file("c.png"), colour));
+  const cv::Mat grey = read_grey_image(dir.file("c.png"));
+  ASSERT_EQ(grey.type(), CV_8UC1);
+  ASSERT_EQ(grey.size(), colour.size());
+  cv::Mat expected;
+  cv::cvtColor(colour, expected, cv::COLOR_BGR2GRAY);
+  EXPECT_LE(cv::norm(grey, expected, cv::NORM_INF), 1.0);
+}
+
+TEST(ReadGreyImage, RealJpegAndPngDecode) {
+  const cv::Mat jpeg = read_grey_image(test::shared_data("rtabmap-samples/samples/1.jpg"));
+  EXPECT_EQ(jpeg.size(), cv::Size(512, 384));
+  const cv::Mat png = read_grey_image(test::shared_data("opencv-doc-samples/graf1.png"));
+  EXPECT_EQ(png.size(), cv::Size(800, 640));
+  const cv::Mat exif = read_grey_image(test::shared_data("opencv-doc-samples/leuvenA.jpg"));
+  EXPECT_EQ(exif.type(), CV_8UC1);
+  EXPECT_FALSE(exif.empty());
+}
+
+TEST(ReadGreyImage, BadFilesGiveFileErrorNamingTheFile) {
+  TempDir dir;
+  write_text(dir.file("empty.png"), "");
+  expect_file_error_naming(dir.file("empty.png"), [&] { read_grey_image(dir.file("empty.png")); });
+
+  const std::vector<std::uint8_t> jpeg =
+      test::read_file(test::shared_data("rtabmap-samples/samples/1.jpg"));
+  ASSERT_GT(jpeg.size(), 1000u);
+  test::write_file(dir.file("truncated.jpg"),
+                   std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + jpeg.size() / 2));
+  expect_file_error_naming(dir.file("truncated.jpg"),
+                           [&] { read_grey_image(dir.file("truncated.jpg")); });
+  test::write_file(dir.file("header_only.jpg"),
+                   std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + 20));
+  expect_file_error_naming(dir.file("header_only.jpg"),
+                           [&] { read_grey_image(dir.file("header_only.jpg")); });
+
+  const std::vector<std::uint8_t> png =
+      test::read_file(test::shared_data("opencv-doc-samples/box.png"));
+  test::write_file(dir.file("truncated.png"),
+                   std::vector<std::uint8_t>(png.begin(), png.begin() + png.size() / 2));
+  expect_file_error_naming(dir.file("truncated.png"),
+                           [&] { read_grey_image(dir.file("truncated.png")); });
+
+  write_text(dir.file("zero.pgm"), "P5\n0 0\n255\n");
+  expect_file_error_naming(dir.file("zero.pgm"), [&] { read_grey_image(dir.file("zero.pgm")); });
+  write_text(dir.file("garbage.png"), "this is not an image at all");
+  expect_file_error_naming(dir.file("garbage.png"),
+                           [&] { read_grey_image(dir.file("garbage.png")); });
+  expect_file_error_naming(dir.file("missing.png"),
+                           [&] { read_grey_image(dir.file("missing.png")); });
+  expect_file_error_naming(dir.path(), [&] { read_grey_image(dir.path()); });
+}
+
+TEST(ImageSource, DirectoryInNaturalOrderSkippingOtherFiles) {
+  TempDir dir;
+  for (const char* name : {"10.png", "2.png", "1.png", ".hidden.png"}) {
+    ASSERT_TRUE(cv::imwrite(dir.file(name), colour_image(1)));
+  }
+  write_text(dir.file("notes.md"), "not an image");
+  std::filesystem::create_directory(dir.file("sub.png"));
+  ImageSource source({dir.path()});
+  EXPECT_EQ(source.size(), 3);
+  const std::vector<std::string> names = read_all_names(source);
+  ASSERT_EQ(names.size(), 3u);
+  EXPECT_EQ(filename(names[0]), "1.png");
+  EXPECT_EQ(filename(names[1]), "2.png");
+  EXPECT_EQ(filename(names[2]), "10.png");
+}
+
+TEST(ImageSource, StrideAndMaxWidth) {
+  TempDir dir;
+  for (int i = 1; i <= 5; ++i) {
+    ASSERT_TRUE(cv::imwrite(dir.file(std::to_string(i) + ".png"), colour_image(i, 640, 480)));
+  }
+  ImageSourceOptions options;
+  options.stride = 2;
+  options.max_width = 320;
+  ImageSource source({dir.path()}, options);
+  EXPECT_EQ(source.size(), 3);
+  Frame frame;
+  std::vector<std::string> names;
+  while (source.next(frame)) {
+    EXPECT_EQ(frame.image.size(), cv::Size(320, 240));
+    names.push_back(filename(frame.name));
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"1.png", "3.png", "5.png"}));
+}
+
+TEST(ImageSource, TextListWithRelativePathsAndComments) {
+  TempDir dir;
+  std::filesystem::create_directory(dir.file("images"));
+  ASSERT_TRUE(cv::imwrite(dir.file("images/a.png"), colour_image(1)));
+  ASSERT_TRUE(cv::imwrite(dir.file("images/b.jpg"), colour_image(2)));
+  write_text(dir.file("list.txt"),
+             "# frames\nimages/b.jpg\r\n\n  images/a.png  \n" + dir.file("images/b.jpg") + "\n");
+  ImageSource source({dir.file("list.txt")});
+  EXPECT_EQ(source.size(), 3);
+  const std::vector<std::string> names = read_all_names(source);
+  ASSERT_EQ(names.size(), 3u);
+  EXPECT_EQ(filename(names[0]), "b.jpg");
+  EXPECT_EQ(filename(names[1]), "a.png");
+  EXPECT_EQ(filename(names[2]), "b.jpg");
+}
+
+TEST(ImageSource, SeveralInputsInOrder) {
+  TempDir dir;
+  ASSERT_TRUE(cv::imwrite(dir.file("x.png"), colour_image(1)));
+  ASSERT_TRUE(cv::imwrite(dir.file("y.png"), colour_image(2)));
+  ImageSource source({dir.file("y.png"), dir.file("x.png"), dir.file("y.png")});
+  const std::vector<std::string> names = read_all_names(source);
+  ASSERT_EQ(names.size(), 3u);
+  EXPECT_EQ(filename(names[0]), "y.png");
+  EXPECT_EQ(filename(names[1]), "x.png");
+}
+
+TEST(ImageSource, BadInputsGiveFileErrorNamingThem) {
+  TempDir dir;
+  EXPECT_THROW(ImageSource({}), InvalidArgument);
+  expect_file_error_naming(dir.file("nothing"), [&] { ImageSource source({dir.file("nothing")}); });
+  std::filesystem::create_directory(dir.file("empty_dir"));
+  expect_file_error_naming(dir.file("empty_dir"),
+                           [&] { ImageSource source({dir.file("empty_dir")}); });
+  write_text(dir.file("list.txt"), "missing.png\n");
+  expect_file_error_naming(dir.file("list.txt"),
+                           [&] { ImageSource source({dir.file("list.txt")}); });
+  write_text(dir.file("nested.txt"), "list.txt\n");
+  expect_file_error_naming(dir.file("nested.txt"),
+                           [&] { ImageSource source({dir.file("nested.txt")}); });
+}
+
+TEST(ImageSource, UndecodableImageReportsItAndContinues) {
+  TempDir dir;
+  ASSERT_TRUE(cv::imwrite(dir.file("1.png"), colour_image(1)));
+  write_text(dir.file("2.png"), "");
+  ASSERT_TRUE(cv::imwrite(dir.file("3.png"), colour_image(3)));
+  ImageSource source({dir.path()});
+  Frame frame;
+  ASSERT_TRUE(source.next(frame));
+  expect_file_error_naming(dir.file("2.png"), [&] { source.next(frame); });
+  ASSERT_TRUE(source.next(frame));
+  EXPECT_EQ(filename(frame.name), "3.png");
+  EXPECT_FALSE(source.next(frame));
+}
+
+// Writes `count` frames of 64x48 whose mean brightness is 20 * k + 10.
+std::string write_video(const TempDir& dir, int count, double fps) {
+  const std::string path = dir.file("clip.avi");
+  cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps, cv::Size(64, 48),
+                         true);
+  EXPECT_TRUE(writer.isOpened()) << "OpenCV cannot write MJPG .avi";
+  for (int k = 0; k < count; ++k) {
+    writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(20 * k + 10)));
+  }
+  writer.release();
+  return path;
+}
+
+TEST(ImageSource, VideoFramesWithStride) {
+  TempDir dir;
+  const std::string video = write_video(dir, 10, 10);
+  {
+    ImageSource source({video});
+    EXPECT_EQ(source.size(), -1);
+    Frame frame;
+    int count = 0;
+    while (source.next(frame)) {
+      EXPECT_EQ(frame.image.type(), CV_8UC1);
+      EXPECT_EQ(frame.image.size(), cv::Size(64, 48));
+      EXPECT_EQ(frame.name, video + "#" + std::to_string(count));
+      EXPECT_NEAR(cv::mean(frame.image)[0], 20 * count + 10, 4.0);
+      ++count;
+    }
+    EXPECT_EQ(count, 10);
+  }
+  {
+    ImageSourceOptions options;
+    options.stride = 3;
+    options.max_width = 32;
+    ImageSource source({video}, options);
+    std::vector<std::string> names;
+    Frame frame;
+    while (source.next(frame)) {
+      EXPECT_EQ(frame.image.size(), cv::Size(32, 24));
+      names.push_back(frame.name);
+    }
+    EXPECT_EQ(names,
+              (std::vector<std::string>{video + "#0", video + "#3", video + "#6", video + "#9"}));
+  }
+  {
+    ImageSourceOptions options;
+    options.video_fps = 5;  // half of the video's 10 fps
+    ImageSource source({video}, options);
+    std::vector<std::string> names;
+    Frame frame;
+    while (source.next(frame)) names.push_back(frame.name);
+    EXPECT_EQ(names, (std::vector<std::string>{video + "#0", video + "#2", video + "#4",
+                                               video + "#6", video + "#8"}));
+  }
+}
+
+TEST(ImageSource, VideoAmongImagesFromAList) {
+  TempDir dir;
+  const std::string video = write_video(dir, 3, 10);
+  ASSERT_TRUE(cv::imwrite(dir.file("still.png"), colour_image(1)));
+  write_text(dir.file("all.txt"), "still.png\nclip.avi\nstill.png\n");
+  ImageSource source({dir.file("all.txt")});
+  const std::vector<std::string> names = read_all_names(source);
+  ASSERT_EQ(names.size(), 5u);
+  EXPECT_EQ(filename(names[0]), "still.png");
+  EXPECT_EQ(filename(names[1]), "clip.avi#0");
+  EXPECT_EQ(filename(names[3]), "clip.avi#2");
+  EXPECT_EQ(filename(names[4]), "still.png");
+}
+
+TEST(ImageSource, UnreadableVideoGivesFileError) {
+  TempDir dir;
+  write_text(dir.file("broken.avi"), "RIFF nonsense");
+  ImageSource source({dir.file("broken.avi")});
+  Frame frame;
+  expect_file_error_naming(dir.file("broken.avi"), [&] { source.next(frame); });
+}
+
+}  // namespace
+}  // namespace binbow::vision
