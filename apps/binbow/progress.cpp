@@ -1,7 +1,7 @@
 #include "progress.h"
 
-#include <cstdio>
 #include <unistd.h>
+#include <cstdio>
 
 namespace binbow::cli {
 
@@ -12,7 +12,9 @@ Progress::Progress(std::string label, std::size_t total)
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 
-Progress::~Progress() { finish(); }
+Progress::~Progress() {
+  finish();
+}
 
 void Progress::update(std::size_t done) {
   done_ = done;

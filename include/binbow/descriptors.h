@@ -48,10 +48,7 @@ class DescriptorMatrix {
   const std::uint8_t* row(std::size_t i) const { return data_.data() + i * code_size_; }
 
   // Appends one descriptor of code_size() bytes.
-  void append(const std::uint8_t* descriptor) {
-    data_.insert(data_.end(), descriptor, descriptor + code_size_);
-    ++rows_;
-  }
+  void append(const std::uint8_t* descriptor);
   // Appends every row of `other`, which must have the same code size.
   void append(const DescriptorView& other);
   void reserve(std::size_t rows) { data_.reserve(rows * code_size_); }

@@ -32,14 +32,14 @@ struct VocabularyBlock;
 // A vocabulary as a plain tree: the interchange form between builders, file
 // readers and writers, and the flat Vocabulary. Node 0 is the root.
 struct VocabularyTree {
-  std::size_t code_size = 0;     // bytes per descriptor
-  std::uint32_t branching = 0;   // k: maximum children per node (1..255)
-  std::uint32_t levels = 0;      // L: maximum depth of a leaf (root has depth 0)
+  std::size_t code_size = 0;    // bytes per descriptor
+  std::uint32_t branching = 0;  // k: maximum children per node (1..255)
+  std::uint32_t levels = 0;     // L: maximum depth of a leaf (root has depth 0)
   Weighting weighting = Weighting::kTfIdf;
   Scoring scoring = Scoring::kL1;
-  std::vector<NodeId> parent;               // parent[i] for i ≥ 1; parent[0] is ignored
-  std::vector<std::uint8_t> descriptors;    // node_count() × code_size; the root's bytes are ignored
-  std::vector<float> weights;               // per node; only leaves' (the words') weights are kept
+  std::vector<NodeId> parent;             // parent[i] for i ≥ 1; parent[0] is ignored
+  std::vector<std::uint8_t> descriptors;  // node_count() × code_size; the root's bytes are ignored
+  std::vector<float> weights;             // per node; only leaves' (the words') weights are kept
 
   std::size_t node_count() const noexcept { return parent.size(); }
 };
@@ -48,7 +48,7 @@ struct VocabularyTree {
 struct BuildProgress {
   std::size_t clustered_descriptors = 0;  // descriptors that reached a leaf so far
   std::size_t total_descriptors = 0;
-  std::size_t nodes = 0;                  // nodes created so far
+  std::size_t nodes = 0;  // nodes created so far
 };
 
 struct BuildOptions {
@@ -117,9 +117,9 @@ class Vocabulary {
   // Node access (ids < node_count()).
   const std::uint8_t* node_descriptor(NodeId node) const;
   bool is_leaf(NodeId node) const;
-  NodeId first_child(NodeId node) const;    // meaningful for inner nodes
+  NodeId first_child(NodeId node) const;         // meaningful for inner nodes
   std::uint32_t child_count(NodeId node) const;  // 0 for leaves
-  WordId node_word(NodeId node) const;      // meaningful for leaves
+  WordId node_word(NodeId node) const;           // meaningful for leaves
   float word_weight(WordId word) const;
   // Leaf node of every word, computed on demand (O(nodes)).
   std::vector<NodeId> word_nodes() const;

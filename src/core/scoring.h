@@ -18,7 +18,9 @@ namespace binbow::detail {
 
 inline const double kLogEpsilon = std::log(DBL_EPSILON);
 
-inline double kl_missing_term(double v) { return v * (std::log(v) - kLogEpsilon); }
+inline double kl_missing_term(double v) {
+  return v * (std::log(v) - kLogEpsilon);
+}
 
 inline double score_term(Scoring scoring, double v, double w) {
   switch (scoring) {

@@ -2,13 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
-#include <sys/wait.h>
 
 namespace binbow::test {
 
@@ -29,7 +29,9 @@ std::string source_path(const std::string& relative) {
   return std::string(BINBOW_SOURCE_DIR) + "/" + relative;
 }
 
-std::string cli_path() { return BINBOW_CLI; }
+std::string cli_path() {
+  return BINBOW_CLI;
+}
 
 TempDir::TempDir() {
   std::string pattern = (fs::temp_directory_path() / "binbow-test-XXXXXX").string();
@@ -48,8 +50,8 @@ DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size, std
   return m;
 }
 
-DescriptorMatrix clustered_descriptors(std::size_t rows, std::size_t code_size,
-                                       std::size_t centers, double noise, std::mt19937_64& rng) {
+DescriptorMatrix clustered_descriptors(std::size_t rows, std::size_t code_size, std::size_t centers,
+                                       double noise, std::mt19937_64& rng) {
   const DescriptorMatrix c = random_descriptors(centers, code_size, rng);
   DescriptorMatrix m(rows, code_size);
   std::bernoulli_distribution flip(noise);
@@ -72,7 +74,8 @@ std::vector<std::uint8_t> read_file(const std::string& path) {
 
 void write_file(const std::string& path, const std::vector<std::uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 int run_command(const std::string& command, std::string* output) {

@@ -37,8 +37,8 @@ class TempDir {
 DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size, std::mt19937_64& rng);
 // Descriptors clustered around `centers` random centres, each bit flipped
 // with probability `noise`: data with real structure for k-medians.
-DescriptorMatrix clustered_descriptors(std::size_t rows, std::size_t code_size,
-                                       std::size_t centers, double noise, std::mt19937_64& rng);
+DescriptorMatrix clustered_descriptors(std::size_t rows, std::size_t code_size, std::size_t centers,
+                                       double noise, std::mt19937_64& rng);
 
 // Reads a whole file; empty vector if missing.
 std::vector<std::uint8_t> read_file(const std::string& path);

@@ -1,0 +1,13 @@
+// CRC-32C (Castagnoli), the checksum of every section of binbow's files.
+// Uses the SSE4.2 instruction when the CPU has it, a table otherwise.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace binbow::detail {
+
+// CRC of `size` bytes, continuing from `crc` (0 to start).
+std::uint32_t crc32c(const void* data, std::size_t size, std::uint32_t crc = 0);
+
+}  // namespace binbow::detail

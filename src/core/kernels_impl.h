@@ -1,0 +1,184 @@
+// Kernel bodies, included once per instruction set by kernels_<isa>.cpp with
+// BINBOW_KERNEL_NAMESPACE defined; the compile flags of that file decide
+// whether __builtin_popcountll becomes one instruction.
+#include <cstring>
+
+#include "core/kernels.h"
+
+namespace binbow::detail::BINBOW_KERNEL_NAMESPACE {
+namespace {
+
+inline std::uint64_t load64(const std::uint8_t* p) {
+  std::uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+inline std::uint32_t popcount64(std::uint64_t x) {
+#if defined(__POPCNT__) || !defined(__x86_64__)
+  return static_cast<std::uint32_t>(__builtin_popcountll(x));
+#else
+  // Without the instruction GCC calls a libgcc routine; SWAR is faster.
+  x -= (x >> 1) & 0x5555555555555555ull;
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
+#endif
+}
+
+template <std::size_t N>
+inline std::uint32_t hamming_fixed(const std::uint8_t* a, const std::uint8_t* b) {
+  std::uint32_t d = 0;
+  for (std::size_t i = 0; i < N; i += 8) d += popcount64(load64(a + i) ^ load64(b + i));
+  return d;
+}
+
+inline std::uint32_t hamming_any(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
+  std::uint32_t d = 0;
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) d += popcount64(load64(a + i) ^ load64(b + i));
+  for (; i < n; ++i) d += popcount64(static_cast<std::uint64_t>(a[i] ^ b[i]));
+  return d;
+}
+
+// Distance functor: fixed width when N > 0, run-time width otherwise.
+template <std::size_t N>
+struct Distance {
+  std::size_t code_size;
+  std::uint32_t operator()(const std::uint8_t* a, const std::uint8_t* b) const {
+    if constexpr (N > 0) {
+      return hamming_fixed<N>(a, b);
+    } else {
+      return hamming_any(a, b, code_size);
+    }
+  }
+};
+
+template <std::size_t N>
+void nearest_impl(const std::uint8_t* queries, std::size_t n, const std::uint8_t* candidates,
+                  std::size_t count, std::size_t code_size, std::uint32_t* best_index,
+                  std::uint32_t* best_distance) {
+  const Distance<N> distance{code_size};
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::uint8_t* query = queries + q * code_size;
+    std::uint32_t best = ~0u;
+    std::uint32_t index = 0;
+    for (std::size_t c = 0; c < count; ++c) {
+      const std::uint32_t d = distance(query, candidates + c * code_size);
+      if (d < best) {
+        best = d;
+        index = static_cast<std::uint32_t>(c);
+      }
+    }
+    best_index[q] = index;
+    if (best_distance != nullptr) best_distance[q] = best;
+  }
+}
+
+inline void prefetch_block(const std::uint8_t* p, std::size_t bytes) {
+  for (std::size_t off = 0; off < bytes; off += 64) __builtin_prefetch(p + off);
+}
+
+// Descends a batch of queries in lock step: while one query waits for its
+// next children block to arrive from memory, the others compute, so cache
+// misses of different queries overlap.
+template <std::size_t N>
+void descend_impl(const TreeView& tree, const std::uint8_t* queries, std::size_t n,
+                  std::uint32_t* words, std::uint32_t* level_nodes, std::uint32_t level_depth) {
+  constexpr std::size_t kBatch = 16;
+  const std::size_t code_size = tree.code_size;
+  const Distance<N> distance{code_size};
+  for (std::size_t begin = 0; begin < n; begin += kBatch) {
+    const std::size_t size = std::min(kBatch, n - begin);
+    std::uint32_t node[kBatch], first[kBatch], count[kBatch], depth[kBatch];
+    std::uint32_t active[kBatch];
+    std::size_t active_count = size;
+    for (std::size_t j = 0; j < size; ++j) {
+      node[j] = 0;
+      depth[j] = 0;
+      active[j] = static_cast<std::uint32_t>(j);
+      if (level_nodes != nullptr) level_nodes[begin + j] = 0;
+    }
+    while (active_count > 0) {
+      std::size_t still = 0;
+      for (std::size_t a = 0; a < active_count; ++a) {
+        const std::uint32_t j = active[a];
+        const std::uint32_t c = tree.child_counts[node[j]];
+        if (c == 0) {
+          words[begin + j] = tree.links[node[j]] & ~kLeafBit;
+          if (level_nodes != nullptr && depth[j] < level_depth) level_nodes[begin + j] = node[j];
+          continue;
+        }
+        first[j] = tree.links[node[j]];
+        count[j] = c;
+        prefetch_block(tree.descriptors + std::size_t{first[j]} * code_size, c * code_size);
+        active[still++] = j;
+      }
+      active_count = still;
+      for (std::size_t a = 0; a < active_count; ++a) {
+        const std::uint32_t j = active[a];
+        const std::uint8_t* query = queries + (begin + j) * code_size;
+        const std::uint8_t* children = tree.descriptors + std::size_t{first[j]} * code_size;
+        std::uint32_t best = ~0u;
+        std::uint32_t best_child = 0;
+        for (std::uint32_t c = 0; c < count[j]; ++c) {
+          const std::uint32_t d = distance(query, children + c * code_size);
+          if (d < best) {
+            best = d;
+            best_child = c;
+          }
+        }
+        node[j] = first[j] + best_child;
+        ++depth[j];
+        if (level_nodes != nullptr && depth[j] == level_depth) level_nodes[begin + j] = node[j];
+        __builtin_prefetch(tree.links + node[j]);
+        __builtin_prefetch(tree.child_counts + node[j]);
+      }
+    }
+  }
+}
+
+std::uint32_t hamming(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size) {
+  switch (code_size) {
+    case 32:
+      return hamming_fixed<32>(a, b);
+    case 64:
+      return hamming_fixed<64>(a, b);
+    default:
+      return hamming_any(a, b, code_size);
+  }
+}
+
+void nearest(const std::uint8_t* queries, std::size_t n, const std::uint8_t* candidates,
+             std::size_t count, std::size_t code_size, std::uint32_t* best_index,
+             std::uint32_t* best_distance) {
+  switch (code_size) {
+    case 32:
+      return nearest_impl<32>(queries, n, candidates, count, code_size, best_index, best_distance);
+    case 64:
+      return nearest_impl<64>(queries, n, candidates, count, code_size, best_index, best_distance);
+    default:
+      return nearest_impl<0>(queries, n, candidates, count, code_size, best_index, best_distance);
+  }
+}
+
+void descend(const TreeView& tree, const std::uint8_t* queries, std::size_t n, std::uint32_t* words,
+             std::uint32_t* level_nodes, std::uint32_t level_depth) {
+  switch (tree.code_size) {
+    case 32:
+      return descend_impl<32>(tree, queries, n, words, level_nodes, level_depth);
+    case 64:
+      return descend_impl<64>(tree, queries, n, words, level_nodes, level_depth);
+    default:
+      return descend_impl<0>(tree, queries, n, words, level_nodes, level_depth);
+  }
+}
+
+}  // namespace
+
+const Kernels& get() {
+  static const Kernels kernels{BINBOW_KERNEL_NAME, &hamming, &nearest, &descend};
+  return kernels;
+}
+
+}  // namespace binbow::detail::BINBOW_KERNEL_NAMESPACE

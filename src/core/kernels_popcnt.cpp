@@ -1,0 +1,7 @@
+// Compiled with -mpopcnt on x86-64 (see src/CMakeLists.txt); only called when
+// the CPU reports popcnt.
+#include <algorithm>
+
+#define BINBOW_KERNEL_NAMESPACE popcnt
+#define BINBOW_KERNEL_NAME "popcnt"
+#include "core/kernels_impl.h"

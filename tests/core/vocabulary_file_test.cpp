@@ -1,0 +1,120 @@
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <random>
+
+#include "binbow/error.h"
+#include "binbow/vocabulary.h"
+#include "core/reference_tree.h"
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+Vocabulary sample_vocabulary(std::uint64_t seed = 9) {
+  std::mt19937_64 rng(seed);
+  return Vocabulary::from_tree(test::random_tree(rng, 32, 5, 3));
+}
+
+TEST(VocabularyFile, SaveLoadIsBitExactAndBehavesTheSame) {
+  test::TempDir dir;
+  const Vocabulary v = sample_vocabulary();
+  v.save(dir.file("v.bbw"));
+  const Vocabulary loaded = Vocabulary::load(dir.file("v.bbw"));
+  EXPECT_EQ(test::read_file(dir.file("v.bbw")), v.serialize());
+  EXPECT_EQ(loaded.serialize(), v.serialize());
+  EXPECT_EQ(loaded.checksum(), v.checksum());
+  std::mt19937_64 rng(1);
+  const auto d = test::random_descriptors(100, 32, rng);
+  BowVector a, b;
+  v.transform(d, a);
+  loaded.transform(d, b);
+  EXPECT_EQ(a, b);
+  // Scoring overrides are saved.
+  v.with_scoring(Scoring::kBhattacharyya).save(dir.file("s.bbw"));
+  EXPECT_EQ(Vocabulary::load(dir.file("s.bbw")).scoring(), Scoring::kBhattacharyya);
+}
+
+TEST(VocabularyFile, SaveIsAtomicAndLeavesNoTemporaryFiles) {
+  test::TempDir dir;
+  const Vocabulary v = sample_vocabulary();
+  v.save(dir.file("v.bbw"));
+  v.save(dir.file("v.bbw"));
+  std::size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) (void)e, ++files;
+  EXPECT_EQ(files, 1u);
+  EXPECT_THROW(v.save(dir.file("missing-dir/v.bbw")), FileError);
+}
+
+void expect_file_error(const std::string& path, const std::string& fragment) {
+  try {
+    Vocabulary::load(path);
+    ADD_FAILURE() << "loaded a damaged file, expected: " << fragment;
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), path);
+    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+  }
+}
+
+TEST(VocabularyFile, RejectsDamagedFilesWithClearErrors) {
+  test::TempDir dir;
+  const std::vector<std::uint8_t> good = sample_vocabulary().serialize();
+  expect_file_error(dir.file("missing.bbw"), "cannot open");
+  test::write_file(dir.file("empty.bbw"), {});
+  expect_file_error(dir.file("empty.bbw"), "empty");
+  expect_file_error(dir.path(), "directory");
+
+  for (std::size_t cut :
+       {std::size_t{10}, std::size_t{64}, std::size_t{100}, good.size() / 2, good.size() - 1}) {
+    test::write_file(dir.file("cut.bbw"), {good.begin(), good.begin() + static_cast<long>(cut)});
+    EXPECT_THROW(Vocabulary::load(dir.file("cut.bbw")), FileError) << "truncated at " << cut;
+  }
+  auto bad = good;
+  bad[0] = 'X';
+  test::write_file(dir.file("magic.bbw"), bad);
+  expect_file_error(dir.file("magic.bbw"), "wrong magic");
+  bad = good;
+  bad[8] = 9;
+  test::write_file(dir.file("version.bbw"), bad);
+  expect_file_error(dir.file("version.bbw"), "version 9");
+  bad = good;
+  bad[good.size() - 70] ^= 0x40;
+  test::write_file(dir.file("flip.bbw"), bad);
+  expect_file_error(dir.file("flip.bbw"), "checksum mismatch");
+}
+
+TEST(VocabularyFile, EveryFlippedByteIsRejectedOrHarmless) {
+  // A flip anywhere either fails cleanly or (padding) leaves the content intact.
+  const Vocabulary v = sample_vocabulary(3);
+  const std::vector<std::uint8_t> good = v.serialize();
+  std::size_t rejected = 0;
+  for (std::size_t i = 0; i < good.size(); ++i) {
+    auto bad = good;
+    bad[i] ^= 0x01;
+    try {
+      const Vocabulary loaded = Vocabulary::deserialize(bad.data(), bad.size(), "flipped");
+      EXPECT_EQ(loaded.checksum(), v.checksum()) << "byte " << i;
+    } catch (const FileError&) {
+      ++rejected;
+    }
+  }
+  EXPECT_GT(rejected, good.size() / 2);
+}
+
+TEST(VocabularyFile, StructuralChecksCatchForgedTreesEvenWithoutChecksums) {
+  // Forge a links section pointing backwards (a cycle) and skip checksum checks:
+  // the structural validation must still refuse it.
+  const Vocabulary v = sample_vocabulary(4);
+  auto bytes = v.serialize();
+  std::size_t links_offset = 0;
+  std::memcpy(&links_offset, bytes.data() + 64 + 24 + 8, 8);
+  const std::uint32_t back = 0;
+  std::memcpy(bytes.data() + links_offset + 4, &back, 4);  // node 1 → root's block
+  LoadOptions no_crc;
+  no_crc.verify_checksums = false;
+  EXPECT_THROW(Vocabulary::deserialize(bytes.data(), bytes.size(), "forged", no_crc), FileError);
+}
+
+}  // namespace
+}  // namespace binbow
