@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs everything binbow needs to build, test and benchmark on Debian 12.
+# Run as root (or through sudo). Only Debian packages; nothing is downloaded
+# at build time.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libopencv-dev libmatio-dev zlib1g-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libcli11-dev nlohmann-json3-dev
+  pybind11-dev python3-dev python3-numpy
+  clang libclang-rt-14-dev clang-format
+  chromium
+)
+if [ "$(id -u)" -ne 0 ]; then
+  exec sudo "$0" "$@"
+fi
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
+echo "binbow dependencies installed."
