@@ -12,26 +12,34 @@ enum class VocabularyFormat {
   kBinbow,         // .bbw, binbow's own binary format
   kDbow2Yaml,      // DBoW2 YAML through OpenCV FileStorage conventions, .yml / .yml.gz / .voc.gz
   kOrbSlamText,    // ORB-SLAM2/3 ORBvoc.txt
+  kOrbSlamBinary,  // the binary ORBvoc.bin of ORB-SLAM2 pull request 21 and its forks, .bin
   kDbow3,          // DBoW3 binary .dbow3
   kFbow,           // fbow .fbow
 };
 
-// "bbw", "dbow2", "orbslam-text", "dbow3", "fbow" ("auto" for kAuto).
+// "bbw", "dbow2", "orbslam-text", "orbslam-binary", "dbow3", "fbow" ("auto" for kAuto).
 const char* to_string(VocabularyFormat format);
 // Accepts the names above; throws InvalidArgument listing them.
 VocabularyFormat parse_vocabulary_format(const std::string& name);
 // The format of an existing file, from its first bytes, then its extension.
 // Throws FileError if the file cannot be read or nothing matches.
 VocabularyFormat detect_vocabulary_format(const std::string& path);
-// The format an output file name asks for: .bbw, .txt, .yml/.yml.gz/.voc.gz,
+// The format an output file name asks for: .bbw, .txt, .bin (ORB-SLAM binary),
+// .yml/.yaml/.yml.gz/.voc.gz (DBoW2 YAML, gzip when the name ends in .gz),
 // .dbow3, .fbow. Throws InvalidArgument for other extensions.
 VocabularyFormat format_for_output(const std::string& path);
 
 // Reads a vocabulary in any supported format. Throws FileError naming the file
 // and the problem for anything unreadable, truncated or inconsistent.
-Vocabulary load_vocabulary(const std::string& path, VocabularyFormat format = VocabularyFormat::kAuto);
-// Writes atomically (temporary file, then rename); kAuto: by extension.
+Vocabulary load_vocabulary(const std::string& path,
+                           VocabularyFormat format = VocabularyFormat::kAuto);
+// Writes atomically (temporary file, then rename); kAuto: by extension. DBoW2
+// YAML is written with decimal-byte descriptors (DBoW2's FORB) unless
+// `brief_bit_strings` asks for FBrief's 0/1 strings (DLoopDetector, VINS).
+// fbow files keep neither L nor the weighting and scoring types (read back as
+// the tree's depth, tf-idf, L1); docs/formats.md lists what each format keeps.
 void save_vocabulary(const Vocabulary& vocabulary, const std::string& path,
-                     VocabularyFormat format = VocabularyFormat::kAuto);
+                     VocabularyFormat format = VocabularyFormat::kAuto,
+                     bool brief_bit_strings = false);
 
 }  // namespace binbow

@@ -1,0 +1,266 @@
+// Format names, detection, and the load/save entry points that dispatch to
+// the codecs.
+#include "binbow/formats.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+
+#include "binbow/error.h"
+#include "core/file_io.h"
+#include "core/little_endian.h"
+#include "core/vocabulary_block.h"
+#include "formats/codecs.h"
+#include "formats/gzip.h"
+#include "formats/loader.h"
+#include "formats/text_numbers.h"
+
+namespace binbow {
+
+namespace {
+
+constexpr std::uint64_t kDbow3Signature = 88877711233ull;
+constexpr std::uint64_t kFbowSignature = 55824124ull;
+
+struct FormatName {
+  VocabularyFormat format;
+  const char* name;
+};
+constexpr FormatName kFormatNames[] = {
+    {VocabularyFormat::kAuto, "auto"},
+    {VocabularyFormat::kBinbow, "bbw"},
+    {VocabularyFormat::kDbow2Yaml, "dbow2"},
+    {VocabularyFormat::kOrbSlamText, "orbslam-text"},
+    {VocabularyFormat::kOrbSlamBinary, "orbslam-binary"},
+    {VocabularyFormat::kDbow3, "dbow3"},
+    {VocabularyFormat::kFbow, "fbow"},
+};
+
+bool ends_with(const std::string& text, const char* suffix) {
+  const std::size_t n = std::strlen(suffix);
+  if (text.size() < n) return false;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::tolower(static_cast<unsigned char>(text[text.size() - n + i])) != suffix[i])
+      return false;
+  return true;
+}
+
+// The format an extension suggests, kAuto for none.
+VocabularyFormat format_from_extension(const std::string& path) {
+  if (ends_with(path, ".bbw")) return VocabularyFormat::kBinbow;
+  if (ends_with(path, ".txt")) return VocabularyFormat::kOrbSlamText;
+  if (ends_with(path, ".bin")) return VocabularyFormat::kOrbSlamBinary;
+  if (ends_with(path, ".yml") || ends_with(path, ".yaml") || ends_with(path, ".yml.gz") ||
+      ends_with(path, ".yaml.gz") || ends_with(path, ".voc.gz"))
+    return VocabularyFormat::kDbow2Yaml;
+  if (ends_with(path, ".dbow3")) return VocabularyFormat::kDbow3;
+  if (ends_with(path, ".fbow")) return VocabularyFormat::kFbow;
+  return VocabularyFormat::kAuto;
+}
+
+// A first line of exactly four unsigned integers: the ORB-SLAM text header.
+bool looks_like_orbslam_text(const std::uint8_t* data, std::size_t size) {
+  const char* p = reinterpret_cast<const char*>(data);
+  const char* end = p + std::min<std::size_t>(size, 256);
+  const char* line_end = static_cast<const char*>(std::memchr(p, '\n', end - p));
+  if (line_end == nullptr) line_end = end;
+  std::uint64_t value = 0;
+  for (int i = 0; i < 4; ++i)
+    if (!detail::parse_token(p, line_end, value)) return false;
+  return detail::skip_blanks(p, line_end) == line_end;
+}
+
+bool looks_like_yaml(const std::uint8_t* data, std::size_t size) {
+  const std::string_view head(reinterpret_cast<const char*>(data), std::min<std::size_t>(size, 64));
+  return head.rfind("%YAML", 0) == 0 || head.rfind("---", 0) == 0 ||
+         head.rfind("vocabulary:", 0) == 0;
+}
+
+// ORB-SLAM binary has no magic: its 24-byte header must predict the file size.
+bool looks_like_orbslam_binary(const std::uint8_t* data, std::size_t size) {
+  if (size < 24) return false;
+  const std::uint64_t nodes = detail::load_le<std::uint32_t>(data);
+  const std::uint64_t node_size = detail::load_le<std::uint32_t>(data + 4);
+  const std::uint32_t branching = detail::load_le<std::uint32_t>(data + 8);
+  const std::uint32_t levels = detail::load_le<std::uint32_t>(data + 12);
+  return nodes >= 1 && node_size >= 10 && node_size <= 9 + detail::kMaxCodeSize && branching >= 1 &&
+         branching <= detail::kMaxBranching && levels >= 1 && levels <= detail::kMaxLevels &&
+         24 + (nodes - 1) * node_size == size;
+}
+
+VocabularyFormat format_from_content(const std::uint8_t* data, std::size_t size) {
+  if (size >= 8 && std::memcmp(data, detail::bbw::kMagic, 8) == 0) return VocabularyFormat::kBinbow;
+  if (detail::is_gzip(data, size)) return VocabularyFormat::kDbow2Yaml;
+  if (size >= 8 && detail::load_le<std::uint64_t>(data) == kDbow3Signature)
+    return VocabularyFormat::kDbow3;
+  if (size >= 8 && detail::load_le<std::uint64_t>(data) == kFbowSignature)
+    return VocabularyFormat::kFbow;
+  if (looks_like_yaml(data, size)) return VocabularyFormat::kDbow2Yaml;
+  if (looks_like_orbslam_text(data, size)) return VocabularyFormat::kOrbSlamText;
+  if (looks_like_orbslam_binary(data, size)) return VocabularyFormat::kOrbSlamBinary;
+  return VocabularyFormat::kAuto;
+}
+
+std::string format_list() {
+  std::string names;
+  for (const FormatName& entry : kFormatNames) {
+    if (!names.empty()) names += ", ";
+    names += entry.name;
+  }
+  return names;
+}
+
+}  // namespace
+
+const char* to_string(VocabularyFormat format) {
+  for (const FormatName& entry : kFormatNames)
+    if (entry.format == format) return entry.name;
+  return "unknown";
+}
+
+VocabularyFormat parse_vocabulary_format(const std::string& name) {
+  std::string lower(name);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  std::replace(lower.begin(), lower.end(), '_', '-');
+  for (const FormatName& entry : kFormatNames)
+    if (lower == entry.name) return entry.format;
+  throw InvalidArgument("unknown vocabulary format '" + name + "'; expected one of " +
+                        format_list());
+}
+
+VocabularyFormat detect_vocabulary_format(const std::string& path) {
+  const detail::MappedFile file(path);
+  const VocabularyFormat by_content = format_from_content(file.data(), file.size());
+  if (by_content != VocabularyFormat::kAuto) return by_content;
+  const VocabularyFormat by_name = format_from_extension(path);
+  if (by_name != VocabularyFormat::kAuto) return by_name;
+  throw FileError(path,
+                  "unknown vocabulary format: neither its first bytes nor its extension "
+                  "match " +
+                      format_list() + " (use --from to say which)");
+}
+
+VocabularyFormat format_for_output(const std::string& path) {
+  const VocabularyFormat format = format_from_extension(path);
+  if (format == VocabularyFormat::kAuto)
+    throw InvalidArgument("cannot tell the vocabulary format from the name '" + path +
+                          "': use .bbw, .txt (ORB-SLAM text), .bin (ORB-SLAM binary), .yml, "
+                          ".yml.gz or .voc.gz (DBoW2 YAML), .dbow3 or .fbow, or --to");
+  return format;
+}
+
+namespace detail {
+
+ChildLists child_lists(const VocabularyTree& tree) {
+  const std::size_t nodes = tree.node_count();
+  ChildLists lists;
+  lists.first.assign(nodes + 1, 0);
+  for (std::size_t node = 1; node < nodes; ++node) ++lists.first[tree.parent[node] + 1];
+  for (std::size_t node = 0; node < nodes; ++node) lists.first[node + 1] += lists.first[node];
+  lists.child.resize(nodes > 0 ? nodes - 1 : 0);
+  std::vector<std::uint32_t> next(lists.first.begin(), lists.first.end() - 1);
+  for (std::size_t node = 1; node < nodes; ++node)
+    lists.child[next[tree.parent[node]]++] = static_cast<NodeId>(node);
+  return lists;
+}
+
+Vocabulary vocabulary_from_parsed(const ParsedVocabulary& parsed, const std::string& name) {
+  try {
+    return Vocabulary::from_tree(parsed.tree);
+  } catch (const InvalidArgument& e) {
+    throw FileError(name, e.what());
+  }
+}
+
+ParsedVocabulary parse_vocabulary_bytes(VocabularyFormat format, const std::uint8_t* data,
+                                        std::size_t size, const std::string& name) {
+  switch (format) {
+    case VocabularyFormat::kDbow2Yaml:
+      return parse_dbow2_yaml(data, size, name);
+    case VocabularyFormat::kOrbSlamText:
+      return parse_orbslam_text(data, size, name);
+    case VocabularyFormat::kOrbSlamBinary:
+      return parse_orbslam_binary(data, size, name);
+    case VocabularyFormat::kDbow3:
+      return parse_dbow3_binary(data, size, name);
+    case VocabularyFormat::kFbow:
+      return parse_fbow(data, size, name);
+    default:
+      throw InvalidArgument(std::string("no tree parser for format ") + to_string(format));
+  }
+}
+
+LoadedVocabulary load_vocabulary_with_details(const std::string& path, VocabularyFormat format) {
+  LoadedVocabulary loaded;
+  if (format == VocabularyFormat::kAuto) format = detect_vocabulary_format(path);
+  loaded.format = format;
+  if (format == VocabularyFormat::kBinbow) {
+    loaded.vocabulary = Vocabulary::load(path);
+    return loaded;
+  }
+  const MappedFile file(path);
+  ParsedVocabulary parsed;
+  if (is_gzip(file.data(), file.size())) {
+    if (format != VocabularyFormat::kDbow2Yaml)
+      throw FileError(
+          path, std::string("gzip-compressed; only DBoW2 YAML may be, not ") + to_string(format));
+    loaded.compressed = true;
+    const std::vector<std::uint8_t> text =
+        gunzip(file.data(), file.size(), path, gunzip_limit(file.size()));
+    parsed = parse_dbow2_yaml(text.data(), text.size(), path);
+  } else {
+    parsed = parse_vocabulary_bytes(format, file.data(), file.size(), path);
+  }
+  loaded.descriptor_text = parsed.descriptor_text;
+  loaded.word_ids_match = parsed.word_ids_match;
+  loaded.vocabulary = vocabulary_from_parsed(parsed, path);
+  return loaded;
+}
+
+void save_vocabulary_as(const Vocabulary& vocabulary, const std::string& path,
+                        VocabularyFormat format, DescriptorText descriptor_text) {
+  if (vocabulary.empty()) throw InvalidArgument("cannot save an empty vocabulary to " + path);
+  if (format == VocabularyFormat::kAuto) format = format_for_output(path);
+  if (format == VocabularyFormat::kBinbow) {
+    vocabulary.save(path);
+    return;
+  }
+  const VocabularyTree tree = vocabulary.to_tree();
+  std::vector<std::uint8_t> bytes;
+  switch (format) {
+    case VocabularyFormat::kDbow2Yaml:
+      bytes = format_dbow2_yaml(tree, descriptor_text);
+      if (ends_with(path, ".gz")) bytes = gzip(bytes);
+      break;
+    case VocabularyFormat::kOrbSlamText:
+      bytes = format_orbslam_text(tree);
+      break;
+    case VocabularyFormat::kOrbSlamBinary:
+      bytes = format_orbslam_binary(tree);
+      break;
+    case VocabularyFormat::kDbow3:
+      bytes = format_dbow3_binary(tree);
+      break;
+    case VocabularyFormat::kFbow:
+      bytes = format_fbow(tree);
+      break;
+    default:
+      throw InvalidArgument(std::string("cannot write format ") + to_string(format));
+  }
+  write_file_atomically(path, bytes.data(), bytes.size());
+}
+
+}  // namespace detail
+
+Vocabulary load_vocabulary(const std::string& path, VocabularyFormat format) {
+  return detail::load_vocabulary_with_details(path, format).vocabulary;
+}
+
+void save_vocabulary(const Vocabulary& vocabulary, const std::string& path, VocabularyFormat format,
+                     bool brief_bit_strings) {
+  detail::save_vocabulary_as(
+      vocabulary, path, format,
+      brief_bit_strings ? detail::DescriptorText::kBits : detail::DescriptorText::kBytes);
+}
+
+}  // namespace binbow
