@@ -1,0 +1,323 @@
+// Database queries against brute force (the vocabulary's pairwise score over
+// every entry), for all six scorings, with ties, bounds and removals.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/error.h"
+#include "binbow/vocabulary.h"
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+constexpr Scoring kAllScorings[] = {
+    Scoring::kL1,        Scoring::kL2, Scoring::kChiSquare, Scoring::kKL, Scoring::kBhattacharyya,
+    Scoring::kDotProduct};
+
+// A small vocabulary (k=5, L=3, at most 125 words) so images share many words.
+Vocabulary small_vocabulary(Weighting weighting, std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::vector<DescriptorMatrix> images;
+  for (int i = 0; i < 20; ++i) images.push_back(test::clustered_descriptors(60, 32, 40, 0.08, rng));
+  std::vector<DescriptorView> views;
+  for (const auto& image : images) views.push_back(image.view());
+  BuildOptions options;
+  options.branching = 5;
+  options.levels = 3;
+  options.weighting = weighting;
+  options.seed = seed;
+  options.threads = 1;
+  return Vocabulary::build(views, options);
+}
+
+struct Corpus {
+  std::vector<DescriptorMatrix> images;
+  std::vector<BowVector> bows;
+};
+
+Corpus random_corpus(const Vocabulary& vocabulary, std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> rows(1, 50);
+  Corpus corpus;
+  for (std::size_t i = 0; i < count; ++i) {
+    corpus.images.push_back(test::clustered_descriptors(rows(rng), 32, 40, 0.08, rng));
+    BowVector bow;
+    vocabulary.transform(corpus.images.back().view(), bow);
+    corpus.bows.push_back(std::move(bow));
+  }
+  return corpus;
+}
+
+std::size_t shared_words(const BowVector& a, const BowVector& b) {
+  std::size_t shared = 0;
+  for (const BowEntry& e : a)
+    if (std::binary_search(b.begin(), b.end(), e,
+                           [](const BowEntry& x, const BowEntry& y) { return x.word < y.word; }))
+      ++shared;
+  return shared;
+}
+
+// Scores every live entry that shares a word with the query, sorts best first
+// (lowest first for KL), ties by entry id.
+std::vector<QueryResult> brute_force(const Vocabulary& vocabulary,
+                                     const std::vector<BowVector>& bows,
+                                     const std::vector<bool>& live, const BowVector& query,
+                                     std::size_t max_results, EntryId max_entry_id = kAllEntries) {
+  std::vector<QueryResult> all;
+  for (EntryId id = 0; id < bows.size() && id <= max_entry_id; ++id) {
+    if (!live[id]) continue;
+    const std::size_t shared = shared_words(query, bows[id]);
+    if (shared == 0) continue;
+    all.push_back({id, vocabulary.score(query, bows[id]), static_cast<std::uint32_t>(shared)});
+  }
+  const bool lower_better = vocabulary.scoring() == Scoring::kKL;
+  std::stable_sort(all.begin(), all.end(), [&](const QueryResult& a, const QueryResult& b) {
+    return lower_better ? a.score < b.score : a.score > b.score;
+  });
+  if (all.size() > max_results) all.resize(max_results);
+  return all;
+}
+
+void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
+                 const std::string& context) {
+  ASSERT_EQ(actual.size(), expected.size()) << context;
+  for (std::size_t i = 0; i < actual.size(); ++i) {
+    EXPECT_EQ(actual[i].entry, expected[i].entry) << context << " rank " << i;
+    EXPECT_EQ(actual[i].score, expected[i].score) << context << " rank " << i;
+    EXPECT_EQ(actual[i].shared_words, expected[i].shared_words) << context << " rank " << i;
+  }
+}
+
+class DatabaseScoringTest : public ::testing::TestWithParam<std::tuple<Scoring, Weighting>> {};
+
+TEST_P(DatabaseScoringTest, QueriesEqualBruteForce) {
+  const auto [scoring, weighting] = GetParam();
+  const Vocabulary vocabulary = small_vocabulary(weighting).with_scoring(scoring);
+  const Corpus corpus = random_corpus(vocabulary, 150, 7);
+  Database database(vocabulary, {false, 0});
+  for (std::size_t i = 0; i < corpus.bows.size(); ++i)
+    ASSERT_EQ(database.add(corpus.bows[i]), static_cast<EntryId>(i));
+  std::vector<bool> live(corpus.bows.size(), true);
+
+  const Corpus queries = random_corpus(vocabulary, 25, 99);
+  std::size_t non_trivial = 0;
+  for (const BowVector& query : queries.bows) {
+    for (std::size_t max_results : {std::size_t{1}, std::size_t{7}, std::size_t{1000}}) {
+      const auto expected = brute_force(vocabulary, corpus.bows, live, query, max_results);
+      non_trivial += expected.size() > 1;
+      expect_same(database.query(query, max_results), expected,
+                  std::string(to_string(scoring)) + "/" + to_string(weighting));
+    }
+    for (EntryId max_id : {EntryId{0}, EntryId{10}, EntryId{77}, EntryId{149}, EntryId{5000}})
+      expect_same(database.query(query, 10, max_id),
+                  brute_force(vocabulary, corpus.bows, live, query, 10, max_id), "max_entry_id");
+  }
+  EXPECT_GE(non_trivial, 40u) << "the corpus must produce real rankings";
+}
+
+INSTANTIATE_TEST_SUITE_P(AllScorings, DatabaseScoringTest,
+                         ::testing::Combine(::testing::ValuesIn(kAllScorings),
+                                            ::testing::Values(Weighting::kTfIdf, Weighting::kTf,
+                                                              Weighting::kIdf,
+                                                              Weighting::kBinary)));
+
+TEST(Database, TiesAreOrderedByEntryId) {
+  for (Scoring scoring : kAllScorings) {
+    const Vocabulary vocabulary = small_vocabulary(Weighting::kBinary).with_scoring(scoring);
+    const Corpus corpus = random_corpus(vocabulary, 40, 3);
+    Database database(vocabulary);
+    std::vector<BowVector> bows;
+    // Entries 0..39 are the corpus, then every third image again three times:
+    // exact duplicates must come back in increasing id order.
+    for (const BowVector& bow : corpus.bows) bows.push_back(bow);
+    for (int copy = 0; copy < 3; ++copy)
+      for (std::size_t i = 0; i < corpus.bows.size(); i += 3) bows.push_back(corpus.bows[i]);
+    for (const BowVector& bow : bows) database.add(bow);
+    std::vector<bool> live(bows.size(), true);
+    for (std::size_t i = 0; i < corpus.bows.size(); i += 3) {
+      const auto results = database.query(corpus.bows[i], 1000);
+      expect_same(results, brute_force(vocabulary, bows, live, corpus.bows[i], 1000),
+                  to_string(scoring));
+      // The query itself and its three copies score the same, in id order.
+      std::vector<EntryId> copies;
+      for (const auto& r : results)
+        if (r.score == results[0].score) copies.push_back(r.entry);
+      EXPECT_TRUE(std::is_sorted(copies.begin(), copies.end())) << to_string(scoring);
+    }
+  }
+}
+
+TEST(Database, BinaryDotProductTiesEverywhere) {
+  // Binary weights with the dot product give integer scores: ties galore.
+  const Vocabulary vocabulary =
+      small_vocabulary(Weighting::kBinary).with_scoring(Scoring::kDotProduct);
+  const Corpus corpus = random_corpus(vocabulary, 300, 11);
+  Database database(vocabulary, {false, 0});
+  for (const BowVector& bow : corpus.bows) database.add(bow);
+  std::vector<bool> live(corpus.bows.size(), true);
+  for (std::size_t q = 0; q < 20; ++q)
+    for (std::size_t n : {std::size_t{3}, std::size_t{50}})
+      expect_same(database.query(corpus.bows[q], n),
+                  brute_force(vocabulary, corpus.bows, live, corpus.bows[q], n), "dot");
+}
+
+TEST(Database, RemovedEntriesNeverAppear) {
+  for (Scoring scoring : {Scoring::kL1, Scoring::kKL}) {
+    const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf).with_scoring(scoring);
+    const Corpus corpus = random_corpus(vocabulary, 200, 5);
+    Database database(vocabulary);
+    for (const BowVector& bow : corpus.bows) database.add(bow);
+    std::vector<bool> live(corpus.bows.size(), true);
+    std::mt19937_64 rng(17);
+    // Remove in rounds so that compaction happens between queries.
+    for (int round = 0; round < 6; ++round) {
+      for (int k = 0; k < 25; ++k) {
+        const EntryId victim = static_cast<EntryId>(rng() % corpus.bows.size());
+        if (!live[victim]) {
+          EXPECT_THROW(database.remove(victim), InvalidArgument);
+          continue;
+        }
+        database.remove(victim);
+        live[victim] = false;
+        EXPECT_FALSE(database.contains(victim));
+        EXPECT_THROW(database.feature_vector(victim), InvalidArgument);
+      }
+      EXPECT_EQ(database.size(),
+                static_cast<std::size_t>(std::count(live.begin(), live.end(), true)));
+      for (std::size_t q = 0; q < 30; ++q) {
+        const auto results = database.query(corpus.bows[q], 1000);
+        for (const auto& r : results) EXPECT_TRUE(live[r.entry]) << r.entry;
+        expect_same(results, brute_force(vocabulary, corpus.bows, live, corpus.bows[q], 1000),
+                    "after removal");
+      }
+    }
+    // Ids are never reused.
+    EXPECT_EQ(database.add(corpus.bows[0]), static_cast<EntryId>(corpus.bows.size()));
+  }
+}
+
+TEST(Database, IdsAreDenseAndClearRestarts) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  const Corpus corpus = random_corpus(vocabulary, 10, 2);
+  Database database(vocabulary);
+  for (EntryId i = 0; i < 10; ++i) EXPECT_EQ(database.add(corpus.images[i].view()), i);
+  EXPECT_EQ(database.size(), 10u);
+  EXPECT_EQ(database.next_entry_id(), 10u);
+  database.remove(3);
+  EXPECT_EQ(database.size(), 9u);
+  EXPECT_EQ(database.next_entry_id(), 10u);
+  database.clear();
+  EXPECT_EQ(database.size(), 0u);
+  EXPECT_TRUE(database.query(corpus.bows[0], 10).empty());
+  EXPECT_EQ(database.add(corpus.bows[0]), 0u);
+  EXPECT_EQ(database.query(corpus.bows[0], 10).at(0).entry, 0u);
+}
+
+TEST(Database, DirectIndexMatchesTransform) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  const Corpus corpus = random_corpus(vocabulary, 20, 4);
+  for (unsigned levels_up : {0u, 1u, 2u, 9u}) {
+    Database database(vocabulary, {true, levels_up});
+    for (const auto& image : corpus.images) database.add(image.view());
+    for (EntryId i = 0; i < corpus.images.size(); ++i) {
+      BowVector bow;
+      FeatureVector expected;
+      vocabulary.transform(corpus.images[i].view(), bow, expected, levels_up);
+      EXPECT_EQ(database.feature_vector(i), expected) << "levels_up " << levels_up;
+      EXPECT_EQ(database.query(bow, 1).at(0).entry, i);
+    }
+  }
+}
+
+TEST(Database, DirectIndexWithLargeFeatureIndices) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  Database database(vocabulary);
+  const FeatureVector features =
+      FeatureVector::from_arrays({1, 2, 5}, {0, 2, 3, 5}, {7, 70000, 12, 3, 100000});
+  const EntryId id = database.add(BowVector({{0, 0.5f}, {3, 0.5f}}), features);
+  EXPECT_EQ(database.feature_vector(id), features);
+  const FeatureVector small = FeatureVector::from_arrays({4}, {0, 2}, {1, 2});
+  EXPECT_EQ(database.feature_vector(database.add(BowVector({{1, 1.0f}}), small)), small);
+  EXPECT_EQ(database.feature_vector(database.add(BowVector({{1, 1.0f}}))), FeatureVector());
+}
+
+TEST(Database, WithoutDirectIndex) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  Database database(vocabulary, {false, 0});
+  const EntryId id = database.add(BowVector({{0, 1.0f}}));
+  EXPECT_THROW(database.feature_vector(id), InvalidArgument);
+}
+
+TEST(Database, BadInput) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  EXPECT_THROW(Database{Vocabulary{}}, InvalidArgument);
+  Database database(vocabulary);
+  const Corpus corpus = random_corpus(vocabulary, 5, 8);
+  for (const auto& bow : corpus.bows) database.add(bow);
+
+  EXPECT_TRUE(database.query(BowVector(), 10).empty());
+  EXPECT_TRUE(database.query(corpus.bows[0], 0).empty());
+  const auto word_count = static_cast<WordId>(vocabulary.word_count());
+  EXPECT_THROW(database.query(BowVector({{word_count, 1.0f}}), 5), InvalidArgument);
+  EXPECT_THROW(database.add(BowVector({{word_count, 1.0f}})), InvalidArgument);
+  EXPECT_THROW(database.add(BowVector({{0, std::nanf("")}})), InvalidArgument);
+  EXPECT_THROW(database.query(BowVector({{0, INFINITY}}), 5), InvalidArgument);
+  const auto node_count = static_cast<NodeId>(vocabulary.node_count());
+  EXPECT_THROW(
+      database.add(BowVector({{0, 1.0f}}), FeatureVector::from_arrays({node_count}, {0, 1}, {0})),
+      InvalidArgument);
+  EXPECT_EQ(database.next_entry_id(), 5u) << "failed adds must not consume ids";
+
+  std::mt19937_64 rng(1);
+  const DescriptorMatrix wrong = test::random_descriptors(10, 16, rng);
+  EXPECT_THROW(database.add(wrong.view()), InvalidArgument);
+
+  EXPECT_THROW(database.remove(5), InvalidArgument);
+  EXPECT_THROW(database.remove(kAllEntries), InvalidArgument);
+  EXPECT_THROW(database.feature_vector(99), InvalidArgument);
+  EXPECT_THROW(database.label(99), InvalidArgument);
+  EXPECT_THROW(database.set_label(99, "x"), InvalidArgument);
+  EXPECT_FALSE(database.contains(99));
+  // An empty image is a valid entry that no query finds.
+  const EntryId empty = database.add(BowVector());
+  EXPECT_TRUE(database.contains(empty));
+  for (const auto& r : database.query(corpus.bows[0], 100)) EXPECT_NE(r.entry, empty);
+}
+
+TEST(Database, NegativeValuesGiveAWellDefinedOrder) {
+  // KL of negative values is NaN: such entries rank last instead of breaking the sort.
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf).with_scoring(Scoring::kKL);
+  Database database(vocabulary);
+  for (int i = 0; i < 50; ++i)
+    database.add(BowVector({{0, i % 2 ? -0.5f : 0.5f}, {1, 0.25f * static_cast<float>(i % 3)}}));
+  const auto results = database.query(BowVector({{0, 0.5f}, {1, 0.5f}}), 100);
+  EXPECT_EQ(results.size(), 50u);
+}
+
+TEST(Database, Labels) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  Database database(vocabulary);
+  const EntryId a = database.add(BowVector({{0, 1.0f}}));
+  EXPECT_EQ(database.label(a), "");
+  database.set_label(a, "images/a.png");
+  const EntryId b = database.add(BowVector({{1, 1.0f}}));
+  EXPECT_EQ(database.label(a), "images/a.png");
+  EXPECT_EQ(database.label(b), "");
+}
+
+TEST(Database, MemoryUsageGrowsWithEntries) {
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  const Corpus corpus = random_corpus(vocabulary, 50, 6);
+  Database database(vocabulary);
+  const std::size_t empty = database.memory_usage();
+  for (const auto& image : corpus.images) database.add(image.view());
+  EXPECT_GT(database.memory_usage(), empty);
+}
+
+}  // namespace
+}  // namespace binbow
