@@ -1,0 +1,237 @@
+// Every writer's output reads back as the same tree; text round trips are
+// byte-identical; formats are recognised by content.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include "binbow/error.h"
+#include "binbow/formats.h"
+#include "formats/codecs.h"
+#include "formats/loader.h"
+#include "formats/random_tree.h"
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+using test::read_file;
+using test::TempDir;
+using test::write_file;
+
+void expect_same_tree(const VocabularyTree& expected, const VocabularyTree& actual) {
+  EXPECT_EQ(expected.code_size, actual.code_size);
+  EXPECT_EQ(expected.branching, actual.branching);
+  EXPECT_EQ(expected.levels, actual.levels);
+  EXPECT_EQ(expected.weighting, actual.weighting);
+  EXPECT_EQ(expected.scoring, actual.scoring);
+  ASSERT_EQ(expected.node_count(), actual.node_count());
+  EXPECT_EQ(expected.parent, actual.parent);
+  EXPECT_EQ(expected.descriptors, actual.descriptors);
+  EXPECT_EQ(expected.weights, actual.weights);  // bitwise: every format keeps float weights
+}
+
+std::uint32_t tree_depth(const VocabularyTree& tree) {
+  std::vector<std::uint32_t> depth(tree.node_count(), 0);
+  std::uint32_t deepest = 0;
+  for (std::size_t i = 1; i < tree.node_count(); ++i) {
+    depth[i] = depth[tree.parent[i]] + 1;  // parents precede children in DBoW2 order
+    deepest = std::max(deepest, depth[i]);
+  }
+  return deepest;
+}
+
+Vocabulary random_vocabulary(std::uint32_t k, std::uint32_t levels, std::size_t code_size,
+                             std::uint64_t seed, Weighting weighting = Weighting::kTfIdf,
+                             Scoring scoring = Scoring::kL1) {
+  std::mt19937_64 rng(seed);
+  VocabularyTree tree = test::random_tree(k, levels, code_size, rng);
+  tree.weighting = weighting;
+  tree.scoring = scoring;
+  return Vocabulary::from_tree(tree);
+}
+
+struct Case {
+  const char* file;
+  VocabularyFormat format;
+  bool brief_bits;
+};
+const Case kCases[] = {
+    {"v.bbw", VocabularyFormat::kBinbow, false},
+    {"v.txt", VocabularyFormat::kOrbSlamText, false},
+    {"v.bin", VocabularyFormat::kOrbSlamBinary, false},
+    {"v.yml", VocabularyFormat::kDbow2Yaml, false},
+    {"bits.yml", VocabularyFormat::kDbow2Yaml, true},
+    {"v.yml.gz", VocabularyFormat::kDbow2Yaml, false},
+    {"v.voc.gz", VocabularyFormat::kDbow2Yaml, true},
+    {"v.dbow3", VocabularyFormat::kDbow3, false},
+    {"v.fbow", VocabularyFormat::kFbow, false},
+};
+
+TEST(FormatsRoundTrip, EveryWriterReadsBackTheSameTree) {
+  TempDir dir;
+  for (const std::size_t code_size : {32u, 64u, 5u}) {
+    const Vocabulary vocabulary = random_vocabulary(
+        code_size == 5 ? 3 : 6, 4, code_size, 7 + code_size, Weighting::kIdf, Scoring::kChiSquare);
+    VocabularyTree expected = vocabulary.to_tree();
+    for (const Case& c : kCases) {
+      SCOPED_TRACE(std::string(c.file) + " code size " + std::to_string(code_size));
+      const std::string path = dir.file(c.file);
+      save_vocabulary(vocabulary, path, VocabularyFormat::kAuto, c.brief_bits);
+      EXPECT_EQ(detect_vocabulary_format(path), c.format);
+      const detail::LoadedVocabulary loaded =
+          detail::load_vocabulary_with_details(path, VocabularyFormat::kAuto);
+      EXPECT_EQ(loaded.format, c.format);
+      EXPECT_TRUE(loaded.word_ids_match);
+      if (c.format == VocabularyFormat::kDbow2Yaml) {
+        EXPECT_EQ(loaded.descriptor_text,
+                  c.brief_bits ? detail::DescriptorText::kBits : detail::DescriptorText::kBytes);
+      }
+      VocabularyTree want = expected;
+      if (c.format == VocabularyFormat::kFbow) {  // fbow keeps neither L nor the types
+        want.levels = tree_depth(expected);
+        want.weighting = Weighting::kTfIdf;
+        want.scoring = Scoring::kL1;
+      }
+      expect_same_tree(want, loaded.vocabulary.to_tree());
+      if (c.format != VocabularyFormat::kFbow) {
+        EXPECT_EQ(loaded.vocabulary.checksum(), vocabulary.checksum());
+      }
+    }
+  }
+}
+
+TEST(FormatsRoundTrip, BbwToTextToBbwIsByteIdentical) {
+  TempDir dir;
+  const Vocabulary vocabulary = random_vocabulary(10, 4, 32, 11);
+  vocabulary.save(dir.file("a.bbw"));
+  save_vocabulary(load_vocabulary(dir.file("a.bbw")), dir.file("a.txt"));
+  save_vocabulary(load_vocabulary(dir.file("a.txt")), dir.file("b.bbw"));
+  save_vocabulary(load_vocabulary(dir.file("b.bbw")), dir.file("b.txt"));
+  EXPECT_EQ(read_file(dir.file("a.bbw")), read_file(dir.file("b.bbw")));
+  EXPECT_EQ(read_file(dir.file("a.txt")), read_file(dir.file("b.txt")));
+  // Through every other writer as well.
+  for (const char* name : {"c.yml", "c.yml.gz", "c.dbow3", "c.bin"}) {
+    SCOPED_TRACE(name);
+    save_vocabulary(vocabulary, dir.file(name));
+    save_vocabulary(load_vocabulary(dir.file(name)), dir.file("c.bbw"));
+    EXPECT_EQ(read_file(dir.file("a.bbw")), read_file(dir.file("c.bbw")));
+  }
+}
+
+TEST(FormatsRoundTrip, TextMatchesOrbSlamLayoutWithShortestWeights) {
+  VocabularyTree tree;
+  tree.code_size = 2;
+  tree.branching = 2;
+  tree.levels = 2;
+  tree.scoring = Scoring::kL2;
+  tree.weighting = Weighting::kTf;
+  tree.parent = {0, 0, 0, 1, 1};
+  tree.descriptors = {0, 0, 1, 2, 255, 0, 7, 8, 9, 10};
+  tree.weights = {0, 0, 0.1f, 2.5f, 1e-7f};
+  const std::vector<std::uint8_t> text =
+      detail::format_orbslam_text(Vocabulary::from_tree(tree).to_tree());
+  EXPECT_EQ(std::string(text.begin(), text.end()),
+            "2 2  1 1\n"
+            "0 0 1 2  0\n"
+            "0 1 255 0  0.1\n"
+            "1 1 7 8  2.5\n"
+            "1 1 9 10  1e-07\n");
+}
+
+TEST(FormatsRoundTrip, TextParserToleratesCrLfTabsAndTrailingBlankLines) {
+  const std::string text =
+      "2 2 0 0\r\n0 0 1 2 0\r\n0 1 3\t4 0.5\r\n1 1 5 6   1.25\r\n1 1 7 8 2\r\n\r\n\n";
+  const detail::ParsedVocabulary parsed = detail::parse_orbslam_text(
+      reinterpret_cast<const std::uint8_t*>(text.data()), text.size(), "crlf.txt");
+  EXPECT_EQ(parsed.tree.node_count(), 5u);
+  EXPECT_EQ(parsed.tree.weights[3], 1.25f);
+  EXPECT_EQ(parsed.tree.descriptors[2 * 2 + 1], 4);
+}
+
+TEST(FormatsRoundTrip, ParallelTextParseEqualsSequential) {
+  std::mt19937_64 rng(5);
+  const Vocabulary vocabulary = Vocabulary::from_tree(test::random_tree(8, 5, 32, rng, 0.0));
+  const std::vector<std::uint8_t> text = detail::format_orbslam_text(vocabulary.to_tree());
+  ASSERT_GT(text.size(), 1u << 20);  // above the threshold where threads are used
+  const auto one = detail::parse_orbslam_text(text.data(), text.size(), "t", 1);
+  for (const unsigned threads : {2u, 3u, 7u}) {
+    const auto many = detail::parse_orbslam_text(text.data(), text.size(), "t", threads);
+    expect_same_tree(one.tree, many.tree);
+  }
+  expect_same_tree(vocabulary.to_tree(), Vocabulary::from_tree(one.tree).to_tree());
+}
+
+TEST(FormatsRoundTrip, WordListInAnotherOrderIsAcceptedAndReported) {
+  const std::string yaml =
+      "%YAML:1.0\n---\nvocabulary:\n   k: 2\n   L: 1\n   scoringType: 0\n   weightingType: 0\n"
+      "   nodes:\n      - { nodeId:1, parentId:0, weight:1.5, descriptor:\"1 2 \" }\n"
+      "      - { descriptor:\"3 4 \", weight:2., parentId:0, nodeId:2 }\n"
+      "   words:\n      - { wordId:1, nodeId:1 }\n      - { wordId:0, nodeId:2 }\n";
+  const auto parsed = detail::parse_dbow2_yaml(reinterpret_cast<const std::uint8_t*>(yaml.data()),
+                                               yaml.size(), "w.yml");
+  EXPECT_FALSE(parsed.word_ids_match);
+  EXPECT_EQ(parsed.tree.weights[2], 2.0f);
+  EXPECT_EQ(parsed.tree.descriptors[2 * 2], 3);
+}
+
+TEST(FormatsRoundTrip, Dbow3YamlDescriptorsAreRead) {
+  const std::string yaml =
+      "%YAML:1.0\n---\nvocabulary:\n   k: 2\n   L: 1\n   scoringType: 1\n   weightingType: 2\n"
+      "   nodes:\n      - { nodeId:1, parentId:0, weight:1.5, descriptor:\"dbw3 0 3 1 2 3 \" }\n"
+      "      - { nodeId:2, parentId:0, weight:2.5, descriptor:\"dbw3 0 3 4 5 6 \" }\n"
+      "   words:\n      - { wordId:0, nodeId:1 }\n      - { wordId:1, nodeId:2 }\n";
+  const auto parsed = detail::parse_dbow2_yaml(reinterpret_cast<const std::uint8_t*>(yaml.data()),
+                                               yaml.size(), "d3.yml");
+  EXPECT_EQ(parsed.tree.code_size, 3u);
+  EXPECT_EQ(parsed.tree.scoring, Scoring::kL2);
+  EXPECT_EQ(parsed.tree.weighting, Weighting::kIdf);
+  EXPECT_EQ(parsed.tree.descriptors[2 * 3 + 2], 6);
+}
+
+TEST(Formats, NamesExtensionsAndDetection) {
+  for (const VocabularyFormat format :
+       {VocabularyFormat::kAuto, VocabularyFormat::kBinbow, VocabularyFormat::kDbow2Yaml,
+        VocabularyFormat::kOrbSlamText, VocabularyFormat::kOrbSlamBinary, VocabularyFormat::kDbow3,
+        VocabularyFormat::kFbow})
+    EXPECT_EQ(parse_vocabulary_format(to_string(format)), format);
+  EXPECT_EQ(parse_vocabulary_format("ORBSLAM_TEXT"), VocabularyFormat::kOrbSlamText);
+  EXPECT_THROW(parse_vocabulary_format("xml"), InvalidArgument);
+  EXPECT_EQ(format_for_output("a/ORBvoc.txt"), VocabularyFormat::kOrbSlamText);
+  EXPECT_EQ(format_for_output("x.BBW"), VocabularyFormat::kBinbow);
+  EXPECT_EQ(format_for_output("x.voc.gz"), VocabularyFormat::kDbow2Yaml);
+  EXPECT_EQ(format_for_output("x.yml.gz"), VocabularyFormat::kDbow2Yaml);
+  EXPECT_EQ(format_for_output("x.dbow3"), VocabularyFormat::kDbow3);
+  EXPECT_EQ(format_for_output("x.fbow"), VocabularyFormat::kFbow);
+  EXPECT_THROW(format_for_output("x.gz"), InvalidArgument);
+  EXPECT_THROW(format_for_output("x"), InvalidArgument);
+
+  // Content wins over a misleading extension.
+  TempDir dir;
+  const Vocabulary vocabulary = random_vocabulary(4, 3, 32, 3);
+  for (const Case& c : kCases) {
+    SCOPED_TRACE(c.file);
+    save_vocabulary(vocabulary, dir.file(c.file));
+    write_file(dir.file("renamed.fbow"), read_file(dir.file(c.file)));
+    EXPECT_EQ(detect_vocabulary_format(dir.file("renamed.fbow")), c.format);
+    EXPECT_EQ(load_vocabulary(dir.file("renamed.fbow")).word_count(), vocabulary.word_count());
+  }
+  // --from forces a parser.
+  save_vocabulary(vocabulary, dir.file("v.txt"));
+  EXPECT_THROW(load_vocabulary(dir.file("v.txt"), VocabularyFormat::kDbow3), FileError);
+  EXPECT_EQ(load_vocabulary(dir.file("v.txt"), VocabularyFormat::kOrbSlamText).checksum(),
+            vocabulary.checksum());
+}
+
+TEST(Formats, SavingIsAtomicAndRejectsEmptyVocabularies) {
+  TempDir dir;
+  EXPECT_THROW(save_vocabulary(Vocabulary(), dir.file("e.txt")), InvalidArgument);
+  EXPECT_TRUE(read_file(dir.file("e.txt")).empty());
+  EXPECT_THROW(save_vocabulary(random_vocabulary(3, 2, 32, 1), dir.file("no/such/dir/v.txt")),
+               FileError);
+}
+
+}  // namespace
+}  // namespace binbow
