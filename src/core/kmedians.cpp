@@ -65,6 +65,7 @@ void KMedians::cluster(const std::uint8_t* rows, std::size_t n, std::uint64_t se
   n_ = n;
   converged_ = false;
   iterations_ = 0;
+  reseeded_ = 0;
   count_ = 0;
   std::fill(members_.begin(), members_.end(), 0);
   if (n <= k_) {
@@ -317,10 +318,8 @@ std::size_t KMedians::repair_empty_clusters(std::uint32_t* assignment, std::uint
     if (c == count_) return moved;
     const std::size_t farthest =
         static_cast<std::size_t>(std::max_element(distance, distance + n_) - distance);
-    if (distance[farthest] == 0) {
-      drop_empty_clusters(assignment);
-      return moved;
-    }
+    if (distance[farthest] == 0) return moved;  // impossible (see kmedians.h); never spin
+    ++reseeded_;
     std::uint8_t* new_centre = centres_.data() + c * code_size_;
     std::memcpy(new_centre, rows_ + farthest * code_size_, code_size_);
     kernel.nearest(rows_, n_, new_centre, 1, code_size_, scratch_index_.data(),
@@ -335,25 +334,6 @@ std::size_t KMedians::repair_empty_clusters(std::uint32_t* assignment, std::uint
       }
     }
   }
-}
-
-void KMedians::drop_empty_clusters(std::uint32_t* assignment) {
-  std::array<std::uint32_t, 256> renumber{};
-  std::uint32_t kept = 0;
-  for (std::uint32_t c = 0; c < count_; ++c) {
-    if (members_[c] == 0) continue;
-    renumber[c] = kept;
-    if (kept != c) {
-      std::memcpy(centres_.data() + kept * code_size_, centre(c), code_size_);
-      std::copy_n(counts_.data() + c * bits_, bits_, counts_.data() + kept * bits_);
-      members_[kept] = members_[c];
-      dirty_[kept] = dirty_[c];
-    }
-    ++kept;
-  }
-  for (std::uint32_t c = kept; c < count_; ++c) members_[c] = 0;
-  count_ = kept;
-  for (std::size_t i = 0; i < n_; ++i) assignment[i] = renumber[assignment[i]];
 }
 
 }  // namespace binbow::detail

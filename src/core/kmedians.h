@@ -12,8 +12,10 @@
 //   it: DBoW2's FORB::meanValue rule, ties set the bit), and every row moves
 //   to its nearest centre (lowest index on ties). Stops when no row moves.
 // - a cluster left empty is re-seeded with the row farthest from its centre
-//   (lowest index on ties); if every row already equals its centre, empty
-//   clusters are dropped. So clusters are never empty and centres never equal.
+//   (lowest index on ties). Such a row always exists: with more than k
+//   distinct rows some row differs from every centre, and with at most k the
+//   seeding already made every distinct row a centre and nothing ever moves.
+//   So clusters are never empty and centres never equal.
 //
 // The result depends only on the rows and the seed, never on `threads`: the
 // work is split into chunks, and every reduction over chunks is an exact
@@ -69,6 +71,8 @@ class KMedians {
   // the majority of its members), false when it hit max_iterations.
   bool converged() const noexcept { return converged_; }
   unsigned iterations() const noexcept { return iterations_; }
+  // Clusters re-seeded because they became empty, in the last run.
+  std::size_t reseeded() const noexcept { return reseeded_; }
 
  private:
   struct Chunk {
@@ -88,7 +92,6 @@ class KMedians {
   bool update_centres();
   std::size_t assign(std::uint32_t* assignment, std::uint32_t* distance);
   std::size_t repair_empty_clusters(std::uint32_t* assignment, std::uint32_t* distance);
-  void drop_empty_clusters(std::uint32_t* assignment);
   void move_row(std::size_t row, std::uint32_t from, std::uint32_t to, std::int32_t* counts,
                 std::int32_t* members, std::uint8_t* dirty) const;
   template <class Body>
@@ -109,6 +112,7 @@ class KMedians {
   std::vector<Chunk> chunks_;
   bool converged_ = false;
   unsigned iterations_ = 0;
+  std::size_t reseeded_ = 0;
 };
 
 }  // namespace binbow::detail

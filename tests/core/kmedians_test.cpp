@@ -182,6 +182,29 @@ TEST(KMedians, ManyDuplicatesNeverLeaveEmptyOrEqualClusters) {
   }
 }
 
+TEST(KMedians, EmptyClustersAreReseeded) {
+  std::mt19937_64 rng(9);
+  // More clusters asked for than the data has: majorities collide and leave
+  // clusters empty, which must be re-seeded.
+  const DescriptorMatrix rows = test::clustered_descriptors(3000, 32, 12, 0.1, rng);
+  std::size_t reseeded = 0;
+  for (std::uint64_t seed = 0; seed < 8; ++seed) {
+    KMedians kmedians(32, 16);
+    Clustering result;
+    result.assignment.resize(rows.rows());
+    result.distance.resize(rows.rows());
+    kmedians.cluster(rows.data(), rows.rows(), seed, 100, 1, result.assignment.data(),
+                     result.distance.data());
+    reseeded += kmedians.reseeded();
+    result.count = kmedians.cluster_count();
+    result.centres.assign(kmedians.centres(), kmedians.centres() + result.count * 32);
+    result.converged = kmedians.converged();
+    EXPECT_EQ(result.count, 16u);
+    expect_converged_invariants(rows, 16, result);
+  }
+  EXPECT_GT(reseeded, 0u) << "the data never exercised re-seeding";
+}
+
 TEST(KMedians, MajorityTieSetsTheBit) {
   // Two rows differing in bit 0 form one cluster far from three others: the
   // tie (1 of 2) sets the bit, as DBoW2 does.
