@@ -345,10 +345,9 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const std::size_t entry_count = impl_->alive.size();
   if (entry_count == 0) return results;
   QueryScratch& buffers = scratch;
-  if (buffers.accumulators.size() < entry_count) {
-    buffers.accumulators.resize(entry_count);
-    buffers.touched.resize(entry_count);
-  }
+  if (buffers.accumulators.size() < entry_count) buffers.accumulators.resize(entry_count);
+  // accumulate() may write one element past the last new id.
+  if (buffers.touched.size() < entry_count + 1) buffers.touched.resize(entry_count + 1);
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
   const IndexView index{impl_->slot_of_word.data(), impl_->lists.data()};
   const std::size_t touched = accumulate(scoring, index, bow, last_entry,

@@ -299,6 +299,22 @@ TEST(Database, NegativeValuesGiveAWellDefinedOrder) {
   EXPECT_EQ(results.size(), 50u);
 }
 
+TEST(Database, EveryEntryTouchedByManyWords) {
+  // Every entry shares every query word: the touched list fills up completely.
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  Database database(vocabulary);
+  std::vector<BowEntry> entries;
+  for (WordId w = 0; w < 20; ++w) entries.push_back({w, 0.05f});
+  const BowVector bow(entries);
+  for (int i = 0; i < 3; ++i) database.add(bow);
+  const auto results = database.query(bow, 10);
+  ASSERT_EQ(results.size(), 3u);
+  for (EntryId i = 0; i < 3; ++i) {
+    EXPECT_EQ(results[i].entry, i);
+    EXPECT_EQ(results[i].shared_words, 20u);
+  }
+}
+
 TEST(Database, Labels) {
   const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
   Database database(vocabulary);

@@ -1,0 +1,192 @@
+// .bbdb: save → load → identical queries; damaged files rejected clearly.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/error.h"
+#include "binbow/vocabulary.h"
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+Vocabulary test_vocabulary(std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::vector<DescriptorMatrix> images;
+  for (int i = 0; i < 10; ++i) images.push_back(test::clustered_descriptors(80, 32, 40, 0.08, rng));
+  std::vector<DescriptorView> views;
+  for (const auto& image : images) views.push_back(image.view());
+  BuildOptions options;
+  options.branching = 4;
+  options.levels = 3;
+  options.seed = seed;
+  options.threads = 1;
+  return Vocabulary::build(views, options);
+}
+
+struct Fixture {
+  Vocabulary vocabulary = test_vocabulary();
+  std::vector<DescriptorMatrix> images;
+  Database database{vocabulary, {true, 1}};
+
+  explicit Fixture(std::size_t count = 40) {
+    std::mt19937_64 rng(3);
+    for (std::size_t i = 0; i < count; ++i) {
+      images.push_back(test::clustered_descriptors(10 + i % 30, 32, 40, 0.08, rng));
+      const EntryId id = database.add(images.back().view());
+      if (i % 4 == 0) database.set_label(id, "image_" + std::to_string(i) + ".png");
+    }
+    database.remove(static_cast<EntryId>(count / 3));
+    database.remove(static_cast<EntryId>(count / 2));
+  }
+};
+
+void expect_equivalent(const Database& a, const Database& b, const Fixture& fixture) {
+  EXPECT_EQ(a.size(), b.size());
+  EXPECT_EQ(a.next_entry_id(), b.next_entry_id());
+  EXPECT_EQ(a.vocabulary().checksum(), b.vocabulary().checksum());
+  EXPECT_EQ(a.options().direct_index, b.options().direct_index);
+  EXPECT_EQ(a.options().direct_index_levels_up, b.options().direct_index_levels_up);
+  for (EntryId id = 0; id < a.next_entry_id(); ++id) {
+    ASSERT_EQ(a.contains(id), b.contains(id));
+    if (!a.contains(id)) continue;
+    EXPECT_EQ(a.label(id), b.label(id));
+    if (a.options().direct_index) {
+      EXPECT_EQ(a.feature_vector(id), b.feature_vector(id));
+    }
+  }
+  for (const auto& image : fixture.images) {
+    BowVector bow;
+    a.vocabulary().transform(image.view(), bow);
+    EXPECT_EQ(a.query(bow, 1000), b.query(bow, 1000));
+  }
+}
+
+TEST(DatabaseFile, SaveLoadRoundTrip) {
+  const Fixture fixture;
+  test::TempDir dir;
+  const std::string path = dir.file("db.bbdb");
+  fixture.database.save(path);
+  const Database loaded = Database::load(path);
+  expect_equivalent(fixture.database, loaded, fixture);
+  // The loaded database keeps working: adds continue the id sequence.
+  Database reloaded = Database::load(path);
+  EXPECT_EQ(reloaded.add(fixture.images[0].view()), fixture.database.next_entry_id());
+  EXPECT_EQ(fixture.database.serialize(), loaded.serialize()) << "saving is deterministic";
+}
+
+TEST(DatabaseFile, WithoutDirectIndexOrLabels) {
+  const Vocabulary vocabulary = test_vocabulary();
+  Database database(vocabulary, {false, 0});
+  Fixture fixture(5);
+  for (const auto& image : fixture.images) database.add(image.view());
+  const auto bytes = database.serialize();
+  const Database loaded = Database::deserialize(bytes.data(), bytes.size(), "memory");
+  expect_equivalent(database, loaded, fixture);
+  // Empty database.
+  Database empty(vocabulary);
+  const auto empty_bytes = empty.serialize();
+  EXPECT_EQ(Database::deserialize(empty_bytes.data(), empty_bytes.size(), "memory").size(), 0u);
+}
+
+TEST(DatabaseFile, VocabularyByChecksum) {
+  const Fixture fixture;
+  test::TempDir dir;
+  const std::string path = dir.file("db.bbdb");
+  fixture.database.save(path, false);
+  try {
+    Database::load(path);
+    FAIL() << "a file without vocabulary needs one";
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), path);
+    EXPECT_NE(e.problem().find("does not include its vocabulary"), std::string::npos) << e.what();
+  }
+  expect_equivalent(fixture.database, Database::load(path, fixture.vocabulary), fixture);
+
+  try {
+    Database::load(path, test_vocabulary(2));
+    FAIL() << "a different vocabulary must be rejected";
+  } catch (const FileError& e) {
+    EXPECT_NE(e.problem().find("different vocabulary"), std::string::npos) << e.what();
+  }
+  // Same tree, other scoring: a different vocabulary for the scores.
+  EXPECT_THROW(Database::load(path, fixture.vocabulary.with_scoring(Scoring::kL2)), FileError);
+
+  const DatabaseFileInfo info = Database::inspect(path);
+  EXPECT_EQ(info.entries, fixture.database.size());
+  EXPECT_EQ(info.next_entry_id, fixture.database.next_entry_id());
+  EXPECT_FALSE(info.vocabulary_included);
+  EXPECT_TRUE(info.direct_index);
+  EXPECT_EQ(info.direct_index_levels_up, 1u);
+  EXPECT_EQ(info.vocabulary_checksum, fixture.vocabulary.checksum());
+  EXPECT_EQ(info.vocabulary_description, fixture.vocabulary.description());
+}
+
+TEST(DatabaseFile, DamagedFilesAreRejected) {
+  const Fixture fixture(12);
+  const std::vector<std::uint8_t> bytes = fixture.database.serialize();
+  const auto load = [](const std::vector<std::uint8_t>& data) {
+    return Database::deserialize(data.data(), data.size(), "damaged.bbdb");
+  };
+  ASSERT_NO_THROW(load(bytes));
+
+  // Truncated anywhere, including inside the header and the table.
+  for (std::size_t size = 0; size < bytes.size(); size += 1 + size / 7) {
+    const std::vector<std::uint8_t> truncated(bytes.begin(), bytes.begin() + size);
+    EXPECT_THROW(load(truncated), FileError) << "truncated to " << size;
+  }
+  // Any single flipped bit.
+  for (std::size_t at = 0; at < bytes.size(); at += 1 + at / 50) {
+    std::vector<std::uint8_t> flipped = bytes;
+    flipped[at] ^= static_cast<std::uint8_t>(1u << (at % 8));
+    EXPECT_THROW(load(flipped), FileError) << "bit flipped at byte " << at;
+  }
+  // Appended garbage.
+  std::vector<std::uint8_t> longer = bytes;
+  longer.push_back(0);
+  EXPECT_THROW(load(longer), FileError);
+
+  std::vector<std::uint8_t> wrong_magic = bytes;
+  wrong_magic[0] = 'X';
+  try {
+    load(wrong_magic);
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_NE(e.problem().find("not a binbow database"), std::string::npos) << e.what();
+  }
+  // A vocabulary file is not a database.
+  const std::vector<std::uint8_t> vocabulary_bytes = fixture.vocabulary.serialize();
+  EXPECT_THROW(load(vocabulary_bytes), FileError);
+}
+
+TEST(DatabaseFile, ErrorsNameTheFile) {
+  test::TempDir dir;
+  const std::string missing = dir.file("missing.bbdb");
+  try {
+    Database::load(missing);
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), missing);
+  }
+  const std::string garbage = dir.file("garbage.bbdb");
+  test::write_file(garbage, std::vector<std::uint8_t>(100, 7));
+  EXPECT_THROW(Database::load(garbage), FileError);
+  EXPECT_THROW(Database::inspect(garbage), FileError);
+}
+
+TEST(DatabaseFile, SaveIsAtomic) {
+  const Fixture fixture(5);
+  test::TempDir dir;
+  const std::string path = dir.file("db.bbdb");
+  fixture.database.save(path);
+  // Saving into a missing directory fails cleanly and leaves nothing behind.
+  EXPECT_THROW(fixture.database.save(dir.file("no/such/dir/db.bbdb")), FileError);
+  fixture.database.save(path);  // overwrite
+  EXPECT_EQ(Database::load(path).size(), fixture.database.size());
+}
+
+}  // namespace
+}  // namespace binbow
