@@ -151,6 +151,7 @@ class Vocabulary {
 
  private:
   explicit Vocabulary(std::shared_ptr<const detail::VocabularyBlock> block);
+  void words_to_bow(const WordId* words, std::size_t count, BowVector& bow) const;
   std::shared_ptr<const detail::VocabularyBlock> block_;
   Scoring scoring_ = Scoring::kL1;
 };

@@ -85,7 +85,7 @@ inline void prefetch_block(const std::uint8_t* p, std::size_t bytes) {
 template <std::size_t N>
 void descend_impl(const TreeView& tree, const std::uint8_t* queries, std::size_t n,
                   std::uint32_t* words, std::uint32_t* level_nodes, std::uint32_t level_depth) {
-  constexpr std::size_t kBatch = 16;
+  constexpr std::size_t kBatch = 32;
   const std::size_t code_size = tree.code_size;
   const Distance<N> distance{code_size};
   for (std::size_t begin = 0; begin < n; begin += kBatch) {
@@ -111,7 +111,11 @@ void descend_impl(const TreeView& tree, const std::uint8_t* queries, std::size_t
         }
         first[j] = tree.links[node[j]];
         count[j] = c;
+        // The children's links and counts come with their descriptors, so the
+        // next level starts without a second dependent miss.
         prefetch_block(tree.descriptors + std::size_t{first[j]} * code_size, c * code_size);
+        __builtin_prefetch(tree.links + first[j]);
+        __builtin_prefetch(tree.child_counts + first[j]);
         active[still++] = j;
       }
       active_count = still;
@@ -131,8 +135,6 @@ void descend_impl(const TreeView& tree, const std::uint8_t* queries, std::size_t
         node[j] = first[j] + best_child;
         ++depth[j];
         if (level_nodes != nullptr && depth[j] == level_depth) level_nodes[begin + j] = node[j];
-        __builtin_prefetch(tree.links + node[j]);
-        __builtin_prefetch(tree.child_counts + node[j]);
       }
     }
   }

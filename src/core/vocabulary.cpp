@@ -6,6 +6,7 @@
 
 #include "binbow/error.h"
 #include "core/kernels.h"
+#include "core/radix_sort.h"
 #include "core/scoring.h"
 #include "core/vocabulary_block.h"
 
@@ -45,7 +46,9 @@ struct Scratch {
   std::vector<WordId> words;
   std::vector<NodeId> nodes;
   std::vector<WordId> sorted;
-  std::vector<std::uint64_t> keys;
+  std::vector<NodeId> node_keys;
+  std::vector<std::uint32_t> feature_ids;
+  std::vector<std::uint32_t> buffer, buffer2;
   std::vector<double> values;
 };
 
@@ -294,15 +297,11 @@ void Vocabulary::quantize(const DescriptorView& descriptors, WordId* words, Node
                             level_depth(b, levels_up));
 }
 
-void Vocabulary::transform(const DescriptorView& descriptors, BowVector& bow) const {
-  const auto& b = require(block_);
-  check_descriptors(b, descriptors);
+void Vocabulary::words_to_bow(const WordId* words, std::size_t count, BowVector& bow) const {
+  const auto& b = *block_;
   Scratch& s = scratch();
-  s.words.resize(descriptors.rows);
-  detail::kernels().descend(b.tree, descriptors.data, descriptors.rows, s.words.data(), nullptr, 0);
-
-  s.sorted.assign(s.words.begin(), s.words.end());
-  std::sort(s.sorted.begin(), s.sorted.end());
+  s.sorted.assign(words, words + count);
+  detail::radix_sort(s.sorted, nullptr, s.buffer, s.buffer2);
   bow.entries_.clear();
   s.values.clear();
   const bool accumulate = b.weighting == Weighting::kTf || b.weighting == Weighting::kTfIdf;
@@ -329,41 +328,53 @@ void Vocabulary::transform(const DescriptorView& descriptors, BowVector& bow) co
       for (double& v : s.values) v /= norm;
   } else if (accumulate && !s.values.empty()) {
     // DBoW2 divides by the number of distinct words here, not of features.
-    const double count = static_cast<double>(s.values.size());
-    for (double& v : s.values) v /= count;
+    const double distinct = static_cast<double>(s.values.size());
+    for (double& v : s.values) v /= distinct;
   }
   for (std::size_t i = 0; i < s.values.size(); ++i)
     bow.entries_[i].value = static_cast<float>(s.values[i]);
 }
 
+void Vocabulary::transform(const DescriptorView& descriptors, BowVector& bow) const {
+  const auto& b = require(block_);
+  check_descriptors(b, descriptors);
+  Scratch& s = scratch();
+  s.words.resize(descriptors.rows);
+  detail::kernels().descend(b.tree, descriptors.data, descriptors.rows, s.words.data(), nullptr, 0);
+  words_to_bow(s.words.data(), descriptors.rows, bow);
+}
+
 void Vocabulary::transform(const DescriptorView& descriptors, BowVector& bow,
                            FeatureVector& features, unsigned levels_up) const {
-  transform(descriptors, bow);
-  const auto& b = *block_;
+  const auto& b = require(block_);
+  check_descriptors(b, descriptors);
   Scratch& s = scratch();
+  s.words.resize(descriptors.rows);
   s.nodes.resize(descriptors.rows);
-  // Second descent for the nodes: the words are already in s.words, and the
-  // second pass hits warm caches; it keeps the BoW path free of level tracking.
   detail::kernels().descend(b.tree, descriptors.data, descriptors.rows, s.words.data(),
                             s.nodes.data(), level_depth(b, levels_up));
-  s.keys.clear();
-  for (std::size_t i = 0; i < descriptors.rows; ++i)
-    if (b.word_weights[s.words[i]] > 0)
-      s.keys.push_back((std::uint64_t{s.nodes[i]} << 32) | static_cast<std::uint32_t>(i));
-  std::sort(s.keys.begin(), s.keys.end());
+  words_to_bow(s.words.data(), descriptors.rows, bow);
+
+  // Group features by node with a stable sort, so indices stay increasing.
+  s.node_keys.clear();
+  s.feature_ids.clear();
+  for (std::size_t i = 0; i < descriptors.rows; ++i) {
+    if (b.word_weights[s.words[i]] <= 0) continue;
+    s.node_keys.push_back(s.nodes[i]);
+    s.feature_ids.push_back(static_cast<std::uint32_t>(i));
+  }
+  detail::radix_sort(s.node_keys, &s.feature_ids, s.buffer, s.buffer2);
   std::vector<NodeId> nodes;
   std::vector<std::uint32_t> offsets{0};
-  std::vector<std::uint32_t> indices(s.keys.size());
-  for (std::size_t i = 0; i < s.keys.size(); ++i) {
-    const auto node = static_cast<NodeId>(s.keys[i] >> 32);
-    if (nodes.empty() || nodes.back() != node) {
+  for (std::size_t i = 0; i < s.node_keys.size(); ++i) {
+    if (nodes.empty() || nodes.back() != s.node_keys[i]) {
       if (!nodes.empty()) offsets.push_back(static_cast<std::uint32_t>(i));
-      nodes.push_back(node);
+      nodes.push_back(s.node_keys[i]);
     }
-    indices[i] = static_cast<std::uint32_t>(s.keys[i]);
   }
-  if (!nodes.empty()) offsets.push_back(static_cast<std::uint32_t>(s.keys.size()));
-  features = FeatureVector::from_arrays(std::move(nodes), std::move(offsets), std::move(indices));
+  if (!nodes.empty()) offsets.push_back(static_cast<std::uint32_t>(s.node_keys.size()));
+  features = FeatureVector::from_arrays(std::move(nodes), std::move(offsets),
+                                        std::vector<std::uint32_t>(s.feature_ids));
 }
 
 double score_bow(const BowVector& a, const BowVector& b, Scoring scoring) {
