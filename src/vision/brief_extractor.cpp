@@ -42,7 +42,7 @@ class BriefExtractor final : public FeatureExtractor {
     const std::vector<cv::KeyPoint> kept = strongest_inside(corners, image.size());
     if (kept.empty()) return features;
 
-    const cv::Mat smoothed = smooth_around(image, kept);
+    const cv::Mat smoothed = smooth(image);
     features.keypoints.reserve(kept.size());
     features.descriptors.resize(kept.size());
     describe(smoothed, kept, features.descriptors);
@@ -87,23 +87,14 @@ class BriefExtractor final : public FeatureExtractor {
     return inside;
   }
 
-  // The image smoothed as DVision does, computed only over the bounding box of
-  // the tests: cv::GaussianBlur on a region of interest reads the real pixels
-  // around it, so the values inside equal those of a whole-image blur.
-  cv::Mat smooth_around(const cv::Mat& image, const std::vector<cv::KeyPoint>& keypoints) const {
-    int min_x = image.cols, min_y = image.rows, max_x = 0, max_y = 0;
-    for (const cv::KeyPoint& keypoint : keypoints) {
-      const int x = static_cast<int>(keypoint.pt.x);
-      const int y = static_cast<int>(keypoint.pt.y);
-      min_x = std::min(min_x, x);
-      min_y = std::min(min_y, y);
-      max_x = std::max(max_x, x);
-      max_y = std::max(max_y, y);
-    }
-    const cv::Rect box(min_x - radius_, min_y - radius_, max_x - min_x + 2 * radius_ + 1,
-                       max_y - min_y + 2 * radius_ + 1);
-    cv::Mat smoothed(image.size(), CV_8UC1);
-    cv::GaussianBlur(image(box), smoothed(box), kSmoothingKernel, kSmoothingSigma, kSmoothingSigma,
+  // The whole image is smoothed, as DVision does: cv::GaussianBlur on a region
+  // of interest takes another code path whose rounding differs by one grey
+  // level on ~1% of the pixels, which would flip bits.
+  // A region-of-interest input is copied first for the same reason.
+  static cv::Mat smooth(const cv::Mat& image) {
+    const cv::Mat whole = image.isSubmatrix() ? image.clone() : image;
+    cv::Mat smoothed;
+    cv::GaussianBlur(whole, smoothed, kSmoothingKernel, kSmoothingSigma, kSmoothingSigma,
                      cv::BORDER_REFLECT_101);
     return smoothed;
   }

@@ -8,6 +8,19 @@
 namespace binbow::vision {
 namespace {
 
+// OpenCV's detectors assert on very small images (BRISK below 6 pixels, ORB
+// and AKAZE at 1 pixel); no detector finds a describable corner below this.
+constexpr int kMinimumSide = 16;
+
+bool too_small(const cv::Mat& image) {
+  return image.cols < kMinimumSide || image.rows < kMinimumSide;
+}
+
+// An OpenCV failure on a valid image becomes a binbow::Error naming the extractor.
+[[noreturn]] void rethrow_opencv(const std::string& name, const cv::Exception& e) {
+  throw Error(name + ": OpenCV failed: " + e.msg);
+}
+
 // ORB builds a fresh cv::ORB per call: creating one costs microseconds, and
 // no state is shared between threads.
 class OrbExtractor final : public FeatureExtractor {
@@ -23,14 +36,18 @@ class OrbExtractor final : public FeatureExtractor {
 
   Features extract(const cv::Mat& image) const override {
     check_grey_image(image, "ORB");
-    if (image.empty()) return features_from_opencv({}, cv::Mat(), code_size());
+    if (too_small(image)) return features_from_opencv({}, cv::Mat(), code_size());
     const cv::Ptr<cv::ORB> orb =
         cv::ORB::create(options_.max_features, options_.scale_factor, options_.levels,
                         options_.edge_threshold, 0, 2, cv::ORB::HARRIS_SCORE,
                         /*patchSize=*/31, options_.fast_threshold);
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat descriptors;
-    orb->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
+    try {
+      orb->detectAndCompute(image, cv::noArray(), keypoints, descriptors);
+    } catch (const cv::Exception& e) {
+      rethrow_opencv("orb", e);
+    }
     return features_from_opencv(keypoints, descriptors, code_size());
   }
 
@@ -55,14 +72,18 @@ class OpenCvExtractor final : public FeatureExtractor {
 
   Features extract(const cv::Mat& image) const override {
     check_grey_image(image, name_.c_str());
-    if (image.empty()) return features_from_opencv({}, cv::Mat(), code_size_);
+    if (too_small(image)) return features_from_opencv({}, cv::Mat(), code_size_);
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat descriptors;
     {
       const std::lock_guard<std::mutex> lock(mutex_);
-      detector_->detect(image, keypoints);
-      if (max_features_ > 0) cv::KeyPointsFilter::retainBest(keypoints, max_features_);
-      if (!keypoints.empty()) detector_->compute(image, keypoints, descriptors);
+      try {
+        detector_->detect(image, keypoints);
+        if (max_features_ > 0) cv::KeyPointsFilter::retainBest(keypoints, max_features_);
+        if (!keypoints.empty()) detector_->compute(image, keypoints, descriptors);
+      } catch (const cv::Exception& e) {
+        rethrow_opencv(name_, e);
+      }
     }
     if (keypoints.empty()) descriptors.release();
     return features_from_opencv(keypoints, descriptors, code_size_);

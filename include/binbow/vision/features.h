@@ -49,7 +49,8 @@ class FeatureExtractor {
  public:
   virtual ~FeatureExtractor() = default;
   // `image` is 8-bit grey (CV_8UC1); throws InvalidArgument otherwise. An
-  // empty (0×0) image or one without corners gives empty Features, not an error.
+  // empty (0×0) image, one without corners, or (OpenCV-backed extractors) one
+  // smaller than 16×16 gives empty Features, not an error.
   virtual Features extract(const cv::Mat& image) const = 0;
   // Bytes per descriptor (32 for ORB and BRIEF-256).
   virtual std::size_t code_size() const = 0;

@@ -1,0 +1,260 @@
+#include "binbow/vision/features.h"
+
+#include <algorithm>
+#include <bitset>
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "binbow/error.h"
+#include "binbow/vision/image_source.h"
+#include "support/test_support.h"
+#include "vision/brief_pattern.h"
+
+namespace binbow::vision {
+namespace {
+
+using test::shared_data;
+
+cv::Mat grey(const std::string& relative) {
+  return read_grey_image(shared_data(relative));
+}
+
+// DVision::BRIEF written out plainly: whole-image 9x9 sigma-2 Gaussian, bit i
+// set when the first point of test i is darker than the second, stored in a
+// std::bitset as DVision/DBoW2 do.
+std::bitset<256> reference_brief(const cv::Mat& smoothed, int x, int y,
+                                 const BriefPattern& pattern) {
+  std::bitset<256> bits;
+  for (std::size_t i = 0; i < 256; ++i) {
+    const int x1 = x + pattern.x1[i], y1 = y + pattern.y1[i];
+    const int x2 = x + pattern.x2[i], y2 = y + pattern.y2[i];
+    if (x1 < 0 || y1 < 0 || x2 < 0 || y2 < 0 || x1 >= smoothed.cols || x2 >= smoothed.cols ||
+        y1 >= smoothed.rows || y2 >= smoothed.rows) {
+      continue;
+    }
+    if (smoothed.at<std::uint8_t>(y1, x1) < smoothed.at<std::uint8_t>(y2, x2)) bits.set(i);
+  }
+  return bits;
+}
+
+// Our bytes from a DBoW2 descriptor string, by the rule in features.h.
+std::vector<std::uint8_t> bytes_from_dbow2_string(const std::string& text) {
+  std::vector<std::uint8_t> bytes(text.size() / 8, 0);
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[text.size() - 1 - i] == '1') bytes[i / 8] |= static_cast<std::uint8_t>(1u << (i % 8));
+  }
+  return bytes;
+}
+
+TEST(BriefPattern, BuiltInEqualsThePatternFile) {
+  const BriefPattern file =
+      load_brief_pattern(shared_data("vins-lite-brief-vocab/brief_pattern.yml"));
+  const BriefPattern& built_in = default_brief_pattern();
+  EXPECT_EQ(file.tests(), 256u);
+  EXPECT_EQ(file.x1, built_in.x1);
+  EXPECT_EQ(file.y1, built_in.y1);
+  EXPECT_EQ(file.x2, built_in.x2);
+  EXPECT_EQ(file.y2, built_in.y2);
+  EXPECT_EQ(built_in.radius(), 24);  // a 48x48 patch
+}
+
+TEST(BriefPattern, BadFilesGiveFileError) {
+  test::TempDir dir;
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir.file(name)) << text;
+    return dir.file(name);
+  };
+  const std::string cases[] = {
+      write("missing_key.yml", "%YAML:1.0\nx1: [1, 2, 3, 4, 5, 6, 7, 8]\n"),
+      write("unequal.yml",
+            "%YAML:1.0\nx1: [1,2,3,4,5,6,7,8]\ny1: [1,2,3,4,5,6,7,8]\nx2: [1,2,3,4,5,6,7,8]\n"
+            "y2: [1,2,3]\n"),
+      write("not_multiple.yml", "%YAML:1.0\nx1: [1]\ny1: [1]\nx2: [1]\ny2: [1]\n"),
+      write("huge.yml",
+            "%YAML:1.0\nx1: [1,2,3,4,5,6,7,100000]\ny1: [1,2,3,4,5,6,7,8]\nx2: "
+            "[1,2,3,4,5,6,7,8]\ny2: [1,2,3,4,5,6,7,8]\n"),
+      write("garbage.yml", "%YAML:1.0\nx1: [ {{{ \n\x01\x02"),
+      write("empty.yml", ""),
+      dir.file("absent.yml"),
+  };
+  for (const std::string& path : cases) {
+    BriefOptions options;
+    options.pattern_file = path;
+    try {
+      make_brief_extractor(options);
+      ADD_FAILURE() << "accepted " << path;
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), path) << e.what();
+    }
+  }
+}
+
+// Bit-exactness with DVision::BRIEF on real images, through the full pipeline.
+TEST(Brief, BitExactWithTheReferenceDefinition) {
+  const BriefPattern& pattern = default_brief_pattern();
+  for (const char* image_name : {"dbow2-demo-images/image1.png", "rtabmap-samples/samples/12.jpg",
+                                 "opencv-doc-samples/graf1.png"}) {
+    SCOPED_TRACE(image_name);
+    const cv::Mat image = grey(image_name);
+    BriefOptions options;
+    options.max_features = 0;  // all corners: covers the image border too
+    const Features features = make_brief_extractor(options)->extract(image);
+    ASSERT_GT(features.keypoints.size(), 150u);
+    ASSERT_EQ(features.descriptors.rows(), features.keypoints.size());
+    ASSERT_EQ(features.descriptors.code_size(), 32u);
+
+    cv::Mat smoothed;
+    cv::GaussianBlur(image, smoothed, cv::Size(9, 9), 2, 2);
+    for (std::size_t k = 0; k < features.keypoints.size(); ++k) {
+      const Keypoint& keypoint = features.keypoints[k];
+      const int x = static_cast<int>(keypoint.x), y = static_cast<int>(keypoint.y);
+      ASSERT_TRUE(x >= 24 && y >= 24 && x < image.cols - 24 && y < image.rows - 24);
+      const std::bitset<256> expected = reference_brief(smoothed, x, y, pattern);
+      // What DBoW2 writes for this descriptor, read back by the documented rule.
+      const std::vector<std::uint8_t> expected_bytes =
+          bytes_from_dbow2_string(expected.to_string());
+      ASSERT_TRUE(
+          std::equal(expected_bytes.begin(), expected_bytes.end(), features.descriptors.row(k)))
+          << "keypoint " << k << " at " << x << "," << y;
+      for (std::size_t i = 0; i < 256; ++i) {
+        ASSERT_EQ(expected[i], ((features.descriptors.row(k)[i / 8] >> (i % 8)) & 1) != 0);
+      }
+    }
+  }
+}
+
+TEST(Brief, KeepsTheStrongestFastCornersInside) {
+  const cv::Mat image = grey("dbow2-demo-images/image1.png");
+  std::vector<cv::KeyPoint> corners;
+  cv::FAST(image, corners, 10, true);
+  std::vector<float> inside;
+  for (const cv::KeyPoint& corner : corners) {
+    if (corner.pt.x >= 24 && corner.pt.y >= 24 && corner.pt.x < image.cols - 24 &&
+        corner.pt.y < image.rows - 24) {
+      inside.push_back(corner.response);
+    }
+  }
+  std::sort(inside.rbegin(), inside.rend());
+  ASSERT_GT(inside.size(), 300u);
+
+  const Features features = make_brief_extractor()->extract(image);
+  ASSERT_EQ(features.keypoints.size(), 300u);
+  for (std::size_t i = 0; i < 300; ++i) {
+    EXPECT_EQ(features.keypoints[i].response, inside[i]) << i;
+    EXPECT_EQ(features.keypoints[i].angle, -1.f);
+    EXPECT_EQ(features.keypoints[i].octave, 0);
+  }
+  // The pattern file and the built-in pattern give the same descriptors.
+  BriefOptions from_file;
+  from_file.pattern_file = shared_data("vins-lite-brief-vocab/brief_pattern.yml");
+  const Features again = make_brief_extractor(from_file)->extract(image);
+  ASSERT_EQ(again.descriptors.rows(), 300u);
+  EXPECT_TRUE(std::equal(again.descriptors.data(), again.descriptors.data() + 300 * 32,
+                         features.descriptors.data()));
+}
+
+TEST(Brief, NonMaxSuppressionOffGivesMoreCorners) {
+  const cv::Mat image = grey("dbow2-demo-images/image1.png");
+  BriefOptions options;
+  options.max_features = 0;
+  const std::size_t suppressed = make_brief_extractor(options)->extract(image).keypoints.size();
+  options.non_max_suppression = false;
+  const std::size_t all = make_brief_extractor(options)->extract(image).keypoints.size();
+  EXPECT_GT(all, suppressed);
+}
+
+TEST(Extractors, EmptyAndFlatImagesGiveEmptyFeatures) {
+  for (const char* name : {"brief", "orb", "akaze", "brisk"}) {
+    SCOPED_TRACE(name);
+    const auto extractor = make_extractor(name);
+    for (const cv::Mat& image :
+         {cv::Mat(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(128)),
+          cv::Mat(10, 10, CV_8UC1, cv::Scalar(0)), cv::Mat(1, 1, CV_8UC1, cv::Scalar(7))}) {
+      const Features features = extractor->extract(image);
+      EXPECT_TRUE(features.keypoints.empty());
+      EXPECT_TRUE(features.descriptors.empty());
+      EXPECT_EQ(features.descriptors.code_size(), extractor->code_size());
+    }
+    EXPECT_THROW(extractor->extract(cv::Mat(10, 10, CV_8UC3)), InvalidArgument);
+    EXPECT_THROW(extractor->extract(cv::Mat(10, 10, CV_32FC1)), InvalidArgument);
+  }
+  EXPECT_THROW(make_extractor("sift"), InvalidArgument);
+}
+
+TEST(Extractors, CodeSizesAndCounts) {
+  const cv::Mat image = grey("dbow2-demo-images/image1.png");
+  struct Case {
+    const char* name;
+    std::size_t code_size;
+    std::size_t max_features;
+  };
+  for (const Case& c : {Case{"brief", 32, 300}, Case{"orb", 32, 1000}, Case{"akaze", 61, 400},
+                        Case{"brisk", 64, 400}}) {
+    SCOPED_TRACE(c.name);
+    const auto extractor = make_extractor(c.name, static_cast<int>(c.max_features));
+    EXPECT_EQ(extractor->name(), c.name);
+    EXPECT_EQ(extractor->code_size(), c.code_size);
+    const Features features = extractor->extract(image);
+    EXPECT_GT(features.keypoints.size(), c.max_features / 4);
+    EXPECT_LE(features.keypoints.size(), c.max_features);
+    EXPECT_EQ(features.descriptors.rows(), features.keypoints.size());
+    EXPECT_EQ(features.descriptors.code_size(), c.code_size);
+  }
+  OrbOptions orb;
+  orb.max_features = 200;
+  EXPECT_LE(make_orb_extractor(orb)->extract(image).keypoints.size(), 200u);
+  orb.levels = 0;
+  EXPECT_THROW(make_orb_extractor(orb), InvalidArgument);
+}
+
+TEST(Extractors, ConcurrentCallsGiveTheSameResult) {
+  const cv::Mat image = grey("rtabmap-samples/samples/5.jpg");
+  for (const char* name : {"brief", "orb", "brisk"}) {
+    SCOPED_TRACE(name);
+    const auto extractor = make_extractor(name);
+    const Features expected = extractor->extract(image);
+    std::vector<Features> results(4);
+    std::vector<std::thread> threads;
+    for (Features& result : results) {
+      threads.emplace_back([&] { result = extractor->extract(image); });
+    }
+    for (std::thread& thread : threads) thread.join();
+    for (const Features& result : results) {
+      ASSERT_EQ(result.descriptors.rows(), expected.descriptors.rows());
+      EXPECT_TRUE(std::equal(result.descriptors.data(),
+                             result.descriptors.data() +
+                                 expected.descriptors.rows() * expected.descriptors.code_size(),
+                             expected.descriptors.data()));
+    }
+  }
+}
+
+TEST(Extractors, OpenCvConversionsRoundTrip) {
+  std::vector<cv::KeyPoint> keypoints = {cv::KeyPoint(1.5f, 2.5f, 7, 30, 0.5f, 2),
+                                         cv::KeyPoint(10, 20, 31, -1, 9, 0)};
+  cv::Mat descriptors(2, 3, CV_8UC1);
+  for (int i = 0; i < 6; ++i) descriptors.data[i] = static_cast<uchar>(i * 11);
+  const Features features = features_from_opencv(keypoints, descriptors, 99);
+  ASSERT_EQ(features.descriptors.code_size(), 3u);
+  EXPECT_EQ(features.descriptors.row(1)[2], 55);
+  const std::vector<cv::KeyPoint> back = to_opencv(features.keypoints);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[0].pt, keypoints[0].pt);
+  EXPECT_EQ(back[0].angle, 30);
+  EXPECT_EQ(back[0].octave, 2);
+  EXPECT_EQ(features_from_opencv({}, cv::Mat(), 61).descriptors.code_size(), 61u);
+  EXPECT_THROW(features_from_opencv(keypoints, cv::Mat(2, 3, CV_32FC1), 3), InvalidArgument);
+  EXPECT_THROW(features_from_opencv(keypoints, cv::Mat(3, 3, CV_8UC1), 3), InvalidArgument);
+  EXPECT_THROW(make_opencv_extractor(nullptr, "none"), InvalidArgument);
+  EXPECT_THROW(make_opencv_extractor(cv::SIFT::create(), "sift"), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace binbow::vision
