@@ -80,7 +80,44 @@ struct VarFreer {
   void operator()(matvar_t* v) const { Mat_VarFree(v); }
 };
 
+// matio reads a truncated compressed variable as zeros without complaint, so
+// the level-5 element chain is walked first: every element must fit in the file.
+void check_level5_elements(const std::string& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));
+  const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
+  unsigned char header[128];
+  in.seekg(0);
+  if (size < 128 || !in.read(reinterpret_cast<char*>(header), 128))
+    throw FileError(path, "too short for a MATLAB .mat file");
+  if (std::memcmp(header, "MATLAB 7.3", 10) == 0) return;  // HDF5 inside: matio checks it
+  const bool swapped = header[126] == 'M' && header[127] == 'I';
+  if (!swapped && !(header[126] == 'I' && header[127] == 'M'))
+    throw FileError(path, "not a MATLAB level-5 .mat file (bad endian indicator)");
+  std::uint64_t offset = 128;
+  while (offset < size) {
+    unsigned char tag[8];
+    in.seekg(static_cast<std::streamoff>(offset));
+    if (size - offset < 8 || !in.read(reinterpret_cast<char*>(tag), 8))
+      throw FileError(path, "truncated: incomplete element tag at byte " + std::to_string(offset));
+    const auto word = [&](int at) {
+      std::uint32_t v = 0;
+      for (int i = 0; i < 4; ++i) v |= std::uint32_t(tag[at + (swapped ? 3 - i : i)]) << (8 * i);
+      return v;
+    };
+    std::uint64_t bytes = word(4);
+    if ((word(0) >> 16) != 0) bytes = 0;  // small data element: data packed in the tag
+    const std::uint64_t end = offset + 8 + bytes;
+    if (end > size)
+      throw FileError(path, "truncated: element at byte " + std::to_string(offset) + " needs " +
+                                std::to_string(bytes) + " bytes, file ends after " +
+                                std::to_string(size - offset - 8));
+    offset = word(0) == 15 ? end : (end + 7) / 8 * 8;  // compressed elements are not padded
+  }
+}
+
 GroundTruth from_mat(const std::string& path) {
+  check_level5_elements(path);
   std::unique_ptr<mat_t, MatCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) throw FileError(path, "not a readable MATLAB .mat file");
   std::unique_ptr<matvar_t, VarFreer> var;

@@ -1,0 +1,173 @@
+#include "binbow/vision/evaluation.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "binbow/error.h"
+#include "support/test_support.h"
+
+namespace binbow::vision {
+namespace {
+
+using test::shared_data;
+using test::TempDir;
+
+std::set<std::pair<std::size_t, std::size_t>> loops_of(const GroundTruth& truth) {
+  std::set<std::pair<std::size_t, std::size_t>> loops;
+  for (std::size_t q = 0; q < truth.frames(); ++q)
+    for (std::uint32_t m : truth.earlier_matches(q)) loops.emplace(q, m);
+  return loops;
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+TEST(GroundTruth, ImageMatrixAgreesWithOneBasedPairs) {
+  const GroundTruth image = GroundTruth::load(shared_data("rtabmap-samples/samples_GT.bmp"));
+  const GroundTruth pairs = GroundTruth::load(shared_data("rtabmap-samples/samples_GT_pairs.txt"));
+  EXPECT_EQ(image.frames(), 84u);
+  EXPECT_EQ(pairs.frames(), 84u);
+  EXPECT_EQ(loops_of(image), loops_of(pairs));
+  EXPECT_EQ(image.queries_with_loops(), 44u);  // frames 41-84 revisit (1-based)
+  EXPECT_TRUE(image.is_loop(40, 0));           // "41 1" in the 1-based pair file
+  EXPECT_TRUE(image.is_loop(0, 40));           // same place is symmetric
+  EXPECT_FALSE(image.has_loop(39));
+  EXPECT_TRUE(image.has_loop(40));
+}
+
+// The .mat files hold dense double, dense logical matrices; their pair lists are 0-based.
+class MatGroundTruth : public testing::TestWithParam<const char*> {};
+
+TEST_P(MatGroundTruth, AgreesWithZeroBasedPairs) {
+  const std::string stem = GetParam();
+  const GroundTruth mat =
+      GroundTruth::load(shared_data("lcd-groundtruth-knzhang/" + stem + ".mat"));
+  const GroundTruth pairs =
+      GroundTruth::load(shared_data("lcd-groundtruth-knzhang/pairs_txt/" + stem + "_pairs.txt"));
+  EXPECT_GT(mat.pair_count(), 100u);
+  EXPECT_EQ(loops_of(mat), loops_of(pairs));
+  EXPECT_GE(mat.frames(), pairs.frames());
+}
+
+INSTANTIATE_TEST_SUITE_P(Knzhang, MatGroundTruth,
+                         testing::Values("Lip6IndoorGroundTruth", "city_GT_final",
+                                         "kitti06GroundTruth"));
+
+TEST(GroundTruth, TextPairsNeedAKnownBase) {
+  TempDir dir;
+  write_text(dir.file("a.txt"), "5 2\n6 3\n");
+  EXPECT_THROW(GroundTruth::load(dir.file("a.txt")), FileError);
+  GroundTruthOptions one_based;
+  one_based.pairs_index_base = 1;
+  const GroundTruth t = GroundTruth::load(dir.file("a.txt"), one_based);
+  EXPECT_TRUE(t.is_loop(4, 1));
+  write_text(dir.file("b.txt"), "# comment\n5,0\n\n6\t3\n");
+  const GroundTruth z = GroundTruth::load(dir.file("b.txt"));
+  EXPECT_TRUE(z.is_loop(5, 0));
+  EXPECT_TRUE(z.is_loop(6, 3));
+  EXPECT_EQ(z.frames(), 7u);
+}
+
+TEST(GroundTruth, DamagedFilesAreFileErrors) {
+  TempDir dir;
+  write_text(dir.file("bad.txt"), "# 0-based\n1 0\n2 x\n");
+  try {
+    GroundTruth::load(dir.file("bad.txt"));
+    FAIL() << "no error";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 3"), std::string::npos) << e.what();
+  }
+  write_text(dir.file("neg.txt"), "# 1-based\n1 0\n");
+  EXPECT_THROW(GroundTruth::load(dir.file("neg.txt")), FileError);
+  // A truncated .mat: every prefix must fail cleanly or read a subset, never crash.
+  const auto bytes =
+      test::read_file(shared_data("lcd-groundtruth-knzhang/Lip6IndoorGroundTruth.mat"));
+  ASSERT_GT(bytes.size(), 200u);
+  for (std::size_t size : {std::size_t{0}, std::size_t{10}, std::size_t{128}, std::size_t{200},
+                           bytes.size() / 2, bytes.size() - 1}) {
+    test::write_file(dir.file("t.mat"), {bytes.begin(), bytes.begin() + static_cast<long>(size)});
+    EXPECT_THROW(GroundTruth::load(dir.file("t.mat")), FileError) << size;
+  }
+  write_text(dir.file("x.png"), "not an image");
+  EXPECT_THROW(GroundTruth::load(dir.file("x.png")), FileError);
+  EXPECT_THROW(GroundTruth::load(dir.file("missing.txt")), FileError);
+}
+
+TEST(Detections, CsvRoundTripWithAwkwardNames) {
+  TempDir dir;
+  const std::vector<Detection> detections = {
+      {41, 2, "a/41.jpg", "a/2.jpg", 0.53125, 37},
+      {42, 3, "odd, \"name\".jpg", "x\ny.jpg", 1e-7, 12},
+  };
+  write_detections_csv(dir.file("loops.csv"), detections);
+  std::ifstream in(dir.file("loops.csv"));
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "query_index,match_index,query_file,match_file,score,inliers");
+  const auto read = read_detections_csv(dir.file("loops.csv"));
+  ASSERT_EQ(read.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(read[i].query, detections[i].query);
+    EXPECT_EQ(read[i].match, detections[i].match);
+    EXPECT_EQ(read[i].query_file, detections[i].query_file);
+    EXPECT_EQ(read[i].match_file, detections[i].match_file);
+    EXPECT_DOUBLE_EQ(read[i].score, detections[i].score);
+    EXPECT_EQ(read[i].inliers, detections[i].inliers);
+  }
+}
+
+TEST(Detections, MalformedCsvNamesTheLine) {
+  TempDir dir;
+  write_text(dir.file("a.csv"), "query,match\n");
+  EXPECT_THROW(read_detections_csv(dir.file("a.csv")), FileError);
+  write_text(dir.file("b.csv"),
+             "query_index,match_index,query_file,match_file,score,inliers\n1,0,a,b,0.5,12\n"
+             "2,-1,a,b,0.5,12\n");
+  try {
+    read_detections_csv(dir.file("b.csv"));
+    FAIL() << "no error";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 3"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PrecisionRecall, PaperDefinitions) {
+  // 10 frames; queries 5..8 revisit 0..3; query 9 has no loop.
+  const GroundTruth truth(10, {{5, 0}, {6, 1}, {7, 2}, {8, 3}, {8, 2}});
+  std::vector<Detection> detections = {
+      {5, 0, "", "", 1, 20}, {6, 1, "", "", 1, 20}, {7, 1, "", "", 1, 20}, {9, 4, "", "", 1, 20}};
+  const PrecisionRecall r = evaluate_detections(detections, truth);
+  EXPECT_EQ(r.detections, 4u);
+  EXPECT_EQ(r.true_positives, 2u);
+  EXPECT_EQ(r.false_positives, 2u);
+  EXPECT_EQ(r.queries_with_loops, 4u);
+  EXPECT_DOUBLE_EQ(r.precision, 0.5);
+  EXPECT_DOUBLE_EQ(r.recall, 0.5);
+
+  const PrecisionRecall none = evaluate_detections({}, truth);
+  EXPECT_DOUBLE_EQ(none.precision, 1);
+  EXPECT_DOUBLE_EQ(none.recall, 0);
+  EXPECT_THROW(evaluate_detections({{10, 0, "", "", 1, 1}}, truth), InvalidArgument);
+}
+
+TEST(PrecisionRecall, CurveByScoreAndRecallAtFullPrecision) {
+  const GroundTruth truth(10, {{5, 0}, {6, 1}, {7, 2}, {8, 3}});
+  const std::vector<Detection> detections = {{5, 0, "", "", 0.9, 0},
+                                             {6, 1, "", "", 0.8, 0},
+                                             {9, 2, "", "", 0.5, 0},
+                                             {7, 2, "", "", 0.4, 0}};
+  const auto curve = pr_curve_by_score(detections, truth);
+  ASSERT_EQ(curve.size(), 4u);
+  EXPECT_DOUBLE_EQ(curve[0].parameter, 0.4);
+  EXPECT_DOUBLE_EQ(curve[0].result.recall, 0.75);
+  EXPECT_DOUBLE_EQ(curve[0].result.precision, 0.75);
+  EXPECT_DOUBLE_EQ(recall_at_full_precision(curve), 0.5);  // thresholds 0.8 and above
+  EXPECT_DOUBLE_EQ(recall_at_full_precision({}), 0);
+}
+
+}  // namespace
+}  // namespace binbow::vision

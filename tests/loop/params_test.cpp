@@ -1,0 +1,103 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "binbow/error.h"
+#include "binbow/vision/loop_detector.h"
+#include "support/test_support.h"
+
+namespace binbow::vision {
+namespace {
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+TEST(LoopDetectorParams, DefaultsAreThePapers) {
+  const LoopDetectorParams p;
+  EXPECT_DOUBLE_EQ(p.alpha, 0.3);
+  EXPECT_EQ(p.k, 3);
+  EXPECT_DOUBLE_EQ(p.min_normalisation_score, 0.005);
+  EXPECT_EQ(p.dislocal, 20);
+  EXPECT_EQ(p.max_db_results, 50);
+  EXPECT_EQ(p.max_intra_island_gap, 3);
+  EXPECT_EQ(p.geometric_check, GeometricCheck::kDirectIndex);
+  EXPECT_EQ(p.direct_index_levels, 2);
+  EXPECT_EQ(p.min_inliers, 12);
+  EXPECT_DOUBLE_EQ(p.max_neighbor_ratio, 0.6);
+  EXPECT_DOUBLE_EQ(p.max_reprojection_error, 2.0);
+  const LoopDetectorParams f2 = LoopDetectorParams::for_frequency(2);
+  EXPECT_EQ(f2.dislocal, 40);
+  EXPECT_EQ(f2.max_db_results, 100);
+  EXPECT_EQ(f2.max_intra_island_gap, 6);
+  EXPECT_EQ(f2.max_distance_between_queries, 4);
+  EXPECT_DOUBLE_EQ(f2.alpha, 0.3);
+}
+
+TEST(LoopDetectorParams, JsonRoundTrip) {
+  LoopDetectorParams p = LoopDetectorParams::for_frequency(3);
+  p.alpha = 0.25;
+  p.geometric_check = GeometricCheck::kExhaustive;
+  p.exhaustive_fallback = false;
+  const LoopDetectorParams q = LoopDetectorParams::from_json(p.to_json());
+  EXPECT_EQ(q.to_json(), p.to_json());
+  EXPECT_EQ(q.dislocal, 60);
+  EXPECT_EQ(q.geometric_check, GeometricCheck::kExhaustive);
+}
+
+TEST(LoopDetectorParams, FrequencyDerivesThenKeysOverride) {
+  const LoopDetectorParams p =
+      LoopDetectorParams::from_json(R"({"max_db_results": 7, "frequency": 2})");
+  EXPECT_EQ(p.dislocal, 40);
+  EXPECT_EQ(p.max_db_results, 7);
+}
+
+TEST(LoopDetectorParams, LoadsYamlAndJsonFiles) {
+  test::TempDir dir;
+  write_text(dir.file("p.yml"),
+             "%YAML:1.0\nalpha: 0.4\nk: 2\ngeometric_check: none\nuse_normalised_score: 0\n");
+  const LoopDetectorParams y = LoopDetectorParams::load(dir.file("p.yml"));
+  EXPECT_DOUBLE_EQ(y.alpha, 0.4);
+  EXPECT_EQ(y.k, 2);
+  EXPECT_EQ(y.geometric_check, GeometricCheck::kNone);
+  EXPECT_FALSE(y.use_normalised_score);
+  write_text(dir.file("p.json"), R"({"alpha": 0.35, "exhaustive_fallback": false})");
+  const LoopDetectorParams j = LoopDetectorParams::load(dir.file("p.json"));
+  EXPECT_DOUBLE_EQ(j.alpha, 0.35);
+  EXPECT_FALSE(j.exhaustive_fallback);
+}
+
+void expect_error_mentions(const std::string& path, const std::string& text,
+                           const std::string& needle) {
+  write_text(path, text);
+  try {
+    LoopDetectorParams::load(path);
+    ADD_FAILURE() << "no error for " << text;
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    EXPECT_EQ(e.path(), path);
+  }
+}
+
+TEST(LoopDetectorParams, UnknownKeysAndBadValuesAreNamed) {
+  test::TempDir dir;
+  expect_error_mentions(dir.file("a.json"), R"({"alfa": 0.3})", "alfa");
+  expect_error_mentions(dir.file("b.yml"), "%YAML:1.0\nbeta: 1\n", "beta");
+  expect_error_mentions(dir.file("c.json"), R"({"k": "three"})", "\"k\"");
+  expect_error_mentions(dir.file("d.json"), R"({"k": 2.5})", "\"k\"");
+  expect_error_mentions(dir.file("e.json"), R"({"min_inliers": 3})", "min_inliers");
+  expect_error_mentions(dir.file("f.json"), R"({"geometric_check": "flann"})", "flann");
+  expect_error_mentions(dir.file("g.json"), R"({"alpha": )", "JSON");
+  expect_error_mentions(dir.file("h.json"), R"([1, 2])", "object");
+  EXPECT_THROW(LoopDetectorParams::load(dir.file("missing.json")), FileError);
+}
+
+TEST(LoopStatus, Names) {
+  EXPECT_STREQ(to_string(LoopStatus::kLoopDetected), "loop-detected");
+  EXPECT_STREQ(to_string(LoopStatus::kNoGeometricConsistency), "no-geometric-consistency");
+  EXPECT_EQ(parse_geometric_check("direct_index"), GeometricCheck::kDirectIndex);
+  EXPECT_THROW(parse_geometric_check("flann"), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace binbow::vision
