@@ -19,7 +19,7 @@ std::string errno_text() {
 }
 }  // namespace
 
-MappedFile::MappedFile(const std::string& path) : path_(path) {
+MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw FileError(path, "cannot open: " + errno_text());
   struct stat st {};
@@ -37,7 +37,7 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
     throw FileError(path, "file is empty");
   }
   size_ = static_cast<std::size_t>(st.st_size);
-  void* map = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0);
+  void* map = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | (populate ? MAP_POPULATE : 0), fd, 0);
   ::close(fd);
   if (map == MAP_FAILED) throw FileError(path, "cannot map into memory: " + errno_text());
   data_ = static_cast<const std::uint8_t*>(map);

@@ -13,7 +13,8 @@ namespace binbow::detail {
 // when it is missing, a directory, unreadable or empty.
 class MappedFile {
  public:
-  explicit MappedFile(const std::string& path);
+  // `populate`: fault every page in at once, faster when all of it is read.
+  explicit MappedFile(const std::string& path, bool populate = false);
   MappedFile(MappedFile&& other) noexcept;
   MappedFile& operator=(MappedFile&& other) noexcept;
   MappedFile(const MappedFile&) = delete;

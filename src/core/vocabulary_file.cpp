@@ -178,21 +178,19 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   // every word belongs to exactly one leaf. Later code relies on this.
   const std::uint32_t* links = block.tree.links;
   const std::uint8_t* counts = block.tree.child_counts;
-  std::vector<std::uint8_t> depth(node_count, 0);
-  std::vector<std::uint8_t> has_parent(node_count, 0);
-  std::vector<std::uint8_t> word_seen(word_count, 0);
+  std::vector<std::uint8_t> depth(node_count, 0);  // depth + 1 once the node has a parent
+  std::vector<bool> word_seen(word_count, false);
   if (counts[0] == 0) fail("the root has no children: the vocabulary has no words");
+  depth[0] = 1;
   for (std::size_t n = 0; n < node_count; ++n) {
-    if (n > 0 && !has_parent[n])
+    if (depth[n] == 0)
       fail("node " + std::to_string(n) + " has no parent (the tree is inconsistent)");
     const std::uint32_t count = counts[n];
     if (count == 0) {
-      if ((links[n] & kLeafBit) == 0) fail("leaf node " + std::to_string(n) + " has no word id");
       const std::uint32_t word = links[n] & ~kLeafBit;
-      if (word >= word_count || word_seen[word])
-        fail("leaf node " + std::to_string(n) + " has an invalid or duplicate word id " +
-             std::to_string(word));
-      word_seen[word] = 1;
+      if ((links[n] & kLeafBit) == 0 || word >= word_count || word_seen[word])
+        fail("leaf node " + std::to_string(n) + " has an invalid or duplicate word id");
+      word_seen[word] = true;
       continue;
     }
     if (count > branching)
@@ -201,17 +199,21 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
     const std::uint64_t first = links[n];
     if (first <= n || first + count > node_count)
       fail("node " + std::to_string(n) + " links to children outside the tree");
-    if (depth[n] + 1u > levels)
+    if (depth[n] > levels)
       fail("node " + std::to_string(n) + " has children below the declared depth " +
            std::to_string(levels));
     for (std::uint64_t c = first; c < first + count; ++c) {
-      if (has_parent[c]) fail("node " + std::to_string(c) + " has two parents");
-      has_parent[c] = 1;
+      if (depth[c] != 0) fail("node " + std::to_string(c) + " has two parents");
       depth[c] = static_cast<std::uint8_t>(depth[n] + 1);
     }
   }
-  for (std::size_t w = 0; w < word_count; ++w)
-    if (!word_seen[w]) fail("word " + std::to_string(w) + " belongs to no leaf");
+  // Each leaf marked a distinct word and there are word_count leaves only if
+  // every word was seen; count the leaves instead of scanning the bitmap.
+  std::size_t leaves = 0;
+  for (std::size_t n = 0; n < node_count; ++n) leaves += counts[n] == 0;
+  if (leaves != word_count)
+    fail(std::to_string(word_count) + " words declared but the tree has " + std::to_string(leaves) +
+         " leaves");
 }
 
 std::uint32_t content_checksum(const VocabularyBlock& block, Scoring scoring) {
@@ -233,7 +235,7 @@ namespace binbow {
 
 Vocabulary Vocabulary::load(const std::string& path, const LoadOptions& options) {
   auto block = std::make_shared<detail::VocabularyBlock>();
-  block->mapped = std::make_unique<detail::MappedFile>(path);
+  block->mapped = std::make_unique<detail::MappedFile>(path, options.verify_checksums);
   detail::parse_block(*block, path, options);
   return Vocabulary(std::move(block));
 }

@@ -73,6 +73,21 @@ TEST(Crc32c, StandardCheckValue) {
   EXPECT_EQ(detail::crc32c(text + 4, 5, detail::crc32c(text, 4)), 0xE3069283u);
 }
 
+TEST(Crc32c, DispatchedStreamsEqualPortableTableForAllSizes) {
+  std::mt19937_64 rng(5);
+  std::vector<std::uint8_t> bytes(100000);
+  for (auto& b : bytes) b = static_cast<std::uint8_t>(rng());
+  for (std::size_t size : {0, 1, 7, 8, 9, 4095, 12287, 12288, 12289, 50001, 100000}) {
+    EXPECT_EQ(detail::crc32c(bytes.data(), size), detail::crc32c_portable(bytes.data(), size))
+        << size;
+    EXPECT_EQ(detail::crc32c(bytes.data(), size, 0x1234u),
+              detail::crc32c_portable(bytes.data(), size, 0x1234u));
+  }
+  const std::uint32_t a = detail::crc32c(bytes.data(), 777);
+  const std::uint32_t b = detail::crc32c(bytes.data() + 777, 5000);
+  EXPECT_EQ(detail::crc32c_combine(a, b, 5000), detail::crc32c(bytes.data(), 5777));
+}
+
 TEST(DescriptorMatrix, AppendRowsAndViews) {
   DescriptorMatrix m(4);
   const std::uint8_t row[4] = {1, 2, 3, 4};
