@@ -8,5 +8,6 @@ namespace binbow::cli {
 void add_info_command(CLI::App& app);
 void add_build_vocab_command(CLI::App& app);
 void add_features_command(CLI::App& app);
+void add_convert_command(CLI::App& app);
 
 }  // namespace binbow::cli

@@ -160,8 +160,13 @@ class DescriptorDecoder {
       out.resize(at + code_size_, 0);
       // FBrief writes bitset::to_string(): character k is bit (bits - 1 - k).
       const std::size_t bits = text.size();
-      for (std::size_t i = 0; i < bits; ++i)
-        if (text[bits - 1 - i] == '1') out[at + i / 8] |= static_cast<std::uint8_t>(1u << (i % 8));
+      std::uint8_t* bytes = out.data() + at;
+      for (std::size_t k = 0; k < bits; ++k) {
+        const unsigned value = static_cast<unsigned>(text[k]) - '0';
+        if (value > 1) scanner_.fail("a bit-string descriptor holds a character other than 0 and 1");
+        const std::size_t bit = bits - 1 - k;
+        bytes[bit / 8] |= static_cast<std::uint8_t>(value << (bit % 8));
+      }
       return;
     }
     const char* p = text.data();
@@ -198,10 +203,14 @@ class DescriptorDecoder {
   }
 
  private:
+  // Bit strings have no blank in their first 9 characters, byte lists do
+  // (decode then checks every character).
   static DescriptorKind classify(std::string_view text) {
     if (text.rfind("dbw3", 0) == 0) return DescriptorKind::kDbow3;
-    const bool bits = text.size() >= 8 && text.find_first_not_of("01") == std::string_view::npos;
-    return bits ? DescriptorKind::kBits : DescriptorKind::kBytes;
+    if (text.size() < 8) return DescriptorKind::kBytes;
+    for (std::size_t k = 0; k < std::min<std::size_t>(text.size(), 9); ++k)
+      if (text[k] != '0' && text[k] != '1') return DescriptorKind::kBytes;
+    return DescriptorKind::kBits;
   }
   void set_code_size(std::size_t size) {
     if (size > kMaxCodeSize)

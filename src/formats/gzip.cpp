@@ -22,7 +22,13 @@ std::vector<std::uint8_t> gunzip(const std::uint8_t* data, std::size_t size,
   if (inflateInit2(&stream, 15 + 16) != Z_OK)  // 15 + 16: gzip wrapper, 32 KiB window
     throw FileError(name, "cannot initialise zlib");
   std::vector<std::uint8_t> out;
-  out.resize(std::min(limit, std::max<std::size_t>(size * 4, 1 << 16)));
+  // The trailer's ISIZE (size mod 4 GiB of the last member) is a good first
+  // guess; the buffer still grows, up to `limit`, if it is wrong.
+  std::size_t guess = size * 4;
+  if (size >= 18) guess = std::max<std::size_t>(guess, data[size - 4] | data[size - 3] << 8 |
+                                                           data[size - 2] << 16 |
+                                                           std::size_t{data[size - 1]} << 24);
+  out.resize(std::min(limit, std::max<std::size_t>(guess + 1, 1 << 16)));
   std::size_t produced = 0;
   std::size_t consumed = 0;
   const auto fail = [&](const std::string& problem) {

@@ -1,0 +1,93 @@
+// `binbow convert IN OUT [--from F] [--to F]`: a vocabulary from any readable
+// format to any writable one (formats and extensions: docs/formats.md).
+#include <sys/stat.h>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "binbow/error.h"
+#include "binbow/formats.h"
+#include "commands.h"
+#include "formats/loader.h"
+
+namespace binbow::cli {
+
+namespace {
+
+struct ConvertArguments {
+  std::string input, output, from = "auto", to = "auto", descriptors = "auto";
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void run_convert(const ConvertArguments& args) {
+  const VocabularyFormat from = parse_vocabulary_format(args.from);
+  VocabularyFormat to = parse_vocabulary_format(args.to);
+  if (to == VocabularyFormat::kAuto) to = format_for_output(args.output);
+
+  const auto start = std::chrono::steady_clock::now();
+  const detail::LoadedVocabulary loaded = detail::load_vocabulary_with_details(args.input, from);
+  std::printf("read %s: %s%s, %s (%.3f s)\n", args.input.c_str(), to_string(loaded.format),
+              loaded.compressed ? " (gzip)" : "", loaded.vocabulary.description().c_str(),
+              seconds_since(start));
+  if (!loaded.word_ids_match)
+    std::printf(
+        "note: the file numbers its words in another order; binbow numbers them as the leaves "
+        "appear in DBoW2's node order, so word ids differ from the file's\n");
+
+  detail::DescriptorText text = loaded.descriptor_text;
+  if (args.descriptors == "bits")
+    text = detail::DescriptorText::kBits;
+  else if (args.descriptors == "bytes")
+    text = detail::DescriptorText::kBytes;
+  else if (args.descriptors != "auto")
+    throw InvalidArgument("--descriptors must be auto, bits or bytes, not '" + args.descriptors +
+                          "'");
+  if (to == VocabularyFormat::kFbow && (loaded.vocabulary.weighting() != Weighting::kTfIdf ||
+                                        loaded.vocabulary.scoring() != Scoring::kL1))
+    std::printf(
+        "note: fbow files store no weighting or scoring type; they read back as tf-idf, "
+        "l1\n");
+
+  const auto write_start = std::chrono::steady_clock::now();
+  detail::save_vocabulary_as(loaded.vocabulary, args.output, to, text);
+  struct stat st {};
+  const long long bytes = ::stat(args.output.c_str(), &st) == 0 ? st.st_size : -1;
+  std::printf("wrote %s: %s%s, %lld bytes (%.3f s)\n", args.output.c_str(), to_string(to),
+              to == VocabularyFormat::kDbow2Yaml
+                  ? (text == detail::DescriptorText::kBits ? " with bit-string descriptors"
+                                                           : " with decimal-byte descriptors")
+                  : "",
+              bytes, seconds_since(write_start));
+}
+
+}  // namespace
+
+void add_convert_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "convert",
+      "Convert a vocabulary between formats (bbw, ORB-SLAM text/binary, DBoW2 YAML, "
+      "DBoW3, fbow)");
+  auto args = std::make_shared<ConvertArguments>();
+  cmd->add_option("IN", args->input, "Vocabulary to read (format detected from its content)")
+      ->required();
+  cmd->add_option("OUT", args->output,
+                  "File to write; its extension picks the format: .bbw, .txt (ORB-SLAM text), "
+                  ".bin (ORB-SLAM binary), .yml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3, .fbow")
+      ->required();
+  cmd->add_option("--from", args->from,
+                  "Input format: auto, bbw, dbow2, orbslam-text, orbslam-binary, dbow3, fbow")
+      ->capture_default_str();
+  cmd->add_option("--to", args->to, "Output format (same names; auto: by OUT's extension)")
+      ->capture_default_str();
+  cmd->add_option("--descriptors", args->descriptors,
+                  "DBoW2 YAML output: bits (FBrief 0/1 strings, DLoopDetector/VINS), bytes "
+                  "(FORB decimal bytes) or auto (as the input file, else bytes)")
+      ->capture_default_str();
+  cmd->callback([args] { run_convert(*args); });
+}
+
+}  // namespace binbow::cli
