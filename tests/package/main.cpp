@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <random>
+#include <vector>
 
 int main() {
   std::mt19937 rng(1);
@@ -11,7 +12,10 @@ int main() {
   binbow::BuildOptions options;
   options.branching = 4;
   options.levels = 3;
-  const auto vocabulary = binbow::Vocabulary::build({training.view()}, options);
+  // Twenty "images" of 100 descriptors: IDF weights need more than one image.
+  std::vector<binbow::DescriptorView> images;
+  for (std::size_t i = 0; i < 20; ++i) images.push_back(training.view().slice(i * 100, 100));
+  const auto vocabulary = binbow::Vocabulary::build(images, options);
   binbow::BowVector bow;
   vocabulary.transform(training.view().slice(0, 100), bow);
   std::printf("words: %zu, bow entries: %zu\n", vocabulary.word_count(), bow.size());
