@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Builds every libFuzzer target (fuzz/fuzz_*.cpp) with clang, AddressSanitizer
+# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 30) on
+# its corpus fuzz/corpus/<name>/. Fails if any target crashes, leaks, hangs or
+# exceeds 2 GiB. New inputs go to the build directory, not the repository;
+# a crashing input is saved there as <build>/fuzz-artifacts/<name>-crash-*:
+# fix the bug, then copy the input into fuzz/corpus/<name>/ so ctest
+# (test_formats, FuzzCorpus.*) replays it from then on.
+#
+# Usage: scripts/run_fuzzers.sh [SECONDS]   (env: BINBOW_FUZZ_BUILD_DIR, JOBS)
+set -euo pipefail
+
+seconds="${1:-30}"
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${BINBOW_FUZZ_BUILD_DIR:-$root/build-fuzz}"
+jobs="${JOBS:-2}"
+
+if ! command -v clang++ >/dev/null; then
+  echo "run_fuzzers: clang++ is needed (Debian: clang and libclang-rt-14-dev)" >&2
+  exit 1
+fi
+
+mkdir -p "$build"
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_COMPILER=clang++ -DBINBOW_BUILD_FUZZ=ON -DBINBOW_BUILD_TESTS=OFF \
+  -DBINBOW_BUILD_BENCH=OFF >"$build/configure.log" 2>&1 || {
+  cat "$build/configure.log" >&2
+  exit 1
+}
+targets=()
+for source in "$root"/fuzz/fuzz_*.cpp; do
+  targets+=("$(basename "$source" .cpp)")
+done
+cmake --build "$build" -j "$jobs" --target "${targets[@]}"
+
+failed=()
+for target in "${targets[@]}"; do
+  name="${target#fuzz_}"
+  binary="$(find "$build" -type f -name "$target" -perm -u+x | head -n 1)"
+  corpus="$root/fuzz/corpus/$name"
+  work="$build/fuzz-work/$name"
+  artifacts="$build/fuzz-artifacts"
+  mkdir -p "$corpus" "$work" "$artifacts"
+  echo "== $target: ${seconds}s on $(find "$corpus" -type f | wc -l) seed(s)"
+  if ! "$binary" -max_total_time="$seconds" -max_len=16384 -timeout=10 -rss_limit_mb=2048 \
+      -print_final_stats=1 -artifact_prefix="$artifacts/$name-" "$work" "$corpus" \
+      >"$build/fuzz-$name.log" 2>&1; then
+    tail -n 40 "$build/fuzz-$name.log" >&2
+    failed+=("$target")
+  else
+    grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "$build/fuzz-$name.log" | tr '\n' ' '
+    echo
+  fi
+done
+
+if ((${#failed[@]})); then
+  echo "run_fuzzers: FAILED: ${failed[*]} (inputs in $build/fuzz-artifacts)" >&2
+  exit 1
+fi
+echo "run_fuzzers: ${#targets[@]} targets ran ${seconds}s each without a crash"
