@@ -1,8 +1,38 @@
 // The default BRIEF test pattern: the 256 point pairs of `brief_pattern.yml`
-// distributed with DLoopDetector's demo and with VINS-Mono/VINS-Fusion/VINS-Lite
-// (copied from VINS_Lite_GPU support_files/brief_pattern.yml, commit a6636de;
-// BSD-3-Clause, Copyright (c) 2021, Kyle; see docs for the full notice). The
-// vocabularies trained with DLoopDetector's BRIEF use exactly these tests.
+// distributed with DLoopDetector's demo and with VINS-Mono/VINS-Fusion/VINS-Lite,
+// copied from github.com/KopiSoftware/VINS_Lite_GPU support_files/brief_pattern.yml
+// (commit a6636de). The vocabularies trained with DLoopDetector's BRIEF use
+// exactly these tests. The pattern is distributed under this license:
+//
+// BSD 3-Clause License
+//
+// Copyright (c) 2021, Kyle
+// All rights reserved.
+//
+// Redistribution and use in source and binary forms, with or without
+// modification, are permitted provided that the following conditions are met:
+//
+// 1. Redistributions of source code must retain the above copyright notice, this
+//    list of conditions and the following disclaimer.
+//
+// 2. Redistributions in binary form must reproduce the above copyright notice,
+//    this list of conditions and the following disclaimer in the documentation
+//    and/or other materials provided with the distribution.
+//
+// 3. Neither the name of the copyright holder nor the names of its
+//    contributors may be used to endorse or promote products derived from
+//    this software without specific prior written permission.
+//
+// THIS SOFTWARE IS PROVIDED BY THE COPYRIGHT HOLDERS AND CONTRIBUTORS "AS IS"
+// AND ANY EXPRESS OR IMPLIED WARRANTIES, INCLUDING, BUT NOT LIMITED TO, THE
+// IMPLIED WARRANTIES OF MERCHANTABILITY AND FITNESS FOR A PARTICULAR PURPOSE ARE
+// DISCLAIMED. IN NO EVENT SHALL THE COPYRIGHT HOLDER OR CONTRIBUTORS BE LIABLE
+// FOR ANY DIRECT, INDIRECT, INCIDENTAL, SPECIAL, EXEMPLARY, OR CONSEQUENTIAL
+// DAMAGES (INCLUDING, BUT NOT LIMITED TO, PROCUREMENT OF SUBSTITUTE GOODS OR
+// SERVICES; LOSS OF USE, DATA, OR PROFITS; OR BUSINESS INTERRUPTION) HOWEVER
+// CAUSED AND ON ANY THEORY OF LIABILITY, WHETHER IN CONTRACT, STRICT LIABILITY,
+// OR TORT (INCLUDING NEGLIGENCE OR OTHERWISE) ARISING IN ANY WAY OUT OF THE USE
+// OF THIS SOFTWARE, EVEN IF ADVISED OF THE POSSIBILITY OF SUCH DAMAGE.
 #include "vision/brief_pattern.h"
 
 namespace binbow::vision {

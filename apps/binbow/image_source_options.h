@@ -1,0 +1,27 @@
+// The image-input flags shared by every command that reads image sequences
+// (--stride, --max-width, --video-fps), so they read the same everywhere.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "binbow/vision/image_source.h"
+
+namespace binbow::cli {
+
+inline void add_image_source_options(CLI::App* command, vision::ImageSourceOptions& options) {
+  command->add_option("--stride", options.stride, "Keep every N-th frame of the input sequence")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  command
+      ->add_option("--max-width", options.max_width,
+                   "Downscale wider frames to this width, keeping the aspect (0: full size)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--video-fps", options.video_fps,
+                   "Videos: sample at most this many frames per second (0: every frame)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
+}  // namespace binbow::cli
