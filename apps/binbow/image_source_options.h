@@ -15,12 +15,12 @@ inline void add_image_source_options(CLI::App* command, vision::ImageSourceOptio
   command
       ->add_option("--max-width", options.max_width,
                    "Downscale wider frames to this width, keeping the aspect (0: full size)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
   command
       ->add_option("--video-fps", options.video_fps,
                    "Videos: sample at most this many frames per second (0: every frame)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
 }
 
