@@ -20,7 +20,7 @@ inline void add_image_source_options(CLI::App* command, vision::ImageSourceOptio
   command
       ->add_option("--video-fps", options.video_fps,
                    "Videos: sample at most this many frames per second (0: every frame)")
-      ->check(CLI::Range(0, 1000000))
+      ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
 }
 
