@@ -106,8 +106,16 @@ void parse_node_lines(const char* begin, const char* end, std::size_t first_node
     }
     std::uint8_t* descriptor = tree.descriptors.data() + node * code_size;
     for (std::size_t i = 0; i < code_size; ++i) {
-      unsigned value = 0;
-      if (!parse_token(p, line_end, value) || value > 255) {
+      // The hot loop: 1-3 digit numbers, parsed inline.
+      p = skip_blanks(p, line_end);
+      unsigned value = p < line_end ? static_cast<unsigned>(*p) - '0' : 10u;
+      bool valid = value <= 9;
+      for (++p; valid && p < line_end && !is_blank(*p); ++p) {
+        const unsigned digit = static_cast<unsigned>(*p) - '0';
+        value = value * 10 + digit;
+        valid = digit <= 9 && value <= 255;
+      }
+      if (!valid) {
         fail("descriptor byte " + std::to_string(i) + " of " + std::to_string(code_size) +
              " is missing or not an integer in 0..255");
         return;
