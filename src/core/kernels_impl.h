@@ -54,25 +54,49 @@ struct Distance {
   }
 };
 
+// Index of the nearest of `count` contiguous rows. The running minimum is
+// over (distance, index) keys, so there is no unpredictable branch and ties go
+// to the lowest index.
+template <std::size_t N>
+inline std::uint32_t nearest_row(const Distance<N>& distance, const std::uint8_t* query,
+                                 const std::uint8_t* rows, std::size_t count,
+                                 std::uint32_t* best_distance) {
+  std::uint64_t best = ~std::uint64_t{0};
+  for (std::size_t c = 0; c < count; ++c) {
+    const std::uint64_t key =
+        (std::uint64_t{distance(query, rows + c * distance.code_size)} << 32) | c;
+    best = key < best ? key : best;
+  }
+  if (best_distance != nullptr) *best_distance = static_cast<std::uint32_t>(best >> 32);
+  return static_cast<std::uint32_t>(best);
+}
+
+// The hot case: a 32- or 64-byte query held in registers against a block of
+// at most 255 children, with 32-bit keys.
+template <std::size_t N>
+inline std::uint32_t nearest_child(const std::uint8_t* query, const std::uint8_t* children,
+                                   std::uint32_t count) {
+  std::uint64_t q[N / 8];
+  for (std::size_t i = 0; i < N / 8; ++i) q[i] = load64(query + 8 * i);
+  std::uint32_t best = ~0u;
+  for (std::uint32_t c = 0; c < count; ++c) {
+    const std::uint8_t* row = children + std::size_t{c} * N;
+    std::uint32_t d = 0;
+    for (std::size_t i = 0; i < N / 8; ++i) d += popcount64(q[i] ^ load64(row + 8 * i));
+    const std::uint32_t key = (d << 8) | c;
+    best = key < best ? key : best;
+  }
+  return best & 0xffu;
+}
+
 template <std::size_t N>
 void nearest_impl(const std::uint8_t* queries, std::size_t n, const std::uint8_t* candidates,
                   std::size_t count, std::size_t code_size, std::uint32_t* best_index,
                   std::uint32_t* best_distance) {
   const Distance<N> distance{code_size};
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::uint8_t* query = queries + q * code_size;
-    std::uint32_t best = ~0u;
-    std::uint32_t index = 0;
-    for (std::size_t c = 0; c < count; ++c) {
-      const std::uint32_t d = distance(query, candidates + c * code_size);
-      if (d < best) {
-        best = d;
-        index = static_cast<std::uint32_t>(c);
-      }
-    }
-    best_index[q] = index;
-    if (best_distance != nullptr) best_distance[q] = best;
-  }
+  for (std::size_t q = 0; q < n; ++q)
+    best_index[q] = nearest_row(distance, queries + q * code_size, candidates, count,
+                                best_distance != nullptr ? best_distance + q : nullptr);
 }
 
 inline void prefetch_block(const std::uint8_t* p, std::size_t bytes) {
@@ -85,7 +109,7 @@ inline void prefetch_block(const std::uint8_t* p, std::size_t bytes) {
 template <std::size_t N>
 void descend_impl(const TreeView& tree, const std::uint8_t* queries, std::size_t n,
                   std::uint32_t* words, std::uint32_t* level_nodes, std::uint32_t level_depth) {
-  constexpr std::size_t kBatch = 32;
+  constexpr std::size_t kBatch = 64;
   const std::size_t code_size = tree.code_size;
   const Distance<N> distance{code_size};
   for (std::size_t begin = 0; begin < n; begin += kBatch) {
@@ -123,14 +147,11 @@ void descend_impl(const TreeView& tree, const std::uint8_t* queries, std::size_t
         const std::uint32_t j = active[a];
         const std::uint8_t* query = queries + (begin + j) * code_size;
         const std::uint8_t* children = tree.descriptors + std::size_t{first[j]} * code_size;
-        std::uint32_t best = ~0u;
-        std::uint32_t best_child = 0;
-        for (std::uint32_t c = 0; c < count[j]; ++c) {
-          const std::uint32_t d = distance(query, children + c * code_size);
-          if (d < best) {
-            best = d;
-            best_child = c;
-          }
+        std::uint32_t best_child;
+        if constexpr (N > 0) {
+          best_child = nearest_child<N>(query, children, count[j]);
+        } else {
+          best_child = nearest_row(distance, query, children, count[j], nullptr);
         }
         node[j] = first[j] + best_child;
         ++depth[j];
