@@ -9,5 +9,7 @@ void add_info_command(CLI::App& app);
 void add_build_vocab_command(CLI::App& app);
 void add_features_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
+void add_detect_loops_command(CLI::App& app);
+void add_evaluate_command(CLI::App& app);
 
 }  // namespace binbow::cli

@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   binbow::cli::add_build_vocab_command(app);
   binbow::cli::add_features_command(app);
   binbow::cli::add_convert_command(app);
+  binbow::cli::add_detect_loops_command(app);
+  binbow::cli::add_evaluate_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -72,20 +72,22 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   check.confidence = params.ransac_confidence;
   check.max_iterations = params.max_ransac_iterations;
 
+  MatchOptions matching;
+  matching.max_neighbor_ratio = params.max_neighbor_ratio;
+  matching.max_distance_fraction = params.max_match_distance;
+  matching.accept_single_candidate = params.accept_single_candidate;
   std::vector<Correspondence> correspondences;
   if (params.geometric_check == GeometricCheck::kDirectIndex) {
     correspondences = match_direct_index(query_descriptors, query_nodes, match_descriptors,
-                                         database.feature_vector(match), params.max_neighbor_ratio);
+                                         database.feature_vector(match), matching);
   } else {
-    correspondences =
-        match_exhaustive(query_descriptors, match_descriptors, params.max_neighbor_ratio);
+    correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
   }
   FundamentalCheckResult fit =
       check_fundamental(query_keypoints, match_keypoints, correspondences, check);
   if (!fit.consistent && params.geometric_check == GeometricCheck::kDirectIndex &&
       params.exhaustive_fallback) {
-    correspondences =
-        match_exhaustive(query_descriptors, match_descriptors, params.max_neighbor_ratio);
+    correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
     fit = check_fundamental(query_keypoints, match_keypoints, correspondences, check);
     result.exhaustive_fallback_used = true;
   }

@@ -94,6 +94,8 @@ const std::vector<Field>& fields() {
       number_field("direct_index_levels", &P::direct_index_levels),
       bool_field("exhaustive_fallback", &P::exhaustive_fallback),
       number_field("max_neighbor_ratio", &P::max_neighbor_ratio),
+      number_field("max_match_distance", &P::max_match_distance),
+      bool_field("accept_single_candidate", &P::accept_single_candidate),
       number_field("min_inliers", &P::min_inliers),
       number_field("max_reprojection_error", &P::max_reprojection_error),
       number_field("ransac_confidence", &P::ransac_confidence),
@@ -218,6 +220,8 @@ void LoopDetectorParams::validate() const {
           "direct_index_levels must be in [0, 16]");
   require(max_neighbor_ratio > 0 && max_neighbor_ratio <= 1,
           "max_neighbor_ratio must be in (0, 1]");
+  require(max_match_distance >= 0 && max_match_distance <= 1,
+          "max_match_distance must be in [0, 1]");
   require(min_inliers >= 8, "min_inliers must be ≥ 8 (a fundamental matrix needs 8 points)");
   require(max_reprojection_error > 0, "max_reprojection_error must be positive");
   require(ransac_confidence > 0 && ransac_confidence < 1, "ransac_confidence must be in (0, 1)");

@@ -17,10 +17,14 @@ constexpr std::uint32_t kNoPartner = std::numeric_limits<std::uint32_t>::max();
 // `second`, keeping one partner per feature of `second` across calls.
 class RatioMatcher {
  public:
-  RatioMatcher(const DescriptorView& first, const DescriptorView& second, double max_ratio)
+  RatioMatcher(const DescriptorView& first, const DescriptorView& second,
+               const MatchOptions& options)
       : first_(first),
         second_(second),
-        max_ratio_(max_ratio),
+        max_ratio_(options.max_neighbor_ratio),
+        accept_single_(options.accept_single_candidate),
+        max_distance_(static_cast<std::uint32_t>(options.max_distance_fraction * 8.0 *
+                                                 static_cast<double>(first.code_size))),
         slot_of_second_(second.rows, kNoPartner) {
     if (first.code_size != second.code_size && !first.empty() && !second.empty())
       throw InvalidArgument("matching descriptors of different sizes (" +
@@ -47,9 +51,10 @@ class RatioMatcher {
           second_best = d;
         }
       }
-      const bool distinctive =
-          second_best == kNoPartner || (best < second_best && best <= max_ratio_ * second_best);
-      if (!distinctive) continue;
+      const bool distinctive = second_best == kNoPartner
+                                   ? accept_single_
+                                   : best < second_best && best <= max_ratio_ * second_best;
+      if (!distinctive || best > max_distance_) continue;
       std::uint32_t& slot = slot_of_second_[best_b];
       if (slot == kNoPartner) {
         slot = static_cast<std::uint32_t>(matches_.size());
@@ -71,24 +76,29 @@ class RatioMatcher {
  private:
   DescriptorView first_, second_;
   double max_ratio_;
+  bool accept_single_;
+  std::uint32_t max_distance_;
   std::vector<std::uint32_t> slot_of_second_;
   std::vector<Correspondence> matches_;
   std::vector<std::uint32_t> distances_;
 };
 
-void check_ratio(double max_neighbor_ratio) {
-  if (!(max_neighbor_ratio > 0 && max_neighbor_ratio <= 1))
+void check_options(const MatchOptions& options) {
+  if (!(options.max_neighbor_ratio > 0 && options.max_neighbor_ratio <= 1))
     throw InvalidArgument("max_neighbor_ratio must be in (0, 1], got " +
-                          std::to_string(max_neighbor_ratio));
+                          std::to_string(options.max_neighbor_ratio));
+  if (!(options.max_distance_fraction >= 0 && options.max_distance_fraction <= 1))
+    throw InvalidArgument("max_distance_fraction must be in [0, 1], got " +
+                          std::to_string(options.max_distance_fraction));
 }
 
 }  // namespace
 
 std::vector<Correspondence> match_exhaustive(const DescriptorView& first,
                                              const DescriptorView& second,
-                                             double max_neighbor_ratio) {
-  check_ratio(max_neighbor_ratio);
-  RatioMatcher matcher(first, second, max_neighbor_ratio);
+                                             const MatchOptions& options) {
+  check_options(options);
+  RatioMatcher matcher(first, second, options);
   const auto identity = [](std::size_t i) { return static_cast<std::uint32_t>(i); };
   matcher.match(first.rows, identity, second.rows, identity);
   return matcher.take();
@@ -98,8 +108,8 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
                                                const FeatureVector& first_nodes,
                                                const DescriptorView& second,
                                                const FeatureVector& second_nodes,
-                                               double max_neighbor_ratio) {
-  check_ratio(max_neighbor_ratio);
+                                               const MatchOptions& options) {
+  check_options(options);
   if (first_nodes.feature_count() > first.rows || second_nodes.feature_count() > second.rows)
     throw InvalidArgument("direct index lists more features than there are descriptors");
   const auto in_range = [](const FeatureVector& nodes, std::size_t rows) {
@@ -110,7 +120,7 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
   if (!in_range(first_nodes, first.rows) || !in_range(second_nodes, second.rows))
     throw InvalidArgument("direct index refers to a feature past the descriptors");
 
-  RatioMatcher matcher(first, second, max_neighbor_ratio);
+  RatioMatcher matcher(first, second, options);
   std::size_t i = 0, j = 0;
   while (i < first_nodes.size() && j < second_nodes.size()) {
     const NodeId a = first_nodes.node(i), b = second_nodes.node(j);

@@ -37,7 +37,7 @@ ImageFeatures orb(const std::string& name) {
 }
 
 FundamentalCheckResult verify(const ImageFeatures& a, const ImageFeatures& b) {
-  const auto matches = match_exhaustive(a.descriptors, b.descriptors, 0.6);
+  const auto matches = match_exhaustive(a.descriptors, b.descriptors);
   return check_fundamental(a.points(), b.points(), matches);
 }
 
@@ -145,7 +145,7 @@ TEST(Matching, ExhaustiveAndDirectIndexMatchTheDefinition) {
     for (std::uint32_t i = 0; i < b.rows(); ++i) all_b[i] = i;
     std::vector<std::pair<Correspondence, std::uint32_t>> raw;
     reference_matches(a, all_a, b, all_b, 0.8, raw);
-    EXPECT_EQ(match_exhaustive(a, b, 0.8), keep_nearest_per_second(raw));
+    EXPECT_EQ(match_exhaustive(a, b, {0.8, 1.0}), keep_nearest_per_second(raw));
 
     // Random node assignment (8 nodes) for the direct index.
     std::vector<NodeId> node_a(a.rows()), node_b(b.rows());
@@ -164,7 +164,7 @@ TEST(Matching, ExhaustiveAndDirectIndexMatchTheDefinition) {
     }
     // Nodes are disjoint, so no feature of b has two partners.
     auto expected = keep_nearest_per_second(per_node);
-    EXPECT_EQ(match_direct_index(a, fa, b, fb, 0.6), expected);
+    EXPECT_EQ(match_direct_index(a, fa, b, fb), expected);
   }
 }
 
@@ -172,12 +172,12 @@ TEST(Matching, RejectsBadArguments) {
   std::mt19937_64 rng(1);
   const DescriptorMatrix a = test::random_descriptors(5, 32, rng),
                          b = test::random_descriptors(5, 64, rng);
-  EXPECT_THROW(match_exhaustive(a, b, 0.6), InvalidArgument);
-  EXPECT_THROW(match_exhaustive(a, a, 0), InvalidArgument);
+  EXPECT_THROW(match_exhaustive(a, b), InvalidArgument);
+  EXPECT_THROW(match_exhaustive(a, a, {0, 1}), InvalidArgument);
   const NodeId nodes[6] = {0, 0, 1, 1, 2, 2};
   const FeatureVector too_many = FeatureVector::from_assignment(nodes, 6);
-  EXPECT_THROW(match_direct_index(a, too_many, a, too_many, 0.6), InvalidArgument);
-  EXPECT_TRUE(match_exhaustive(a, DescriptorMatrix(32), 0.6).empty());
+  EXPECT_THROW(match_direct_index(a, too_many, a, too_many), InvalidArgument);
+  EXPECT_TRUE(match_exhaustive(a, DescriptorMatrix(32)).empty());
 }
 
 }  // namespace

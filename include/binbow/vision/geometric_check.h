@@ -27,17 +27,27 @@ struct Correspondence {
   }
 };
 
-// Putative correspondences, nearest-neighbour ratio test (Lowe): feature i of
-// `first` is matched to its nearest feature j of `second` when
-// d(i, j) ≤ max_neighbor_ratio × d(i, second nearest) (and strictly below
-// it); a feature with a single candidate has no second neighbour and passes,
-// as in DLoopDetector. Each feature of `second` keeps at most one partner:
-// the nearest of the features that chose it. Sorted by `first`.
+// Putative correspondences: feature i of `first` is matched to its nearest
+// feature j of `second` when
+//   - d(i, j) ≤ max_distance_fraction × the descriptor's bits, and
+//   - d(i, j) ≤ max_neighbor_ratio × d(i, second nearest), strictly below it
+//     (Lowe's ratio test). A feature with a single candidate has no second
+//     neighbour: it passes only with accept_single_candidate (DLoopDetector
+//     accepts it; binbow does not by default, since nothing then shows the
+//     match is distinctive, and in repetitive scenes such matches are enough
+//     for a spurious fundamental matrix).
+// Each feature of `second` keeps at most one partner: the nearest of the
+// features that chose it. Sorted by `first`.
+struct MatchOptions {
+  double max_neighbor_ratio = 0.6;
+  double max_distance_fraction = 1.0;  // 1: no absolute limit
+  bool accept_single_candidate = false;
+};
 
 // Every feature of `first` against every feature of `second`.
 std::vector<Correspondence> match_exhaustive(const DescriptorView& first,
                                              const DescriptorView& second,
-                                             double max_neighbor_ratio);
+                                             const MatchOptions& options = {});
 
 // Through the direct index: only features under the same vocabulary node
 // (FeatureVector built at the same level for both images) are compared —
@@ -47,7 +57,7 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
                                                const FeatureVector& first_nodes,
                                                const DescriptorView& second,
                                                const FeatureVector& second_nodes,
-                                               double max_neighbor_ratio);
+                                               const MatchOptions& options = {});
 
 struct FundamentalCheckParams {
   int min_inliers = 12;                 // also the minimum number of correspondences tried

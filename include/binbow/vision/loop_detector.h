@@ -79,7 +79,14 @@ struct LoopDetectorParams {
   // and the extra cost is one exhaustive match for the single candidate that
   // passed every other test. See docs/loop-detection.md.
   bool exhaustive_fallback = true;
-  double max_neighbor_ratio = 0.6;      // nearest-neighbour ratio test of correspondences
+  double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences
+  // Largest Hamming distance of a correspondence, as a fraction of the
+  // descriptor's bits. binbow's addition (see exhaustive_fallback's note).
+  double max_match_distance = 1.0;
+  // Accept a correspondence whose feature has a single candidate under its
+  // direct-index node (no second neighbour for the ratio test), as
+  // DLoopDetector does. Off by default: see MatchOptions.
+  bool accept_single_candidate = false;
   int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix
   double max_reprojection_error = 2.0;  // pixels, RANSAC threshold
   double ransac_confidence = 0.99;

@@ -1,0 +1,26 @@
+// Where the bundled default vocabularies are found, so that commands can
+// default --vocab to them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace binbow::cli {
+
+// File name of the default vocabulary of a descriptor: "orb_default.bbw" or
+// "brief_default.bbw". Throws InvalidArgument for other descriptors.
+std::string default_vocabulary_name(const std::string& descriptor);
+
+// The places searched for it, in order:
+//   1. $BINBOW_DATA_DIR/vocab/            (explicit override)
+//   2. <exe>/../share/binbow/vocab/       (installed: bin/binbow beside share/binbow)
+//   3. <exe>/../../data/vocab/            (build directory inside the source tree,
+//                                          e.g. build/bin/binbow → data/vocab)
+// where <exe> is the directory of the running binbow executable.
+std::vector<std::string> default_vocabulary_candidates(const std::string& descriptor);
+
+// The first existing candidate. Throws InvalidArgument, listing the places
+// searched and telling the user to pass --vocab, when none exists.
+std::string default_vocabulary_path(const std::string& descriptor);
+
+}  // namespace binbow::cli

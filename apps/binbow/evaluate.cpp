@@ -1,0 +1,186 @@
+// binbow evaluate: precision and recall of detected loops against ground truth.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "binbow/error.h"
+#include "binbow/vision/evaluation.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "binbow/vision/loop_detector.h"
+#include "binbow/vocabulary.h"
+#include "commands.h"
+#include "loop_report.h"
+#include "loop_run.h"
+#include "progress.h"
+
+namespace binbow::cli {
+namespace {
+
+struct EvaluateArguments {
+  std::string ground_truth;
+  int ground_truth_base = -1;
+  bool sweep = false;
+  std::string report;
+  std::string detections;
+};
+
+// α values of the sweep: the paper's range, then beyond 1 (η can exceed 1
+// when the loop image is more similar than the previous frame).
+std::vector<double> alpha_values() {
+  std::vector<double> values;
+  for (int i = 0; i <= 20; ++i) values.push_back(i * 0.05);
+  for (double v : {1.2, 1.5, 2.0, 3.0}) values.push_back(v);
+  return values;
+}
+
+// Re-runs the recorded detection for every α, features extracted once.
+std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
+                                              const vision::GroundTruth& truth) {
+  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
+  Vocabulary vocabulary;
+  load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), vocabulary);
+  const vision::LoopDetectorParams base = vision::LoopDetectorParams::from_json(run.params_json);
+
+  vision::ImageSource source(run.inputs);
+  std::vector<vision::Features> features;
+  std::vector<std::string> names;
+  {
+    Progress progress("extracting features", run.frames.size());
+    vision::Frame frame;
+    while (source.next(frame)) {
+      features.push_back(extractor->extract(frame.image));
+      names.push_back(frame.name);
+      progress.update(features.size());
+    }
+  }
+  if (features.size() != run.frames.size())
+    throw InvalidArgument("the inputs of the recorded run now have " +
+                          std::to_string(features.size()) + " frames instead of " +
+                          std::to_string(run.frames.size()) + "; run detect-loops again");
+
+  const std::vector<double> alphas = alpha_values();
+  std::vector<vision::PrCurvePoint> curve;
+  Progress progress("sweeping alpha", alphas.size());
+  for (double alpha : alphas) {
+    vision::LoopDetectorParams params = base;
+    params.alpha = alpha;
+    vision::LoopDetector detector(vocabulary, params);
+    std::vector<vision::Detection> detections;
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      const vision::LoopResult r = detector.process(features[i]);
+      if (r.detection())
+        detections.push_back(
+            {r.query, r.match, names[i], names[r.match], r.normalised_score, r.inliers.size()});
+    }
+    curve.push_back({alpha, vision::evaluate_detections(detections, truth)});
+    progress.update(curve.size());
+  }
+  return curve;
+}
+
+void run_evaluate(const EvaluateArguments& arguments) {
+  vision::GroundTruthOptions options;
+  options.pairs_index_base = arguments.ground_truth_base;
+  const vision::GroundTruth truth = vision::GroundTruth::load(arguments.ground_truth, options);
+  const std::vector<vision::Detection> detections =
+      vision::read_detections_csv(arguments.detections);
+  vision::PrecisionRecall result;
+  try {
+    result = vision::evaluate_detections(detections, truth);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(arguments.detections + ": " + e.what() + " (wrong --gt?)");
+  }
+
+  const std::string run_path = LoopRun::path_for(arguments.detections);
+  std::unique_ptr<LoopRun> run;
+  if (std::filesystem::exists(run_path)) run = std::make_unique<LoopRun>(LoopRun::load(run_path));
+  if (run && run->frames.size() != truth.frames())
+    std::fprintf(stderr, "warning: %zu frames were processed but the ground truth has %zu\n",
+                 run->frames.size(), truth.frames());
+
+  std::printf("precision: %.6g\nrecall: %.6g\n", result.precision, result.recall);
+  std::printf(
+      "detections: %zu\ntrue positives: %zu\nfalse positives: %zu\n"
+      "queries with a loop: %zu\nqueries found: %zu\n",
+      result.detections, result.true_positives, result.false_positives, result.queries_with_loops,
+      result.queries_found);
+
+  std::vector<vision::PrCurvePoint> curve;
+  std::string swept;
+  if (arguments.sweep) {
+    if (run) {
+      curve = sweep_alpha(*run, truth);
+      swept = "alpha";
+    } else {
+      std::fprintf(stderr,
+                   "note: no run record %s; the curve thresholds the scores of %s instead of "
+                   "re-running detection\n",
+                   run_path.c_str(), arguments.detections.c_str());
+      curve = vision::pr_curve_by_score(detections, truth);
+      swept = "score";
+    }
+    std::printf("recall at 100%% precision: %.6g\n", vision::recall_at_full_precision(curve));
+    std::printf("%-8s %10s %10s %10s\n", swept.c_str(), "precision", "recall", "detections");
+    for (const auto& p : curve)
+      std::printf("%-8.3g %10.4f %10.4f %10zu\n", p.parameter, p.result.precision, p.result.recall,
+                  p.result.detections);
+  }
+  std::fflush(stdout);
+
+  if (!arguments.report.empty()) {
+    LoopReport report;
+    report.title = "binbow loop detection: evaluation";
+    report.facts = {{"detections", arguments.detections}, {"ground truth", arguments.ground_truth}};
+    report.has_result = true;
+    report.result = result;
+    report.curve = curve;
+    report.curve_parameter = swept;
+    report.recall_at_full_precision = vision::recall_at_full_precision(curve);
+    if (run) {
+      report.facts.emplace_back("vocabulary", run->vocabulary);
+      report.facts.emplace_back("descriptor", run->descriptor);
+      report.facts.emplace_back("frames", std::to_string(run->frames.size()));
+      report.params_json = run->params_json;
+      report.timing = run->timing;
+    }
+    for (const vision::Detection& d : detections) {
+      ReportLoop loop{d, {}, truth.is_loop(d.query, d.match) ? 1 : 0};
+      if (run)
+        for (const LoopRecord& r : run->loops)
+          if (r.query == d.query && r.match == d.match) loop.inliers = r.inliers;
+      report.loops.push_back(std::move(loop));
+    }
+    const std::string page = write_loop_report(arguments.report, report);
+    std::fprintf(stderr, "report: %s\n", page.c_str());
+  }
+}
+
+}  // namespace
+
+void add_evaluate_command(CLI::App& app) {
+  auto arguments = std::make_shared<EvaluateArguments>();
+  CLI::App* command =
+      app.add_subcommand("evaluate", "Precision and recall of detected loops against ground truth");
+  command
+      ->add_option("--gt", arguments->ground_truth,
+                   "Ground truth: image matrix (.bmp/.png, row = query, non-zero = same place), "
+                   "MATLAB .mat matrix, or text pairs \"query match\"")
+      ->required();
+  command
+      ->add_option("--gt-base", arguments->ground_truth_base,
+                   "Index base of text pairs, 0 or 1 (default: from a \"0-based\"/\"1-based\" "
+                   "comment, or 0 if an index 0 appears)")
+      ->check(CLI::IsMember({0, 1}));
+  command->add_flag("--sweep", arguments->sweep,
+                    "Re-run detection over alpha (from the run record beside the CSV) for the "
+                    "precision-recall curve and the recall at 100% precision");
+  command->add_option("--report", arguments->report, "Write an HTML report into this directory");
+  command->add_option("loops", arguments->detections, "loops.csv written by detect-loops")
+      ->required();
+  command->callback([arguments] { run_evaluate(*arguments); });
+}
+
+}  // namespace binbow::cli

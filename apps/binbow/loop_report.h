@@ -1,0 +1,41 @@
+// The HTML report of detect-loops and evaluate: one self-contained page
+// (inline CSS, SVG and base64 images; nothing fetched) with the
+// precision–recall curve, the parameters, the per-stage timing, the table of
+// detections and, for each loop, the two images side by side with the inlier
+// correspondences drawn.
+#pragma once
+
+#include <array>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "binbow/vision/evaluation.h"
+#include "loop_run.h"
+
+namespace binbow::cli {
+
+struct ReportLoop {
+  vision::Detection detection;
+  std::vector<std::array<float, 4>> inliers;  // query x, y, match x, y (pixels of the files)
+  int verdict = -1;                           // 1 true positive, 0 false positive, -1 unknown
+};
+
+struct LoopReport {
+  std::string title;
+  std::vector<std::pair<std::string, std::string>> facts;  // shown as a two-column table
+  std::string params_json;                                 // empty: not known
+  std::vector<StageTiming> timing;                         // empty: not measured
+  std::vector<ReportLoop> loops;
+  bool has_result = false;  // precision and recall against ground truth
+  vision::PrecisionRecall result;
+  std::vector<vision::PrCurvePoint> curve;  // empty: no curve
+  std::string curve_parameter;              // what the curve sweeps ("alpha", "score")
+  double recall_at_full_precision = 0;
+};
+
+// Writes DIRECTORY/index.html (creating the directory), atomically.
+// Returns the page's path. Images that cannot be read are reported as such.
+std::string write_loop_report(const std::string& directory, const LoopReport& report);
+
+}  // namespace binbow::cli
