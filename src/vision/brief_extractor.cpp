@@ -2,7 +2,6 @@
 // the exact compatibility contract with DLoopDetector's DVision::BRIEF.
 #include <algorithm>
 #include <cstdint>
-#include <numeric>
 
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -18,8 +17,6 @@ namespace {
 // DVision::BRIEF smooths with this kernel before the tests.
 const cv::Size kSmoothingKernel(9, 9);
 constexpr double kSmoothingSigma = 2.0;
-// The patch size the paper and DLoopDetector report for the default pattern.
-constexpr float kPatchSize = 48.f;
 
 class BriefExtractor final : public FeatureExtractor {
  public:
@@ -50,7 +47,7 @@ class BriefExtractor final : public FeatureExtractor {
       Keypoint keypoint;
       keypoint.x = corner.pt.x;
       keypoint.y = corner.pt.y;
-      keypoint.size = kPatchSize;
+      keypoint.size = static_cast<float>(2 * radius_);  // 48 for the default pattern
       keypoint.angle = -1;
       keypoint.response = corner.response;
       keypoint.octave = 0;

@@ -69,12 +69,16 @@ struct OrbOptions {
 // The paper's BRIEF, bit for bit DLoopDetector's (DVision::BRIEF with its
 // demo's FAST detection): FAST-9 corners on the raw image (threshold,
 // optional non-maximum suppression), the `max_features` strongest kept by
-// FAST score (ties: raster order); no orientation, no scale. The image is
+// FAST score and returned strongest first (ties: raster order); no
+// orientation, no scale; Keypoint::size is the patch side (48). The image is
 // smoothed with cv::GaussianBlur (9×9, sigma 2, reflect-101 border) and each
 // test compares two smoothed pixels at integer offsets from the keypoint.
 // Keypoints whose tests would leave the image are dropped (DVision keeps them
 // and leaves those bits 0) before the strongest are chosen, so every returned
-// descriptor is identical to DVision's for the same keypoint.
+// descriptor is identical to DVision's for the same keypoint and the same
+// OpenCV (the smoothing's fixed-point rounding is OpenCV's). Defaults follow
+// the paper (threshold 10, 300 corners); DLoopDetector's demo uses threshold
+// 20 and every corner (max_features 0).
 struct BriefOptions {
   int max_features = 300;  // the strongest FAST corners by response; ≤ 0: all
   int fast_threshold = 10;
