@@ -1,6 +1,8 @@
 // Each subcommand lives in its own file and registers itself on the app.
 #pragma once
 
+#include <string>
+
 #include <CLI/CLI.hpp>
 
 namespace binbow::cli {
@@ -11,5 +13,9 @@ void add_features_command(CLI::App& app);
 void add_convert_command(CLI::App& app);
 void add_detect_loops_command(CLI::App& app);
 void add_evaluate_command(CLI::App& app);
+void add_db_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
+// Prints `binbow info` lines for a .bbdb file; false if `path` is not one.
+bool print_database_info(const std::string& path);
 
 }  // namespace binbow::cli

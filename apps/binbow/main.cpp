@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   binbow::cli::add_convert_command(app);
   binbow::cli::add_detect_loops_command(app);
   binbow::cli::add_evaluate_command(app);
+  binbow::cli::add_db_command(app);
+  binbow::cli::add_bench_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,158 @@
+// `binbow bench`: end-to-end timings on real images — vocabulary load,
+// features, transform, loop detection, and the database at a chosen size —
+// as medians, so that users can compare machines and vocabularies.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/error.h"
+#include "binbow/formats.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "binbow/vision/loop_detector.h"
+#include "commands.h"
+#include "image_source_options.h"
+#include "loop_run.h"
+#include "progress.h"
+
+namespace binbow::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double elapsed_ms(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+struct BenchArguments {
+  std::vector<std::string> inputs;
+  std::string vocabulary;
+  std::string descriptor = "orb";
+  int features = 0;
+  std::size_t database_size = 10000;
+  int load_repeats = 5;
+  vision::ImageSourceOptions source;
+};
+
+struct Frame {
+  vision::Features features;
+};
+
+void run_bench(const BenchArguments& args) {
+  const auto extractor = vision::make_extractor(args.descriptor, args.features);
+  Vocabulary vocabulary;
+  const std::string vocabulary_path =
+      load_loop_vocabulary(args.vocabulary, args.descriptor, extractor->code_size(), vocabulary);
+
+  // Each stage's samples in milliseconds: per load, per frame, per entry, per query.
+  std::vector<StageTiming> timing;
+  auto stage = [&timing](const std::string& name) -> std::vector<double>& {
+    timing.push_back({name, {}});
+    return timing.back().ms;
+  };
+
+  auto& load = stage("vocabulary load");
+  for (int i = 0; i < args.load_repeats; ++i) {
+    const auto start = Clock::now();
+    const Vocabulary v = load_vocabulary(vocabulary_path);
+    load.push_back(elapsed_ms(start));
+  }
+
+  std::vector<Frame> frames;
+  auto& features = stage("features");
+  {
+    vision::ImageSource source(args.inputs, args.source);
+    const long long total = source.size();
+    Progress progress("features", total > 0 ? static_cast<std::size_t>(total) : 0);
+    vision::Frame frame;
+    while (source.next(frame)) {
+      const auto start = Clock::now();
+      frames.push_back({extractor->extract(frame.image)});
+      features.push_back(elapsed_ms(start));
+      progress.update(frames.size());
+    }
+  }
+  if (frames.empty()) throw InvalidArgument("bench: the input has no frames");
+
+  const DatabaseOptions db_options;
+  auto& transform = stage("transform: BoW + direct index");
+  std::vector<BowVector> bows(frames.size());
+  std::vector<FeatureVector> direct(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const auto start = Clock::now();
+    vocabulary.transform(frames[i].features.descriptors, bows[i], direct[i],
+                         db_options.direct_index_levels_up);
+    transform.push_back(elapsed_ms(start));
+  }
+
+  auto& detection = stage("loop detection, features excluded");
+  {
+    vision::LoopDetector detector(vocabulary);
+    for (const Frame& frame : frames) {
+      const auto start = Clock::now();
+      detector.process(frame.features);
+      detection.push_back(elapsed_ms(start));
+    }
+  }
+
+  // The database filled to the requested size with the real frames' vectors
+  // in turn: the posting lists then have the length real use gives them.
+  Database database(vocabulary, db_options);
+  auto& add = stage("database add, per entry");
+  {
+    Progress progress("database", args.database_size);
+    for (std::size_t i = 0; i < args.database_size; ++i) {
+      const auto start = Clock::now();
+      database.add(bows[i % bows.size()], direct[i % direct.size()]);
+      add.push_back(elapsed_ms(start));
+      if (i % 256 == 0) progress.update(i);
+    }
+    progress.update(args.database_size);
+  }
+  auto& query = stage("database query, top 50, full size");
+  for (const BowVector& bow : bows) {
+    const auto start = Clock::now();
+    const auto results = database.query(bow, 50);
+    query.push_back(elapsed_ms(start));
+  }
+
+  std::printf("binbow bench: %zu frames, %s features, vocabulary %s\n", frames.size(),
+              args.descriptor.c_str(), vocabulary.description().c_str());
+  std::printf("database: %zu entries, %.1f MiB of index (%.1f KiB per entry)\n", database.size(),
+              static_cast<double>(database.memory_usage()) / (1 << 20),
+              static_cast<double>(database.memory_usage()) / 1024.0 /
+                  static_cast<double>(std::max<std::size_t>(database.size(), 1)));
+  std::printf("hamming kernel: %s\n\n", hamming_kernel_name());
+  std::printf("%-36s %10s %10s %10s\n", "stage (ms)", "median", "mean", "max");
+  for (const StageTiming& t : timing)
+    std::printf("%-36s %10.3f %10.3f %10.3f\n", t.stage.c_str(), t.median(), t.mean(), t.max());
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app) {
+  auto args = std::make_shared<BenchArguments>();
+  auto* cmd = app.add_subcommand(
+      "bench", "Time every stage on real images: load, features, transform, detection, database");
+  cmd->add_option("inputs", args->inputs, "Image directory, video or text list of images")
+      ->required();
+  cmd->add_option("--vocab", args->vocabulary,
+                  "Vocabulary (any supported format); default: the bundled one for --descriptor");
+  cmd->add_option("--descriptor", args->descriptor, "orb or brief")
+      ->check(CLI::IsMember({"orb", "brief"}))
+      ->capture_default_str();
+  cmd->add_option("--features", args->features, "Features per image (0: the extractor's default)");
+  cmd->add_option("--database-size", args->database_size,
+                  "Entries in the database for the add and query timings")
+      ->check(CLI::Range(1, 10000000))
+      ->capture_default_str();
+  add_image_source_options(cmd, args->source);
+  cmd->callback([args] { run_bench(*args); });
+}
+
+}  // namespace binbow::cli
