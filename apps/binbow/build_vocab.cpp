@@ -15,6 +15,7 @@
 #include "binbow/vision/image_source.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "core/parallel_for.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -52,17 +53,31 @@ struct TrainingSet {
 };
 
 TrainingSet extract_training_set(const BuildVocabArguments& arguments) {
-  const auto extractor = vision::make_extractor(arguments.descriptor, arguments.features_per_image);
+  // Frames are read in order and described in parallel batches, one extractor
+  // per thread (OpenCV's detectors are not documented as thread-safe).
+  const unsigned threads = detail::resolve_thread_count(arguments.threads);
+  std::vector<std::unique_ptr<vision::FeatureExtractor>> extractors;
+  for (unsigned t = 0; t < threads; ++t) {
+    extractors.push_back(
+        vision::make_extractor(arguments.descriptor, arguments.features_per_image));
+  }
   vision::ImageSource source(arguments.inputs);
   const long long known_size = source.size();
   Progress progress("reading images", known_size > 0 ? static_cast<std::size_t>(known_size) : 0);
   TrainingSet set;
-  set.descriptors = DescriptorMatrix(extractor->code_size());
-  vision::Frame frame;
-  while (source.next(frame)) {
-    const vision::Features features = extractor->extract(frame.image);
-    set.descriptors.append(features.descriptors.view());
-    set.offsets.push_back(set.descriptors.rows());
+  set.descriptors = DescriptorMatrix(extractors[0]->code_size());
+  std::vector<vision::Frame> batch(4 * static_cast<std::size_t>(threads));
+  std::vector<vision::Features> features(batch.size());
+  for (bool more = true; more;) {
+    std::size_t count = 0;
+    while (count < batch.size() && (more = source.next(batch[count]))) ++count;
+    detail::parallel_for(threads, count, [&](std::size_t i, unsigned worker) {
+      features[i] = extractors[worker]->extract(batch[i].image);
+    });
+    for (std::size_t i = 0; i < count; ++i) {
+      set.descriptors.append(features[i].descriptors.view());
+      set.offsets.push_back(set.descriptors.rows());
+    }
     progress.update(set.images());
   }
   progress.finish();
