@@ -1,0 +1,83 @@
+// The CLI as scripts use it: `binbow info` key lines, errors on stderr with
+// exit status 1, and `binbow bench` on real frames.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/vocabulary.h"
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+std::string run(const std::string& arguments, int* status) {
+  std::string output;
+  *status = test::run_command("'" + test::cli_path() + "' " + arguments, &output);
+  return output;
+}
+
+Vocabulary small_vocabulary() {
+  std::mt19937_64 rng(1);
+  const DescriptorMatrix training = test::clustered_descriptors(3000, 32, 80, 0.1, rng);
+  std::vector<DescriptorView> images;
+  for (std::size_t i = 0; i < 30; ++i) images.push_back(training.view().slice(i * 100, 100));
+  BuildOptions options;
+  options.branching = 6;
+  options.levels = 3;
+  return Vocabulary::build(images, options);
+}
+
+TEST(CliInfo, PrintsTheKeysScriptsRelyOn) {
+  test::TempDir dir;
+  const Vocabulary v = small_vocabulary();
+  v.save(dir.file("v.bbw"));
+  int status = -1;
+  const std::string out = run("info " + dir.file("v.bbw"), &status);
+  ASSERT_EQ(status, 0) << out;
+  for (const std::string& line :
+       std::vector<std::string>{"kind: vocabulary\n", "descriptor_bits: 256\n", "branching: 6\n",
+                                "levels: 3\n", "nodes: " + std::to_string(v.node_count()) + "\n",
+                                "words: " + std::to_string(v.word_count()) + "\n",
+                                "weighting: tf-idf\n", "scoring: l1\n"})
+    EXPECT_NE(out.find(line), std::string::npos) << "missing '" << line << "' in:\n" << out;
+}
+
+TEST(CliInfo, ReadsRealDbow2Vocabulary) {
+  int status = -1;
+  const std::string out =
+      run("info " + test::shared_data("vins-lite-brief-vocab/brief_lite.voc.gz"), &status);
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("words: 24830\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("branching: 10\n"), std::string::npos) << out;
+}
+
+TEST(CliInfo, BadFilesExitOneWithTheFileNamed) {
+  test::TempDir dir;
+  test::write_file(dir.file("junk.bbw"), {'B', 'B', 'W', 'V', 'O', 'C', 'A', 'B', 1, 2});
+  int status = -1;
+  std::string out = run("info " + dir.file("junk.bbw"), &status);
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(out.find("binbow: error: " + dir.file("junk.bbw")), std::string::npos) << out;
+  out = run("info " + dir.file("missing.bbw"), &status);
+  EXPECT_EQ(status, 1);
+  EXPECT_NE(out.find("missing.bbw"), std::string::npos) << out;
+}
+
+TEST(CliBench, TimesEveryStageOnRealFrames) {
+  test::TempDir dir;
+  small_vocabulary().save(dir.file("v.bbw"));
+  const std::string frames = test::source_path("data/samples/rtabmap/samples");
+  int status = -1;
+  const std::string out = run(
+      "bench --vocab " + dir.file("v.bbw") + " --database-size 200 --stride 4 " + frames, &status);
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("21 frames"), std::string::npos) << out;
+  for (const char* stage : {"features", "transform", "loop detection", "database add",
+                            "database query", "vocabulary load"})
+    EXPECT_NE(out.find(stage), std::string::npos) << stage << " missing in:\n" << out;
+}
+
+}  // namespace
+}  // namespace binbow
