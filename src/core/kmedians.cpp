@@ -14,6 +14,9 @@ namespace {
 constexpr std::size_t kMinRowsPerChunk = 16384;
 // Eight 8-bit counters per byte of a descriptor overflow after 255 additions.
 constexpr std::size_t kPackedFlushInterval = 255;
+// Recount every cluster's bits instead of moving rows one by one when more
+// than 1/kRecountRatio of the rows moved.
+constexpr std::size_t kRecountRatio = 4;
 
 // kByteLanes[v] has byte b equal to bit b of v: adding it to a 64-bit word
 // counts the eight bits of one descriptor byte at once.
@@ -27,6 +30,20 @@ constexpr std::array<std::uint64_t, 256> make_byte_lanes() {
   return lanes;
 }
 constexpr std::array<std::uint64_t, 256> kByteLanes = make_byte_lanes();
+
+// kBitValues[v][b] is bit b of v, as eight 32-bit lanes the compiler adds with
+// two vector instructions.
+struct BitValues {
+  std::int32_t bits[256][8];
+};
+constexpr BitValues make_bit_values() {
+  BitValues values{};
+  for (unsigned v = 0; v < 256; ++v) {
+    for (unsigned b = 0; b < 8; ++b) values.bits[v][b] = static_cast<std::int32_t>((v >> b) & 1u);
+  }
+  return values;
+}
+constexpr BitValues kBitValues = make_bit_values();
 
 }  // namespace
 
@@ -187,6 +204,7 @@ void KMedians::seed_centres(std::uint64_t seed, std::uint32_t* assignment,
 
 void KMedians::count_bits(const std::uint32_t* assignment) {
   std::fill(counts_.begin(), counts_.end(), 0);
+  std::fill(members_.begin(), members_.end(), 0);
   const bool merge = chunks_.size() > 1;
   for_chunks([&](Chunk& chunk) {
     std::int32_t* counts = merge ? chunk.counts.data() : counts_.data();
@@ -253,12 +271,12 @@ void KMedians::move_row(std::size_t row, std::uint32_t from, std::uint32_t to, s
   std::int32_t* from_counts = counts + from * bits_;
   std::int32_t* to_counts = counts + to * bits_;
   for (std::size_t j = 0; j < code_size_; ++j) {
-    const unsigned byte = bytes[j];
-    if (byte == 0) continue;
+    const std::int32_t* bits = kBitValues.bits[bytes[j]];
+    std::int32_t* from_byte = from_counts + j * 8;
+    std::int32_t* to_byte = to_counts + j * 8;
     for (unsigned b = 0; b < 8; ++b) {
-      const std::int32_t bit = static_cast<std::int32_t>((byte >> b) & 1u);
-      from_counts[j * 8 + b] -= bit;
-      to_counts[j * 8 + b] += bit;
+      from_byte[b] -= bits[b];
+      to_byte[b] += bits[b];
     }
   }
   --members[from];
@@ -269,28 +287,40 @@ void KMedians::move_row(std::size_t row, std::uint32_t from, std::uint32_t to, s
 
 std::size_t KMedians::assign(std::uint32_t* assignment, std::uint32_t* distance) {
   const Kernels& kernel = kernels();
+  for_chunks([&](Chunk& chunk) {
+    kernel.nearest(rows_ + chunk.begin * code_size_, chunk.end - chunk.begin, centres_.data(),
+                   count_, code_size_, scratch_index_.data() + chunk.begin, distance + chunk.begin);
+    std::size_t moved = 0;
+    for (std::size_t i = chunk.begin; i < chunk.end; ++i)
+      moved += scratch_index_[i] != assignment[i];
+    chunk.moved = moved;
+  });
+  std::size_t moved = 0;
+  for (const Chunk& chunk : chunks_) moved += chunk.moved;
+  if (moved == 0) return 0;
+  // Moving one row updates 2 × bits counters; recounting costs about a
+  // quarter of that per row, so recount when many rows moved.
+  if (moved * kRecountRatio > n_) {
+    std::copy_n(scratch_index_.data(), n_, assignment);
+    count_bits(assignment);
+    std::fill(dirty_.begin(), dirty_.begin() + count_, std::uint8_t{1});
+    return moved;
+  }
   const bool merge = chunks_.size() > 1;
   for_chunks([&](Chunk& chunk) {
+    if (chunk.moved == 0) return;
     std::int32_t* counts = merge ? chunk.counts.data() : counts_.data();
     std::int32_t* members = merge ? chunk.members.data() : members_.data();
     std::uint8_t* dirty = merge ? chunk.dirty.data() : dirty_.data();
-    const std::size_t length = chunk.end - chunk.begin;
-    kernel.nearest(rows_ + chunk.begin * code_size_, length, centres_.data(), count_, code_size_,
-                   scratch_index_.data() + chunk.begin, distance + chunk.begin);
-    std::size_t moved = 0;
     for (std::size_t i = chunk.begin; i < chunk.end; ++i) {
       const std::uint32_t nearest = scratch_index_[i];
       if (nearest == assignment[i]) continue;
       move_row(i, assignment[i], nearest, counts, members, dirty);
       assignment[i] = nearest;
-      ++moved;
     }
-    chunk.moved = moved;
   });
-  std::size_t moved = 0;
+  if (!merge) return moved;
   for (Chunk& chunk : chunks_) {
-    moved += chunk.moved;
-    if (!merge) continue;
     if (chunk.moved == 0) continue;
     for (std::uint32_t c = 0; c < count_; ++c) {
       members_[c] += chunk.members[c];
