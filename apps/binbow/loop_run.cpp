@@ -1,5 +1,6 @@
 #include "loop_run.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 #include <algorithm>
 #include <cerrno>
@@ -43,6 +44,10 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   std::string temporary = path + ".tmp-XXXXXX";
   const int fd = mkstemp(temporary.data());
   if (fd < 0) throw FileError(path, std::string("cannot create: ") + std::strerror(errno));
+  // mkstemp creates 0600; the result should get the usual permissions.
+  const mode_t mask = umask(0);
+  umask(mask);
+  fchmod(fd, 0666 & ~mask);
   close(fd);
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);

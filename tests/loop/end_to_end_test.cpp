@@ -1,0 +1,179 @@
+// The detector on real images: rtabmap-samples (84 frames, a corridor walked
+// twice) with a vocabulary trained here on unrelated images, through the
+// library and through the CLI, and the HTML report in headless Chromium.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "binbow/vision/evaluation.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "binbow/vision/loop_detector.h"
+#include "support/test_support.h"
+
+namespace binbow::vision {
+namespace {
+
+using test::shared_data;
+
+class RealSequence : public testing::Test {
+ protected:
+  // ORB vocabulary k=10, L=4 from 2000 features of each image of two
+  // unrelated sets (none of rtabmap-samples).
+  static const Vocabulary& vocabulary() {
+    static const Vocabulary v = [] {
+      const auto extractor = make_extractor("orb", 2000);
+      ImageSource source({shared_data("opencv-doc-samples"), shared_data("dbow2-demo-images")});
+      std::vector<DescriptorMatrix> images;
+      Frame frame;
+      while (source.next(frame)) images.push_back(extractor->extract(frame.image).descriptors);
+      std::vector<DescriptorView> views(images.begin(), images.end());
+      BuildOptions options;
+      options.branching = 10;
+      options.levels = 4;
+      return Vocabulary::build(views, options);
+    }();
+    return v;
+  }
+
+  static std::string vocabulary_file() {
+    static test::TempDir dir;
+    const std::string path = dir.file("orb_k10_L4.bbw");
+    if (!std::filesystem::exists(path)) vocabulary().save(path);
+    return path;
+  }
+};
+
+TEST_F(RealSequence, PerfectPrecisionAndHighRecallWithDefaults) {
+  const GroundTruth truth = GroundTruth::load(shared_data("rtabmap-samples/samples_GT.bmp"));
+  LoopDetector detector(vocabulary());
+  const auto extractor = make_extractor("orb");
+  ImageSource source({shared_data("rtabmap-samples/samples")});
+  std::vector<Detection> detections;
+  Frame frame;
+  while (source.next(frame)) {
+    const LoopResult r = detector.process(extractor->extract(frame.image));
+    if (r.detection()) {
+      EXPECT_GE(r.inliers.size(), 12u);
+      EXPECT_LT(r.match + 20, r.query);  // dislocal
+      detections.push_back({r.query, r.match, "", "", r.normalised_score, r.inliers.size()});
+    }
+  }
+  ASSERT_EQ(detector.size(), 84u);
+  const PrecisionRecall pr = evaluate_detections(detections, truth);
+  std::cout << "rtabmap-samples, ORB k=10 L=4 test vocabulary: precision " << pr.precision
+            << ", recall " << pr.recall << " (" << pr.true_positives << "/" << pr.queries_with_loops
+            << ")\n";
+  EXPECT_EQ(pr.false_positives, 0u);
+  EXPECT_DOUBLE_EQ(pr.precision, 1.0);
+  EXPECT_GE(pr.recall, 0.75);
+}
+
+std::string line_value(const std::string& output, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(output, m, std::regex("(^|\n)" + key + ": ([^\n]*)"))) return "";
+  return m[2];
+}
+
+std::string find_chromium() {
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    std::string out;
+    if (test::run_command(std::string("command -v ") + name, &out) == 0) {
+      while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+      return out;
+    }
+  }
+  return "";
+}
+
+TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
+  test::TempDir dir;
+  const std::string cli = test::cli_path();
+  const std::string samples = shared_data("rtabmap-samples/samples");
+  const std::string gt = shared_data("rtabmap-samples/samples_GT.bmp");
+  std::string out;
+  ASSERT_EQ(
+      test::run_command(cli + " detect-loops --vocab " + vocabulary_file() + " --timing --report " +
+                            dir.file("run-report") + " -o " + dir.file("loops.csv") + " " + samples,
+                        &out),
+      0)
+      << out;
+  for (const char* stage :
+       {"features", "transform", "query", "islands", "verification", "insertion"})
+    EXPECT_NE(out.find(stage), std::string::npos) << stage << "\n" << out;
+  std::ifstream csv(dir.file("loops.csv"));
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "query_index,match_index,query_file,match_file,score,inliers");
+  EXPECT_TRUE(std::filesystem::exists(dir.file("run-report/index.html")));
+
+  ASSERT_EQ(test::run_command(cli + " evaluate --gt " + gt + " --sweep --report " +
+                                  dir.file("report") + " " + dir.file("loops.csv"),
+                              &out),
+            0)
+      << out;
+  EXPECT_EQ(std::stod(line_value(out, "precision")), 1.0) << out;
+  EXPECT_GE(std::stod(line_value(out, "recall")), 0.75) << out;
+  EXPECT_GE(std::stod(line_value(out, "recall at 100% precision")), 0.75) << out;
+
+  // The same numbers from the 1-based pair list.
+  std::string pairs_out;
+  ASSERT_EQ(test::run_command(cli + " evaluate --gt " +
+                                  shared_data("rtabmap-samples/samples_GT_pairs.txt") + " " +
+                                  dir.file("loops.csv"),
+                              &pairs_out),
+            0)
+      << pairs_out;
+  EXPECT_EQ(line_value(pairs_out, "recall"), line_value(out, "recall"));
+
+  const std::string page = dir.file("report/index.html");
+  std::ifstream in(page);
+  std::stringstream html;
+  html << in.rdbuf();
+  for (const char* part :
+       {"<svg", "id='params'", "id='timing'", "id='detections'", "data:image/jpeg;base64,"})
+    EXPECT_NE(html.str().find(part), std::string::npos) << part;
+  EXPECT_EQ(html.str().find("http://"), html.str().find("http://www.w3.org/2000/svg"))
+      << "the page must not fetch anything";
+
+  const std::string chromium = find_chromium();
+  ASSERT_FALSE(chromium.empty())
+      << "headless Chromium is needed to check that the report renders: install it "
+         "(Debian: apt-get install -y chromium)";
+  const std::string screenshot = dir.file("report.png");
+  ASSERT_EQ(test::run_command(
+                "timeout 120 " + chromium +
+                    " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+                    " --disable-background-networking --disable-component-update --disable-sync"
+                    " --user-data-dir=" +
+                    dir.file("chromium-profile") +
+                    " --window-size=1280,2000 --screenshot=" + screenshot + " file://" + page,
+                &out),
+            0)
+      << out;
+  ASSERT_TRUE(std::filesystem::exists(screenshot)) << out;
+  EXPECT_GT(std::filesystem::file_size(screenshot), 20000u) << "blank page? " << out;
+}
+
+TEST_F(RealSequence, MissingDefaultVocabularyAsksForVocab) {
+  test::TempDir dir;
+  std::string out;
+  const int status = test::run_command("BINBOW_DATA_DIR=" + dir.path() + " " + test::cli_path() +
+                                           " detect-loops -o " + dir.file("l.csv") + " " +
+                                           shared_data("rtabmap-samples/samples/1.jpg"),
+                                       &out);
+  if (std::filesystem::exists(test::source_path("data/vocab/orb_default.bbw"))) {
+    EXPECT_EQ(status, 0) << out;  // the bundled vocabulary is found beside the build
+  } else {
+    EXPECT_NE(status, 0);
+    EXPECT_NE(out.find("--vocab"), std::string::npos) << out;
+    EXPECT_NE(out.find("orb_default.bbw"), std::string::npos) << out;
+  }
+}
+
+}  // namespace
+}  // namespace binbow::vision

@@ -1,0 +1,169 @@
+#include "binbow/vision/loop_detector.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "binbow/error.h"
+#include "support/test_support.h"
+
+namespace binbow::vision {
+namespace {
+
+// A one-level vocabulary: every word's own descriptor quantises to it, so
+// images can be written down as sets of words.
+class WordImages {
+ public:
+  WordImages() {
+    std::mt19937_64 rng(11);
+    const DescriptorMatrix training = test::random_descriptors(4000, 32, rng);
+    std::vector<DescriptorView> images;
+    for (std::size_t i = 0; i < 40; ++i) images.push_back(training.view().slice(i * 100, 100));
+    BuildOptions options;
+    options.branching = 200;
+    options.levels = 1;
+    vocabulary_ = Vocabulary::build(images, options);
+    leaves_ = vocabulary_.word_nodes();
+  }
+
+  const Vocabulary& vocabulary() const { return vocabulary_; }
+
+  Features image(const std::vector<WordId>& words) const {
+    Features f;
+    f.descriptors = DescriptorMatrix(32);
+    for (WordId w : words) {
+      f.descriptors.append(vocabulary_.node_descriptor(leaves_[w]));
+      f.keypoints.push_back({float(w), float(w), 10, -1, 1, 0});
+    }
+    return f;
+  }
+
+  // Place i: ten words of its own and five of place i + 1, so consecutive
+  // images share words (as consecutive frames of a video do).
+  Features place(int i) const {
+    std::vector<WordId> words;
+    for (int w = 0; w < 10; ++w) words.push_back(WordId(10 * i + w));
+    for (int w = 0; w < 5; ++w) words.push_back(WordId(10 * (i + 1) + w));
+    return image(words);
+  }
+
+ private:
+  Vocabulary vocabulary_;
+  std::vector<NodeId> leaves_;
+};
+
+LoopDetectorParams small_params() {
+  LoopDetectorParams p;
+  p.dislocal = 3;
+  p.geometric_check = GeometricCheck::kNone;
+  return p;
+}
+
+TEST(LoopDetector, NormalisationSkipIslandsTemporalConsistencyThenLoop) {
+  const WordImages words;
+  ASSERT_EQ(words.vocabulary().word_count(), 200u);
+  LoopDetector detector(words.vocabulary(), small_params());
+  // Walk places 0..9, then walk them again.
+  for (int i = 0; i < 10; ++i) {
+    const LoopResult r = detector.process(words.place(i));
+    EXPECT_EQ(r.query, EntryId(i));
+    EXPECT_FALSE(r.detection()) << i;
+    // Places never repeat on the first walk: anything older than dislocal shares no word.
+    if (i <= 3) EXPECT_EQ(r.status, LoopStatus::kNoDatabaseResults) << i;
+  }
+  // The revisit starts with a jump: image 10 shares nothing with image 9, so
+  // η cannot be normalised and the frame is skipped.
+  LoopResult r = detector.process(words.place(0));
+  EXPECT_EQ(r.status, LoopStatus::kLowNormalisationScore);
+  EXPECT_LT(r.normalisation_score, 0.005);
+  EXPECT_TRUE(r.has_candidate);
+  EXPECT_EQ(r.match, 0u);
+  // Then k = 3 consistent queries are needed before the fourth is a loop.
+  for (int i = 1; i <= 3; ++i) {
+    r = detector.process(words.place(i));
+    EXPECT_EQ(r.status, LoopStatus::kNoTemporalConsistency) << i;
+    EXPECT_EQ(r.consistent_queries, i);
+    EXPECT_EQ(r.match, EntryId(i));
+    EXPECT_GT(r.normalised_score, 1.0);  // the old image beats the previous frame
+    EXPECT_LE(r.island_first, EntryId(i));
+    EXPECT_GE(r.island_last, EntryId(i));
+    EXPECT_GE(r.island_score, r.normalised_score);
+  }
+  for (int i = 4; i < 7; ++i) {
+    r = detector.process(words.place(i));
+    EXPECT_EQ(r.status, LoopStatus::kLoopDetected) << i;
+    EXPECT_EQ(r.match, EntryId(i));
+    EXPECT_NEAR(r.score, r.normalised_score * r.normalisation_score, 1e-9);
+  }
+  EXPECT_EQ(detector.size(), 17u);
+}
+
+TEST(LoopDetector, AlphaAndIslandLengthFilterCandidates) {
+  const WordImages words;
+  LoopDetectorParams p = small_params();
+  p.alpha = 100;  // no η can reach it
+  LoopDetector strict(words.vocabulary(), p);
+  for (int i = 0; i < 10; ++i) strict.process(words.place(i));
+  strict.process(words.place(0));
+  EXPECT_EQ(strict.process(words.place(1)).status, LoopStatus::kLowScores);
+
+  p = small_params();
+  p.min_matches_per_island = 10;  // longer than any island here
+  LoopDetector picky(words.vocabulary(), p);
+  for (int i = 0; i < 10; ++i) picky.process(words.place(i));
+  picky.process(words.place(0));
+  EXPECT_EQ(picky.process(words.place(1)).status, LoopStatus::kNoIslands);
+}
+
+TEST(LoopDetector, WithoutNormalisationRawScoresAreCompared) {
+  const WordImages words;
+  LoopDetectorParams p = small_params();
+  p.use_normalised_score = false;
+  p.alpha = 0.1;
+  p.k = 0;
+  LoopDetector detector(words.vocabulary(), p);
+  for (int i = 0; i < 10; ++i) detector.process(words.place(i));
+  const LoopResult r = detector.process(words.place(0));  // no skip without η
+  EXPECT_EQ(r.status, LoopStatus::kLoopDetected);
+  EXPECT_EQ(r.match, 0u);
+  EXPECT_DOUBLE_EQ(r.normalised_score, r.score);
+}
+
+TEST(LoopDetector, EmptyImagesAndBadInput) {
+  const WordImages words;
+  LoopDetector detector(words.vocabulary(), LoopDetectorParams{});
+  for (int i = 0; i < 30; ++i) {
+    const LoopResult r = detector.process(Features{});
+    EXPECT_EQ(r.status, LoopStatus::kNoDatabaseResults);
+  }
+  Features mismatch = words.place(1);
+  mismatch.keypoints.pop_back();
+  EXPECT_THROW(detector.process(mismatch), InvalidArgument);
+  Features wide;
+  wide.descriptors = DescriptorMatrix(2, 64);
+  wide.keypoints.resize(2);
+  EXPECT_THROW(detector.process(wide), InvalidArgument);
+  LoopDetectorParams bad;
+  bad.k = -1;
+  EXPECT_THROW(LoopDetector(words.vocabulary(), bad), InvalidArgument);
+  EXPECT_THROW(LoopDetector(Vocabulary(), LoopDetectorParams{}), InvalidArgument);
+  detector.clear();
+  EXPECT_EQ(detector.size(), 0u);
+  EXPECT_EQ(detector.process(words.place(0)).query, 0u);
+}
+
+TEST(LoopDetector, KeepsFeaturesForVerification) {
+  const WordImages words;
+  LoopDetector detector(words.vocabulary(), LoopDetectorParams{});
+  const Features f = words.place(2);
+  detector.process(words.place(1));
+  detector.process(f);
+  ASSERT_EQ(detector.keypoints(1).size(), f.keypoints.size());
+  EXPECT_EQ(detector.keypoints(1)[3].x, f.keypoints[3].x);
+  EXPECT_EQ(detector.descriptors(1).rows, f.descriptors.rows());
+  EXPECT_EQ(hamming_distance(detector.descriptors(1).row(4), f.descriptors.row(4), 32), 0u);
+  EXPECT_THROW(detector.keypoints(2), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace binbow::vision
