@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <mutex>
 #include <new>
 #include <utility>
@@ -63,30 +64,6 @@ void PostingList::push_back(EntryId entry, float weight) {
   ++size_;
 }
 
-void PostingList::assign(const EntryId* entries, const float* weights, std::uint32_t count) {
-  size_ = 0;
-  reallocate(count);
-  if (count == 0) return;
-  std::memcpy(ids_, entries, std::size_t{count} * sizeof(EntryId));
-  std::memcpy(mutable_weights(), weights, std::size_t{count} * sizeof(float));
-  size_ = count;
-}
-
-std::size_t PostingList::erase_dead(const std::vector<std::uint8_t>& alive) {
-  float* values = mutable_weights();
-  std::uint32_t kept = 0;
-  for (std::uint32_t i = 0; i < size_; ++i) {
-    if (alive[ids_[i]] == 0) continue;
-    ids_[kept] = ids_[i];
-    values[kept] = values[i];
-    ++kept;
-  }
-  const std::size_t removed = size_ - kept;
-  size_ = kept;
-  if (size_ == 0) reallocate(0);  // frees, cannot throw
-  return removed;
-}
-
 std::size_t PostingList::memory_usage() const noexcept {
   return std::size_t{capacity_} * 8;
 }
@@ -95,48 +72,82 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     : node_count_(static_cast<std::uint32_t>(features.size())),
       feature_count_(static_cast<std::uint32_t>(features.feature_count())) {
   const auto& indices = features.feature_indices();
-  wide_ = feature_count_ > 0xFFFF ||
-          std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
-  const std::size_t width = wide_ ? 4 : 2;
-  bytes_.resize(std::size_t{node_count_} * (4 + width) + std::size_t{feature_count_} * width);
-  std::uint8_t* out = bytes_.data();
-  if (node_count_ > 0) std::memcpy(out, features.nodes().data(), std::size_t{node_count_} * 4);
-  out += std::size_t{node_count_} * 4;
-  const auto put = [&](std::uint32_t v) {
-    if (wide_) {
-      std::memcpy(out, &v, 4);
-    } else {
-      const auto narrow = static_cast<std::uint16_t>(v);
-      std::memcpy(out, &narrow, 2);
+  bool partition = node_count_ <= 0x10000;
+  if (partition) {
+    std::vector<bool> seen(feature_count_, false);
+    for (std::uint32_t index : indices) {
+      if (index >= feature_count_ || seen[index]) {
+        partition = false;
+        break;
+      }
+      seen[index] = true;
     }
+  }
+  const bool wide =
+      feature_count_ > 0xFFFF ||
+      std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
+  if (partition)
+    layout_ = node_count_ <= 0x100 ? Layout::kPartition8 : Layout::kPartition16;
+  else
+    layout_ = wide ? Layout::kRows32 : Layout::kRows16;
+  const std::size_t nodes_bytes = std::size_t{node_count_} * 4;
+  if (partition) {
+    const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
+    bytes_.resize(nodes_bytes + std::size_t{feature_count_} * width);
+    if (node_count_ > 0) std::memcpy(bytes_.data(), features.nodes().data(), nodes_bytes);
+    std::uint8_t* slots = bytes_.data() + nodes_bytes;
+    for (std::size_t node = 0; node < node_count_; ++node) {
+      for (std::uint32_t index : features.features(node)) {
+        const auto slot = static_cast<std::uint16_t>(node);
+        std::memcpy(slots + std::size_t{index} * width, &slot, width);  // little-endian
+      }
+    }
+    return;
+  }
+  const std::size_t width = layout_ == Layout::kRows32 ? 4 : 2;
+  bytes_.resize(nodes_bytes + std::size_t{node_count_} * width +
+                std::size_t{feature_count_} * width);
+  std::uint8_t* out = bytes_.data();
+  if (node_count_ > 0) std::memcpy(out, features.nodes().data(), nodes_bytes);
+  out += nodes_bytes;
+  const auto put = [&](std::uint32_t v) {
+    std::memcpy(out, &v, width);  // little-endian: the low bytes
     out += width;
   };
   for (std::size_t i = 1; i <= node_count_; ++i) put(features.offsets()[i]);
   for (std::uint32_t index : indices) put(index);
 }
 
-std::uint32_t PackedFeatureVector::value(std::size_t byte_offset) const noexcept {
-  if (wide_) {
-    std::uint32_t v;
-    std::memcpy(&v, bytes_.data() + byte_offset, 4);
-    return v;
-  }
-  std::uint16_t v;
-  std::memcpy(&v, bytes_.data() + byte_offset, 2);
+std::uint32_t PackedFeatureVector::value(std::size_t byte_offset,
+                                         std::size_t width) const noexcept {
+  std::uint32_t v = 0;
+  std::memcpy(&v, bytes_.data() + byte_offset, width);  // little-endian
   return v;
 }
 
 FeatureVector PackedFeatureVector::unpack() const {
-  const std::size_t width = wide_ ? 4 : 2;
   std::vector<NodeId> nodes(node_count_);
-  if (node_count_ > 0) std::memcpy(nodes.data(), bytes_.data(), std::size_t{node_count_} * 4);
+  const std::size_t nodes_bytes = std::size_t{node_count_} * 4;
+  if (node_count_ > 0) std::memcpy(nodes.data(), bytes_.data(), nodes_bytes);
   std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
-  std::size_t at = std::size_t{node_count_} * 4;
-  for (std::size_t i = 1; i <= node_count_; ++i, at += width) offsets[i] = value(at);
   std::vector<std::uint32_t> indices(feature_count_);
-  for (auto& index : indices) {
-    index = value(at);
-    at += width;
+  if (layout_ == Layout::kPartition8 || layout_ == Layout::kPartition16) {
+    // Counting sort of the features by node; increasing index within a node.
+    const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
+    for (std::size_t f = 0; f < feature_count_; ++f)
+      ++offsets[value(nodes_bytes + f * width, width) + 1];
+    for (std::size_t i = 0; i < node_count_; ++i) offsets[i + 1] += offsets[i];
+    std::vector<std::uint32_t> next(offsets.begin(), offsets.end() - 1);
+    for (std::uint32_t f = 0; f < feature_count_; ++f)
+      indices[next[value(nodes_bytes + f * width, width)]++] = f;
+  } else {
+    const std::size_t width = layout_ == Layout::kRows32 ? 4 : 2;
+    std::size_t at = nodes_bytes;
+    for (std::size_t i = 1; i <= node_count_; ++i, at += width) offsets[i] = value(at, width);
+    for (auto& index : indices) {
+      index = value(at, width);
+      at += width;
+    }
   }
   return FeatureVector::from_arrays(std::move(nodes), std::move(offsets), std::move(indices));
 }
@@ -163,30 +174,72 @@ thread_local QueryScratch scratch;
 // Every term is computed and summed exactly as Vocabulary::score does, in the
 // same order (increasing word id), so scores agree to the last bit.
 struct IndexView {
+  const std::uint32_t* main_offsets;  // null when the main tier is empty
+  const EntryId* main_ids;
+  const float* main_weights;
   const std::uint32_t* slot_of_word;
   const detail::PostingList* lists;
 };
 
+// Adds the terms of one posting run; ids increasing, so `last_entry` cuts it.
+template <Scoring kScoring>
+inline void accumulate_run(const EntryId* ids, const float* weights, std::uint32_t count, double v,
+                           EntryId last_entry, Accumulator* accumulators, EntryId* touched,
+                           std::size_t& touched_count) {
+  if (count > 0 && ids[count - 1] > last_entry)
+    count = static_cast<std::uint32_t>(std::upper_bound(ids, ids + count, last_entry) - ids);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    Accumulator& accumulator = accumulators[ids[i]];
+    touched[touched_count] = ids[i];
+    touched_count += accumulator.shared == 0;
+    ++accumulator.shared;
+    accumulator.sum += detail::score_term(kScoring, v, weights[i]);
+  }
+}
+
+// Every term is computed and summed exactly as Vocabulary::score does, in the
+// same order (increasing word id), so scores agree to the last bit. Posting
+// lists are scattered in memory: the lists of words a few steps ahead are
+// prefetched so that their cache misses overlap.
 template <Scoring kScoring>
 std::size_t accumulate(IndexView index, const BowVector& bow, EntryId last_entry,
                        Accumulator* accumulators, EntryId* touched) {
+  constexpr std::size_t kAhead = 8;
   std::size_t touched_count = 0;
-  for (const BowEntry& query_entry : bow) {
-    const std::uint32_t slot = index.slot_of_word[query_entry.word];
-    if (slot == 0) continue;
-    const detail::PostingList& list = index.lists[slot - 1];
-    const EntryId* ids = list.ids();
-    const float* weights = list.weights();
-    std::uint32_t count = list.size();
-    if (count > 0 && ids[count - 1] > last_entry)
-      count = static_cast<std::uint32_t>(std::upper_bound(ids, ids + count, last_entry) - ids);
-    const double v = query_entry.value;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      Accumulator& accumulator = accumulators[ids[i]];
-      touched[touched_count] = ids[i];
-      touched_count += accumulator.shared == 0;
-      ++accumulator.shared;
-      accumulator.sum += detail::score_term(kScoring, v, weights[i]);
+  const std::size_t n = bow.size();
+  const BowEntry* query = bow.begin();
+  for (std::size_t q = 0; q < n; ++q) {
+    if (q + 2 * kAhead < n) {
+      const WordId far = query[q + 2 * kAhead].word;
+      if (index.main_offsets != nullptr) __builtin_prefetch(index.main_offsets + far);
+      __builtin_prefetch(index.slot_of_word + far);
+    }
+    if (q + kAhead < n) {
+      const WordId near = query[q + kAhead].word;
+      if (index.main_offsets != nullptr) {
+        const std::uint32_t begin = index.main_offsets[near];
+        __builtin_prefetch(index.main_ids + begin);
+        __builtin_prefetch(index.main_weights + begin);
+      }
+      const std::uint32_t slot = index.slot_of_word[near];
+      if (slot != 0) {
+        __builtin_prefetch(index.lists[slot - 1].ids());
+        __builtin_prefetch(index.lists[slot - 1].weights());
+      }
+    }
+    const WordId word = query[q].word;
+    const double v = query[q].value;
+    if (index.main_offsets != nullptr) {
+      const std::uint32_t begin = index.main_offsets[word];
+      accumulate_run<kScoring>(index.main_ids + begin, index.main_weights + begin,
+                               index.main_offsets[word + 1] - begin, v, last_entry, accumulators,
+                               touched, touched_count);
+    }
+    const std::uint32_t slot = index.slot_of_word[word];
+    if (slot != 0) {
+      const detail::PostingList& list = index.lists[slot - 1];
+      accumulate_run<kScoring>(list.ids(), list.weights(), list.size(), v, last_entry, accumulators,
+                               touched, touched_count);
     }
   }
   return touched_count;
@@ -267,13 +320,22 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     if (lists.capacity() < lists.size() + bow.size())
       lists.reserve(
           std::max(lists.size() + bow.size(), std::min(lists.capacity() * 2, slot_of_word.size())));
-    for (const BowEntry& word : bow) {
-      std::uint32_t& slot = slot_of_word[word.word];
+    // As in queries: prefetch the lists of words a few steps ahead.
+    constexpr std::size_t kAhead = 8;
+    const BowEntry* words = bow.begin();
+    const std::size_t n = bow.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i + 2 * kAhead < n) __builtin_prefetch(slot_of_word.data() + words[i + 2 * kAhead].word);
+      if (i + kAhead < n) {
+        const std::uint32_t ahead = slot_of_word[words[i + kAhead].word];
+        if (ahead != 0) lists[ahead - 1].prefetch_end();
+      }
+      std::uint32_t& slot = slot_of_word[words[i].word];
       if (slot == 0) {
         lists.emplace_back();  // no reallocation: reserved above
         slot = static_cast<std::uint32_t>(lists.size());
       }
-      lists[slot - 1].push_back(entry, word.value);
+      lists[slot - 1].push_back(entry, words[i].value);
     }
   } catch (...) {
     for (const BowEntry& word : bow) {
@@ -291,15 +353,74 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   alive[entry] = 1;
   ++live_entries;
   postings += bow.size();
+  tail_postings += bow.size();
   return entry;
 }
 
-void Database::Impl::compact_if_worthwhile() {
-  if (dead_postings * 3 > postings) compact();
+void Database::Impl::merge_if_worthwhile() {
+  constexpr std::size_t kMinimumTail = 1 << 16;
+  if (tail_postings <= std::max(kMinimumTail, postings / 8) && dead_postings * 3 <= postings)
+    return;
+  try {
+    merge();
+  } catch (...) {
+    // Out of memory for the merged copy: the two tiers stay valid as they
+    // are, and the add or remove that got here has succeeded.
+  }
 }
 
-void Database::Impl::compact() {
-  for (detail::PostingList& list : lists) postings -= list.erase_dead(alive);
+void Database::Impl::merge() {
+  const std::size_t words = slot_of_word.size();
+  std::size_t live = 0;
+  std::vector<std::uint32_t> offsets(words + 1, 0);
+  const auto live_count = [&](const EntryId* ids, std::uint32_t count) {
+    std::uint32_t kept = 0;
+    for (std::uint32_t i = 0; i < count; ++i) kept += alive[ids[i]];
+    return kept;
+  };
+  for (std::size_t w = 0; w < words; ++w) {
+    std::uint32_t count = 0;
+    if (!main_offsets.empty())
+      count += live_count(main_ids.data() + main_offsets[w], main_offsets[w + 1] - main_offsets[w]);
+    if (slot_of_word[w] != 0) {
+      const detail::PostingList& list = lists[slot_of_word[w] - 1];
+      count += live_count(list.ids(), list.size());
+    }
+    live += count;
+    if (live > std::numeric_limits<std::uint32_t>::max())
+      throw InvalidArgument("Database: more than 2^32 postings");
+    offsets[w + 1] = static_cast<std::uint32_t>(live);
+  }
+  std::vector<EntryId> ids(live);
+  std::vector<float> weights(live);
+  std::size_t at = 0;
+  const auto copy_live = [&](const EntryId* from_ids, const float* from_weights,
+                             std::uint32_t count) {
+    for (std::uint32_t i = 0; i < count; ++i) {
+      if (alive[from_ids[i]] == 0) continue;
+      ids[at] = from_ids[i];
+      weights[at] = from_weights[i];
+      ++at;
+    }
+  };
+  for (std::size_t w = 0; w < words; ++w) {
+    if (!main_offsets.empty()) {
+      const std::uint32_t begin = main_offsets[w];
+      copy_live(main_ids.data() + begin, main_weights.data() + begin, main_offsets[w + 1] - begin);
+    }
+    if (slot_of_word[w] != 0) {
+      const detail::PostingList& list = lists[slot_of_word[w] - 1];
+      copy_live(list.ids(), list.weights(), list.size());
+    }
+  }
+  // Nothing below can throw: the index changes all at once.
+  main_offsets.swap(offsets);
+  main_ids.swap(ids);
+  main_weights.swap(weights);
+  std::fill(slot_of_word.begin(), slot_of_word.end(), 0);
+  std::vector<detail::PostingList>().swap(lists);
+  tail_postings = 0;
+  postings = live;
   dead_postings = 0;
 }
 
@@ -318,7 +439,9 @@ EntryId Database::add(const DescriptorView& descriptors) {
   else
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
-  return impl_->append(bow, features);
+  const EntryId entry = impl_->append(bow, features);
+  impl_->merge_if_worthwhile();
+  return entry;
 }
 
 EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
@@ -330,7 +453,9 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
                           " is outside the vocabulary (" +
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
-  return impl_->append(bow, features);
+  const EntryId entry = impl_->append(bow, features);
+  impl_->merge_if_worthwhile();
+  return entry;
 }
 
 std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
@@ -349,7 +474,9 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   // accumulate() may write one element past the last new id.
   if (buffers.touched.size() < entry_count + 1) buffers.touched.resize(entry_count + 1);
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
-  const IndexView index{impl_->slot_of_word.data(), impl_->lists.data()};
+  const IndexView index{impl_->main_offsets.empty() ? nullptr : impl_->main_offsets.data(),
+                        impl_->main_ids.data(), impl_->main_weights.data(),
+                        impl_->slot_of_word.data(), impl_->lists.data()};
   const std::size_t touched = accumulate(scoring, index, bow, last_entry,
                                          buffers.accumulators.data(), buffers.touched.data());
 
@@ -395,7 +522,7 @@ void Database::remove(EntryId entry) {
   impl_->dead_postings += impl_->word_counts[entry];
   if (!impl_->direct.empty()) impl_->direct[entry] = {};
   if (!impl_->labels.empty()) std::string().swap(impl_->labels[entry]);
-  impl_->compact_if_worthwhile();
+  impl_->merge_if_worthwhile();
 }
 
 bool Database::contains(EntryId entry) const {
@@ -442,8 +569,12 @@ EntryId Database::next_entry_id() const {
 
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
+  std::vector<std::uint32_t>().swap(impl_->main_offsets);
+  std::vector<EntryId>().swap(impl_->main_ids);
+  std::vector<float>().swap(impl_->main_weights);
   std::fill(impl_->slot_of_word.begin(), impl_->slot_of_word.end(), 0);
   std::vector<detail::PostingList>().swap(impl_->lists);
+  impl_->tail_postings = 0;
   std::vector<std::uint8_t>().swap(impl_->alive);
   std::vector<std::uint32_t>().swap(impl_->word_counts);
   std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
@@ -456,7 +587,10 @@ void Database::clear() {
 std::size_t Database::memory_usage() const {
   std::shared_lock lock(impl_->mutex);
   const Impl& impl = *impl_;
-  std::size_t bytes = impl.slot_of_word.capacity() * sizeof(std::uint32_t) +
+  std::size_t bytes = impl.main_offsets.capacity() * sizeof(std::uint32_t) +
+                      impl.main_ids.capacity() * sizeof(EntryId) +
+                      impl.main_weights.capacity() * sizeof(float) +
+                      impl.slot_of_word.capacity() * sizeof(std::uint32_t) +
                       impl.lists.capacity() * sizeof(detail::PostingList) + impl.alive.capacity() +
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +

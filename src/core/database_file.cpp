@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -186,18 +187,34 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
   // Live postings only, words in increasing order.
   std::uint64_t posting_count = 0;
   for (WordId word = 0; word < impl.slot_of_word.size(); ++word) {
-    const std::uint32_t slot = impl.slot_of_word[word];
-    if (slot == 0) continue;
-    const detail::PostingList& list = impl.lists[slot - 1];
+    // Main tier first: its entries are older than the tail's.
+    const EntryId* runs[2] = {nullptr, nullptr};
+    const float* run_weights[2] = {nullptr, nullptr};
+    std::uint32_t run_sizes[2] = {0, 0};
+    if (!impl.main_offsets.empty()) {
+      const std::uint32_t begin = impl.main_offsets[word];
+      runs[0] = impl.main_ids.data() + begin;
+      run_weights[0] = impl.main_weights.data() + begin;
+      run_sizes[0] = impl.main_offsets[word + 1] - begin;
+    }
+    if (impl.slot_of_word[word] != 0) {
+      const detail::PostingList& list = impl.lists[impl.slot_of_word[word] - 1];
+      runs[1] = list.ids();
+      run_weights[1] = list.weights();
+      run_sizes[1] = list.size();
+    }
     std::uint32_t live = 0;
-    for (std::uint32_t i = 0; i < list.size(); ++i) live += impl.alive[list.ids()[i]];
+    for (int r = 0; r < 2; ++r)
+      for (std::uint32_t i = 0; i < run_sizes[r]; ++i) live += impl.alive[runs[r][i]];
     if (live == 0) continue;
     detail::put_le<std::uint32_t>(sections[kWords], word);
     detail::put_le<std::uint32_t>(sections[kListLengths], live);
-    for (std::uint32_t i = 0; i < list.size(); ++i) {
-      if (impl.alive[list.ids()[i]] == 0) continue;
-      detail::put_le<std::uint32_t>(sections[kPostingIds], list.ids()[i]);
-      detail::put_le<float>(sections[kPostingWeights], list.weights()[i]);
+    for (int r = 0; r < 2; ++r) {
+      for (std::uint32_t i = 0; i < run_sizes[r]; ++i) {
+        if (impl.alive[runs[r][i]] == 0) continue;
+        detail::put_le<std::uint32_t>(sections[kPostingIds], runs[r][i]);
+        detail::put_le<float>(sections[kPostingWeights], run_weights[r][i]);
+      }
     }
     posting_count += live;
   }
@@ -317,10 +334,12 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
   if (posting_count != header.postings)
     layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
                 std::to_string(posting_count));
-  const auto ids = layout.values<std::uint32_t>(kPostingIds, posting_count);
-  const auto weights = layout.values<float>(kPostingWeights, posting_count);
+  auto ids = layout.values<std::uint32_t>(kPostingIds, posting_count);
+  auto weights = layout.values<float>(kPostingWeights, posting_count);
+  if (posting_count > std::numeric_limits<std::uint32_t>::max())
+    layout.fail("more postings than this binbow supports (2^32)");
   impl->word_counts.assign(next_id, 0);
-  impl->lists.resize(list_count);
+  impl->main_offsets.assign(word_count + 1, 0);
   std::size_t at = 0;
   for (std::size_t l = 0; l < list_count; ++l) {
     if (words[l] >= word_count || (l > 0 && words[l] <= words[l - 1]))
@@ -338,11 +357,13 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
                     " has a non-finite weight");
       ++impl->word_counts[ids[i]];
     }
-    impl->lists[l].assign(ids.data() + at, weights.data() + at, length);
-    impl->slot_of_word[words[l]] = static_cast<std::uint32_t>(l + 1);
+    impl->main_offsets[words[l] + 1] = length;
     at += length;
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
+  for (std::size_t w = 0; w < word_count; ++w) impl->main_offsets[w + 1] += impl->main_offsets[w];
+  impl->main_ids = std::move(ids);
+  impl->main_weights = std::move(weights);
   impl->postings = posting_count;
 
   if (options.direct_index) {

@@ -33,10 +33,11 @@ class PostingList {
 
   void push_back(EntryId entry, float weight);
   void pop_back() noexcept { --size_; }
-  // Replaces the content with `count` postings, with no spare capacity.
-  void assign(const EntryId* entries, const float* weights, std::uint32_t count);
-  // Drops the postings of entries for which alive[entry] is 0; returns how many.
-  std::size_t erase_dead(const std::vector<std::uint8_t>& alive);
+  // Hints the cache about where the next push_back writes.
+  void prefetch_end() const noexcept {
+    __builtin_prefetch(ids_ + size_);
+    __builtin_prefetch(weights() + size_);
+  }
   std::size_t memory_usage() const noexcept;
 
  private:
@@ -48,9 +49,12 @@ class PostingList {
   std::uint32_t capacity_ = 0;
 };
 
-// One entry's FeatureVector, packed: node ids (32 bit), then the end offset
-// of every node's features and the feature indices, both 16 bit when every
-// value fits (images have fewer than 65,536 features), else 32 bit.
+// One entry's FeatureVector, packed. Node ids are 32 bit. When every feature
+// 0..n-1 sits under exactly one node (what transform produces), each feature
+// just stores the position of its node, in 8 bits when there are at most 256
+// nodes (about 1 byte per feature) or 16 bits; otherwise the end offset of
+// every node's features and the feature indices follow, 16 bit when they fit
+// (images have fewer than 65,536 features), else 32 bit.
 class PackedFeatureVector {
  public:
   PackedFeatureVector() = default;
@@ -59,35 +63,49 @@ class PackedFeatureVector {
   std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
 
  private:
-  std::uint32_t value(std::size_t byte_offset) const noexcept;
+  enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32 };
+  std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept;
 
   std::vector<std::uint8_t> bytes_;
   std::uint32_t node_count_ = 0;
   std::uint32_t feature_count_ = 0;
-  bool wide_ = false;
+  Layout layout_ = Layout::kPartition8;
 };
 
 }  // namespace binbow::detail
 
 namespace binbow {
 
+// The inverted index has two tiers. The main tier is compressed rows by word
+// (one offset per word, then all entry ids and all weights, exact size: 8
+// bytes per posting). New entries go to the tail tier, one growable list per
+// word, which is merged into the main tier (dropping removed entries) when it
+// holds more than an eighth of all postings: each posting is copied a bounded
+// number of times, the index stays compact, and every entry lives in exactly
+// one tier, its postings in increasing word order.
 struct Database::Impl {
   Impl(Vocabulary vocabulary_in, DatabaseOptions options_in);
 
   // Appends an entry whose arguments are already validated; exclusive lock held.
   EntryId append(const BowVector& bow, const FeatureVector& features);
-  // Drops dead postings once they are a large share of the index.
-  void compact_if_worthwhile();
-  void compact();
+  // Merges the tail into the main tier when worthwhile (or always).
+  void merge_if_worthwhile();
+  void merge();
   bool is_live(EntryId entry) const noexcept { return entry < alive.size() && alive[entry] != 0; }
 
   Vocabulary vocabulary;
   DatabaseOptions options;
   mutable std::shared_mutex mutex;
 
-  // Inverted index: word → slot + 1 (0: the word has no postings yet).
+  // Main tier: postings of word w are [main_offsets[w], main_offsets[w + 1]).
+  std::vector<std::uint32_t> main_offsets;  // word_count + 1
+  std::vector<EntryId> main_ids;
+  std::vector<float> main_weights;
+
+  // Tail tier: word → slot + 1 (0: no tail postings).
   std::vector<std::uint32_t> slot_of_word;
   std::vector<detail::PostingList> lists;
+  std::size_t tail_postings = 0;
 
   // Per entry, indexed by entry id (dead entries keep their place).
   std::vector<std::uint8_t> alive;
@@ -96,7 +114,7 @@ struct Database::Impl {
   std::vector<std::string> labels;                  // empty until a label is set
 
   std::size_t live_entries = 0;
-  std::size_t postings = 0;       // in the lists, dead ones included
+  std::size_t postings = 0;       // in both tiers, dead ones included
   std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 };
 

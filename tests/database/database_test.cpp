@@ -201,6 +201,41 @@ TEST(Database, RemovedEntriesNeverAppear) {
   }
 }
 
+TEST(Database, QueriesSpanningBothTiers) {
+  // Enough postings that the tail is merged into the main tier several times
+  // while entries keep being added and removed.
+  for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kChiSquare}) {
+    const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf).with_scoring(scoring);
+    const Corpus corpus = random_corpus(vocabulary, 6000, 21);
+    Database database(vocabulary, {false, 0});
+    std::vector<bool> live(corpus.bows.size(), false);
+    std::mt19937_64 rng(4);
+    std::size_t checks = 0;
+    for (std::size_t i = 0; i < corpus.bows.size(); ++i) {
+      database.add(corpus.bows[i]);
+      live[i] = true;
+      if (i % 7 == 3) {
+        const auto victim = static_cast<EntryId>(rng() % (i + 1));
+        if (live[victim]) {
+          database.remove(victim);
+          live[victim] = false;
+        }
+      }
+      if (i % 1500 == 1499 || i + 1 == corpus.bows.size()) {
+        for (std::size_t q = 0; q < 5; ++q) {
+          const BowVector& query = corpus.bows[rng() % corpus.bows.size()];
+          for (EntryId max_id : {kAllEntries, static_cast<EntryId>(i / 2)})
+            expect_same(database.query(query, 20, max_id),
+                        brute_force(vocabulary, corpus.bows, live, query, 20, max_id),
+                        std::string("two tiers ") + to_string(scoring));
+          ++checks;
+        }
+      }
+    }
+    EXPECT_EQ(checks, 20u);
+  }
+}
+
 TEST(Database, IdsAreDenseAndClearRestarts) {
   const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
   const Corpus corpus = random_corpus(vocabulary, 10, 2);
@@ -241,6 +276,31 @@ TEST(Database, DirectIndexWithLargeFeatureIndices) {
       FeatureVector::from_arrays({1, 2, 5}, {0, 2, 3, 5}, {7, 70000, 12, 3, 100000});
   const EntryId id = database.add(BowVector({{0, 0.5f}, {3, 0.5f}}), features);
   EXPECT_EQ(database.feature_vector(id), features);
+  // Every feature under exactly one of 300 nodes (16-bit node positions).
+  std::vector<NodeId> many_nodes;
+  std::vector<std::uint32_t> many_offsets{0}, many_features;
+  for (std::uint32_t n = 0; n < 300; ++n) {
+    many_nodes.push_back(n + 100);
+    many_features.push_back(299 - n);
+    many_offsets.push_back(n + 1);
+  }
+  const FeatureVector many = FeatureVector::from_arrays(many_nodes, many_offsets, many_features);
+  VocabularyTree tree;  // k=20, L=2: 421 nodes
+  tree.code_size = 32;
+  tree.branching = 20;
+  tree.levels = 2;
+  tree.parent.push_back(0);
+  for (NodeId n = 0; n < 20; ++n) tree.parent.push_back(0);
+  for (NodeId n = 0; n < 400; ++n) tree.parent.push_back(1 + n / 20);
+  tree.descriptors.resize(tree.parent.size() * 32);
+  for (std::size_t i = 0; i < tree.descriptors.size(); ++i)
+    tree.descriptors[i] = static_cast<std::uint8_t>(i * 37 + i / 32);
+  tree.weights.assign(tree.parent.size(), 1.0f);
+  Database wide_database(Vocabulary::from_tree(tree));
+  EXPECT_EQ(wide_database.feature_vector(wide_database.add(BowVector({{2, 1.0f}}), many)), many);
+  // A node holding several features, features unordered across nodes.
+  const FeatureVector mixed = FeatureVector::from_arrays({3, 9}, {0, 3, 5}, {1, 3, 4, 0, 2});
+  EXPECT_EQ(database.feature_vector(database.add(BowVector({{2, 1.0f}}), mixed)), mixed);
   const FeatureVector small = FeatureVector::from_arrays({4}, {0, 2}, {1, 2});
   EXPECT_EQ(database.feature_vector(database.add(BowVector({{1, 1.0f}}), small)), small);
   EXPECT_EQ(database.feature_vector(database.add(BowVector({{1, 1.0f}}))), FeatureVector());
