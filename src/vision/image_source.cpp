@@ -13,6 +13,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "binbow/error.h"
+#include "vision/image_header.h"
 #include "vision/natural_order.h"
 
 namespace binbow::vision {
@@ -107,6 +108,17 @@ cv::Mat read_grey_image(const std::string& path) {
   const bool jpeg = bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8;
   if (jpeg && !jpeg_is_complete(bytes)) {
     throw FileError(path, "truncated JPEG (no end-of-image marker after the last scan)");
+  }
+  if (const auto declared = declared_dimensions(bytes)) {
+    if (declared->width == 0 || declared->height == 0) {
+      throw FileError(path, "image header declares 0 pixels (" + std::to_string(declared->width) +
+                                "x" + std::to_string(declared->height) + ")");
+    }
+    if (declared->width * declared->height > max_pixels_for_file_size(bytes.size())) {
+      throw FileError(path, "image header declares " + std::to_string(declared->width) + "x" +
+                                std::to_string(declared->height) + " pixels, more than " +
+                                std::to_string(bytes.size()) + " bytes can hold");
+    }
   }
   cv::Mat image;
   try {

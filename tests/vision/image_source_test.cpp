@@ -13,6 +13,7 @@
 
 #include "binbow/error.h"
 #include "support/test_support.h"
+#include "vision/image_header.h"
 #include "vision/natural_order.h"
 
 namespace binbow::vision {
@@ -135,6 +136,67 @@ TEST(ReadGreyImage, BadFilesGiveFileErrorNamingTheFile) {
   expect_file_error_naming(dir.file("missing.png"),
                            [&] { read_grey_image(dir.file("missing.png")); });
   expect_file_error_naming(dir.path(), [&] { read_grey_image(dir.path()); });
+}
+
+TEST(ImageHeader, DeclaredDimensionsMatchDecodedImages) {
+  for (const char* name :
+       {"opencv-doc-samples/graf1.png", "opencv-doc-samples/box.png",
+        "opencv-doc-samples/leuvenA.jpg", "opencv-doc-samples/Blender_Suzanne1.jpg",
+        "opencv-doc-samples/left01.jpg", "rtabmap-samples/samples/1.jpg"}) {
+    SCOPED_TRACE(name);
+    const std::string path = test::shared_data(name);
+    const auto declared = declared_dimensions(test::read_file(path));
+    ASSERT_TRUE(declared.has_value());
+    const cv::Mat image = read_grey_image(path);
+    EXPECT_EQ(declared->width, static_cast<std::uint64_t>(image.cols));
+    EXPECT_EQ(declared->height, static_cast<std::uint64_t>(image.rows));
+  }
+  EXPECT_FALSE(declared_dimensions({0xFF, 0xD8, 0xFF}).has_value());
+  EXPECT_FALSE(declared_dimensions({'B', 'M', 0, 0}).has_value());
+}
+
+// A small file whose header declares a huge image is refused before decoding.
+TEST(ReadGreyImage, RefusesHeadersDeclaringMorePixelsThanTheFileCanHold) {
+  TempDir dir;
+  std::vector<std::uint8_t> png = test::read_file(test::shared_data("opencv-doc-samples/box.png"));
+  ASSERT_GT(png.size(), 24u);
+  for (int i : {16, 20}) {  // IHDR width and height: 40000
+    png[i] = 0;
+    png[i + 1] = 0;
+    png[i + 2] = 0x9C;
+    png[i + 3] = 0x40;
+  }
+  test::write_file(dir.file("bomb.png"), png);
+  try {
+    read_grey_image(dir.file("bomb.png"));
+    ADD_FAILURE() << "decoded a 40000x40000 PNG header";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 40000x40000"), std::string::npos) << e.what();
+  }
+
+  std::vector<std::uint8_t> jpeg =
+      test::read_file(test::shared_data("rtabmap-samples/samples/1.jpg"));
+  const auto declared = declared_dimensions(jpeg);
+  ASSERT_TRUE(declared.has_value());
+  // Find the SOF0 marker and set height and width to 65000.
+  bool patched = false;
+  for (std::size_t i = 2; i + 9 < jpeg.size() && !patched; ++i) {
+    if (jpeg[i] == 0xFF && jpeg[i + 1] == 0xC0) {
+      for (std::size_t at : {i + 5, i + 7}) {
+        jpeg[at] = 0xFD;
+        jpeg[at + 1] = 0xE8;
+      }
+      patched = true;
+    }
+  }
+  ASSERT_TRUE(patched);
+  test::write_file(dir.file("bomb.jpg"), jpeg);
+  try {
+    read_grey_image(dir.file("bomb.jpg"));
+    ADD_FAILURE() << "decoded a 65000x65000 JPEG header";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 65000x65000"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ImageSource, DirectoryInNaturalOrderSkippingOtherFiles) {
