@@ -57,8 +57,9 @@ class ImageSource {
 
 // Reads one image file as 8-bit grey. Throws FileError naming the file when it
 // is missing, a directory, empty (0 bytes), a truncated JPEG (no end-of-image
-// marker after its last scan: libjpeg would silently fill the rest grey), not
-// decodable by OpenCV, or decodes to 0×0 pixels.
+// marker after its last scan: libjpeg would silently fill the rest grey), a
+// PNG/JPEG whose header declares 0 pixels or more than ~1100 per byte of file
+// (a decompression bomb), not decodable by OpenCV, or decodes to 0×0 pixels.
 cv::Mat read_grey_image(const std::string& path);
 
 }  // namespace binbow::vision
