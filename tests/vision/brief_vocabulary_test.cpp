@@ -11,7 +11,10 @@
 // descriptors lie 106.9 bits from their word (the reference implementation:
 // ~106), but uniformly random descriptors lie 107.8 bits away and the same
 // descriptors with reversed bit order 107.0. What it does show is that, with
-// our extractor, it recognises places as the reference does.
+// our extractor, it recognises places as the reference does. It does not
+// single out the DBoW2 demo's staircase (image1-image3 scores 0.044 with 300
+// features, image2-image3 0.067), although the descriptors themselves do:
+// see Matching.SameStaircaseHasFarMoreCloseMatchesThanDifferentPlaces.
 #include <bitset>
 #include <cstdint>
 #include <cstdio>
