@@ -54,7 +54,7 @@ VocabularyTree orbvoc_like_tree() {
 }
 
 struct Files {
-  std::string dir, text, bbw, dbow3, fbow, orbslam_binary;
+  std::string dir, text, bbw, dbow3, fbow, orbslam_binary, yaml;
   std::size_t words = 0, nodes = 0, text_bytes = 0;
   Files() {
     char pattern[] = "/tmp/binbow-bench-formats-XXXXXX";
@@ -64,15 +64,16 @@ struct Files {
     dbow3 = dir + "/ORBvoc.dbow3";
     fbow = dir + "/ORBvoc.fbow";
     orbslam_binary = dir + "/ORBvoc.bin";
+    yaml = dir + "/ORBvoc.yml";
     const Vocabulary vocabulary = Vocabulary::from_tree(orbvoc_like_tree());
     words = vocabulary.word_count();
     nodes = vocabulary.node_count();
-    for (const std::string* path : {&text, &bbw, &dbow3, &fbow, &orbslam_binary})
+    for (const std::string* path : {&text, &bbw, &dbow3, &fbow, &orbslam_binary, &yaml})
       save_vocabulary(vocabulary, *path);
     text_bytes = detail::MappedFile(text).size();
   }
   ~Files() {
-    for (const std::string* path : {&text, &bbw, &dbow3, &fbow, &orbslam_binary})
+    for (const std::string* path : {&text, &bbw, &dbow3, &fbow, &orbslam_binary, &yaml})
       std::remove(path->c_str());
     ::rmdir(dir.c_str());
   }
@@ -169,6 +170,11 @@ BENCHMARK_CAPTURE(BM_LoadOther, fbow, &Files::fbow)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK_CAPTURE(BM_LoadOther, dbow2_yaml, &Files::yaml)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_LoadDbow2YamlBriefLite)
     ->Unit(benchmark::kMillisecond)

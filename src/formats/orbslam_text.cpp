@@ -231,33 +231,42 @@ ParsedVocabulary parse_orbslam_text(const std::uint8_t* data, std::size_t size,
 std::vector<std::uint8_t> format_orbslam_text(const VocabularyTree& tree) {
   const ChildLists children = child_lists(tree);
   const std::size_t nodes = tree.node_count();
-  std::vector<std::uint8_t> out;
-  out.reserve(32 + nodes * (tree.code_size * 4 + 24));
-  append_number(out, tree.branching);
-  out.push_back(' ');
-  append_number(out, tree.levels);
+  const std::size_t code_size = tree.code_size;
+  // Lines are written through a raw pointer into a buffer sized for the
+  // longest possible line: this writer runs at memory speed.
+  const std::size_t max_line = 10 + 3 + code_size * 4 + 1 + 20 + 1;
+  std::vector<std::uint8_t> out(64 + nodes * max_line);
+  char* p = reinterpret_cast<char*>(out.data());
+  char* const limit = p + out.size();
+  const auto put_number = [&](auto value) { p = std::to_chars(p, limit, value).ptr; };
+  put_number(tree.branching);
+  *p++ = ' ';
+  put_number(tree.levels);
   // ORB-SLAM writes two spaces before the scoring type; kept for identical files.
-  append_text(out, "  ", 2);
-  append_number(out, static_cast<unsigned>(tree.scoring));
-  out.push_back(' ');
-  append_number(out, static_cast<unsigned>(tree.weighting));
-  out.push_back('\n');
+  *p++ = ' ';
+  *p++ = ' ';
+  put_number(static_cast<unsigned>(tree.scoring));
+  *p++ = ' ';
+  put_number(static_cast<unsigned>(tree.weighting));
+  *p++ = '\n';
   for (std::size_t node = 1; node < nodes; ++node) {
     const bool leaf = children.first[node] == children.first[node + 1];
-    append_number(out, tree.parent[node]);
-    append_text(out, leaf ? " 1 " : " 0 ", 3);
-    const std::uint8_t* descriptor = tree.descriptors.data() + node * tree.code_size;
-    for (std::size_t i = 0; i < tree.code_size; ++i) {
-      append_number(out, static_cast<unsigned>(descriptor[i]));
-      out.push_back(' ');
+    put_number(tree.parent[node]);
+    std::memcpy(p, leaf ? " 1 " : " 0 ", 3);
+    p += 3;
+    const std::uint8_t* descriptor = tree.descriptors.data() + node * code_size;
+    for (std::size_t i = 0; i < code_size; ++i) {
+      put_number(static_cast<unsigned>(descriptor[i]));
+      *p++ = ' ';
     }
-    out.push_back(' ');  // ORB-SLAM's descriptor string ends with a space, then " " weight
+    *p++ = ' ';  // ORB-SLAM's descriptor string ends with a space, then " " weight
     if (leaf)
-      append_float(out, tree.weights[node]);
+      put_number(tree.weights[node]);
     else
-      out.push_back('0');
-    out.push_back('\n');
+      *p++ = '0';
+    *p++ = '\n';
   }
+  out.resize(static_cast<std::size_t>(p - reinterpret_cast<char*>(out.data())));
   return out;
 }
 
