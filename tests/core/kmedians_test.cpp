@@ -103,10 +103,10 @@ TEST(KMedians, UniformRandomRowsAlsoConverge) {
 TEST(KMedians, ResultDoesNotDependOnThreads) {
   std::mt19937_64 rng(3);
   // Large enough to be split into chunks when threads > 1.
-  const DescriptorMatrix rows = test::clustered_descriptors(40000, 32, 50, 0.15, rng);
-  const Clustering one = run(rows, 10, 11, 20, 1);
-  for (const unsigned threads : {2u, 3u}) {
-    const Clustering many = run(rows, 10, 11, 20, threads);
+  const DescriptorMatrix rows = test::clustered_descriptors(34000, 32, 50, 0.15, rng);
+  const Clustering one = run(rows, 10, 11, 10, 1);
+  for (const unsigned threads : {2u}) {
+    const Clustering many = run(rows, 10, 11, 10, threads);
     EXPECT_EQ(one.count, many.count);
     EXPECT_EQ(one.centres, many.centres) << threads << " threads";
     EXPECT_EQ(one.assignment, many.assignment) << threads << " threads";
