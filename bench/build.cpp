@@ -134,6 +134,7 @@ BENCHMARK(BM_BuildVocabulary)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->Repetitions(5)
+    ->MeasureProcessCPUTime()
     ->UseRealTime();
 
 }  // namespace
