@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <opencv2/videoio/registry.hpp>
 
 #include "binbow/error.h"
 #include "vision/image_header.h"
@@ -86,6 +87,23 @@ cv::Mat to_grey(const cv::Mat& image) {
   cv::Mat grey;
   cv::cvtColor(image, grey, image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
   return grey;
+}
+
+// The video-file backends of this OpenCV, in order of preference. CAP_ANY
+// would also try camera backends (gPhoto2 probes USB devices and leaks) and
+// CAP_IMAGES, which reads a file name as a printf pattern.
+const std::vector<int>& file_backends() {
+  static const std::vector<int> backends = [] {
+    std::vector<int> available;
+    for (const int backend : {cv::CAP_FFMPEG, cv::CAP_GSTREAMER, cv::CAP_OPENCV_MJPEG}) {
+      if (cv::videoio_registry::hasBackend(static_cast<cv::VideoCaptureAPIs>(backend))) {
+        available.push_back(backend);
+      }
+    }
+    if (available.empty()) available.push_back(cv::CAP_ANY);
+    return available;
+  }();
+  return backends;
 }
 
 cv::Mat limit_width(const cv::Mat& image, int max_width) {
@@ -236,7 +254,9 @@ struct ImageSource::Impl {
     next_sample = 0;
     bool opened = false;
     try {
-      opened = capture.open(path);
+      for (const int backend : file_backends()) {
+        if ((opened = capture.open(path, backend))) break;
+      }
     } catch (const cv::Exception& e) {
       throw FileError(path, "cannot open video: " + e.msg);
     }
