@@ -16,7 +16,7 @@
 #include "binbow/formats.h"
 #include "binbow/vocabulary.h"
 #include "formats/codecs.h"
-#include "formats/gzip.h"
+#include "formats/container.h"
 
 namespace binbow::fuzz {
 
@@ -61,13 +61,12 @@ inline void load_tree_format(VocabularyFormat format, const std::uint8_t* data, 
   check_accepted(detail::vocabulary_from_parsed(parsed, "fuzz"), format, parsed.descriptor_text);
 }
 
+// DBoW2 YAML, also through gzip and tar.gz (the container code is fuzzed here).
 inline void load_dbow2_yaml(const std::uint8_t* data, std::size_t size) {
-  if (!detail::is_gzip(data, size))
-    return load_tree_format(VocabularyFormat::kDbow2Yaml, data, size);
-  // Capped lower than the library's limit to keep fuzzing iterations fast.
-  const std::vector<std::uint8_t> text = detail::gunzip(
-      data, size, "fuzz", std::min<std::size_t>(detail::gunzip_limit(size), 1 << 24));
-  load_tree_format(VocabularyFormat::kDbow2Yaml, text.data(), text.size());
+  std::size_t contained_size = 0;
+  detail::contained_head(data, size, contained_size);
+  const detail::ContainedFile file = detail::open_contained(data, size, "fuzz");
+  load_tree_format(VocabularyFormat::kDbow2Yaml, file.data, file.size);
 }
 
 inline void load_bbw(const std::uint8_t* data, std::size_t size) {

@@ -163,7 +163,8 @@ class DescriptorDecoder {
       std::uint8_t* bytes = out.data() + at;
       for (std::size_t k = 0; k < bits; ++k) {
         const unsigned value = static_cast<unsigned>(text[k]) - '0';
-        if (value > 1) scanner_.fail("a bit-string descriptor holds a character other than 0 and 1");
+        if (value > 1)
+          scanner_.fail("a bit-string descriptor holds a character other than 0 and 1");
         const std::size_t bit = bits - 1 - k;
         bytes[bit / 8] |= static_cast<std::uint8_t>(value << (bit % 8));
       }

@@ -11,6 +11,7 @@
 #include "core/little_endian.h"
 #include "core/vocabulary_block.h"
 #include "formats/codecs.h"
+#include "formats/container.h"
 #include "formats/gzip.h"
 #include "formats/loader.h"
 #include "formats/text_numbers.h"
@@ -45,8 +46,15 @@ bool ends_with(const std::string& text, const char* suffix) {
   return true;
 }
 
-// The format an extension suggests, kAuto for none.
-VocabularyFormat format_from_extension(const std::string& path) {
+std::string without_suffix(const std::string& path, const char* suffix) {
+  return ends_with(path, suffix) ? path.substr(0, path.size() - std::strlen(suffix)) : path;
+}
+
+// The format an extension suggests, kAuto for none. `.gz`, `.tar.gz` and
+// `.tgz` are looked through (ORBvoc.txt.tar.gz is ORB-SLAM text).
+VocabularyFormat format_from_extension(const std::string& path);
+
+VocabularyFormat format_from_plain_extension(const std::string& path) {
   if (ends_with(path, ".bbw")) return VocabularyFormat::kBinbow;
   if (ends_with(path, ".txt")) return VocabularyFormat::kOrbSlamText;
   if (ends_with(path, ".bin")) return VocabularyFormat::kOrbSlamBinary;
@@ -55,6 +63,15 @@ VocabularyFormat format_from_extension(const std::string& path) {
     return VocabularyFormat::kDbow2Yaml;
   if (ends_with(path, ".dbow3")) return VocabularyFormat::kDbow3;
   if (ends_with(path, ".fbow")) return VocabularyFormat::kFbow;
+  return VocabularyFormat::kAuto;
+}
+
+VocabularyFormat format_from_extension(const std::string& path) {
+  const VocabularyFormat format = format_from_plain_extension(path);
+  if (format != VocabularyFormat::kAuto) return format;
+  if (ends_with(path, ".tgz")) return format_from_plain_extension(without_suffix(path, ".tgz"));
+  if (ends_with(path, ".gz"))
+    return format_from_plain_extension(without_suffix(without_suffix(path, ".gz"), ".tar"));
   return VocabularyFormat::kAuto;
 }
 
@@ -77,7 +94,7 @@ bool looks_like_yaml(const std::uint8_t* data, std::size_t size) {
 }
 
 // ORB-SLAM binary has no magic: its 24-byte header must predict the file size.
-bool looks_like_orbslam_binary(const std::uint8_t* data, std::size_t size) {
+bool looks_like_orbslam_binary(const std::uint8_t* data, std::size_t size, std::size_t file_size) {
   if (size < 24) return false;
   const std::uint64_t nodes = detail::load_le<std::uint32_t>(data);
   const std::uint64_t node_size = detail::load_le<std::uint32_t>(data + 4);
@@ -85,10 +102,12 @@ bool looks_like_orbslam_binary(const std::uint8_t* data, std::size_t size) {
   const std::uint32_t levels = detail::load_le<std::uint32_t>(data + 12);
   return nodes >= 1 && node_size >= 10 && node_size <= 9 + detail::kMaxCodeSize && branching >= 1 &&
          branching <= detail::kMaxBranching && levels >= 1 && levels <= detail::kMaxLevels &&
-         24 + (nodes - 1) * node_size == size;
+         24 + (nodes - 1) * node_size == file_size;
 }
 
-VocabularyFormat format_from_content(const std::uint8_t* data, std::size_t size) {
+// `data` holds the first `size` bytes of a file of `file_size` bytes (0: unknown).
+VocabularyFormat format_from_content(const std::uint8_t* data, std::size_t size,
+                                     std::size_t file_size) {
   if (size >= 8 && std::memcmp(data, detail::bbw::kMagic, 8) == 0) return VocabularyFormat::kBinbow;
   if (detail::is_gzip(data, size)) return VocabularyFormat::kDbow2Yaml;
   if (size >= 8 && detail::load_le<std::uint64_t>(data) == kDbow3Signature)
@@ -97,7 +116,7 @@ VocabularyFormat format_from_content(const std::uint8_t* data, std::size_t size)
     return VocabularyFormat::kFbow;
   if (looks_like_yaml(data, size)) return VocabularyFormat::kDbow2Yaml;
   if (looks_like_orbslam_text(data, size)) return VocabularyFormat::kOrbSlamText;
-  if (looks_like_orbslam_binary(data, size)) return VocabularyFormat::kOrbSlamBinary;
+  if (looks_like_orbslam_binary(data, size, file_size)) return VocabularyFormat::kOrbSlamBinary;
   return VocabularyFormat::kAuto;
 }
 
@@ -130,7 +149,10 @@ VocabularyFormat parse_vocabulary_format(const std::string& name) {
 
 VocabularyFormat detect_vocabulary_format(const std::string& path) {
   const detail::MappedFile file(path);
-  const VocabularyFormat by_content = format_from_content(file.data(), file.size());
+  std::size_t contained_size = 0;
+  const std::vector<std::uint8_t> head =
+      detail::contained_head(file.data(), file.size(), contained_size);
+  const VocabularyFormat by_content = format_from_content(head.data(), head.size(), contained_size);
   if (by_content != VocabularyFormat::kAuto) return by_content;
   const VocabularyFormat by_name = format_from_extension(path);
   if (by_name != VocabularyFormat::kAuto) return by_name;
@@ -145,7 +167,8 @@ VocabularyFormat format_for_output(const std::string& path) {
   if (format == VocabularyFormat::kAuto)
     throw InvalidArgument("cannot tell the vocabulary format from the name '" + path +
                           "': use .bbw, .txt (ORB-SLAM text), .bin (ORB-SLAM binary), .yml, "
-                          ".yml.gz or .voc.gz (DBoW2 YAML), .dbow3 or .fbow, or --to");
+                          ".yml.gz or .voc.gz (DBoW2 YAML), .dbow3 or .fbow (any of them may "
+                          "end in .gz), or --to");
   return format;
 }
 
@@ -192,25 +215,30 @@ ParsedVocabulary parse_vocabulary_bytes(VocabularyFormat format, const std::uint
 
 LoadedVocabulary load_vocabulary_with_details(const std::string& path, VocabularyFormat format) {
   LoadedVocabulary loaded;
-  if (format == VocabularyFormat::kAuto) format = detect_vocabulary_format(path);
+  const MappedFile file(path);
+  if (!is_gzip(file.data(), file.size())) {
+    if (format == VocabularyFormat::kAuto) format = detect_vocabulary_format(path);
+    loaded.format = format;
+    if (format == VocabularyFormat::kBinbow) {
+      loaded.vocabulary = Vocabulary::load(path);  // memory-mapped
+      return loaded;
+    }
+  }
+  const ContainedFile contained = open_contained(file.data(), file.size(), path);
+  loaded.compressed = contained.gzip;
+  if (format == VocabularyFormat::kAuto) {
+    format = format_from_content(contained.data, contained.size, contained.size);
+    if (format == VocabularyFormat::kAuto) format = format_from_extension(path);
+    if (format == VocabularyFormat::kAuto)
+      throw FileError(path, "unknown vocabulary format inside the compressed file (use --from)");
+  }
   loaded.format = format;
   if (format == VocabularyFormat::kBinbow) {
-    loaded.vocabulary = Vocabulary::load(path);
+    loaded.vocabulary = Vocabulary::deserialize(contained.data, contained.size, path);
     return loaded;
   }
-  const MappedFile file(path);
-  ParsedVocabulary parsed;
-  if (is_gzip(file.data(), file.size())) {
-    if (format != VocabularyFormat::kDbow2Yaml)
-      throw FileError(
-          path, std::string("gzip-compressed; only DBoW2 YAML may be, not ") + to_string(format));
-    loaded.compressed = true;
-    const std::vector<std::uint8_t> text =
-        gunzip(file.data(), file.size(), path, gunzip_limit(file.size()));
-    parsed = parse_dbow2_yaml(text.data(), text.size(), path);
-  } else {
-    parsed = parse_vocabulary_bytes(format, file.data(), file.size(), path);
-  }
+  const ParsedVocabulary parsed =
+      parse_vocabulary_bytes(format, contained.data, contained.size, path);
   loaded.descriptor_text = parsed.descriptor_text;
   loaded.word_ids_match = parsed.word_ids_match;
   loaded.vocabulary = vocabulary_from_parsed(parsed, path);
@@ -221,16 +249,19 @@ void save_vocabulary_as(const Vocabulary& vocabulary, const std::string& path,
                         VocabularyFormat format, DescriptorText descriptor_text) {
   if (vocabulary.empty()) throw InvalidArgument("cannot save an empty vocabulary to " + path);
   if (format == VocabularyFormat::kAuto) format = format_for_output(path);
-  if (format == VocabularyFormat::kBinbow) {
+  const bool compress = ends_with(path, ".gz");
+  if (format == VocabularyFormat::kBinbow && !compress) {
     vocabulary.save(path);
     return;
   }
   const VocabularyTree tree = vocabulary.to_tree();
   std::vector<std::uint8_t> bytes;
   switch (format) {
+    case VocabularyFormat::kBinbow:
+      bytes = vocabulary.serialize();
+      break;
     case VocabularyFormat::kDbow2Yaml:
       bytes = format_dbow2_yaml(tree, descriptor_text);
-      if (ends_with(path, ".gz")) bytes = gzip(bytes);
       break;
     case VocabularyFormat::kOrbSlamText:
       bytes = format_orbslam_text(tree);
@@ -247,6 +278,7 @@ void save_vocabulary_as(const Vocabulary& vocabulary, const std::string& path,
     default:
       throw InvalidArgument(std::string("cannot write format ") + to_string(format));
   }
+  if (compress) bytes = gzip(bytes);
   write_file_atomically(path, bytes.data(), bytes.size());
 }
 

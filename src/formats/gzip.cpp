@@ -25,9 +25,10 @@ std::vector<std::uint8_t> gunzip(const std::uint8_t* data, std::size_t size,
   // The trailer's ISIZE (size mod 4 GiB of the last member) is a good first
   // guess; the buffer still grows, up to `limit`, if it is wrong.
   std::size_t guess = size * 4;
-  if (size >= 18) guess = std::max<std::size_t>(guess, data[size - 4] | data[size - 3] << 8 |
-                                                           data[size - 2] << 16 |
-                                                           std::size_t{data[size - 1]} << 24);
+  if (size >= 18)
+    guess =
+        std::max<std::size_t>(guess, data[size - 4] | data[size - 3] << 8 | data[size - 2] << 16 |
+                                         std::size_t{data[size - 1]} << 24);
   out.resize(std::min(limit, std::max<std::size_t>(guess + 1, 1 << 16)));
   std::size_t produced = 0;
   std::size_t consumed = 0;
@@ -67,6 +68,22 @@ std::vector<std::uint8_t> gunzip(const std::uint8_t* data, std::size_t size,
   }
   inflateEnd(&stream);
   out.resize(produced);
+  return out;
+}
+
+std::vector<std::uint8_t> gunzip_head(const std::uint8_t* data, std::size_t size,
+                                      std::size_t want) {
+  std::vector<std::uint8_t> out(want);
+  z_stream stream{};
+  if (inflateInit2(&stream, 15 + 16) != Z_OK) return {};
+  stream.next_in = const_cast<Bytef*>(data);
+  stream.avail_in = static_cast<uInt>(std::min<std::size_t>(size, UINT_MAX));
+  stream.next_out = out.data();
+  stream.avail_out = static_cast<uInt>(want);
+  int status = Z_OK;
+  while (status == Z_OK && stream.avail_out > 0) status = inflate(&stream, Z_NO_FLUSH);
+  out.resize(want - stream.avail_out);
+  inflateEnd(&stream);
   return out;
 }
 

@@ -22,6 +22,10 @@ std::size_t gunzip_limit(std::size_t compressed_size);
 std::vector<std::uint8_t> gunzip(const std::uint8_t* data, std::size_t size,
                                  const std::string& name, std::size_t limit);
 
+// At most the first `want` decompressed bytes (fewer if the data ends or is
+// corrupt): enough to recognise what a gzip file holds without inflating it.
+std::vector<std::uint8_t> gunzip_head(const std::uint8_t* data, std::size_t size, std::size_t want);
+
 std::vector<std::uint8_t> gzip(const std::vector<std::uint8_t>& data);
 
 }  // namespace binbow::detail

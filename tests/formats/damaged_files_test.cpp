@@ -258,6 +258,23 @@ TEST_F(DamagedFiles, GzipBombsAreCapped) {
   EXPECT_NE(rejection(dir_, "garbage.yml.gz", garbage).find("gzip"), std::string::npos);
 }
 
+TEST_F(DamagedFiles, MalformedTarArchivesAreRejected) {
+  std::vector<std::uint8_t> tar(2048, 0);
+  std::memcpy(tar.data(), "ORBvoc.txt", 10);
+  std::memcpy(tar.data() + 257, "ustar", 5);
+  tar[156] = '0';
+  std::memcpy(tar.data() + 124, "9z9", 3);
+  EXPECT_NE(rejection(dir_, "badsize.txt.tar.gz", detail::gzip(tar)).find("bad size field"),
+            std::string::npos);
+  std::memcpy(tar.data() + 124, "77777777777", 11);
+  EXPECT_NE(rejection(dir_, "huge.txt.tar.gz", detail::gzip(tar)).find("truncated tar"),
+            std::string::npos);
+  tar[156] = '5';  // only a directory
+  std::memcpy(tar.data() + 124, "00000000000", 11);
+  EXPECT_NE(rejection(dir_, "dir.txt.tar.gz", detail::gzip(tar)).find("no regular file"),
+            std::string::npos);
+}
+
 TEST_F(DamagedFiles, ParsersRejectEveryPrefixOfSmallFiles) {
   // Exhaustive on a tiny vocabulary: no prefix may crash a parser.
   VocabularyTree tree;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 #include <string>
 
@@ -223,6 +224,47 @@ TEST(Formats, NamesExtensionsAndDetection) {
   EXPECT_THROW(load_vocabulary(dir.file("v.txt"), VocabularyFormat::kDbow3), FileError);
   EXPECT_EQ(load_vocabulary(dir.file("v.txt"), VocabularyFormat::kOrbSlamText).checksum(),
             vocabulary.checksum());
+}
+
+TEST(Formats, EveryFormatMayBeGzippedOrInATarGz) {
+  TempDir dir;
+  const Vocabulary vocabulary = random_vocabulary(4, 3, 32, 8);
+  for (const Case& c : kCases) {
+    SCOPED_TRACE(c.file);
+    const std::string name = c.file;
+    const bool already_gzip = name.size() > 3 && name.compare(name.size() - 3, 3, ".gz") == 0;
+    const std::string gz = dir.file(already_gzip ? name : name + ".gz");
+    save_vocabulary(vocabulary, gz);
+    EXPECT_EQ(detect_vocabulary_format(gz), c.format);
+    const detail::LoadedVocabulary loaded =
+        detail::load_vocabulary_with_details(gz, VocabularyFormat::kAuto);
+    EXPECT_TRUE(loaded.compressed);
+    EXPECT_EQ(loaded.format, c.format);
+    if (c.format != VocabularyFormat::kFbow) {
+      EXPECT_EQ(loaded.vocabulary.checksum(), vocabulary.checksum());
+    }
+  }
+  // ORB-SLAM ships Vocabulary/ORBvoc.txt.tar.gz: a directory entry, then the file.
+  std::filesystem::create_directory(dir.file("Vocabulary"));
+  save_vocabulary(vocabulary, dir.file("Vocabulary/ORBvoc.txt"));
+  std::string output;
+  ASSERT_EQ(test::run_command("tar czf '" + dir.file("ORBvoc.txt.tar.gz") + "' -C '" + dir.path() +
+                                  "' Vocabulary",
+                              &output),
+            0)
+      << output;
+  EXPECT_EQ(detect_vocabulary_format(dir.file("ORBvoc.txt.tar.gz")),
+            VocabularyFormat::kOrbSlamText);
+  EXPECT_EQ(load_vocabulary(dir.file("ORBvoc.txt.tar.gz")).checksum(), vocabulary.checksum());
+  // A tar.gz of an ORB-SLAM binary file: recognised by its size in the tar header.
+  save_vocabulary(vocabulary, dir.file("Vocabulary/ORBvoc.bin"));
+  std::filesystem::remove(dir.file("Vocabulary/ORBvoc.txt"));
+  ASSERT_EQ(
+      test::run_command("tar czf '" + dir.file("voc.data") + "' -C '" + dir.path() + "' Vocabulary",
+                        &output),
+      0);
+  EXPECT_EQ(detect_vocabulary_format(dir.file("voc.data")), VocabularyFormat::kOrbSlamBinary);
+  EXPECT_EQ(load_vocabulary(dir.file("voc.data")).checksum(), vocabulary.checksum());
 }
 
 TEST(Formats, SavingIsAtomicAndRejectsEmptyVocabularies) {
