@@ -22,11 +22,14 @@ const char* to_string(VocabularyFormat format);
 // Accepts the names above; throws InvalidArgument listing them.
 VocabularyFormat parse_vocabulary_format(const std::string& name);
 // The format of an existing file, from its first bytes, then its extension.
-// Throws FileError if the file cannot be read or nothing matches.
+// Every format may be gzip-compressed or the first file of a .tar.gz; the
+// format is then the one of the file inside. Throws FileError if the file
+// cannot be read or nothing matches.
 VocabularyFormat detect_vocabulary_format(const std::string& path);
 // The format an output file name asks for: .bbw, .txt, .bin (ORB-SLAM binary),
-// .yml/.yaml/.yml.gz/.voc.gz (DBoW2 YAML, gzip when the name ends in .gz),
-// .dbow3, .fbow. Throws InvalidArgument for other extensions.
+// .yml/.yaml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3, .fbow; any of them may be
+// followed by .gz (written gzip-compressed). Throws InvalidArgument for other
+// extensions.
 VocabularyFormat format_for_output(const std::string& path);
 
 // Reads a vocabulary in any supported format. Throws FileError naming the file
