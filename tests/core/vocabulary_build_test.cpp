@@ -200,6 +200,34 @@ TEST(VocabularyBuild, IdfWeightsMatchAHandComputation) {
   }
 }
 
+TEST(VocabularyBuild, IdfWeightsMatchDocumentFrequenciesOfTheFinishedTree) {
+  std::mt19937_64 rng(6);
+  const DescriptorMatrix rows = test::clustered_descriptors(3000, 32, 30, 0.2, rng);
+  const std::vector<DescriptorView> images = split(rows, 37);
+  const Vocabulary vocabulary = Vocabulary::build(images, options_for(4, 4));
+  // N_i by quantising every training image with the finished tree.
+  std::vector<std::size_t> image_count(vocabulary.word_count(), 0);
+  for (const DescriptorView& image : images) {
+    std::vector<WordId> words(image.rows);
+    vocabulary.quantize(image, words.data());
+    const std::set<WordId> present(words.begin(), words.end());
+    for (const WordId word : present) ++image_count[word];
+  }
+  std::size_t unused = 0;
+  for (WordId word = 0; word < vocabulary.word_count(); ++word) {
+    if (image_count[word] == 0) {
+      // A training row can descend to another leaf than the cluster it built.
+      ++unused;
+      EXPECT_EQ(vocabulary.word_weight(word), 0.0f) << "word " << word;
+    } else {
+      EXPECT_FLOAT_EQ(vocabulary.word_weight(word),
+                      static_cast<float>(std::log(37.0 / image_count[word])))
+          << "word " << word;
+    }
+  }
+  EXPECT_LT(unused, vocabulary.word_count() / 10);
+}
+
 TEST(VocabularyBuild, TfAndBinaryWeightsAreOne) {
   const TinyCase tiny;
   for (const Weighting weighting : {Weighting::kTf, Weighting::kBinary}) {
