@@ -31,6 +31,7 @@ void add_info_command(CLI::App& app) {
   cmd->add_option("FILE", *path, "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database")
       ->required();
   cmd->callback([path] {
+    if (print_database_info(*path)) return;
     const VocabularyFormat format = detect_vocabulary_format(*path);
     const Vocabulary vocabulary = load_vocabulary(*path, format);
     std::printf("format: %s\n", to_string(format));

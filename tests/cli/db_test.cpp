@@ -1,0 +1,124 @@
+// `binbow db build`, `binbow db query` and `binbow info` on a database, on
+// the real rtabmap-samples corridor; and database queries on real ORB
+// features against brute force for every scoring.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/formats.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+using test::cli_path;
+using test::run_command;
+using test::shared_data;
+using test::TempDir;
+
+int binbow_cli(const std::string& arguments, std::string* output) {
+  return run_command("'" + cli_path() + "' " + arguments, output);
+}
+
+std::string samples_folder() {
+  const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
+  return first.substr(0, first.rfind('/'));
+}
+
+TEST(CliDb, BuildQueryInfo) {
+  TempDir dir;
+  const std::string vocabulary = shared_data("kimera-small-voc/small_voc.yml.gz");
+  const std::string folder = samples_folder();
+  const std::string database = dir.file("corridor.bbdb");
+  std::string output;
+  ASSERT_EQ(
+      binbow_cli("db build --vocab '" + vocabulary + "' -o '" + database + "' '" + folder + "'",
+                 &output),
+      0)
+      << output;
+  EXPECT_NE(output.find("84 entries"), std::string::npos) << output;
+
+  ASSERT_EQ(binbow_cli("info '" + database + "'", &output), 0) << output;
+  EXPECT_NE(output.find("kind: database\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("entries: 84\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("vocabulary: k=9 L=3"), std::string::npos) << output;
+
+  // Frame 54 revisits frame 14 (ground truth): itself first, its old view next.
+  ASSERT_EQ(binbow_cli("db query '" + database + "' '" + folder + "/54.jpg' --top 3", &output), 0)
+      << output;
+  EXPECT_NE(output.find("rank\tentry\tfile\tscore\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("1\t53\t" + folder + "/54.jpg\t1.000000\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("2\t13\t" + folder + "/14.jpg\t"), std::string::npos) << output;
+  EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 4) << output;
+}
+
+TEST(CliDb, ClearErrors) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  std::string output;
+  EXPECT_EQ(
+      binbow_cli("db query '" + dir.file("missing.bbdb") + "' '" + folder + "/1.jpg'", &output), 1);
+  EXPECT_NE(output.find("binbow: error: " + dir.file("missing.bbdb") + ": cannot open"),
+            std::string::npos)
+      << output;
+
+  test::write_file(dir.file("bad.bbdb"), std::vector<std::uint8_t>(200, 'B'));
+  EXPECT_EQ(binbow_cli("db query '" + dir.file("bad.bbdb") + "' '" + folder + "/1.jpg'", &output),
+            1);
+  EXPECT_NE(output.find("not a binbow database"), std::string::npos) << output;
+
+  const std::string vocabulary = shared_data("kimera-small-voc/small_voc.yml.gz");
+  EXPECT_NE(binbow_cli("db build --vocab '" + vocabulary + "' -o '" + dir.file("x.bbdb") + "' '" +
+                           dir.path() + "'",
+                       &output),
+            0);
+  EXPECT_NE(output.find("error"), std::string::npos) << output;
+}
+
+// Real ORB features of the corridor, a real DBoW2 ORB vocabulary, every
+// scoring: the database answers exactly what brute force answers.
+TEST(DatabaseRealData, QueriesEqualBruteForce) {
+  const Vocabulary base = load_vocabulary(shared_data("kimera-small-voc/small_voc.yml.gz"));
+  vision::ImageSource source({samples_folder()});
+  const auto extractor = vision::make_extractor("orb", 500);
+  std::vector<DescriptorMatrix> images;
+  vision::Frame frame;
+  while (source.next(frame)) images.push_back(extractor->extract(frame.image).descriptors);
+  ASSERT_EQ(images.size(), 84u);
+
+  for (Scoring scoring : {Scoring::kL1, Scoring::kL2, Scoring::kChiSquare, Scoring::kKL,
+                          Scoring::kBhattacharyya, Scoring::kDotProduct}) {
+    const Vocabulary vocabulary = base.with_scoring(scoring);
+    Database database(vocabulary);
+    std::vector<BowVector> bows(images.size());
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      vocabulary.transform(images[i].view(), bows[i]);
+      database.add(bows[i]);
+    }
+    database.remove(40);
+    for (std::size_t q = 0; q < images.size(); q += 3) {
+      std::vector<QueryResult> expected;
+      for (EntryId e = 0; e < bows.size(); ++e) {
+        if (e == 40) continue;
+        std::uint32_t shared = 0;
+        for (const BowEntry& word : bows[q])
+          shared += std::any_of(bows[e].begin(), bows[e].end(),
+                                [&](const BowEntry& x) { return x.word == word.word; });
+        if (shared > 0) expected.push_back({e, vocabulary.score(bows[q], bows[e]), shared});
+      }
+      std::stable_sort(expected.begin(), expected.end(), [&](const auto& a, const auto& b) {
+        return scoring == Scoring::kKL ? a.score < b.score : a.score > b.score;
+      });
+      expected.resize(std::min<std::size_t>(expected.size(), 15));
+      EXPECT_EQ(database.query(bows[q], 15), expected) << to_string(scoring) << " query " << q;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace binbow
