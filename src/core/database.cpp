@@ -19,53 +19,58 @@ namespace binbow {
 
 namespace detail {
 
-PostingList::PostingList(PostingList&& other) noexcept
-    : ids_(std::exchange(other.ids_, nullptr)),
-      size_(std::exchange(other.size_, 0)),
-      capacity_(std::exchange(other.capacity_, 0)) {}
-
-PostingList& PostingList::operator=(PostingList&& other) noexcept {
-  if (this != &other) {
-    std::free(ids_);
-    ids_ = std::exchange(other.ids_, nullptr);
-    size_ = std::exchange(other.size_, 0);
-    capacity_ = std::exchange(other.capacity_, 0);
+// Chunks are arrays of unsigned char: their storage implicitly holds the
+// EntryId and float arrays the lists write into it.
+unsigned char* PostingArena::allocate(std::uint32_t capacity) {
+  const auto size_class = static_cast<unsigned>(__builtin_ctz(capacity));
+  if (unsigned char* block = free_lists_[size_class]) {
+    std::memcpy(&free_lists_[size_class], block, sizeof(unsigned char*));
+    return block;
   }
-  return *this;
+  if (bump_left_ < capacity) {
+    const std::size_t postings = std::max<std::size_t>(kChunkPostings, capacity);
+    chunks_.emplace_back(new unsigned char[postings * 8]);  // left uninitialised
+    chunk_bytes_ += postings * 8;
+    bump_ = chunks_.back().get();
+    bump_left_ = postings;
+  }
+  unsigned char* block = bump_;
+  bump_ += std::size_t{capacity} * 8;
+  bump_left_ -= capacity;
+  return block;
 }
 
-PostingList::~PostingList() {
-  std::free(ids_);
+void PostingArena::release(unsigned char* block, std::uint32_t capacity) noexcept {
+  const auto size_class = static_cast<unsigned>(__builtin_ctz(capacity));
+  std::memcpy(block, &free_lists_[size_class], sizeof(unsigned char*));
+  free_lists_[size_class] = block;
 }
 
-void PostingList::reallocate(std::uint32_t capacity) {
-  if (capacity == 0) {
-    std::free(ids_);
-    ids_ = nullptr;
-    capacity_ = 0;
-    return;
-  }
-  // malloc'd storage: the ids and the floats after them are implicitly created.
-  auto* block = static_cast<EntryId*>(std::malloc(std::size_t{capacity} * 8));
-  if (block == nullptr) throw std::bad_alloc();
-  if (size_ > 0) {
-    std::memcpy(block, ids_, std::size_t{size_} * sizeof(EntryId));
-    std::memcpy(block + capacity, weights(), std::size_t{size_} * sizeof(float));
-  }
-  std::free(ids_);
-  ids_ = block;
-  capacity_ = capacity;
+void PostingArena::clear() noexcept {
+  chunks_.clear();
+  std::fill(std::begin(free_lists_), std::end(free_lists_), nullptr);
+  bump_ = nullptr;
+  bump_left_ = 0;
+  chunk_bytes_ = 0;
 }
 
-void PostingList::push_back(EntryId entry, float weight) {
-  if (size_ == capacity_) reallocate(capacity_ < 4 ? capacity_ + 2 : capacity_ + capacity_ / 2);
-  ids_[size_] = entry;
-  mutable_weights()[size_] = weight;
+void PostingList::push_back(EntryId entry, float weight, PostingArena& arena) {
+  if (size_ == capacity_) {
+    const std::uint32_t capacity = capacity_ == 0 ? 2 : capacity_ * 2;
+    unsigned char* block = arena.allocate(capacity);
+    auto* new_ids = reinterpret_cast<EntryId*>(block);
+    if (size_ > 0) {
+      std::memcpy(new_ids, ids(), std::size_t{size_} * sizeof(EntryId));
+      std::memcpy(new_ids + capacity, weights(), std::size_t{size_} * sizeof(float));
+      arena.release(block_, capacity_);
+    }
+    block_ = block;
+    capacity_ = capacity;
+  }
+  auto* id_array = reinterpret_cast<EntryId*>(block_);
+  id_array[size_] = entry;
+  reinterpret_cast<float*>(id_array + capacity_)[size_] = weight;
   ++size_;
-}
-
-std::size_t PostingList::memory_usage() const noexcept {
-  return std::size_t{capacity_} * 8;
 }
 
 PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
@@ -335,7 +340,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
         lists.emplace_back();  // no reallocation: reserved above
         slot = static_cast<std::uint32_t>(lists.size());
       }
-      lists[slot - 1].push_back(entry, words[i].value);
+      lists[slot - 1].push_back(entry, words[i].value, arena);
     }
   } catch (...) {
     for (const BowEntry& word : bow) {
@@ -419,6 +424,7 @@ void Database::Impl::merge() {
   main_weights.swap(weights);
   std::fill(slot_of_word.begin(), slot_of_word.end(), 0);
   std::vector<detail::PostingList>().swap(lists);
+  arena.clear();
   tail_postings = 0;
   postings = live;
   dead_postings = 0;
@@ -574,6 +580,7 @@ void Database::clear() {
   std::vector<float>().swap(impl_->main_weights);
   std::fill(impl_->slot_of_word.begin(), impl_->slot_of_word.end(), 0);
   std::vector<detail::PostingList>().swap(impl_->lists);
+  impl_->arena.clear();
   impl_->tail_postings = 0;
   std::vector<std::uint8_t>().swap(impl_->alive);
   std::vector<std::uint32_t>().swap(impl_->word_counts);
@@ -595,7 +602,7 @@ std::size_t Database::memory_usage() const {
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
                       impl.labels.capacity() * sizeof(std::string);
-  for (const auto& list : impl.lists) bytes += list.memory_usage();
+  bytes += impl.arena.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();
   for (const auto& label : impl.labels)
     if (label.capacity() > 15) bytes += label.capacity() + 1;  // beyond the small-string buffer

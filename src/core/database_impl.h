@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <shared_mutex>
 #include <string>
 #include <vector>
@@ -15,36 +16,47 @@
 
 namespace binbow::detail {
 
-// The postings of one word: entry ids (strictly increasing) and their weights,
-// as two arrays in one allocation, so a query streams through both. 16 bytes
-// of bookkeeping per word in use; growth by 1.5× keeps slack small.
+// Storage of the tail tier's posting lists: blocks of 2^k postings (8 bytes
+// each) carved from large chunks, with a free list per block size for the
+// blocks that growing lists leave behind. The whole tier is dropped at once
+// when it is merged, so there is no per-list malloc, free or header.
+class PostingArena {
+ public:
+  // A block for `capacity` postings (a power of two ≥ 2).
+  unsigned char* allocate(std::uint32_t capacity);
+  void release(unsigned char* block, std::uint32_t capacity) noexcept;
+  void clear() noexcept;
+  std::size_t memory_usage() const noexcept { return chunk_bytes_; }
+
+ private:
+  static constexpr std::size_t kChunkPostings = std::size_t{1} << 17;  // 1 MiB
+  std::vector<std::unique_ptr<unsigned char[]>> chunks_;
+  unsigned char* free_lists_[32] = {};
+  unsigned char* bump_ = nullptr;
+  std::size_t bump_left_ = 0;  // in postings (8 bytes)
+  std::size_t chunk_bytes_ = 0;
+};
+
+// The tail postings of one word: entry ids (strictly increasing) and their
+// weights, as two arrays in one arena block, so a query streams through both.
 class PostingList {
  public:
-  PostingList() = default;
-  PostingList(const PostingList&) = delete;
-  PostingList& operator=(const PostingList&) = delete;
-  PostingList(PostingList&& other) noexcept;
-  PostingList& operator=(PostingList&& other) noexcept;
-  ~PostingList();
-
   std::uint32_t size() const noexcept { return size_; }
-  const EntryId* ids() const noexcept { return ids_; }
-  const float* weights() const noexcept { return reinterpret_cast<const float*>(ids_ + capacity_); }
+  const EntryId* ids() const noexcept { return reinterpret_cast<const EntryId*>(block_); }
+  const float* weights() const noexcept {
+    return reinterpret_cast<const float*>(ids() + capacity_);
+  }
 
-  void push_back(EntryId entry, float weight);
+  void push_back(EntryId entry, float weight, PostingArena& arena);
   void pop_back() noexcept { --size_; }
   // Hints the cache about where the next push_back writes.
   void prefetch_end() const noexcept {
-    __builtin_prefetch(ids_ + size_);
+    __builtin_prefetch(ids() + size_);
     __builtin_prefetch(weights() + size_);
   }
-  std::size_t memory_usage() const noexcept;
 
  private:
-  void reallocate(std::uint32_t capacity);
-  float* mutable_weights() noexcept { return reinterpret_cast<float*>(ids_ + capacity_); }
-
-  EntryId* ids_ = nullptr;  // capacity_ ids, then capacity_ floats
+  unsigned char* block_ = nullptr;  // capacity_ ids, then capacity_ floats
   std::uint32_t size_ = 0;
   std::uint32_t capacity_ = 0;
 };
@@ -105,6 +117,7 @@ struct Database::Impl {
   // Tail tier: word → slot + 1 (0: no tail postings).
   std::vector<std::uint32_t> slot_of_word;
   std::vector<detail::PostingList> lists;
+  detail::PostingArena arena;
   std::size_t tail_postings = 0;
 
   // Per entry, indexed by entry id (dead entries keep their place).
