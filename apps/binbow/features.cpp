@@ -65,6 +65,10 @@ void draw_features(const cv::Mat& image, const vision::Features& features,
 }
 
 void run_features(const FeaturesArguments& arguments) {
+  if (!arguments.draw.empty() && !cv::haveImageWriter(arguments.draw)) {
+    throw InvalidArgument("--draw " + arguments.draw +
+                          ": OpenCV has no image writer for this extension (use .png or .jpg)");
+  }
   const auto extractor = make_configured_extractor(arguments);
   const cv::Mat image = vision::read_grey_image(arguments.image);
   // The first call pays for OpenCV's lazy initialisation; time the calls after it.
