@@ -50,10 +50,6 @@ std::string without_suffix(const std::string& path, const char* suffix) {
   return ends_with(path, suffix) ? path.substr(0, path.size() - std::strlen(suffix)) : path;
 }
 
-// The format an extension suggests, kAuto for none. `.gz`, `.tar.gz` and
-// `.tgz` are looked through (ORBvoc.txt.tar.gz is ORB-SLAM text).
-VocabularyFormat format_from_extension(const std::string& path);
-
 VocabularyFormat format_from_plain_extension(const std::string& path) {
   if (ends_with(path, ".bbw")) return VocabularyFormat::kBinbow;
   if (ends_with(path, ".txt")) return VocabularyFormat::kOrbSlamText;
@@ -66,6 +62,8 @@ VocabularyFormat format_from_plain_extension(const std::string& path) {
   return VocabularyFormat::kAuto;
 }
 
+// The format an extension suggests, kAuto for none. `.gz`, `.tar.gz` and
+// `.tgz` are looked through (ORBvoc.txt.tar.gz is ORB-SLAM text).
 VocabularyFormat format_from_extension(const std::string& path) {
   const VocabularyFormat format = format_from_plain_extension(path);
   if (format != VocabularyFormat::kAuto) return format;
