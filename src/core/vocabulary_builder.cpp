@@ -211,6 +211,9 @@ class TreeBuilder {
         tree_.child_count.push_back(0);
         tree_.descriptors.insert(tree_.descriptors.end(), centres.data() + slot * code_size_,
                                  centres.data() + (slot + 1) * code_size_);
+        // DBoW2 splits every child with more than one row; a child whose rows
+        // are all equal would only grow a chain of single children, so it
+        // stays a leaf.
         if (!last_level && sizes[slot] > 1 && spread[slot]) {
           next.push_back({begin, begin + sizes[slot], detail::child_seed(task.seed, c), first + c});
         }
