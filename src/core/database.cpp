@@ -60,8 +60,11 @@ void PostingList::push_back(EntryId entry, float weight, PostingArena& arena) {
     unsigned char* block = arena.allocate(capacity);
     auto* new_ids = reinterpret_cast<EntryId*>(block);
     if (size_ > 0) {
-      std::memcpy(new_ids, ids(), std::size_t{size_} * sizeof(EntryId));
-      std::memcpy(new_ids + capacity, weights(), std::size_t{size_} * sizeof(float));
+      auto* new_weights = reinterpret_cast<float*>(new_ids + capacity);
+      for (std::uint32_t i = 0; i < size_; ++i) {
+        new_ids[i] = ids()[i];
+        new_weights[i] = weights()[i];
+      }
       arena.release(block_, capacity_);
     }
     block_ = block;
@@ -364,7 +367,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
 
 void Database::Impl::merge_if_worthwhile() {
   constexpr std::size_t kMinimumTail = 1 << 16;
-  if (tail_postings <= std::max(kMinimumTail, postings / 8) && dead_postings * 3 <= postings)
+  if (tail_postings <= std::max(kMinimumTail, postings / 4) && dead_postings * 3 <= postings)
     return;
   try {
     merge();
@@ -378,7 +381,9 @@ void Database::Impl::merge() {
   const std::size_t words = slot_of_word.size();
   std::size_t live = 0;
   std::vector<std::uint32_t> offsets(words + 1, 0);
+  const bool drop_dead = dead_postings > 0;  // else the copies are plain memcpy
   const auto live_count = [&](const EntryId* ids, std::uint32_t count) {
+    if (!drop_dead) return count;
     std::uint32_t kept = 0;
     for (std::uint32_t i = 0; i < count; ++i) kept += alive[ids[i]];
     return kept;
@@ -401,6 +406,16 @@ void Database::Impl::merge() {
   std::size_t at = 0;
   const auto copy_live = [&](const EntryId* from_ids, const float* from_weights,
                              std::uint32_t count) {
+    if (!drop_dead) {  // runs are short: a loop beats a call to memcpy
+      EntryId* to_ids = ids.data() + at;
+      float* to_weights = weights.data() + at;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        to_ids[i] = from_ids[i];
+        to_weights[i] = from_weights[i];
+      }
+      at += count;
+      return;
+    }
     for (std::uint32_t i = 0; i < count; ++i) {
       if (alive[from_ids[i]] == 0) continue;
       ids[at] = from_ids[i];

@@ -92,7 +92,7 @@ namespace binbow {
 // (one offset per word, then all entry ids and all weights, exact size: 8
 // bytes per posting). New entries go to the tail tier, one growable list per
 // word, which is merged into the main tier (dropping removed entries) when it
-// holds more than an eighth of all postings: each posting is copied a bounded
+// holds more than a quarter of all postings: each posting is copied a bounded
 // number of times, the index stays compact, and every entry lives in exactly
 // one tier, its postings in increasing word order.
 struct Database::Impl {
