@@ -8,10 +8,16 @@
 // same order of increasing word id). "Best" is the highest score, except for
 // Scoring::kKL, a divergence, where it is the lowest (as in DBoW2).
 //
+// Index layout: a compact main tier (per word, contiguous entry ids and
+// weights: 8 bytes per posting) plus a tail tier of growable per-word lists
+// for recent entries, merged into the main tier when it holds a quarter of
+// all postings. add() is O(words of the image) amortised; a query costs
+// O(postings of the query's words).
+//
 // Removal: remove() marks the entry dead at once (it never appears in a
-// result again); its postings are dropped from the posting lists lazily, in
-// one pass over the index when dead postings exceed a third of all postings,
-// so remove() is O(1) amortised over the entries added.
+// result again); its postings are dropped at the next merge, which also
+// happens when dead postings exceed a third of all postings, so remove() is
+// O(1) amortised over the entries added.
 //
 // Concurrency: any number of threads may call the const methods (query,
 // feature_vector, ...) at the same time; add, remove, clear and set_label need
