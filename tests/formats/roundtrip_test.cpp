@@ -104,6 +104,32 @@ TEST(FormatsRoundTrip, EveryWriterReadsBackTheSameTree) {
   }
 }
 
+TEST(FormatsRoundTrip, BuiltVocabularyTransformsIdenticallyAfterEveryFormat) {
+  std::mt19937_64 rng(21);
+  std::vector<DescriptorMatrix> images;
+  std::vector<DescriptorView> views;
+  for (int i = 0; i < 12; ++i)
+    images.push_back(test::clustered_descriptors(150, 32, 40, 0.05, rng));
+  for (const DescriptorMatrix& image : images) views.push_back(image.view());
+  BuildOptions options;
+  options.branching = 6;
+  options.levels = 3;
+  options.threads = 1;
+  const Vocabulary vocabulary = Vocabulary::build(views, options);
+  const DescriptorMatrix queries = test::clustered_descriptors(300, 32, 40, 0.1, rng);
+  BowVector expected;
+  vocabulary.transform(queries, expected);
+  TempDir dir;
+  for (const Case& c : kCases) {
+    SCOPED_TRACE(c.file);
+    save_vocabulary(vocabulary, dir.file(c.file), VocabularyFormat::kAuto, c.brief_bits);
+    BowVector bow;
+    load_vocabulary(dir.file(c.file)).transform(queries, bow);
+    EXPECT_FALSE(bow.empty());
+    EXPECT_EQ(bow.entries(), expected.entries());
+  }
+}
+
 TEST(FormatsRoundTrip, BbwToTextToBbwIsByteIdentical) {
   TempDir dir;
   const Vocabulary vocabulary = random_vocabulary(10, 4, 32, 11);
