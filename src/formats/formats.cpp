@@ -161,6 +161,10 @@ VocabularyFormat detect_vocabulary_format(const std::string& path) {
 }
 
 VocabularyFormat format_for_output(const std::string& path) {
+  if (ends_with(path, ".tgz") || ends_with(path, ".tar.gz"))
+    throw InvalidArgument("'" + path +
+                          "': binbow reads vocabularies inside tar archives but "
+                          "does not write them; name the output .gz to compress it");
   const VocabularyFormat format = format_from_extension(path);
   if (format == VocabularyFormat::kAuto)
     throw InvalidArgument("cannot tell the vocabulary format from the name '" + path +

@@ -233,6 +233,8 @@ TEST(Formats, NamesExtensionsAndDetection) {
   EXPECT_EQ(format_for_output("x.dbow3"), VocabularyFormat::kDbow3);
   EXPECT_EQ(format_for_output("x.fbow"), VocabularyFormat::kFbow);
   EXPECT_THROW(format_for_output("x.gz"), InvalidArgument);
+  EXPECT_THROW(format_for_output("ORBvoc.txt.tar.gz"), InvalidArgument);
+  EXPECT_EQ(format_for_output("ORBvoc.txt.gz"), VocabularyFormat::kOrbSlamText);
   EXPECT_THROW(format_for_output("x"), InvalidArgument);
 
   // Content wins over a misleading extension.
