@@ -1,6 +1,7 @@
 #include "binbow/vision/geometric_check.h"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -12,6 +13,47 @@ namespace binbow::vision {
 namespace {
 
 constexpr std::uint32_t kNoPartner = std::numeric_limits<std::uint32_t>::max();
+
+// Distances from one descriptor to `count` rows (row index[j], or j when
+// index is null) of a contiguous matrix.
+using DistanceRow = void (*)(const std::uint8_t* query, const std::uint8_t* rows,
+                             std::size_t code_size, const std::uint32_t* index, std::size_t count,
+                             std::uint32_t* out);
+
+void distance_row_any_size(const std::uint8_t* query, const std::uint8_t* rows,
+                           std::size_t code_size, const std::uint32_t* index, std::size_t count,
+                           std::uint32_t* out) {
+  for (std::size_t j = 0; j < count; ++j)
+    out[j] =
+        hamming_distance(query, rows + (index != nullptr ? index[j] : j) * code_size, code_size);
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// 256-bit descriptors (ORB, BRIEF) with the popcnt instruction: the query
+// stays in registers, no call per pair.
+__attribute__((target("popcnt"))) void distance_row_256_popcnt(
+    const std::uint8_t* query, const std::uint8_t* rows, std::size_t, const std::uint32_t* index,
+    std::size_t count, std::uint32_t* out) {
+  std::uint64_t q[4];
+  std::memcpy(q, query, 32);
+  for (std::size_t j = 0; j < count; ++j) {
+    std::uint64_t r[4];
+    std::memcpy(r, rows + (index != nullptr ? index[j] : j) * 32, 32);
+    out[j] = static_cast<std::uint32_t>(
+        __builtin_popcountll(q[0] ^ r[0]) + __builtin_popcountll(q[1] ^ r[1]) +
+        __builtin_popcountll(q[2] ^ r[2]) + __builtin_popcountll(q[3] ^ r[3]));
+  }
+}
+#endif
+
+DistanceRow distance_row_for(std::size_t code_size) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  static const bool has_popcnt = __builtin_cpu_supports("popcnt");
+  if (code_size == 32 && has_popcnt) return distance_row_256_popcnt;
+#endif
+  (void)code_size;
+  return distance_row_any_size;
+}
 
 // Ratio-test matching of index sets of `first` against index sets of
 // `second`, keeping one partner per feature of `second` across calls.
@@ -25,32 +67,37 @@ class RatioMatcher {
         accept_single_(options.accept_single_candidate),
         max_distance_(static_cast<std::uint32_t>(options.max_distance_fraction * 8.0 *
                                                  static_cast<double>(first.code_size))),
-        slot_of_second_(second.rows, kNoPartner) {
+        slot_of_second_(second.rows, kNoPartner),
+        distance_row_(distance_row_for(first.code_size)) {
     if (first.code_size != second.code_size && !first.empty() && !second.empty())
       throw InvalidArgument("matching descriptors of different sizes (" +
                             std::to_string(first.code_size) + " and " +
                             std::to_string(second.code_size) + " bytes)");
   }
 
-  template <class FirstIndex, class SecondIndex>
-  void match(std::size_t first_count, FirstIndex first_index, std::size_t second_count,
-             SecondIndex second_index) {
+  // Matches features first_index[i] (i < first_count) against
+  // second_index[j] (j < second_count); a null index means 0, 1, 2, ...
+  void match(const std::uint32_t* first_index, std::size_t first_count,
+             const std::uint32_t* second_index, std::size_t second_count) {
     if (second_count == 0) return;
+    distances_row_.resize(second_count);
     for (std::size_t i = 0; i < first_count; ++i) {
-      const std::uint32_t a = first_index(i);
-      const std::uint8_t* da = first_.row(a);
-      std::uint32_t best = kNoPartner, second_best = kNoPartner, best_b = 0;
+      const std::uint32_t a =
+          first_index != nullptr ? first_index[i] : static_cast<std::uint32_t>(i);
+      distance_row_(first_.row(a), second_.data, second_.code_size, second_index, second_count,
+                    distances_row_.data());
+      std::uint32_t best = kNoPartner, second_best = kNoPartner, best_j = 0;
       for (std::size_t j = 0; j < second_count; ++j) {
-        const std::uint32_t b = second_index(j);
-        const std::uint32_t d = hamming_distance(da, second_.row(b), first_.code_size);
+        const std::uint32_t d = distances_row_[j];
         if (d < best) {
           second_best = best;
           best = d;
-          best_b = b;
+          best_j = static_cast<std::uint32_t>(j);
         } else if (d < second_best) {
           second_best = d;
         }
       }
+      const std::uint32_t best_b = second_index != nullptr ? second_index[best_j] : best_j;
       const bool distinctive = second_best == kNoPartner
                                    ? accept_single_
                                    : best < second_best && best <= max_ratio_ * second_best;
@@ -81,6 +128,8 @@ class RatioMatcher {
   std::vector<std::uint32_t> slot_of_second_;
   std::vector<Correspondence> matches_;
   std::vector<std::uint32_t> distances_;
+  DistanceRow distance_row_;
+  std::vector<std::uint32_t> distances_row_;
 };
 
 void check_options(const MatchOptions& options) {
@@ -99,8 +148,7 @@ std::vector<Correspondence> match_exhaustive(const DescriptorView& first,
                                              const MatchOptions& options) {
   check_options(options);
   RatioMatcher matcher(first, second, options);
-  const auto identity = [](std::size_t i) { return static_cast<std::uint32_t>(i); };
-  matcher.match(first.rows, identity, second.rows, identity);
+  matcher.match(nullptr, first.rows, nullptr, second.rows);
   return matcher.take();
 }
 
@@ -130,9 +178,7 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
       ++j;
     } else {
       const Span<std::uint32_t> fa = first_nodes.features(i), fb = second_nodes.features(j);
-      matcher.match(
-          fa.size(), [&](std::size_t k) { return fa[k]; }, fb.size(),
-          [&](std::size_t k) { return fb[k]; });
+      matcher.match(fa.data(), fa.size(), fb.data(), fb.size());
       ++i;
       ++j;
     }

@@ -135,11 +135,15 @@ std::vector<Correspondence> keep_nearest_per_second(
   return result;
 }
 
-TEST(Matching, ExhaustiveAndDirectIndexMatchTheDefinition) {
+// 32 bytes takes the popcnt kernel, other sizes the generic one.
+class Matching : public testing::TestWithParam<std::size_t> {};
+
+TEST_P(Matching, ExhaustiveAndDirectIndexMatchTheDefinition) {
   std::mt19937_64 rng(3);
+  const std::size_t code_size = GetParam();
   for (int trial = 0; trial < 20; ++trial) {
-    const DescriptorMatrix a = test::clustered_descriptors(120, 32, 15, 0.1, rng);
-    const DescriptorMatrix b = test::clustered_descriptors(100, 32, 15, 0.1, rng);
+    const DescriptorMatrix a = test::clustered_descriptors(120, code_size, 15, 0.1, rng);
+    const DescriptorMatrix b = test::clustered_descriptors(100, code_size, 15, 0.1, rng);
     std::vector<std::uint32_t> all_a(a.rows()), all_b(b.rows());
     for (std::uint32_t i = 0; i < a.rows(); ++i) all_a[i] = i;
     for (std::uint32_t i = 0; i < b.rows(); ++i) all_b[i] = i;
@@ -168,7 +172,9 @@ TEST(Matching, ExhaustiveAndDirectIndexMatchTheDefinition) {
   }
 }
 
-TEST(Matching, RejectsBadArguments) {
+INSTANTIATE_TEST_SUITE_P(CodeSizes, Matching, testing::Values(32, 64, 20));
+
+TEST(MatchingArguments, RejectsBadArguments) {
   std::mt19937_64 rng(1);
   const DescriptorMatrix a = test::random_descriptors(5, 32, rng),
                          b = test::random_descriptors(5, 64, rng);
