@@ -69,7 +69,9 @@ TEST(LoopDetector, NormalisationSkipIslandsTemporalConsistencyThenLoop) {
     EXPECT_EQ(r.query, EntryId(i));
     EXPECT_FALSE(r.detection()) << i;
     // Places never repeat on the first walk: anything older than dislocal shares no word.
-    if (i <= 3) EXPECT_EQ(r.status, LoopStatus::kNoDatabaseResults) << i;
+    if (i <= 3) {
+      EXPECT_EQ(r.status, LoopStatus::kNoDatabaseResults) << i;
+    }
   }
   // The revisit starts with a jump: image 10 shares nothing with image 9, so
   // η cannot be normalised and the frame is skipped.
