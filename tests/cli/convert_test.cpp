@@ -2,7 +2,9 @@
 // exit status 1 and "binbow: error: <file>: <problem>" on stderr.
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "binbow/formats.h"
@@ -112,6 +114,64 @@ TEST(CliConvert, DamagedInputsExitWithOneAndNameTheFile) {
     }
   }
   EXPECT_TRUE(read_file(dir.file("o.bbw")).empty());  // nothing half-written
+}
+
+// DBoW2 users must be able to go back: read our DBoW2 YAML (plain, gzip,
+// bytes and bits) through OpenCV's FileStorage exactly as DBoW2's
+// TemplatedVocabulary::load does, and compare with the vocabulary.
+TEST(CliConvert, Dbow2YamlOutputReadsBackThroughOpenCvFileStorage) {
+  TempDir dir;
+  const Vocabulary vocabulary = small_vocabulary();
+  vocabulary.save(dir.file("v.bbw"));
+  const VocabularyTree tree = vocabulary.to_tree();
+  std::string output;
+  for (const char* name : {"orb.yml", "brief.voc.gz"}) {
+    SCOPED_TRACE(name);
+    const bool bits = std::string(name) == "brief.voc.gz";
+    ASSERT_EQ(binbow_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file(name) +
+                             "' --descriptors " + (bits ? "bits" : "bytes"),
+                         &output),
+              0)
+        << output;
+    cv::FileStorage fs(dir.file(name), cv::FileStorage::READ);
+    ASSERT_TRUE(fs.isOpened());
+    const cv::FileNode voc = fs["vocabulary"];
+    EXPECT_EQ(static_cast<int>(voc["k"]), 3);
+    EXPECT_EQ(static_cast<int>(voc["L"]), 2);
+    EXPECT_EQ(static_cast<int>(voc["scoringType"]), 0);
+    EXPECT_EQ(static_cast<int>(voc["weightingType"]), 0);
+    const cv::FileNode nodes = voc["nodes"];
+    ASSERT_EQ(nodes.size(), tree.node_count() - 1);
+    for (auto it = nodes.begin(); it != nodes.end(); ++it) {
+      const int id = static_cast<int>((*it)["nodeId"]);
+      ASSERT_GT(id, 0);
+      ASSERT_LT(static_cast<std::size_t>(id), tree.node_count());
+      EXPECT_EQ(static_cast<int>((*it)["parentId"]), static_cast<int>(tree.parent[id]));
+      EXPECT_EQ(static_cast<float>(static_cast<double>((*it)["weight"])), tree.weights[id]);
+      const std::string text = static_cast<std::string>((*it)["descriptor"]);
+      std::vector<std::uint8_t> bytes(32, 0);
+      if (bits) {  // DBoW2 FBrief: boost::dynamic_bitset from the string, MSB first
+        ASSERT_EQ(text.size(), 256u);
+        for (std::size_t i = 0; i < 256; ++i)
+          if (text[255 - i] == '1') bytes[i / 8] |= static_cast<std::uint8_t>(1u << (i % 8));
+      } else {  // DBoW2 FORB: decimal bytes through a stringstream
+        std::istringstream in(text);
+        for (std::uint8_t& byte : bytes) {
+          int value = -1;
+          in >> value;
+          byte = static_cast<std::uint8_t>(value);
+        }
+      }
+      EXPECT_EQ(bytes, std::vector<std::uint8_t>(tree.descriptors.begin() + id * 32,
+                                                 tree.descriptors.begin() + id * 32 + 32));
+    }
+    const cv::FileNode words = voc["words"];
+    ASSERT_EQ(words.size(), vocabulary.word_count());
+    const std::vector<NodeId> word_nodes = vocabulary.word_nodes();
+    for (auto it = words.begin(); it != words.end(); ++it)
+      EXPECT_EQ(static_cast<int>((*it)["nodeId"]),
+                static_cast<int>(word_nodes[static_cast<int>((*it)["wordId"])]));
+  }
 }
 
 }  // namespace
