@@ -188,6 +188,29 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
       result.times.islands_ms = milliseconds_since(clock);
       if (result.status == LoopStatus::kNoGeometricConsistency) {
         d.verify(result, keypoints, descriptors, nodes);
+        if (!result.detection() && p.max_verified_entries > 1) {
+          // The island, not its best entry, is what passed the temporal test:
+          // its other images of the same place get a chance, best η first.
+          std::vector<detail::Candidate> others;
+          for (const detail::Candidate& c : d.candidates)
+            if (c.entry >= result.island_first && c.entry <= result.island_last &&
+                c.entry != result.match)
+              others.push_back(c);
+          std::stable_sort(others.begin(), others.end(),
+                           [](const detail::Candidate& a, const detail::Candidate& b) {
+                             return a.score > b.score;
+                           });
+          const std::size_t tries =
+              std::min(others.size(), static_cast<std::size_t>(p.max_verified_entries - 1));
+          for (std::size_t i = 0; i < tries && !result.detection(); ++i) {
+            LoopResult attempt = result;
+            attempt.match = others[i].entry;
+            attempt.normalised_score = others[i].score;
+            attempt.score = others[i].score * factor;
+            d.verify(attempt, keypoints, descriptors, nodes);
+            if (attempt.detection()) result = std::move(attempt);
+          }
+        }
         result.times.verification_ms = milliseconds_since(clock);
       }
     }

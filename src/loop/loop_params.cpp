@@ -93,6 +93,7 @@ const std::vector<Field>& fields() {
             [](const P& p) { return Json(to_string(p.geometric_check)); }},
       number_field("direct_index_levels", &P::direct_index_levels),
       bool_field("exhaustive_fallback", &P::exhaustive_fallback),
+      number_field("max_verified_entries", &P::max_verified_entries),
       number_field("max_neighbor_ratio", &P::max_neighbor_ratio),
       number_field("max_match_distance", &P::max_match_distance),
       bool_field("accept_single_candidate", &P::accept_single_candidate),
@@ -220,6 +221,7 @@ void LoopDetectorParams::validate() const {
           "direct_index_levels must be in [0, 16]");
   require(max_neighbor_ratio > 0 && max_neighbor_ratio <= 1,
           "max_neighbor_ratio must be in (0, 1]");
+  require(max_verified_entries >= 1, "max_verified_entries must be ≥ 1");
   require(max_match_distance >= 0 && max_match_distance <= 1,
           "max_match_distance must be in [0, 1]");
   require(min_inliers >= 8, "min_inliers must be ≥ 8 (a fundamental matrix needs 8 points)");

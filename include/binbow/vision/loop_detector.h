@@ -79,6 +79,9 @@ struct LoopDetectorParams {
   // and the extra cost is one exhaustive match for the single candidate that
   // passed every other test. See docs/loop-detection.md.
   bool exhaustive_fallback = true;
+  // Entries of the best island checked, best η first, until one is
+  // geometrically consistent. 1 (the paper): only the island's best entry.
+  int max_verified_entries = 1;
   double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences
   // Largest Hamming distance of a correspondence, as a fraction of the
   // descriptor's bits. binbow's addition (see exhaustive_fallback's note).
