@@ -56,7 +56,7 @@ void PostingArena::clear() noexcept {
 
 void PostingList::push_back(EntryId entry, float weight, PostingArena& arena) {
   if (size_ == capacity_) {
-    const std::uint32_t capacity = capacity_ == 0 ? 2 : capacity_ * 2;
+    const std::uint32_t capacity = capacity_ == 0 ? 1 : capacity_ * 2;
     unsigned char* block = arena.allocate(capacity);
     auto* new_ids = reinterpret_cast<EntryId*>(block);
     if (size_ > 0) {

@@ -22,7 +22,7 @@ namespace binbow::detail {
 // when it is merged, so there is no per-list malloc, free or header.
 class PostingArena {
  public:
-  // A block for `capacity` postings (a power of two ≥ 2).
+  // A block for `capacity` postings (a power of two).
   unsigned char* allocate(std::uint32_t capacity);
   void release(unsigned char* block, std::uint32_t capacity) noexcept;
   void clear() noexcept;
