@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Builds every libFuzzer target (fuzz/fuzz_*.cpp) with clang, AddressSanitizer
 # and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 30) on
-# its corpus fuzz/corpus/<name>/. Fails if any target crashes, leaks, hangs or
-# exceeds 2 GiB. New inputs go to the build directory, not the repository;
+# its corpus fuzz/corpus/<name>/. Fails if any target crashes, leaks, hangs,
+# exceeds 2 GiB, or makes a single allocation over 512 MiB (inputs are at most
+# 16 KiB: such an allocation means a reader trusted a header). New inputs go to the build directory, not the repository;
 # a crashing input is saved there as <build>/fuzz-artifacts/<name>-crash-*:
 # fix the bug, then copy the input into fuzz/corpus/<name>/ so ctest
 # (test_formats, FuzzCorpus.*) replays it from then on.
@@ -43,6 +44,7 @@ for target in "${targets[@]}"; do
   mkdir -p "$corpus" "$work" "$artifacts"
   echo "== $target: ${seconds}s on $(find "$corpus" -type f | wc -l) seed(s)"
   if ! "$binary" -max_total_time="$seconds" -max_len=16384 -timeout=10 -rss_limit_mb=2048 \
+      -malloc_limit_mb=512 \
       -print_final_stats=1 -artifact_prefix="$artifacts/$name-" "$work" "$corpus" \
       >"$build/fuzz-$name.log" 2>&1; then
     tail -n 40 "$build/fuzz-$name.log" >&2
