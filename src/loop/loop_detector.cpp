@@ -139,7 +139,8 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
   result.query = entry;
   result.status = LoopStatus::kNoDatabaseResults;
   if (static_cast<long long>(entry) > p.dislocal) {
-    const EntryId newest_candidate = entry - static_cast<EntryId>(p.dislocal);
+    // DLoopDetector's bound (DBoW2's max_id is exclusive): j < t − dislocal.
+    const EntryId newest_candidate = entry - static_cast<EntryId>(p.dislocal) - 1;
     const std::vector<QueryResult> found =
         d.database.query(bow, static_cast<std::size_t>(p.max_db_results), newest_candidate);
     double factor = 1;

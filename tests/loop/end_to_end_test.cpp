@@ -22,11 +22,14 @@ using test::shared_data;
 
 class RealSequence : public testing::Test {
  protected:
-  // ORB vocabulary k=10, L=4 from 2000 features of each image of two
-  // unrelated sets (none of rtabmap-samples).
+  // A stand-in until the bundled default vocabularies exist: ORB k=10, L=4
+  // from the extractor's default 1000 features of each image of two unrelated
+  // sets (none of rtabmap-samples). Its recall here is 0.77; such small
+  // vocabularies vary (0.73-0.80 over seeds and feature counts, precision
+  // always 1.0), see docs/loop-detection.md.
   static const Vocabulary& vocabulary() {
     static const Vocabulary v = [] {
-      const auto extractor = make_extractor("orb", 2000);
+      const auto extractor = make_extractor("orb");
       ImageSource source({shared_data("opencv-doc-samples"), shared_data("dbow2-demo-images")});
       std::vector<DescriptorMatrix> images;
       Frame frame;
@@ -59,13 +62,13 @@ TEST_F(RealSequence, PerfectPrecisionAndHighRecallWithDefaults) {
     const LoopResult r = detector.process(extractor->extract(frame.image));
     if (r.detection()) {
       EXPECT_GE(r.inliers.size(), 12u);
-      EXPECT_LE(r.match + 20, r.query);  // dislocal
+      EXPECT_LT(r.match + 20, r.query);  // dislocal
       detections.push_back({r.query, r.match, "", "", r.normalised_score, r.inliers.size()});
     }
   }
   ASSERT_EQ(detector.size(), 84u);
   const PrecisionRecall pr = evaluate_detections(detections, truth);
-  std::cout << "rtabmap-samples, ORB k=10 L=4 test vocabulary: precision " << pr.precision
+  std::cout << "rtabmap-samples, ORB k=10 L=4 stand-in vocabulary: precision " << pr.precision
             << ", recall " << pr.recall << " (" << pr.true_positives << "/" << pr.queries_with_loops
             << ")\n";
   EXPECT_EQ(pr.false_positives, 0u);

@@ -55,7 +55,7 @@ struct LoopDetectorParams {
   double min_normalisation_score = 0.005;
 
   // --- Database query
-  int dislocal = 20;        // candidates of image t are entries ≤ t − dislocal (20 f)
+  int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f)
   int max_db_results = 50;  // candidates taken from each query (50 f)
 
   // --- Islands (Section V-B)
