@@ -15,6 +15,7 @@
 #include "binbow/vision/image_source.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "image_source_options.h"
 #include "core/parallel_for.h"
 #include "progress.h"
 
@@ -33,6 +34,7 @@ struct BuildVocabArguments {
   int features_per_image = 0;
   std::string output;
   std::vector<std::string> inputs;
+  vision::ImageSourceOptions source;
 };
 
 // The descriptors of every image, one contiguous block; image i owns rows
@@ -61,7 +63,7 @@ TrainingSet extract_training_set(const BuildVocabArguments& arguments) {
     extractors.push_back(
         vision::make_extractor(arguments.descriptor, arguments.features_per_image));
   }
-  vision::ImageSource source(arguments.inputs);
+  vision::ImageSource source(arguments.inputs, arguments.source);
   const long long known_size = source.size();
   Progress progress("reading images", known_size > 0 ? static_cast<std::size_t>(known_size) : 0);
   TrainingSet set;
@@ -195,6 +197,7 @@ void add_build_vocab_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--threads", arguments->threads, "Worker threads (0: all cores)")
       ->capture_default_str();
+  add_image_source_options(command, arguments->source);
   command
       ->add_option("--seed", arguments->seed,
                    "Random seed; the same seed gives the same file for any --threads")
