@@ -18,3 +18,6 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/binbowConfigVersion
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/binbowConfig.cmake
               ${CMAKE_CURRENT_BINARY_DIR}/binbowConfigVersion.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
+
+# Bundled data, found by the CLI at <prefix>/share/binbow (default vocabularies, demo sample).
+install(DIRECTORY data/vocab data/samples DESTINATION ${CMAKE_INSTALL_DATADIR}/binbow)

@@ -15,6 +15,7 @@ void add_detect_loops_command(CLI::App& app);
 void add_evaluate_command(CLI::App& app);
 void add_db_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
 // Prints `binbow info` lines for a .bbdb file; false if `path` is not one.
 bool print_database_info(const std::string& path);
 

@@ -14,33 +14,54 @@ std::string default_vocabulary_name(const std::string& descriptor) {
   throw InvalidArgument("no default vocabulary for descriptor \"" + descriptor + "\"");
 }
 
-std::vector<std::string> default_vocabulary_candidates(const std::string& descriptor) {
-  const std::string name = default_vocabulary_name(descriptor);
-  std::vector<std::string> candidates;
+std::vector<std::string> data_directories() {
+  std::vector<std::string> directories;
   if (const char* data_dir = std::getenv("BINBOW_DATA_DIR"); data_dir != nullptr && *data_dir)
-    candidates.push_back((fs::path(data_dir) / "vocab" / name).string());
+    directories.push_back(fs::path(data_dir).lexically_normal().string());
   std::error_code error;
   const fs::path exe = fs::read_symlink("/proc/self/exe", error);
   if (!error) {
     const fs::path dir = exe.parent_path();
-    candidates.push_back(
-        (dir / ".." / "share" / "binbow" / "vocab" / name).lexically_normal().string());
-    candidates.push_back((dir / ".." / ".." / "data" / "vocab" / name).lexically_normal().string());
+    directories.push_back((dir / ".." / "share" / "binbow").lexically_normal().string());
+    directories.push_back((dir / ".." / ".." / "data").lexically_normal().string());
   }
+  return directories;
+}
+
+std::vector<std::string> default_vocabulary_candidates(const std::string& descriptor) {
+  const std::string name = default_vocabulary_name(descriptor);
+  std::vector<std::string> candidates;
+  for (const std::string& directory : data_directories())
+    candidates.push_back((fs::path(directory) / "vocab" / name).string());
   return candidates;
 }
 
-std::string default_vocabulary_path(const std::string& descriptor) {
-  const std::vector<std::string> candidates = default_vocabulary_candidates(descriptor);
+namespace {
+std::string first_existing(const std::vector<std::string>& candidates, const std::string& what,
+                           const std::string& advice) {
   std::string searched;
   for (const std::string& path : candidates) {
     std::error_code error;
-    if (fs::is_regular_file(path, error)) return path;
+    if (fs::exists(path, error)) return path;
     searched += "\n  " + path;
   }
-  throw InvalidArgument("the default " + descriptor + " vocabulary (" +
-                        default_vocabulary_name(descriptor) +
-                        ") is not installed; pass one with --vocab FILE. Searched:" + searched);
+  throw InvalidArgument(what + " is not installed; " + advice + ". Searched:" + searched);
+}
+}  // namespace
+
+std::string find_bundled_data(const std::string& relative, const std::string& what) {
+  std::vector<std::string> candidates;
+  for (const std::string& directory : data_directories())
+    candidates.push_back((fs::path(directory) / relative).string());
+  return first_existing(candidates, what,
+                        "set BINBOW_DATA_DIR to binbow's data directory (the repository's data/)");
+}
+
+std::string default_vocabulary_path(const std::string& descriptor) {
+  return first_existing(
+      default_vocabulary_candidates(descriptor),
+      "the default " + descriptor + " vocabulary (" + default_vocabulary_name(descriptor) + ")",
+      "pass one with --vocab FILE");
 }
 
 }  // namespace binbow::cli

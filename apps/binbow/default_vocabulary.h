@@ -19,6 +19,13 @@ std::string default_vocabulary_name(const std::string& descriptor);
 // where <exe> is the directory of the running binbow executable.
 std::vector<std::string> default_vocabulary_candidates(const std::string& descriptor);
 
+// The bundled data directories, in search order: $BINBOW_DATA_DIR,
+// <exe>/../share/binbow (installed), <exe>/../../data (build tree).
+std::vector<std::string> data_directories();
+// The first existing <data directory>/<relative>; throws InvalidArgument
+// naming `what` and the places searched when there is none.
+std::string find_bundled_data(const std::string& relative, const std::string& what);
+
 // The first existing candidate. Throws InvalidArgument, listing the places
 // searched and telling the user to pass --vocab, when none exists.
 std::string default_vocabulary_path(const std::string& descriptor);

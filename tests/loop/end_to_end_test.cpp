@@ -82,17 +82,6 @@ std::string line_value(const std::string& output, const std::string& key) {
   return m[2];
 }
 
-std::string find_chromium() {
-  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
-    std::string out;
-    if (test::run_command(std::string("command -v ") + name, &out) == 0) {
-      while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-      return out;
-    }
-  }
-  return "";
-}
-
 TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
   test::TempDir dir;
   const std::string cli = test::cli_path();
@@ -143,22 +132,8 @@ TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
   EXPECT_EQ(html.str().find("http://"), html.str().find("http://www.w3.org/2000/svg"))
       << "the page must not fetch anything";
 
-  const std::string chromium = find_chromium();
-  ASSERT_FALSE(chromium.empty())
-      << "headless Chromium is needed to check that the report renders: install it "
-         "(Debian: apt-get install -y chromium)";
   const std::string screenshot = dir.file("report.png");
-  ASSERT_EQ(test::run_command(
-                "timeout 120 " + chromium +
-                    " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
-                    " --disable-background-networking --disable-component-update --disable-sync"
-                    " --user-data-dir=" +
-                    dir.file("chromium-profile") +
-                    " --window-size=1280,2000 --screenshot=" + screenshot + " file://" + page,
-                &out),
-            0)
-      << out;
-  ASSERT_TRUE(std::filesystem::exists(screenshot)) << out;
+  ASSERT_TRUE(test::render_in_chromium(page, screenshot, dir.path()));
   EXPECT_GT(std::filesystem::file_size(screenshot), 20000u) << "blank page? " << out;
 }
 

@@ -90,4 +90,41 @@ int run_command(const std::string& command, std::string* output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+namespace {
+std::string find_chromium() {
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    std::string out;
+    if (run_command(std::string("command -v ") + name, &out) == 0) {
+      while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+      return out;
+    }
+  }
+  return "";
+}
+}  // namespace
+
+bool render_in_chromium(const std::string& page, const std::string& png,
+                        const std::string& scratch_dir) {
+  const std::string chromium = find_chromium();
+  if (chromium.empty()) {
+    ADD_FAILURE() << "headless Chromium is needed to check that the report renders: install it "
+                     "(Debian: apt-get install -y chromium, or scripts/install-deps.sh)";
+    return false;
+  }
+  std::string out;
+  const int status = run_command(
+      "timeout 120 " + chromium +
+          " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+          " --disable-background-networking --disable-component-update --disable-sync"
+          " --user-data-dir=" +
+          scratch_dir + "/chromium-profile --window-size=1280,2000 --screenshot=" + png +
+          " file://" + page,
+      &out);
+  if (status != 0 || !fs::exists(png)) {
+    ADD_FAILURE() << "Chromium could not render " << page << ":\n" << out;
+    return false;
+  }
+  return true;
+}
+
 }  // namespace binbow::test

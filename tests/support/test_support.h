@@ -47,4 +47,10 @@ void write_file(const std::string& path, const std::vector<std::uint8_t>& bytes)
 // Runs a shell command, returns its exit status; stdout+stderr go to `output`.
 int run_command(const std::string& command, std::string* output);
 
+// Renders an HTML page in headless Chromium into `png` (profile in
+// `scratch_dir`). Adds a test failure saying how to install Chromium when it
+// is missing, or what Chromium printed when rendering fails; returns success.
+bool render_in_chromium(const std::string& page, const std::string& png,
+                        const std::string& scratch_dir);
+
 }  // namespace binbow::test
