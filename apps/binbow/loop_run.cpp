@@ -16,6 +16,7 @@
 #include "binbow/error.h"
 #include "binbow/formats.h"
 #include "binbow/vocabulary.h"
+#include "core/file_io.h"
 #include "default_vocabulary.h"
 
 namespace binbow::cli {
@@ -41,28 +42,7 @@ double StageTiming::max() const {
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {
-  std::string temporary = path + ".tmp-XXXXXX";
-  const int fd = mkstemp(temporary.data());
-  if (fd < 0) throw FileError(path, std::string("cannot create: ") + std::strerror(errno));
-  // mkstemp creates 0600; the result should get the usual permissions.
-  const mode_t mask = umask(0);
-  umask(mask);
-  fchmod(fd, 0666 & ~mask);
-  close(fd);
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::remove(temporary.c_str());
-      throw FileError(path, "write error");
-    }
-  }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    const std::string problem = std::strerror(errno);
-    std::remove(temporary.c_str());
-    throw FileError(path, "cannot replace: " + problem);
-  }
+  detail::write_file_atomically(path, text.data(), text.size());
 }
 
 void LoopRun::save(const std::string& path) const {

@@ -88,8 +88,10 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     ::unlink(temp.c_str());
     throw;
   }
-  // Files are created 0600 by mkstemp; give them the usual permissions.
-  ::fchmod(fd, 0644);
+  // mkstemp creates 0600; give the file the permissions the user's umask asks for.
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  ::fchmod(fd, 0666 & ~mask);
   if (std::fclose(file) != 0) {
     ::unlink(temp.c_str());
     throw FileError(path, "cannot write: " + errno_text());

@@ -16,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "binbow/error.h"
+#include "core/file_io.h"
 
 namespace binbow::vision {
 namespace {
@@ -391,34 +392,16 @@ Span<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
 }
 
 void write_detections_csv(const std::string& path, const std::vector<Detection>& detections) {
-  std::string temporary = path + ".tmp-XXXXXX";
-  const int fd = mkstemp(temporary.data());
-  if (fd < 0) throw FileError(path, std::string("cannot create: ") + std::strerror(errno));
-  // mkstemp creates 0600; the result should get the usual permissions.
-  const mode_t mask = umask(0);
-  umask(mask);
-  fchmod(fd, 0666 & ~mask);
-  close(fd);
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << "query_index,match_index,query_file,match_file,score,inliers\n";
-    char score[64];
-    for (const Detection& d : detections) {
-      std::snprintf(score, sizeof score, "%.9g", d.score);
-      out << d.query << ',' << d.match << ',' << csv_field(d.query_file) << ','
-          << csv_field(d.match_file) << ',' << score << ',' << d.inliers << '\n';
-    }
-    out.flush();
-    if (!out) {
-      std::remove(temporary.c_str());
-      throw FileError(path, "write error");
-    }
+  std::ostringstream out;
+  out << "query_index,match_index,query_file,match_file,score,inliers\n";
+  char score[64];
+  for (const Detection& d : detections) {
+    std::snprintf(score, sizeof score, "%.9g", d.score);
+    out << d.query << ',' << d.match << ',' << csv_field(d.query_file) << ','
+        << csv_field(d.match_file) << ',' << score << ',' << d.inliers << '\n';
   }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    const std::string problem = std::strerror(errno);
-    std::remove(temporary.c_str());
-    throw FileError(path, "cannot replace: " + problem);
-  }
+  const std::string text = out.str();
+  detail::write_file_atomically(path, text.data(), text.size());
 }
 
 std::vector<Detection> read_detections_csv(const std::string& path) {
