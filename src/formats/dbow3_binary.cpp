@@ -39,15 +39,7 @@ ParsedVocabulary parse_dbow3_binary(const std::uint8_t* data, std::size_t size,
   const std::int32_t levels = in.read<std::int32_t>("the header");
   const std::int32_t scoring = in.read<std::int32_t>("the header");
   const std::int32_t weighting = in.read<std::int32_t>("the header");
-  if (branching < 1 || branching > static_cast<std::int32_t>(kMaxBranching))
-    in.fail("header: branching factor k = " + std::to_string(branching) + " is outside 1..255");
-  if (levels < 1 || levels > static_cast<std::int32_t>(kMaxLevels))
-    in.fail("header: depth L = " + std::to_string(levels) + " is outside 1.." +
-            std::to_string(kMaxLevels));
-  if (scoring < 0 || scoring > static_cast<int>(Scoring::kDotProduct))
-    in.fail("header: scoring type " + std::to_string(scoring) + " is outside 0..5");
-  if (weighting < 0 || weighting > static_cast<int>(Weighting::kBinary))
-    in.fail("header: weighting type " + std::to_string(weighting) + " is outside 0..3");
+  check_header_values(name, "header", branching, levels, scoring, weighting);
   if (std::uint64_t{node_count - 1} * (kRecordHeader + 1) > in.remaining())
     in.fail("truncated: the header announces " + std::to_string(node_count - 1) +
             " node records, more than the file can hold");

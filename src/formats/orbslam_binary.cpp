@@ -34,15 +34,7 @@ ParsedVocabulary parse_orbslam_binary(const std::uint8_t* data, std::size_t size
     in.fail("header: node record size " + std::to_string(record_size) + " is outside " +
             std::to_string(kRecordOverhead + 1) + ".." +
             std::to_string(kRecordOverhead + kMaxCodeSize));
-  if (branching < 1 || branching > static_cast<std::int32_t>(kMaxBranching))
-    in.fail("header: branching factor k = " + std::to_string(branching) + " is outside 1..255");
-  if (levels < 1 || levels > static_cast<std::int32_t>(kMaxLevels))
-    in.fail("header: depth L = " + std::to_string(levels) + " is outside 1.." +
-            std::to_string(kMaxLevels));
-  if (scoring < 0 || scoring > static_cast<int>(Scoring::kDotProduct))
-    in.fail("header: scoring type " + std::to_string(scoring) + " is outside 0..5");
-  if (weighting < 0 || weighting > static_cast<int>(Weighting::kBinary))
-    in.fail("header: weighting type " + std::to_string(weighting) + " is outside 0..3");
+  check_header_values(name, "header", branching, levels, scoring, weighting);
   const std::uint64_t expected = std::uint64_t{node_count - 1} * record_size;
   if (expected != in.remaining())
     in.fail("the header announces " + std::to_string(node_count - 1) + " node records of " +

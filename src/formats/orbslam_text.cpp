@@ -63,17 +63,11 @@ Header parse_header(const char* p, const char* end, const std::string& name) {
     throw FileError(name,
                     "line 1: expected the ORB-SLAM header `k L scoring weighting` (four "
                     "non-negative integers)");
-  if (h.branching < 1 || h.branching > kMaxBranching)
-    throw FileError(name, "line 1: branching factor k = " + std::to_string(h.branching) +
-                              " is outside 1.." + std::to_string(kMaxBranching));
-  if (h.levels < 1 || h.levels > kMaxLevels)
-    throw FileError(name, "line 1: depth L = " + std::to_string(h.levels) + " is outside 1.." +
-                              std::to_string(kMaxLevels));
-  if (h.scoring > static_cast<std::uint64_t>(Scoring::kDotProduct))
-    throw FileError(name, "line 1: scoring type " + std::to_string(h.scoring) + " is outside 0..5");
-  if (h.weighting > static_cast<std::uint64_t>(Weighting::kBinary))
-    throw FileError(name,
-                    "line 1: weighting type " + std::to_string(h.weighting) + " is outside 0..3");
+  auto signed_value = [](std::uint64_t v) {
+    return static_cast<std::int64_t>(std::min<std::uint64_t>(v, INT64_MAX));
+  };
+  check_header_values(name, "line 1", signed_value(h.branching), signed_value(h.levels),
+                      signed_value(h.scoring), signed_value(h.weighting));
   return h;
 }
 

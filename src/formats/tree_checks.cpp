@@ -3,8 +3,23 @@
 #include <cstdint>
 
 #include "binbow/error.h"
+#include "formats/codecs.h"
 
 namespace binbow::detail {
+
+void check_header_values(const std::string& name, const std::string& where, std::int64_t branching,
+                         std::int64_t levels, std::int64_t scoring, std::int64_t weighting) {
+  auto fail = [&](const std::string& problem) { throw FileError(name, where + ": " + problem); };
+  if (branching < 1 || branching > kMaxBranching)
+    fail("branching factor k = " + std::to_string(branching) + " is outside 1.." +
+         std::to_string(kMaxBranching));
+  if (levels < 1 || levels > kMaxLevels)
+    fail("depth L = " + std::to_string(levels) + " is outside 1.." + std::to_string(kMaxLevels));
+  if (scoring < 0 || scoring > static_cast<int>(Scoring::kDotProduct))
+    fail("scoring type " + std::to_string(scoring) + " is outside 0..5");
+  if (weighting < 0 || weighting > static_cast<int>(Weighting::kBinary))
+    fail("weighting type " + std::to_string(weighting) + " is outside 0..3");
+}
 
 void check_listed_tree(VocabularyTree& tree, const std::vector<std::uint8_t>& leaf_flags,
                        const std::string& name, const char* unit, std::size_t unit_offset) {

@@ -11,6 +11,12 @@
 
 namespace binbow::detail {
 
+// The branching factor, depth, scoring and weighting codes a header states,
+// against what binbow supports; throws FileError(name, "<where>: ...") naming
+// the first value out of range.
+void check_header_values(const std::string& name, const std::string& where, std::int64_t branching,
+                         std::int64_t levels, std::int64_t scoring, std::int64_t weighting);
+
 // Every parent must be an earlier node, a node flagged as a leaf must have no
 // children and an inner one must have some. Zeroes inner nodes' weights.
 // Errors name the node as "<unit> <node + unit_offset>" ("line 12").
