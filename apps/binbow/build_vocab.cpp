@@ -15,8 +15,8 @@
 #include "binbow/vision/image_source.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
-#include "image_source_options.h"
 #include "core/parallel_for.h"
+#include "image_source_options.h"
 #include "progress.h"
 
 namespace binbow::cli {

@@ -91,9 +91,9 @@ class Database {
 
   // The `max_results` entries most similar to `bow`, best first; ties are
   // ordered by increasing entry id. Only entries with id ≤ `max_entry_id` are
-  // considered (inclusive; DBoW2's max_id excludes it: pass max_id − 1). Entries sharing no word with the query are not returned, so an
-  // empty `bow` or `max_results` = 0 give an empty result. Throws
-  // InvalidArgument for a word id outside the vocabulary.
+  // considered (inclusive; DBoW2's max_id excludes it: pass max_id − 1). Entries sharing no word
+  // with the query are not returned, so an empty `bow` or `max_results` = 0 give an empty result.
+  // Throws InvalidArgument for a word id outside the vocabulary.
   std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
                                  EntryId max_entry_id = kAllEntries) const;
 
