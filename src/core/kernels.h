@@ -1,9 +1,10 @@
 // Hot kernels, compiled once per instruction set (kernels_generic.cpp,
-// kernels_popcnt.cpp) from kernels_impl.h and selected once at run time.
+// kernels_popcnt.cpp, kernels_avx512.cpp) from kernels_impl.h and selected once at run time.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace binbow::detail {
 
@@ -39,5 +40,7 @@ struct Kernels {
 const Kernels& kernels();
 // Kernels without hardware popcount, for tests that compare implementations.
 const Kernels& generic_kernels();
+// Every kernel set this CPU can run, the portable one first, for tests.
+std::vector<const Kernels*> supported_kernels();
 
 }  // namespace binbow::detail

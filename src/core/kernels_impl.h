@@ -3,6 +3,10 @@
 // whether __builtin_popcountll becomes one instruction.
 #include <cstring>
 
+#if defined(__AVX512F__) && defined(__AVX512VPOPCNTDQ__)
+#include <immintrin.h>
+#endif
+
 #include "core/kernels.h"
 
 namespace binbow::detail::BINBOW_KERNEL_NAMESPACE {
@@ -71,6 +75,74 @@ inline std::uint32_t nearest_row(const Distance<N>& distance, const std::uint8_t
   return static_cast<std::uint32_t>(best);
 }
 
+#if defined(__AVX512F__) && defined(__AVX512VPOPCNTDQ__)
+// Population counts of query ^ child for the children 2·pair and 2·pair + 1,
+// as four 64-bit partial counts each: the first child in qwords 0-3, the
+// second in 4-7. Children past `count` are masked loads that touch no memory.
+template <std::size_t N>
+inline __m512i pair_counts(__m512i query, const std::uint8_t* children, std::uint32_t pair,
+                           std::uint32_t count) {
+  const std::uint32_t first = 2 * pair;
+  const bool whole = first + 1 < count;  // plain loads: the XOR can take them from memory
+  const __mmask8 first_valid = first < count ? 0xff : 0;
+  if constexpr (N == 32) {
+    const std::uint8_t* rows = children + std::size_t{first} * 32;
+    const __m512i loaded =
+        whole ? _mm512_loadu_si512(rows) : _mm512_maskz_loadu_epi64(first_valid & 0x0f, rows);
+    return _mm512_popcnt_epi64(_mm512_xor_si512(query, loaded));
+  } else {
+    const std::uint8_t* row = children + std::size_t{first} * 64;
+    const __m512i a =
+        _mm512_popcnt_epi64(_mm512_xor_si512(query, _mm512_maskz_loadu_epi64(first_valid, row)));
+    const __m512i b = _mm512_popcnt_epi64(
+        _mm512_xor_si512(query, whole ? _mm512_loadu_si512(row + 64) : _mm512_setzero_si512()));
+    return _mm512_add_epi64(_mm512_shuffle_i64x2(a, b, _MM_SHUFFLE(1, 0, 1, 0)),
+                            _mm512_shuffle_i64x2(a, b, _MM_SHUFFLE(3, 2, 3, 2)));
+  }
+}
+
+// The hot case with AVX-512: eight children at a time, their distances
+// reduced across registers in three steps, and the minimum taken over
+// (distance, index) keys in a vector, so ties go to the lowest index as in
+// the scalar kernel.
+template <std::size_t N>
+inline std::uint32_t nearest_child(const std::uint8_t* query, const std::uint8_t* children,
+                                   std::uint32_t count) {
+  __m512i q;
+  if constexpr (N == 32) {
+    q = _mm512_broadcast_i64x4(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(query)));
+  } else {
+    q = _mm512_loadu_si512(query);
+  }
+  // Lane i of the reduced vector holds child base + kOrder[i].
+  const __m512i order = _mm512_set_epi64(7, 5, 6, 4, 3, 1, 2, 0);
+  const __m512i limit = _mm512_set1_epi64(count);
+  __m512i best = _mm512_set1_epi64(-1);
+  for (std::uint32_t base = 0; base < count; base += 8) {
+    const std::uint32_t pair = base / 2;
+    // Whole groups for the common k = 8, 10, 16...; the tail computes only
+    // the pairs it has (count is the same for every node of a tree, so these
+    // branches are predicted).
+    const std::uint32_t left = count - base;
+    const __m512i zero = _mm512_setzero_si512();
+    const __m512i p0 = pair_counts<N>(q, children, pair, count);
+    const __m512i p1 = left > 2 ? pair_counts<N>(q, children, pair + 1, count) : zero;
+    const __m512i p2 = left > 4 ? pair_counts<N>(q, children, pair + 2, count) : zero;
+    const __m512i p3 = left > 6 ? pair_counts<N>(q, children, pair + 3, count) : zero;
+    const __m512i t0 =
+        _mm512_add_epi64(_mm512_unpacklo_epi64(p0, p1), _mm512_unpackhi_epi64(p0, p1));
+    const __m512i t1 =
+        _mm512_add_epi64(_mm512_unpacklo_epi64(p2, p3), _mm512_unpackhi_epi64(p2, p3));
+    const __m512i distances =
+        _mm512_add_epi64(_mm512_shuffle_i64x2(t0, t1, _MM_SHUFFLE(2, 0, 2, 0)),
+                         _mm512_shuffle_i64x2(t0, t1, _MM_SHUFFLE(3, 1, 3, 1)));
+    const __m512i index = _mm512_add_epi64(order, _mm512_set1_epi64(base));
+    const __m512i keys = _mm512_or_si512(_mm512_slli_epi64(distances, 8), index);
+    best = _mm512_mask_min_epu64(best, _mm512_cmplt_epu64_mask(index, limit), best, keys);
+  }
+  return static_cast<std::uint32_t>(_mm512_reduce_min_epu64(best)) & 0xffu;
+}
+#else
 // The hot case: a 32- or 64-byte query held in registers against a block of
 // at most 255 children, with 32-bit keys.
 template <std::size_t N>
@@ -88,6 +160,8 @@ inline std::uint32_t nearest_child(const std::uint8_t* query, const std::uint8_t
   }
   return best & 0xffu;
 }
+
+#endif
 
 template <std::size_t N>
 void nearest_impl(const std::uint8_t* queries, std::size_t n, const std::uint8_t* candidates,

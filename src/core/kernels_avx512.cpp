@@ -1,0 +1,7 @@
+// Compiled with -mpopcnt -mavx512f -mavx512vpopcntdq on x86-64 (see
+// src/CMakeLists.txt); only called when the CPU and the OS support both.
+#include <algorithm>
+
+#define BINBOW_KERNEL_NAMESPACE avx512
+#define BINBOW_KERNEL_NAME "avx512-vpopcntdq"
+#include "core/kernels_impl.h"
