@@ -1,0 +1,161 @@
+// Every kernel set the CPU supports (portable, popcnt, AVX-512) against a
+// bit-counting reference: distances, nearest rows and the batched descent,
+// with ties, odd child counts and every code size path.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/kernels.h"
+
+namespace binbow {
+namespace {
+
+std::uint32_t naive_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
+  std::uint32_t d = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (int bit = 0; bit < 8; ++bit) d += ((a[i] ^ b[i]) >> bit) & 1u;
+  return d;
+}
+
+std::uint32_t naive_nearest(const std::uint8_t* query, const std::uint8_t* rows, std::size_t count,
+                            std::size_t code_size) {
+  std::uint32_t best = ~0u, best_index = 0;
+  for (std::size_t c = 0; c < count; ++c) {
+    const std::uint32_t d = naive_distance(query, rows + c * code_size, code_size);
+    if (d < best) best = d, best_index = static_cast<std::uint32_t>(c);
+  }
+  return best_index;
+}
+
+// A flat tree in breadth-first order with `fanout(depth)` children per inner
+// node; children are near copies of one another so that ties are frequent.
+struct FlatTree {
+  std::vector<std::uint8_t> descriptors;
+  std::vector<std::uint32_t> links;
+  std::vector<std::uint8_t> child_counts;
+  std::size_t code_size = 0;
+
+  detail::TreeView view() const {
+    return {descriptors.data(), links.data(), child_counts.data(), code_size};
+  }
+};
+
+FlatTree make_tree(std::mt19937_64& rng, std::size_t code_size, std::uint32_t max_children,
+                   std::uint32_t levels) {
+  FlatTree t;
+  t.code_size = code_size;
+  t.descriptors.resize(code_size);
+  t.links.push_back(0);
+  t.child_counts.push_back(0);
+  std::vector<std::uint32_t> frontier{0};
+  std::uint32_t words = 0;
+  for (std::uint32_t depth = 0; depth < levels; ++depth) {
+    std::vector<std::uint32_t> next;
+    for (std::uint32_t node : frontier) {
+      const auto count = static_cast<std::uint32_t>(1 + rng() % max_children);
+      if (depth > 0 && rng() % 8 == 0) continue;  // an early leaf
+      t.links[node] = static_cast<std::uint32_t>(t.links.size());
+      t.child_counts[node] = static_cast<std::uint8_t>(count);
+      for (std::uint32_t c = 0; c < count; ++c) {
+        const std::size_t at = t.descriptors.size();
+        t.descriptors.resize(at + code_size);
+        for (std::size_t b = 0; b < code_size; ++b)
+          t.descriptors[at + b] = static_cast<std::uint8_t>(rng());
+        if (c > 0 && rng() % 3 == 0)  // duplicate a sibling: a tie
+          std::copy_n(t.descriptors.begin() + static_cast<std::ptrdiff_t>(at - code_size),
+                      code_size, t.descriptors.begin() + static_cast<std::ptrdiff_t>(at));
+        next.push_back(static_cast<std::uint32_t>(t.links.size()));
+        t.links.push_back(0);
+        t.child_counts.push_back(0);
+      }
+    }
+    frontier = std::move(next);
+  }
+  for (std::size_t n = 0; n < t.links.size(); ++n)
+    if (t.child_counts[n] == 0) t.links[n] = words++ | detail::kLeafBit;
+  return t;
+}
+
+void naive_descend(const FlatTree& t, const std::uint8_t* query, std::uint32_t level_depth,
+                   std::uint32_t* word, std::uint32_t* level_node) {
+  std::uint32_t node = 0, depth = 0;
+  *level_node = 0;
+  while (t.child_counts[node] != 0) {
+    const std::uint32_t first = t.links[node];
+    node = first + naive_nearest(query, t.descriptors.data() + std::size_t{first} * t.code_size,
+                                 t.child_counts[node], t.code_size);
+    if (++depth <= level_depth) *level_node = node;
+  }
+  *word = t.links[node] & ~detail::kLeafBit;
+}
+
+std::vector<std::uint8_t> random_bytes(std::mt19937_64& rng, std::size_t n) {
+  std::vector<std::uint8_t> v(n);
+  for (auto& b : v) b = static_cast<std::uint8_t>(rng());
+  return v;
+}
+
+TEST(Kernels, TheDispatchedSetIsOneOfTheSupported) {
+  const auto all = detail::supported_kernels();
+  ASSERT_FALSE(all.empty());
+  bool found = false;
+  for (const detail::Kernels* k : all) found = found || k == &detail::kernels();
+  EXPECT_TRUE(found) << detail::kernels().name;
+}
+
+TEST(Kernels, DistancesAndNearestRowsEqualBitCounting) {
+  std::mt19937_64 rng(3);
+  for (const detail::Kernels* kernels : detail::supported_kernels()) {
+    for (std::size_t code_size : {5, 20, 32, 64, 96}) {
+      const std::size_t count = 1 + rng() % 40;
+      auto rows = random_bytes(rng, count * code_size);
+      if (count > 2) std::copy_n(rows.begin(), code_size, rows.begin() + 2 * code_size);
+      const auto queries = random_bytes(rng, 30 * code_size);
+      std::vector<std::uint32_t> index(30), distance(30);
+      kernels->nearest(queries.data(), 30, rows.data(), count, code_size, index.data(),
+                       distance.data());
+      for (std::size_t q = 0; q < 30; ++q) {
+        const std::uint8_t* query = queries.data() + q * code_size;
+        const std::uint32_t expected = naive_nearest(query, rows.data(), count, code_size);
+        EXPECT_EQ(index[q], expected) << kernels->name << " code size " << code_size;
+        EXPECT_EQ(distance[q],
+                  naive_distance(query, rows.data() + expected * code_size, code_size));
+        EXPECT_EQ(kernels->hamming(query, rows.data(), code_size),
+                  naive_distance(query, rows.data(), code_size));
+      }
+    }
+  }
+}
+
+TEST(Kernels, DescentEqualsNaiveDescentForEveryFanoutAndCodeSize) {
+  std::mt19937_64 rng(5);
+  for (const detail::Kernels* kernels : detail::supported_kernels()) {
+    for (std::size_t code_size : {32, 64, 24}) {
+      for (std::uint32_t max_children : {1u, 2u, 3u, 9u, 10u, 17u, 255u}) {
+        const std::uint32_t levels = max_children > 20 ? 2 : 4;
+        const FlatTree tree = make_tree(rng, code_size, max_children, levels);
+        // More queries than one batch, and a query equal to a node (distance 0).
+        const std::size_t n = 150;
+        auto queries = random_bytes(rng, n * code_size);
+        std::copy_n(tree.descriptors.begin() + static_cast<std::ptrdiff_t>(code_size), code_size,
+                    queries.begin());
+        for (std::uint32_t level_depth : {0u, 1u, 2u, 9u}) {
+          std::vector<std::uint32_t> words(n), nodes(n);
+          kernels->descend(tree.view(), queries.data(), n, words.data(), nodes.data(), level_depth);
+          for (std::size_t q = 0; q < n; ++q) {
+            std::uint32_t word = 0, node = 0;
+            naive_descend(tree, queries.data() + q * code_size, level_depth, &word, &node);
+            ASSERT_EQ(words[q], word) << kernels->name << " code size " << code_size << " k "
+                                      << max_children << " query " << q;
+            ASSERT_EQ(nodes[q], node) << kernels->name << " level depth " << level_depth;
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace binbow
