@@ -300,6 +300,9 @@ void Vocabulary::quantize(const DescriptorView& descriptors, WordId* words, Node
 void Vocabulary::words_to_bow(const WordId* words, std::size_t count, BowVector& bow) const {
   const auto& b = *block_;
   Scratch& s = scratch();
+  // The weights of a big vocabulary are far apart in memory: fetch them all
+  // now, so the misses overlap with one another and with the sort.
+  for (std::size_t i = 0; i < count; ++i) __builtin_prefetch(b.word_weights + words[i]);
   s.sorted.assign(words, words + count);
   detail::radix_sort(s.sorted, nullptr, s.buffer, s.buffer2);
   bow.entries_.clear();
