@@ -19,62 +19,104 @@ namespace binbow {
 
 namespace detail {
 
-// Chunks are arrays of unsigned char: their storage implicitly holds the
-// EntryId and float arrays the lists write into it.
-unsigned char* PostingArena::allocate(std::uint32_t capacity) {
+std::uint32_t PostingArena::new_chunk(std::size_t postings) {
+  // Addresses are 32 bits: chunk index, then kChunkBits of position.
+  if (chunks_.size() >= (std::size_t{1} << (32 - kChunkBits)))
+    throw InvalidArgument("Database: the tail tier outgrew its 32 GiB of addresses");
+  chunk_starts_.reserve(chunks_.size() + 1);
+  chunk_postings_.reserve(chunks_.size() + 1);
+  chunks_.emplace_back(new TailPosting[postings]);  // left uninitialised
+  chunk_starts_.push_back(chunks_.back().get());
+  chunk_postings_.push_back(postings);
+  chunk_bytes_ += postings * sizeof(TailPosting);
+  return static_cast<std::uint32_t>((chunks_.size() - 1) << kChunkBits);
+}
+
+std::uint32_t PostingArena::allocate(std::uint32_t capacity) {
   const auto size_class = static_cast<unsigned>(__builtin_ctz(capacity));
-  if (unsigned char* block = free_lists_[size_class]) {
-    std::memcpy(&free_lists_[size_class], block, sizeof(unsigned char*));
-    return block;
+  const std::uint32_t reused = free_lists_[size_class];
+  if (reused != kNoBlock) {
+    std::memcpy(&free_lists_[size_class], at(reused), sizeof(std::uint32_t));
+    // The next allocation of this size reads that block: fetch it now.
+    if (free_lists_[size_class] != kNoBlock) __builtin_prefetch(at(free_lists_[size_class]));
+    return reused;
   }
+  constexpr std::uint32_t kChunkPostings = std::uint32_t{1} << kChunkBits;
+  if (capacity > kChunkPostings) return new_chunk(capacity);  // a chunk of its own
   if (bump_left_ < capacity) {
-    const std::size_t postings = std::max<std::size_t>(kChunkPostings, capacity);
-    chunks_.emplace_back(new unsigned char[postings * 8]);  // left uninitialised
-    chunk_bytes_ += postings * 8;
-    bump_ = chunks_.back().get();
-    bump_left_ = postings;
+    bump_ = spare_begin_ < spare_end_ ? static_cast<std::uint32_t>(spare_begin_++ << kChunkBits)
+                                      : new_chunk(kChunkPostings);
+    bump_left_ = kChunkPostings;
   }
-  unsigned char* block = bump_;
-  bump_ += std::size_t{capacity} * 8;
+  const std::uint32_t block = bump_;
+  bump_ += capacity;
   bump_left_ -= capacity;
   return block;
 }
 
-void PostingArena::release(unsigned char* block, std::uint32_t capacity) noexcept {
+void PostingArena::release(std::uint32_t block, std::uint32_t capacity) noexcept {
   const auto size_class = static_cast<unsigned>(__builtin_ctz(capacity));
-  std::memcpy(block, &free_lists_[size_class], sizeof(unsigned char*));
+  std::memcpy(at(block), &free_lists_[size_class], sizeof(std::uint32_t));
   free_lists_[size_class] = block;
+}
+
+void PostingArena::reset() noexcept {
+  // Blocks larger than a chunk have chunks of their own: those go.
+  constexpr std::size_t kChunkPostings = std::size_t{1} << kChunkBits;
+  std::size_t kept = 0;
+  for (std::size_t c = 0; c < chunks_.size(); ++c) {
+    if (chunk_postings_[c] != kChunkPostings) continue;
+    chunks_[kept] = std::move(chunks_[c]);
+    chunk_starts_[kept] = chunk_starts_[c];
+    chunk_postings_[kept] = kChunkPostings;
+    ++kept;
+  }
+  chunks_.resize(kept);
+  chunk_starts_.resize(kept);
+  chunk_postings_.resize(kept);
+  chunk_bytes_ = kept * kChunkPostings * sizeof(TailPosting);
+  std::fill(std::begin(free_lists_), std::end(free_lists_), kNoBlock);
+  bump_ = 0;
+  bump_left_ = 0;
+  spare_begin_ = 0;
+  spare_end_ = kept;
 }
 
 void PostingArena::clear() noexcept {
   chunks_.clear();
-  std::fill(std::begin(free_lists_), std::end(free_lists_), nullptr);
-  bump_ = nullptr;
+  chunk_starts_.clear();
+  chunk_postings_.clear();
+  std::fill(std::begin(free_lists_), std::end(free_lists_), kNoBlock);
+  bump_ = 0;
   bump_left_ = 0;
+  spare_begin_ = 0;
+  spare_end_ = 0;
   chunk_bytes_ = 0;
 }
 
-void PostingList::push_back(EntryId entry, float weight, PostingArena& arena) {
-  if (size_ == capacity_) {
-    const std::uint32_t capacity = capacity_ == 0 ? 1 : capacity_ * 2;
-    unsigned char* block = arena.allocate(capacity);
-    auto* new_ids = reinterpret_cast<EntryId*>(block);
-    if (size_ > 0) {
-      auto* new_weights = reinterpret_cast<float*>(new_ids + capacity);
-      for (std::uint32_t i = 0; i < size_; ++i) {
-        new_ids[i] = ids()[i];
-        new_weights[i] = weights()[i];
-      }
-      arena.release(block_, capacity_);
-    }
-    block_ = block;
-    capacity_ = capacity;
-  }
-  auto* id_array = reinterpret_cast<EntryId*>(block_);
-  id_array[size_] = entry;
-  reinterpret_cast<float*>(id_array + capacity_)[size_] = weight;
-  ++size_;
+namespace {
+
+bool is_power_of_two_or_zero(std::uint32_t n) noexcept {
+  return (n & (n - 1)) == 0;
 }
+
+// A list whose size is 0 or a power of two is full (see TailList).
+void push_back(TailList& list, TailPosting posting, PostingArena& arena) {
+  if (is_power_of_two_or_zero(list.size)) {
+    const std::uint32_t capacity = list.size == 0 ? 1 : list.size * 2;
+    const std::uint32_t block = arena.allocate(capacity);
+    if (list.size > 0) {
+      const TailPosting* from = arena.at(list.block);
+      TailPosting* to = arena.at(block);
+      for (std::uint32_t i = 0; i < list.size; ++i) to[i] = from[i];
+      arena.release(list.block, list.size);
+    }
+    list.block = block;
+  }
+  arena.at(list.block)[list.size++] = posting;
+}
+
+}  // namespace
 
 PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     : node_count_(static_cast<std::uint32_t>(features.size())),
@@ -179,30 +221,48 @@ struct QueryScratch {
 
 thread_local QueryScratch scratch;
 
-// Every term is computed and summed exactly as Vocabulary::score does, in the
-// same order (increasing word id), so scores agree to the last bit.
 struct IndexView {
   const std::uint32_t* main_offsets;  // null when the main tier is empty
   const EntryId* main_ids;
   const float* main_weights;
-  const std::uint32_t* slot_of_word;
-  const detail::PostingList* lists;
+  const detail::TailList* tail_lists;
+  const detail::PostingArena* arena;
 };
 
-// Adds the terms of one posting run; ids increasing, so `last_entry` cuts it.
 template <Scoring kScoring>
-inline void accumulate_run(const EntryId* ids, const float* weights, std::uint32_t count, double v,
-                           EntryId last_entry, Accumulator* accumulators, EntryId* touched,
-                           std::size_t& touched_count) {
+inline void accumulate_posting(EntryId entry, float weight, double v, Accumulator* accumulators,
+                               EntryId* touched, std::size_t& touched_count) {
+  Accumulator& accumulator = accumulators[entry];
+  touched[touched_count] = entry;
+  touched_count += accumulator.shared == 0;
+  ++accumulator.shared;
+  accumulator.sum += detail::score_term(kScoring, v, weight);
+}
+
+// Adds the terms of one word's postings; ids increase, so `last_entry` cuts
+// them short.
+template <Scoring kScoring>
+inline void accumulate_main(const EntryId* ids, const float* weights, std::uint32_t count, double v,
+                            EntryId last_entry, Accumulator* accumulators, EntryId* touched,
+                            std::size_t& touched_count) {
   if (count > 0 && ids[count - 1] > last_entry)
     count = static_cast<std::uint32_t>(std::upper_bound(ids, ids + count, last_entry) - ids);
-  for (std::uint32_t i = 0; i < count; ++i) {
-    Accumulator& accumulator = accumulators[ids[i]];
-    touched[touched_count] = ids[i];
-    touched_count += accumulator.shared == 0;
-    ++accumulator.shared;
-    accumulator.sum += detail::score_term(kScoring, v, weights[i]);
-  }
+  for (std::uint32_t i = 0; i < count; ++i)
+    accumulate_posting<kScoring>(ids[i], weights[i], v, accumulators, touched, touched_count);
+}
+
+template <Scoring kScoring>
+inline void accumulate_tail(const detail::TailPosting* postings, std::uint32_t count, double v,
+                            EntryId last_entry, Accumulator* accumulators, EntryId* touched,
+                            std::size_t& touched_count) {
+  if (count > 0 && postings[count - 1].entry > last_entry)
+    count = static_cast<std::uint32_t>(
+        std::upper_bound(postings, postings + count, last_entry,
+                         [](EntryId id, const detail::TailPosting& p) { return id < p.entry; }) -
+        postings);
+  for (std::uint32_t i = 0; i < count; ++i)
+    accumulate_posting<kScoring>(postings[i].entry, postings[i].weight, v, accumulators, touched,
+                                 touched_count);
 }
 
 // Every term is computed and summed exactly as Vocabulary::score does, in the
@@ -220,7 +280,7 @@ std::size_t accumulate(IndexView index, const BowVector& bow, EntryId last_entry
     if (q + 2 * kAhead < n) {
       const WordId far = query[q + 2 * kAhead].word;
       if (index.main_offsets != nullptr) __builtin_prefetch(index.main_offsets + far);
-      __builtin_prefetch(index.slot_of_word + far);
+      __builtin_prefetch(index.tail_lists + far);
     }
     if (q + kAhead < n) {
       const WordId near = query[q + kAhead].word;
@@ -229,26 +289,21 @@ std::size_t accumulate(IndexView index, const BowVector& bow, EntryId last_entry
         __builtin_prefetch(index.main_ids + begin);
         __builtin_prefetch(index.main_weights + begin);
       }
-      const std::uint32_t slot = index.slot_of_word[near];
-      if (slot != 0) {
-        __builtin_prefetch(index.lists[slot - 1].ids());
-        __builtin_prefetch(index.lists[slot - 1].weights());
-      }
+      const detail::TailList list = index.tail_lists[near];
+      if (list.size != 0) __builtin_prefetch(index.arena->at(list.block));
     }
     const WordId word = query[q].word;
     const double v = query[q].value;
     if (index.main_offsets != nullptr) {
       const std::uint32_t begin = index.main_offsets[word];
-      accumulate_run<kScoring>(index.main_ids + begin, index.main_weights + begin,
-                               index.main_offsets[word + 1] - begin, v, last_entry, accumulators,
-                               touched, touched_count);
+      accumulate_main<kScoring>(index.main_ids + begin, index.main_weights + begin,
+                                index.main_offsets[word + 1] - begin, v, last_entry, accumulators,
+                                touched, touched_count);
     }
-    const std::uint32_t slot = index.slot_of_word[word];
-    if (slot != 0) {
-      const detail::PostingList& list = index.lists[slot - 1];
-      accumulate_run<kScoring>(list.ids(), list.weights(), list.size(), v, last_entry, accumulators,
-                               touched, touched_count);
-    }
+    const detail::TailList list = index.tail_lists[word];
+    if (list.size != 0)
+      accumulate_tail<kScoring>(index.arena->at(list.block), list.size, v, last_entry, accumulators,
+                                touched, touched_count);
   }
   return touched_count;
 }
@@ -307,12 +362,37 @@ std::string no_entry_message(EntryId entry, EntryId next) {
   return "entry " + std::to_string(entry) + " was removed";
 }
 
+// Walks the set bits of a bitmap from the highest to the lowest.
+class TailWordCursor {
+ public:
+  static constexpr std::size_t kEnd = ~std::size_t{0};
+
+  explicit TailWordCursor(const std::vector<std::uint64_t>& bits) noexcept
+      : bits_(bits.data()), block_(bits.size()) {}
+
+  std::size_t next() noexcept {
+    while (current_ == 0) {
+      if (block_ == 0) return kEnd;
+      current_ = bits_[--block_];
+    }
+    const auto bit = static_cast<std::size_t>(63 - __builtin_clzll(current_));
+    current_ &= ~(std::uint64_t{1} << bit);
+    return block_ * 64 + bit;
+  }
+
+ private:
+  const std::uint64_t* bits_;
+  std::size_t block_;
+  std::uint64_t current_ = 0;
+};
+
 }  // namespace
 
 Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
     : vocabulary(std::move(vocabulary_in)), options(options_in) {
   if (vocabulary.empty()) throw InvalidArgument("Database: the vocabulary is empty");
-  slot_of_word.assign(vocabulary.word_count(), 0);
+  tail_lists.resize(vocabulary.word_count());
+  tail_words.resize((vocabulary.word_count() + 63) / 64);
 }
 
 EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& features) {
@@ -320,38 +400,36 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     throw InvalidArgument("Database: no entry id left (" + std::to_string(alive.size()) +
                           " entries added)");
   const auto entry = static_cast<EntryId>(alive.size());
+  const BowEntry* words = bow.begin();
+  const std::size_t n = bow.size();
+  std::size_t appended = 0;
   try {
     alive.push_back(0);
-    word_counts.push_back(static_cast<std::uint32_t>(bow.size()));
+    word_counts.push_back(static_cast<std::uint32_t>(n));
     if (options.direct_index) direct.emplace_back(features);
     if (!labels.empty()) labels.emplace_back();
-    if (lists.capacity() < lists.size() + bow.size())
-      lists.reserve(
-          std::max(lists.size() + bow.size(), std::min(lists.capacity() * 2, slot_of_word.size())));
-    // As in queries: prefetch the lists of words a few steps ahead.
-    constexpr std::size_t kAhead = 8;
-    const BowEntry* words = bow.begin();
-    const std::size_t n = bow.size();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (i + 2 * kAhead < n) __builtin_prefetch(slot_of_word.data() + words[i + 2 * kAhead].word);
-      if (i + kAhead < n) {
-        const std::uint32_t ahead = slot_of_word[words[i + kAhead].word];
-        if (ahead != 0) lists[ahead - 1].prefetch_end();
+    // Each posting touches two cache lines nothing predicts: its word's list
+    // and the end of that list's block. A software pipeline fetches the list
+    // kListAhead words ahead and the block end kBlockAhead words ahead, so
+    // their misses overlap instead of stalling the loop one after the other.
+    constexpr std::size_t kListAhead = 24;
+    constexpr std::size_t kBlockAhead = 12;
+    detail::TailList* lists = tail_lists.data();
+    for (; appended < n; ++appended) {
+      if (appended + kListAhead < n) __builtin_prefetch(lists + words[appended + kListAhead].word);
+      if (appended + kBlockAhead < n) {
+        const detail::TailList ahead = lists[words[appended + kBlockAhead].word];
+        if (ahead.size != 0) __builtin_prefetch(arena.at(ahead.block) + ahead.size);
       }
-      std::uint32_t& slot = slot_of_word[words[i].word];
-      if (slot == 0) {
-        lists.emplace_back();  // no reallocation: reserved above
-        slot = static_cast<std::uint32_t>(lists.size());
-      }
-      lists[slot - 1].push_back(entry, words[i].value, arena);
+      const WordId word = words[appended].word;
+      if (lists[word].size == 0) tail_words[word / 64] |= std::uint64_t{1} << (word % 64);
+      detail::push_back(lists[word], {entry, words[appended].value}, arena);
     }
   } catch (...) {
-    for (const BowEntry& word : bow) {
-      const std::uint32_t slot = slot_of_word[word.word];
-      if (slot == 0) continue;
-      detail::PostingList& list = lists[slot - 1];
-      if (list.size() > 0 && list.ids()[list.size() - 1] == entry) list.pop_back();
-    }
+    // The lists that got this entry end with it; undo them.
+    for (std::size_t i = 0; i < appended; ++i)
+      if (--tail_lists[words[i].word].size == 0)
+        tail_words[words[i].word / 64] &= ~(std::uint64_t{1} << (words[i].word % 64));
     alive.resize(entry);
     word_counts.resize(entry);
     if (direct.size() > entry) direct.resize(entry);
@@ -360,8 +438,8 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   }
   alive[entry] = 1;
   ++live_entries;
-  postings += bow.size();
-  tail_postings += bow.size();
+  postings += n;
+  tail_postings += n;
   return entry;
 }
 
@@ -377,71 +455,119 @@ void Database::Impl::merge_if_worthwhile() {
   }
 }
 
+// In place: the main arrays grow (realloc) to the merged size, then one pass
+// from the last word with tail postings to the first moves the main runs
+// right by the number of tail postings of the words before them and puts
+// each word's tail postings after its main run. A word's new place never
+// starts before its old one, so nothing is overwritten before it is read.
+// The runs between two words with tail postings move together, so a merge
+// costs the postings it moves plus one add per offset, and the tail blocks,
+// the only scattered reads, are prefetched a few words ahead.
 void Database::Impl::merge() {
-  const std::size_t words = slot_of_word.size();
-  std::size_t live = 0;
-  std::vector<std::uint32_t> offsets(words + 1, 0);
-  const bool drop_dead = dead_postings > 0;  // else the copies are plain memcpy
-  const auto live_count = [&](const EntryId* ids, std::uint32_t count) {
-    if (!drop_dead) return count;
-    std::uint32_t kept = 0;
-    for (std::uint32_t i = 0; i < count; ++i) kept += alive[ids[i]];
-    return kept;
-  };
-  for (std::size_t w = 0; w < words; ++w) {
-    std::uint32_t count = 0;
-    if (!main_offsets.empty())
-      count += live_count(main_ids.data() + main_offsets[w], main_offsets[w + 1] - main_offsets[w]);
-    if (slot_of_word[w] != 0) {
-      const detail::PostingList& list = lists[slot_of_word[w] - 1];
-      count += live_count(list.ids(), list.size());
-    }
-    live += count;
-    if (live > std::numeric_limits<std::uint32_t>::max())
-      throw InvalidArgument("Database: more than 2^32 postings");
-    offsets[w + 1] = static_cast<std::uint32_t>(live);
+  const std::size_t words = tail_lists.size();
+  const std::size_t main_size = postings - tail_postings;
+  std::size_t live_tail = tail_postings;
+  std::size_t live_main = main_size;
+  if (dead_postings > 0) {
+    live_tail = 0;
+    for (std::size_t entry = tail_first_entry; entry < alive.size(); ++entry)
+      live_tail += alive[entry] != 0 ? word_counts[entry] : 0;
+    live_main = postings - dead_postings - live_tail;
   }
-  std::vector<EntryId> ids(live);
-  std::vector<float> weights(live);
-  std::size_t at = 0;
-  const auto copy_live = [&](const EntryId* from_ids, const float* from_weights,
-                             std::uint32_t count) {
-    if (!drop_dead) {  // runs are short: a loop beats a call to memcpy
-      EntryId* to_ids = ids.data() + at;
-      float* to_weights = weights.data() + at;
-      for (std::uint32_t i = 0; i < count; ++i) {
-        to_ids[i] = from_ids[i];
-        to_weights[i] = from_weights[i];
-      }
-      at += count;
-      return;
+  const std::size_t merged = live_main + live_tail;
+  if (merged > std::numeric_limits<std::uint32_t>::max())
+    throw InvalidArgument("Database: more than 2^32 postings");
+  const bool first = main_offsets.empty();
+  if (first) main_offsets.assign(words + 1, 0);
+  try {
+    if (merged > main_size) {
+      main_ids.resize(merged);
+      main_weights.resize(merged);
     }
-    for (std::uint32_t i = 0; i < count; ++i) {
-      if (alive[from_ids[i]] == 0) continue;
-      ids[at] = from_ids[i];
-      weights[at] = from_weights[i];
-      ++at;
-    }
-  };
-  for (std::size_t w = 0; w < words; ++w) {
-    if (!main_offsets.empty()) {
-      const std::uint32_t begin = main_offsets[w];
-      copy_live(main_ids.data() + begin, main_weights.data() + begin, main_offsets[w + 1] - begin);
-    }
-    if (slot_of_word[w] != 0) {
-      const detail::PostingList& list = lists[slot_of_word[w] - 1];
-      copy_live(list.ids(), list.weights(), list.size());
-    }
+  } catch (...) {
+    if (first) std::vector<std::uint32_t>().swap(main_offsets);
+    throw;
   }
   // Nothing below can throw: the index changes all at once.
-  main_offsets.swap(offsets);
-  main_ids.swap(ids);
-  main_weights.swap(weights);
-  std::fill(slot_of_word.begin(), slot_of_word.end(), 0);
-  std::vector<detail::PostingList>().swap(lists);
-  arena.clear();
+  std::uint32_t* offsets = main_offsets.data();
+  EntryId* ids = main_ids.data();
+  float* weights = main_weights.data();
+  if (live_main < main_size) {
+    // Drop the main tier's dead postings first (moving left), so that the
+    // pass below only ever moves postings right.
+    std::uint32_t kept = 0;
+    std::uint32_t begin = 0;
+    for (std::size_t w = 0; w < words; ++w) {
+      const std::uint32_t end = offsets[w + 1];
+      for (std::uint32_t i = begin; i < end; ++i) {
+        ids[kept] = ids[i];
+        weights[kept] = weights[i];
+        kept += alive[ids[i]];
+      }
+      begin = end;
+      offsets[w + 1] = kept;
+    }
+  }
+
+  const bool drop_dead = live_tail < tail_postings;
+  const auto move_right = [&](std::uint32_t begin, std::uint32_t end, std::uint32_t shift) {
+    if (shift == 0) return;
+    if (end - begin > 64) {
+      std::memmove(ids + begin + shift, ids + begin, std::size_t{end - begin} * sizeof(EntryId));
+      std::memmove(weights + begin + shift, weights + begin,
+                   std::size_t{end - begin} * sizeof(float));
+      return;
+    }
+    for (std::uint32_t i = end; i-- > begin;) {  // most runs are short: no call
+      ids[i + shift] = ids[i];
+      weights[i + shift] = weights[i];
+    }
+  };
+  // The words with tail postings, last first; the cursors ahead of the one
+  // merging prefetch the list, then the block, of the words it comes to next.
+  TailWordCursor far(tail_words), near(tail_words), current(tail_words);
+  constexpr int kFar = 32;
+  constexpr int kNear = 16;
+  for (int i = 0; i < kFar; ++i) {
+    const std::size_t w = far.next();
+    if (w != TailWordCursor::kEnd) __builtin_prefetch(tail_lists.data() + w);
+    if (i >= kFar - kNear) near.next();
+  }
+  std::size_t remaining = live_tail;  // of the words up to the current one
+  std::size_t span_end = words;       // the first word already merged
+  for (std::size_t w = current.next(); w != TailWordCursor::kEnd; w = current.next()) {
+    const std::size_t w_far = far.next();
+    if (w_far != TailWordCursor::kEnd) __builtin_prefetch(tail_lists.data() + w_far);
+    const std::size_t w_near = near.next();
+    if (w_near != TailWordCursor::kEnd) __builtin_prefetch(arena.at(tail_lists[w_near].block));
+    // The words between this one and the last merged one have no tail
+    // postings: their runs move right together.
+    const auto shift = static_cast<std::uint32_t>(remaining);
+    const std::uint32_t old_end = offsets[w + 1];
+    move_right(old_end, offsets[span_end], shift);
+    if (shift != 0)
+      for (std::size_t u = w + 1; u <= span_end; ++u) offsets[u] += shift;
+    // This word's tail postings go after its main run, which then moves
+    // right by the tail postings of the words before it.
+    detail::TailList& list = tail_lists[w];
+    const detail::TailPosting* tail = arena.at(list.block);
+    std::uint32_t to = old_end + shift;
+    for (std::uint32_t i = list.size; i-- > 0;) {
+      if (drop_dead && alive[tail[i].entry] == 0) continue;
+      --to;
+      ids[to] = tail[i].entry;
+      weights[to] = tail[i].weight;
+    }
+    remaining -= old_end + shift - to;
+    move_right(offsets[w], old_end, static_cast<std::uint32_t>(remaining));
+    list = {};
+    span_end = w;
+  }
+  std::fill(tail_words.begin(), tail_words.end(), 0);
+  arena.reset();
   tail_postings = 0;
-  postings = live;
+  tail_first_entry = static_cast<EntryId>(alive.size());
+  postings = merged;
   dead_postings = 0;
 }
 
@@ -497,7 +623,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
   const IndexView index{impl_->main_offsets.empty() ? nullptr : impl_->main_offsets.data(),
                         impl_->main_ids.data(), impl_->main_weights.data(),
-                        impl_->slot_of_word.data(), impl_->lists.data()};
+                        impl_->tail_lists.data(), &impl_->arena};
   const std::size_t touched = accumulate(scoring, index, bow, last_entry,
                                          buffers.accumulators.data(), buffers.touched.data());
 
@@ -591,12 +717,13 @@ EntryId Database::next_entry_id() const {
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
   std::vector<std::uint32_t>().swap(impl_->main_offsets);
-  std::vector<EntryId>().swap(impl_->main_ids);
-  std::vector<float>().swap(impl_->main_weights);
-  std::fill(impl_->slot_of_word.begin(), impl_->slot_of_word.end(), 0);
-  std::vector<detail::PostingList>().swap(impl_->lists);
+  impl_->main_ids.resize(0);
+  impl_->main_weights.resize(0);
+  std::fill(impl_->tail_lists.begin(), impl_->tail_lists.end(), detail::TailList{});
+  std::fill(impl_->tail_words.begin(), impl_->tail_words.end(), 0);
   impl_->arena.clear();
   impl_->tail_postings = 0;
+  impl_->tail_first_entry = 0;
   std::vector<std::uint8_t>().swap(impl_->alive);
   std::vector<std::uint32_t>().swap(impl_->word_counts);
   std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
@@ -610,10 +737,10 @@ std::size_t Database::memory_usage() const {
   std::shared_lock lock(impl_->mutex);
   const Impl& impl = *impl_;
   std::size_t bytes = impl.main_offsets.capacity() * sizeof(std::uint32_t) +
-                      impl.main_ids.capacity() * sizeof(EntryId) +
-                      impl.main_weights.capacity() * sizeof(float) +
-                      impl.slot_of_word.capacity() * sizeof(std::uint32_t) +
-                      impl.lists.capacity() * sizeof(detail::PostingList) + impl.alive.capacity() +
+                      impl.main_ids.size() * sizeof(EntryId) +
+                      impl.main_weights.size() * sizeof(float) +
+                      impl.tail_lists.capacity() * sizeof(detail::TailList) +
+                      impl.tail_words.capacity() * sizeof(std::uint64_t) + impl.alive.capacity() +
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
                       impl.labels.capacity() * sizeof(std::string);

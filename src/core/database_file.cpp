@@ -186,36 +186,32 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
 
   // Live postings only, words in increasing order.
   std::uint64_t posting_count = 0;
-  for (WordId word = 0; word < impl.slot_of_word.size(); ++word) {
+  for (WordId word = 0; word < impl.tail_lists.size(); ++word) {
     // Main tier first: its entries are older than the tail's.
-    const EntryId* runs[2] = {nullptr, nullptr};
-    const float* run_weights[2] = {nullptr, nullptr};
-    std::uint32_t run_sizes[2] = {0, 0};
+    const EntryId* main_ids = nullptr;
+    const float* main_weights = nullptr;
+    std::uint32_t main_size = 0;
     if (!impl.main_offsets.empty()) {
       const std::uint32_t begin = impl.main_offsets[word];
-      runs[0] = impl.main_ids.data() + begin;
-      run_weights[0] = impl.main_weights.data() + begin;
-      run_sizes[0] = impl.main_offsets[word + 1] - begin;
+      main_ids = impl.main_ids.data() + begin;
+      main_weights = impl.main_weights.data() + begin;
+      main_size = impl.main_offsets[word + 1] - begin;
     }
-    if (impl.slot_of_word[word] != 0) {
-      const detail::PostingList& list = impl.lists[impl.slot_of_word[word] - 1];
-      runs[1] = list.ids();
-      run_weights[1] = list.weights();
-      run_sizes[1] = list.size();
-    }
+    const detail::TailList list = impl.tail_lists[word];
+    const detail::TailPosting* tail = list.size != 0 ? impl.arena.at(list.block) : nullptr;
     std::uint32_t live = 0;
-    for (int r = 0; r < 2; ++r)
-      for (std::uint32_t i = 0; i < run_sizes[r]; ++i) live += impl.alive[runs[r][i]];
+    for (std::uint32_t i = 0; i < main_size; ++i) live += impl.alive[main_ids[i]];
+    for (std::uint32_t i = 0; i < list.size; ++i) live += impl.alive[tail[i].entry];
     if (live == 0) continue;
     detail::put_le<std::uint32_t>(sections[kWords], word);
     detail::put_le<std::uint32_t>(sections[kListLengths], live);
-    for (int r = 0; r < 2; ++r) {
-      for (std::uint32_t i = 0; i < run_sizes[r]; ++i) {
-        if (impl.alive[runs[r][i]] == 0) continue;
-        detail::put_le<std::uint32_t>(sections[kPostingIds], runs[r][i]);
-        detail::put_le<float>(sections[kPostingWeights], run_weights[r][i]);
-      }
-    }
+    const auto put_posting = [&](EntryId entry, float weight) {
+      if (impl.alive[entry] == 0) return;
+      detail::put_le<std::uint32_t>(sections[kPostingIds], entry);
+      detail::put_le<float>(sections[kPostingWeights], weight);
+    };
+    for (std::uint32_t i = 0; i < main_size; ++i) put_posting(main_ids[i], main_weights[i]);
+    for (std::uint32_t i = 0; i < list.size; ++i) put_posting(tail[i].entry, tail[i].weight);
     posting_count += live;
   }
 
@@ -362,9 +358,10 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
   for (std::size_t w = 0; w < word_count; ++w) impl->main_offsets[w + 1] += impl->main_offsets[w];
-  impl->main_ids = std::move(ids);
-  impl->main_weights = std::move(weights);
+  impl->main_ids.assign(ids.data(), ids.size());
+  impl->main_weights.assign(weights.data(), weights.size());
   impl->postings = posting_count;
+  impl->tail_first_entry = next_id;
 
   if (options.direct_index) {
     const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);

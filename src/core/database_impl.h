@@ -4,7 +4,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <memory>
+#include <new>
 #include <shared_mutex>
 #include <string>
 #include <vector>
@@ -16,49 +19,104 @@
 
 namespace binbow::detail {
 
-// Storage of the tail tier's posting lists: blocks of 2^k postings (8 bytes
-// each) carved from large chunks, with a free list per block size for the
-// blocks that growing lists leave behind. The whole tier is dropped at once
-// when it is merged, so there is no per-list malloc, free or header.
+// A posting of the tail tier: entry id and weight side by side, so that a
+// short list (most are) is one cache line for both append and query.
+struct TailPosting {
+  EntryId entry;
+  float weight;
+};
+
+// The tail postings of one word: where its block is in the arena, and how
+// many postings it holds. Blocks grow by doubling from one posting, so the
+// capacity is the smallest power of two ≥ size (at least that much: undoing
+// an append may leave more room, never less).
+struct TailList {
+  std::uint32_t block = 0;  // a PostingArena address; meaningless while size is 0
+  std::uint32_t size = 0;
+};
+
+// Storage of the tail tier's posting lists: blocks of 2^k postings carved
+// from large chunks, with a free list per block size for the blocks that
+// growing lists leave behind. Blocks are named by 32-bit addresses (chunk
+// index, then position in the chunk) so a word's TailList is 8 bytes. The
+// whole tier is dropped at once when it is merged, so there is no per-list
+// malloc, free or header.
 class PostingArena {
  public:
+  static constexpr unsigned kChunkBits = 17;  // 2^17 postings: 1 MiB chunks
+
+  PostingArena() noexcept { clear(); }
   // A block for `capacity` postings (a power of two).
-  unsigned char* allocate(std::uint32_t capacity);
-  void release(unsigned char* block, std::uint32_t capacity) noexcept;
+  std::uint32_t allocate(std::uint32_t capacity);
+  void release(std::uint32_t block, std::uint32_t capacity) noexcept;
+  // Forgets every block but keeps the chunks of the usual size for reuse:
+  // the tail fills again after each merge, and fresh memory costs a page
+  // fault (about 2 µs in our VM) per 4 KiB.
+  void reset() noexcept;
   void clear() noexcept;
   std::size_t memory_usage() const noexcept { return chunk_bytes_; }
+  TailPosting* at(std::uint32_t block) const noexcept {
+    return chunk_starts_[block >> kChunkBits] + (block & ((1u << kChunkBits) - 1));
+  }
+  TailPosting* const* chunk_starts() const noexcept { return chunk_starts_.data(); }
 
  private:
-  static constexpr std::size_t kChunkPostings = std::size_t{1} << 17;  // 1 MiB
-  std::vector<std::unique_ptr<unsigned char[]>> chunks_;
-  unsigned char* free_lists_[32] = {};
-  unsigned char* bump_ = nullptr;
-  std::size_t bump_left_ = 0;  // in postings (8 bytes)
+  static constexpr std::uint32_t kNoBlock = 0xFFFFFFFF;
+  std::uint32_t new_chunk(std::size_t postings);
+
+  std::vector<std::unique_ptr<TailPosting[]>> chunks_;
+  std::vector<TailPosting*> chunk_starts_;
+  std::vector<std::size_t> chunk_postings_;
+  std::uint32_t free_lists_[33];  // per log2(capacity)
+  std::uint32_t bump_ = 0;        // address of the next free posting
+  std::size_t bump_left_ = 0;     // in postings, in the chunk of bump_
+  // Chunks [spare_begin_, spare_end_) are kept from before the last reset
+  // and not used yet.
+  std::size_t spare_begin_ = 0;
+  std::size_t spare_end_ = 0;
   std::size_t chunk_bytes_ = 0;
 };
 
-// The tail postings of one word: entry ids (strictly increasing) and their
-// weights, as two arrays in one arena block, so a query streams through both.
-class PostingList {
+// A trivially copyable array in one malloc'd block, resized with realloc:
+// the main tier grows in place this way (large blocks are remapped by the
+// kernel, not copied) and no element is value-initialised for nothing.
+template <typename T>
+class GrowableArray {
  public:
-  std::uint32_t size() const noexcept { return size_; }
-  const EntryId* ids() const noexcept { return reinterpret_cast<const EntryId*>(block_); }
-  const float* weights() const noexcept {
-    return reinterpret_cast<const float*>(ids() + capacity_);
-  }
+  GrowableArray() = default;
+  GrowableArray(const GrowableArray&) = delete;
+  GrowableArray& operator=(const GrowableArray&) = delete;
+  ~GrowableArray() { std::free(data_); }
 
-  void push_back(EntryId entry, float weight, PostingArena& arena);
-  void pop_back() noexcept { --size_; }
-  // Hints the cache about where the next push_back writes.
-  void prefetch_end() const noexcept {
-    __builtin_prefetch(ids() + size_);
-    __builtin_prefetch(weights() + size_);
+  T* data() noexcept { return data_; }
+  const T* data() const noexcept { return data_; }
+  std::size_t size() const noexcept { return size_; }
+  // Keeps the first min(size, n) elements; the others are uninitialised.
+  // Growing throws std::bad_alloc, leaving the array as it was; shrinking
+  // never throws (it keeps the larger block if realloc fails).
+  void resize(std::size_t n) {
+    if (n == size_) return;
+    if (n == 0) {
+      std::free(data_);
+      data_ = nullptr;
+      size_ = 0;
+      return;
+    }
+    void* moved = std::realloc(data_, n * sizeof(T));
+    if (moved != nullptr)
+      data_ = static_cast<T*>(moved);
+    else if (n > size_)
+      throw std::bad_alloc();
+    size_ = n;
+  }
+  void assign(const T* values, std::size_t n) {
+    resize(n);
+    if (n > 0) std::memcpy(data_, values, n * sizeof(T));
   }
 
  private:
-  unsigned char* block_ = nullptr;  // capacity_ ids, then capacity_ floats
-  std::uint32_t size_ = 0;
-  std::uint32_t capacity_ = 0;
+  T* data_ = nullptr;
+  std::size_t size_ = 0;
 };
 
 // One entry's FeatureVector, packed. Node ids are 32 bit. When every feature
@@ -94,7 +152,8 @@ namespace binbow {
 // word, which is merged into the main tier (dropping removed entries) when it
 // holds more than a quarter of all postings: each posting is copied a bounded
 // number of times, the index stays compact, and every entry lives in exactly
-// one tier, its postings in increasing word order.
+// one tier (the tail holds the entries from tail_first_entry on), its
+// postings in increasing word order.
 struct Database::Impl {
   Impl(Vocabulary vocabulary_in, DatabaseOptions options_in);
 
@@ -110,15 +169,18 @@ struct Database::Impl {
   mutable std::shared_mutex mutex;
 
   // Main tier: postings of word w are [main_offsets[w], main_offsets[w + 1]).
-  std::vector<std::uint32_t> main_offsets;  // word_count + 1
-  std::vector<EntryId> main_ids;
-  std::vector<float> main_weights;
+  std::vector<std::uint32_t> main_offsets;  // word_count + 1, or empty
+  detail::GrowableArray<EntryId> main_ids;
+  detail::GrowableArray<float> main_weights;
 
-  // Tail tier: word → slot + 1 (0: no tail postings).
-  std::vector<std::uint32_t> slot_of_word;
-  std::vector<detail::PostingList> lists;
+  // Tail tier: one list per word, and one bit per word set while its list is
+  // not empty (128 KiB for a million words: merges skip the words without
+  // tail postings, and queries skip their lists, without touching them).
+  std::vector<detail::TailList> tail_lists;
+  std::vector<std::uint64_t> tail_words;
   detail::PostingArena arena;
   std::size_t tail_postings = 0;
+  EntryId tail_first_entry = 0;
 
   // Per entry, indexed by entry id (dead entries keep their place).
   std::vector<std::uint8_t> alive;

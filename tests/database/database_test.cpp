@@ -236,6 +236,85 @@ TEST(Database, QueriesSpanningBothTiers) {
   }
 }
 
+// A complete k-ary tree with random descriptors: word ids 0..k^levels-1,
+// enough words for sparse tail lists, without training.
+Vocabulary wide_vocabulary(std::uint32_t k, std::uint32_t levels, Scoring scoring) {
+  std::mt19937_64 rng(3);
+  VocabularyTree tree;
+  tree.code_size = 32;
+  tree.branching = k;
+  tree.levels = levels;
+  tree.parent.push_back(0);
+  std::size_t level_begin = 0, level_size = 1;
+  for (std::uint32_t depth = 0; depth < levels; ++depth) {
+    for (std::size_t i = 0; i < level_size; ++i)
+      for (std::uint32_t c = 0; c < k; ++c)
+        tree.parent.push_back(static_cast<NodeId>(level_begin + i));
+    level_begin += level_size;
+    level_size *= k;
+  }
+  tree.descriptors.resize(tree.parent.size() * tree.code_size);
+  for (auto& b : tree.descriptors) b = static_cast<std::uint8_t>(rng());
+  tree.weights.assign(tree.parent.size(), 1.0f);
+  return Vocabulary::from_tree(tree).with_scoring(scoring);
+}
+
+TEST(Database, ManyMergesOfSparseAndDenseTails) {
+  // 10,000 words; images mix rare words (tail lists of one posting, most
+  // words untouched by a merge) with a few very common ones (long lists), so
+  // merges move runs both word by word and in long spans. Removals make
+  // some merges drop dead postings from both tiers. Queries are checked
+  // between merges (tail large or small) and after a save/load.
+  for (Scoring scoring : {Scoring::kL1, Scoring::kKL}) {
+    const Vocabulary vocabulary = wide_vocabulary(10, 4, scoring);
+    ASSERT_EQ(vocabulary.word_count(), 10000u);
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<float> value(0.01f, 1.0f);
+    std::vector<BowVector> bows;
+    for (int i = 0; i < 2500; ++i) {
+      std::vector<bool> used(vocabulary.word_count(), false);
+      const std::size_t rare = 50 + rng() % 300;
+      for (std::size_t j = 0; j < rare; ++j) used[rng() % used.size()] = true;
+      for (WordId common = 0; common < 40; ++common) used[common * 250] = rng() % 4 != 0;
+      std::vector<BowEntry> entries;
+      for (WordId w = 0; w < used.size(); ++w)
+        if (used[w]) entries.push_back({w, value(rng)});
+      bows.emplace_back(std::move(entries));
+    }
+    Database database(vocabulary, {false, 0});
+    std::vector<bool> live(bows.size(), false);
+    std::size_t checks = 0;
+    for (std::size_t i = 0; i < bows.size(); ++i) {
+      ASSERT_EQ(database.add(bows[i]), static_cast<EntryId>(i));
+      live[i] = true;
+      if (i % 5 == 2) {
+        const auto victim = static_cast<EntryId>(rng() % (i + 1));
+        if (live[victim]) {
+          database.remove(victim);
+          live[victim] = false;
+        }
+      }
+      if (i % 211 == 0 || i + 1 == bows.size()) {
+        const BowVector& query = bows[rng() % bows.size()];
+        for (EntryId max_id : {kAllEntries, static_cast<EntryId>(i / 3)})
+          expect_same(
+              database.query(query, 15, max_id),
+              brute_force(vocabulary, bows, live, query, 15, max_id),
+              std::string("many merges ") + to_string(scoring) + " after " + std::to_string(i));
+        ++checks;
+      }
+    }
+    EXPECT_EQ(checks, 13u);
+    const std::vector<std::uint8_t> bytes = database.serialize(false);
+    const Database loaded = Database::deserialize(bytes.data(), bytes.size(), "memory", vocabulary);
+    for (std::size_t q = 0; q < 10; ++q) {
+      const BowVector& query = bows[rng() % bows.size()];
+      expect_same(loaded.query(query, 15), brute_force(vocabulary, bows, live, query, 15),
+                  "loaded");
+    }
+  }
+}
+
 TEST(Database, IdsAreDenseAndClearRestarts) {
   const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
   const Corpus corpus = random_corpus(vocabulary, 10, 2);
