@@ -99,17 +99,6 @@ const TrainingSet& training_set() {
   return set;
 }
 
-double mean_quantisation_error(const Vocabulary& vocabulary, const DescriptorView& rows) {
-  std::vector<WordId> words(rows.rows);
-  vocabulary.quantize(rows, words.data());
-  const std::vector<NodeId> leaves = vocabulary.word_nodes();
-  double total = 0;
-  for (std::size_t i = 0; i < rows.rows; ++i) {
-    total += hamming_distance(rows.row(i), vocabulary.node_descriptor(leaves[words[i]]), 32);
-  }
-  return total / static_cast<double>(rows.rows);
-}
-
 void BM_BuildVocabulary(benchmark::State& state) {
   const TrainingSet& set = training_set();
   const std::vector<DescriptorView> images = set.views();
@@ -124,8 +113,7 @@ void BM_BuildVocabulary(benchmark::State& state) {
   }
   state.counters["descriptors"] = static_cast<double>(set.descriptors.rows());
   state.counters["words"] = static_cast<double>(vocabulary.word_count());
-  state.counters["quantisation_error"] =
-      mean_quantisation_error(vocabulary, set.descriptors.view());
+  state.counters["quantisation_error"] = vocabulary.mean_quantisation_error(set.descriptors.view());
 }
 BENCHMARK(BM_BuildVocabulary)
     ->ArgName("threads")

@@ -120,18 +120,6 @@ TrainingSet subsample(const TrainingSet& set, std::size_t limit, std::uint64_t s
   return result;
 }
 
-double mean_quantisation_error(const Vocabulary& vocabulary, const DescriptorView& descriptors) {
-  std::vector<WordId> words(descriptors.rows);
-  vocabulary.quantize(descriptors, words.data());
-  const std::vector<NodeId> leaves = vocabulary.word_nodes();
-  double total = 0;
-  for (std::size_t i = 0; i < descriptors.rows; ++i) {
-    total += hamming_distance(descriptors.row(i), vocabulary.node_descriptor(leaves[words[i]]),
-                              descriptors.code_size);
-  }
-  return descriptors.rows == 0 ? 0.0 : total / static_cast<double>(descriptors.rows);
-}
-
 void run_build_vocab(const BuildVocabArguments& arguments) {
   BuildOptions options;
   options.branching = arguments.branching;
@@ -172,7 +160,7 @@ void run_build_vocab(const BuildVocabArguments& arguments) {
   std::printf("words: %zu, nodes: %zu\n", vocabulary.word_count(), vocabulary.node_count());
   std::printf("time: %.2f s features, %.2f s clustering\n", extraction_seconds, build_seconds);
   std::printf("mean quantisation error: %.2f bits\n",
-              mean_quantisation_error(vocabulary, set.descriptors.view()));
+              vocabulary.mean_quantisation_error(set.descriptors.view()));
 }
 
 }  // namespace

@@ -134,6 +134,11 @@ class Vocabulary {
   void quantize(const DescriptorView& descriptors, WordId* words, NodeId* nodes = nullptr,
                 unsigned levels_up = 0) const;
 
+  // Mean Hamming distance in bits from each descriptor to the descriptor of
+  // its word (greedy descent): how closely the vocabulary fits these
+  // descriptors, lower is better; 0 for no descriptors.
+  double mean_quantisation_error(const DescriptorView& descriptors) const;
+
   // Descriptors → BoW vector, weighted and normalised as DBoW2's
   // transform(features, v). Throws InvalidArgument if the code size differs.
   void transform(const DescriptorView& descriptors, BowVector& bow) const;

@@ -297,6 +297,20 @@ void Vocabulary::quantize(const DescriptorView& descriptors, WordId* words, Node
                             level_depth(b, levels_up));
 }
 
+double Vocabulary::mean_quantisation_error(const DescriptorView& descriptors) const {
+  const auto& b = require(block_);
+  check_descriptors(b, descriptors);
+  if (descriptors.rows == 0) return 0.0;
+  std::vector<WordId> words(descriptors.rows);
+  detail::kernels().descend(b.tree, descriptors.data, descriptors.rows, words.data(), nullptr, 0);
+  const std::vector<NodeId> leaves = word_nodes();
+  double total = 0;
+  for (std::size_t i = 0; i < descriptors.rows; ++i)
+    total += detail::kernels().hamming(descriptors.row(i), node_descriptor(leaves[words[i]]),
+                                       descriptors.code_size);
+  return total / static_cast<double>(descriptors.rows);
+}
+
 void Vocabulary::words_to_bow(const WordId* words, std::size_t count, BowVector& bow) const {
   const auto& b = *block_;
   Scratch& s = scratch();

@@ -46,6 +46,23 @@ TEST(Vocabulary, FlatDescentEqualsExhaustiveDescentInPointerTree) {
   }
 }
 
+TEST(Vocabulary, MeanQuantisationErrorIsTheMeanBitDistanceToEachDescriptorsLeaf) {
+  std::mt19937_64 rng(4);
+  const VocabularyTree tree = test::random_tree(rng, 32, 6, 3);
+  const Vocabulary v = Vocabulary::from_tree(tree);
+  const test::ReferenceVocabulary ref(tree);
+  const auto d = test::random_descriptors(200, 32, rng);
+  double total = 0;
+  for (std::size_t i = 0; i < d.rows(); ++i) {
+    const std::uint8_t* leaf = v.node_descriptor(ref.descend(d.row(i), v.levels()).second);
+    for (std::size_t byte = 0; byte < 32; ++byte)
+      total += __builtin_popcount(static_cast<unsigned>(d.row(i)[byte] ^ leaf[byte]));
+  }
+  EXPECT_NEAR(v.mean_quantisation_error(d), total / 200.0, 1e-9);
+  EXPECT_EQ(v.mean_quantisation_error(DescriptorMatrix(0, 32)), 0.0);
+  EXPECT_THROW(v.mean_quantisation_error(DescriptorMatrix(3, 64)), InvalidArgument);
+}
+
 TEST(Vocabulary, TransformEqualsDenseReferenceForEveryWeightingAndScoring) {
   std::mt19937_64 rng(2);
   for (Weighting weighting : kAllWeightings) {
