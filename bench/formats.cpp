@@ -15,6 +15,7 @@
 #include "binbow/vocabulary.h"
 #include "core/file_io.h"
 #include "formats/codecs.h"
+#include "support/random_tree.h"
 
 namespace {
 
@@ -23,34 +24,10 @@ using namespace binbow;
 // ~690k words, ~800k nodes.
 VocabularyTree orbvoc_like_tree() {
   std::mt19937_64 rng(2026);
-  VocabularyTree tree;
-  tree.code_size = 32;
-  tree.branching = 10;
-  tree.levels = 6;
-  tree.parent.push_back(0);
-  std::vector<std::uint32_t> depth{0};
-  std::vector<NodeId> stack{0};
   std::uniform_int_distribution<std::uint32_t> last_level(3, 11);  // capped at 10: mean ≈ 6.9
-  while (!stack.empty()) {
-    const NodeId node = stack.back();
-    stack.pop_back();
-    if (depth[node] == 6) continue;
-    const std::uint32_t count = depth[node] < 5 ? 10 : std::min(10u, last_level(rng));
-    const NodeId first = static_cast<NodeId>(tree.parent.size());
-    for (std::uint32_t c = 0; c < count; ++c) {
-      tree.parent.push_back(node);
-      depth.push_back(depth[node] + 1);
-    }
-    for (std::uint32_t c = count; c-- > 0;) stack.push_back(first + c);
-  }
-  const std::size_t nodes = tree.parent.size();
-  tree.descriptors.resize(nodes * 32);
-  for (std::size_t i = 32; i < tree.descriptors.size(); ++i)
-    tree.descriptors[i] = static_cast<std::uint8_t>(rng());
-  std::uniform_real_distribution<float> weight(0.5f, 12.0f);
-  tree.weights.resize(nodes);
-  for (float& w : tree.weights) w = weight(rng);
-  return tree;
+  return test::random_tree(10, 6, 32, rng, [&](std::uint32_t depth, std::mt19937_64& r) {
+    return depth < 5 ? 10u : std::min(10u, last_level(r));
+  });
 }
 
 struct Files {

@@ -12,7 +12,7 @@
 #include "core/little_endian.h"
 #include "formats/codecs.h"
 #include "formats/gzip.h"
-#include "formats/random_tree.h"
+#include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {

@@ -12,7 +12,7 @@
 #include "binbow/formats.h"
 #include "formats/codecs.h"
 #include "formats/loader.h"
-#include "formats/random_tree.h"
+#include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {
