@@ -1,8 +1,8 @@
 // The work of each libFuzzer target, shared with the regression test that
 // replays fuzz/corpus/<target>/* through the normal build
-// (tests/formats/fuzz_corpus_test.cpp). Each function returns for a valid
-// file, throws binbow::FileError for an invalid one, and throws
-// std::logic_error when an accepted file breaks an invariant (a bug).
+// (tests/formats/fuzz_corpus_test.cpp), vocabularies and databases alike. Each function returns for
+// a valid file, throws binbow::FileError for an invalid one, and throws std::logic_error when an
+// accepted file breaks an invariant (a bug).
 #pragma once
 
 #include <algorithm>
@@ -12,9 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/formats.h"
 #include "binbow/vocabulary.h"
+#include "core/crc32c.h"
+#include "core/little_endian.h"
 #include "formats/codecs.h"
 #include "formats/container.h"
 
@@ -77,6 +80,68 @@ inline void load_bbw(const std::uint8_t* data, std::size_t size) {
   check_accepted(Vocabulary::deserialize(data, size, "fuzz", options), VocabularyFormat::kBinbow);
 }
 
+// Rewrites the header, table and section CRCs of a .bbdb image in place,
+// where the layout allows it.
+inline void fix_bbdb_checksums(std::vector<std::uint8_t>& bytes) {
+  constexpr std::size_t kHeaderSize = 64;
+  constexpr std::size_t kSectionEntrySize = 24;
+  using detail::crc32c;
+  using detail::load_le;
+  using detail::store_le;
+  if (bytes.size() < kHeaderSize) return;
+  std::uint8_t* data = bytes.data();
+  const auto sections = load_le<std::uint32_t>(data + 48);
+  if (sections > 64) return;
+  const std::size_t table_size = sections * kSectionEntrySize;
+  if (bytes.size() >= kHeaderSize + table_size + 4) {
+    std::uint8_t* table = data + kHeaderSize;
+    for (std::uint32_t i = 0; i < sections; ++i) {
+      std::uint8_t* e = table + i * kSectionEntrySize;
+      const auto offset = load_le<std::uint64_t>(e + 8);
+      const auto length = load_le<std::uint64_t>(e + 16);
+      if (offset <= bytes.size() && length <= bytes.size() - offset)
+        store_le<std::uint32_t>(e + 4, crc32c(data + offset, length));
+    }
+    store_le<std::uint32_t>(table + table_size, crc32c(table, table_size));
+  }
+  store_le<std::uint32_t>(data + 60, crc32c(data, 60));
+}
+
+// An accepted database answers queries, returns its direct index and
+// survives a save/load round trip unchanged.
+inline void check_accepted_database(const Database& database) {
+  const std::size_t words = std::min<std::size_t>(database.vocabulary().word_count(), 16);
+  std::vector<BowEntry> entries;
+  for (WordId w = 0; w < words; ++w) entries.push_back({w, 1.0f / static_cast<float>(words)});
+  const auto results = database.query(BowVector(entries), 5);
+  for (const auto& result : results)
+    if (!database.contains(result.entry)) throw std::logic_error("query returned a missing entry");
+  std::size_t live = 0;
+  for (EntryId id = 0; id < database.next_entry_id(); ++id) {
+    if (!database.contains(id)) continue;
+    ++live;
+    if (database.options().direct_index) (void)database.feature_vector(id);
+    (void)database.label(id);
+  }
+  if (live != database.size()) throw std::logic_error("size() disagrees with contains()");
+  const std::vector<std::uint8_t> saved = database.serialize();
+  const Database again = Database::deserialize(saved.data(), saved.size(), "resaved");
+  if (again.serialize() != saved) throw std::logic_error("save/load round trip changed the file");
+}
+
+// .bbdb: the input as is (the CRCs reject almost all mutations), then with
+// its CRCs recomputed, so that mutations reach the structural checks behind
+// them. Throws FileError if the input as is was rejected.
+inline void load_bbdb(const std::uint8_t* data, std::size_t size) {
+  std::vector<std::uint8_t> fixed(data, data + size);
+  fix_bbdb_checksums(fixed);
+  try {
+    check_accepted_database(Database::deserialize(fixed.data(), fixed.size(), "fuzz"));
+  } catch (const FileError&) {
+  }
+  check_accepted_database(Database::deserialize(data, size, "fuzz"));
+}
+
 // Target names (fuzz_<name>, fuzz/corpus/<name>/) and their functions.
 struct Target {
   const char* name;
@@ -95,6 +160,7 @@ inline const Target kTargets[] = {
     {"fbow",
      [](const std::uint8_t* d, std::size_t n) { load_tree_format(VocabularyFormat::kFbow, d, n); }},
     {"bbw", load_bbw},
+    {"bbdb", load_bbdb},
 };
 
 // The body of LLVMFuzzerTestOneInput for target `name`.
