@@ -335,17 +335,11 @@ ParsedVocabulary parse_dbow2_yaml(const std::uint8_t* data, std::size_t size,
     }
   }
 
-  const auto require = [&](std::int64_t value, const char* key, std::int64_t low,
-                           std::int64_t high) {
+  for (const auto& [value, key] :
+       {std::pair{branching, "k"}, std::pair{levels, "L"}, std::pair{scoring, "scoringType"},
+        std::pair{weighting, "weightingType"}})
     if (value == -1) throw FileError(name, std::string("the vocabulary map has no `") + key + "`");
-    if (value < low || value > high)
-      throw FileError(name, std::string("`") + key + "` = " + std::to_string(value) +
-                                " is outside " + std::to_string(low) + ".." + std::to_string(high));
-  };
-  require(branching, "k", 1, kMaxBranching);
-  require(levels, "L", 1, kMaxLevels);
-  require(scoring, "scoringType", 0, static_cast<int>(Scoring::kDotProduct));
-  require(weighting, "weightingType", 0, static_cast<int>(Weighting::kBinary));
+  check_header_values(name, "the vocabulary map", branching, levels, scoring, weighting);
   if (nodes.empty()) throw FileError(name, "the vocabulary has no nodes");
 
   ParsedVocabulary parsed;

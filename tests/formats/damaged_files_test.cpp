@@ -167,7 +167,7 @@ TEST_F(DamagedFiles, AbsurdHeaderValuesFailWithoutAllocating) {
       "%YAML:1.0\n---\nvocabulary:\n   k: 4000000000\n   L: 4000000000\n   scoringType: 0\n"
       "   weightingType: 0\n   nodes:\n      - { nodeId:1, parentId:0, weight:0., "
       "descriptor:\"1 \" }\n");
-  EXPECT_NE(rejection(dir_, "absurd.yml", yaml).find("`k` = 4000000000"), std::string::npos);
+  EXPECT_NE(rejection(dir_, "absurd.yml", yaml).find("k = 4000000000"), std::string::npos);
 }
 
 TEST_F(DamagedFiles, ParentsOutsideTheTreeOrInCyclesAreRejected) {
