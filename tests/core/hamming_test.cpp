@@ -11,19 +11,12 @@
 namespace binbow {
 namespace {
 
-std::uint32_t naive_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
-  std::uint32_t d = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int bit = 0; bit < 8; ++bit) d += ((a[i] ^ b[i]) >> bit) & 1u;
-  return d;
-}
-
 TEST(Hamming, EveryKernelMatchesBitCountingForAllLengths) {
   std::mt19937_64 rng(7);
   for (std::size_t code_size : {1, 3, 7, 8, 9, 16, 31, 32, 33, 61, 64, 65, 128}) {
     const auto m = test::random_descriptors(50, code_size, rng);
     for (std::size_t i = 0; i + 1 < m.rows(); ++i) {
-      const std::uint32_t expected = naive_distance(m.row(i), m.row(i + 1), code_size);
+      const std::uint32_t expected = test::bit_distance(m.row(i), m.row(i + 1), code_size);
       EXPECT_EQ(hamming_distance(m.row(i), m.row(i + 1), code_size), expected) << code_size;
       EXPECT_EQ(detail::generic_kernels().hamming(m.row(i), m.row(i + 1), code_size), expected);
     }
@@ -49,7 +42,7 @@ TEST(Hamming, NearestNeighborsMatchesLinearSearchWithLowestIndexOnTies) {
     for (std::size_t q = 0; q < queries.rows(); ++q) {
       std::uint32_t best = ~0u, best_i = 0;
       for (std::size_t c = 0; c < candidates.rows(); ++c) {
-        const auto d = naive_distance(queries.row(q), candidates.row(c), code_size);
+        const auto d = test::bit_distance(queries.row(q), candidates.row(c), code_size);
         if (d < best) best = d, best_i = static_cast<std::uint32_t>(c);
       }
       EXPECT_EQ(index[q], best_i);

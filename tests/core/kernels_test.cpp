@@ -8,22 +8,16 @@
 #include <vector>
 
 #include "core/kernels.h"
+#include "support/test_support.h"
 
 namespace binbow {
 namespace {
-
-std::uint32_t naive_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t n) {
-  std::uint32_t d = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int bit = 0; bit < 8; ++bit) d += ((a[i] ^ b[i]) >> bit) & 1u;
-  return d;
-}
 
 std::uint32_t naive_nearest(const std::uint8_t* query, const std::uint8_t* rows, std::size_t count,
                             std::size_t code_size) {
   std::uint32_t best = ~0u, best_index = 0;
   for (std::size_t c = 0; c < count; ++c) {
-    const std::uint32_t d = naive_distance(query, rows + c * code_size, code_size);
+    const std::uint32_t d = test::bit_distance(query, rows + c * code_size, code_size);
     if (d < best) best = d, best_index = static_cast<std::uint32_t>(c);
   }
   return best_index;
@@ -121,9 +115,9 @@ TEST(Kernels, DistancesAndNearestRowsEqualBitCounting) {
         const std::uint32_t expected = naive_nearest(query, rows.data(), count, code_size);
         EXPECT_EQ(index[q], expected) << kernels->name << " code size " << code_size;
         EXPECT_EQ(distance[q],
-                  naive_distance(query, rows.data() + expected * code_size, code_size));
+                  test::bit_distance(query, rows.data() + expected * code_size, code_size));
         EXPECT_EQ(kernels->hamming(query, rows.data(), code_size),
-                  naive_distance(query, rows.data(), code_size));
+                  test::bit_distance(query, rows.data(), code_size));
       }
     }
   }

@@ -53,11 +53,9 @@ TEST(Vocabulary, MeanQuantisationErrorIsTheMeanBitDistanceToEachDescriptorsLeaf)
   const test::ReferenceVocabulary ref(tree);
   const auto d = test::random_descriptors(200, 32, rng);
   double total = 0;
-  for (std::size_t i = 0; i < d.rows(); ++i) {
-    const std::uint8_t* leaf = v.node_descriptor(ref.descend(d.row(i), v.levels()).second);
-    for (std::size_t byte = 0; byte < 32; ++byte)
-      total += __builtin_popcount(static_cast<unsigned>(d.row(i)[byte] ^ leaf[byte]));
-  }
+  for (std::size_t i = 0; i < d.rows(); ++i)
+    total += test::bit_distance(d.row(i),
+                                v.node_descriptor(ref.descend(d.row(i), v.levels()).second), 32);
   EXPECT_NEAR(v.mean_quantisation_error(d), total / 200.0, 1e-9);
   EXPECT_EQ(v.mean_quantisation_error(DescriptorMatrix(0, 32)), 0.0);
   EXPECT_THROW(v.mean_quantisation_error(DescriptorMatrix(3, 64)), InvalidArgument);

@@ -44,6 +44,13 @@ TempDir::~TempDir() {
   fs::remove_all(path_, ignored);
 }
 
+std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size) {
+  std::uint32_t d = 0;
+  for (std::size_t i = 0; i < code_size; ++i)
+    for (int bit = 0; bit < 8; ++bit) d += ((a[i] ^ b[i]) >> bit) & 1u;
+  return d;
+}
+
 DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size, std::mt19937_64& rng) {
   DescriptorMatrix m(rows, code_size);
   for (std::size_t i = 0; i < rows * code_size; ++i) m.data()[i] = static_cast<std::uint8_t>(rng());

@@ -33,6 +33,9 @@ class TempDir {
   std::string path_;
 };
 
+// Hamming distance counted bit by bit: the reference for the kernels.
+std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size);
+
 // `rows` uniformly random descriptors of `code_size` bytes.
 DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size, std::mt19937_64& rng);
 // Descriptors clustered around `centers` random centres, each bit flipped
