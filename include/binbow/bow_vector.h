@@ -91,6 +91,7 @@ class FeatureVector {
   }
 
  private:
+  friend class Vocabulary;  // transform fills the arrays in place, reusing their capacity
   std::vector<NodeId> nodes_;
   std::vector<std::uint32_t> offsets_{0};
   std::vector<std::uint32_t> features_;

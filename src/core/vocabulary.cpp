@@ -381,17 +381,16 @@ void Vocabulary::transform(const DescriptorView& descriptors, BowVector& bow,
     s.feature_ids.push_back(static_cast<std::uint32_t>(i));
   }
   detail::radix_sort(s.node_keys, &s.feature_ids, s.buffer, s.buffer2);
-  std::vector<NodeId> nodes;
-  std::vector<std::uint32_t> offsets{0};
+  features.nodes_.clear();
+  features.offsets_.assign(1, 0);
   for (std::size_t i = 0; i < s.node_keys.size(); ++i) {
-    if (nodes.empty() || nodes.back() != s.node_keys[i]) {
-      if (!nodes.empty()) offsets.push_back(static_cast<std::uint32_t>(i));
-      nodes.push_back(s.node_keys[i]);
-    }
+    if (i > 0 && s.node_keys[i] == s.node_keys[i - 1]) continue;
+    if (i > 0) features.offsets_.push_back(static_cast<std::uint32_t>(i));
+    features.nodes_.push_back(s.node_keys[i]);
   }
-  if (!nodes.empty()) offsets.push_back(static_cast<std::uint32_t>(s.node_keys.size()));
-  features = FeatureVector::from_arrays(std::move(nodes), std::move(offsets),
-                                        std::vector<std::uint32_t>(s.feature_ids));
+  if (!features.nodes_.empty())
+    features.offsets_.push_back(static_cast<std::uint32_t>(s.node_keys.size()));
+  features.features_.assign(s.feature_ids.begin(), s.feature_ids.end());
 }
 
 double score_bow(const BowVector& a, const BowVector& b, Scoring scoring) {
