@@ -117,7 +117,7 @@ PYBIND11_MODULE(binbow, m) {
           "build",
           [](const std::vector<Bytes>& images, std::uint32_t branching, std::uint32_t levels,
              const std::string& weighting, const std::string& scoring, std::uint64_t seed,
-             unsigned threads) {
+             unsigned threads, const std::string& descriptor) {
             std::vector<DescriptorView> views;
             for (const Bytes& image : images) views.push_back(as_view(image));
             BuildOptions options;
@@ -127,13 +127,15 @@ PYBIND11_MODULE(binbow, m) {
             options.scoring = parse_scoring(scoring);
             options.seed = seed;
             options.threads = threads;
+            options.descriptor = descriptor;
             py::gil_scoped_release release;
             return Vocabulary::build(views, options);
           },
           py::arg("images"), py::arg("branching") = 10, py::arg("levels") = 6,
           py::arg("weighting") = "tf-idf", py::arg("scoring") = "l1", py::arg("seed") = 0,
-          py::arg("threads") = 0,
-          "Hierarchical k-medians over a list of (n_i, code_size) uint8 arrays, one per image.")
+          py::arg("threads") = 0, py::arg("descriptor") = "",
+          "Hierarchical k-medians over a list of (n_i, code_size) uint8 arrays, one per image;\n"
+          "descriptor names the extractor (\"orb\", \"brief\", ...) to record in the vocabulary.")
       .def(
           "transform",
           [](const Vocabulary& v, const Bytes& descriptors) {
@@ -175,6 +177,9 @@ PYBIND11_MODULE(binbow, m) {
       .def_property_readonly("branching", &Vocabulary::branching)
       .def_property_readonly("levels", &Vocabulary::levels)
       .def_property_readonly("code_size", &Vocabulary::code_size)
+      .def_property_readonly(
+          "descriptor", &Vocabulary::descriptor,
+          "Extractor that trained it (\"orb\", \"brief\", ...), \"\" if unknown.")
       .def_property_readonly("weighting",
                              [](const Vocabulary& v) { return to_string(v.weighting()); })
       .def_property_readonly("scoring", [](const Vocabulary& v) { return to_string(v.scoring()); })

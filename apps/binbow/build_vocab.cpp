@@ -122,6 +122,7 @@ TrainingSet subsample(const TrainingSet& set, std::size_t limit, std::uint64_t s
 
 void run_build_vocab(const BuildVocabArguments& arguments) {
   BuildOptions options;
+  options.descriptor = arguments.descriptor;
   options.branching = arguments.branching;
   options.levels = arguments.levels;
   options.weighting = parse_weighting(arguments.weighting);

@@ -13,6 +13,7 @@
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
 #include "commands.h"
+#include "default_vocabulary.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -39,20 +40,18 @@ struct DbQueryArguments {
 };
 
 std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
+                                                        const std::string& vocabulary_name,
                                                         const std::string& descriptor,
                                                         int features) {
   auto extractor = vision::make_extractor(descriptor, features);
-  if (extractor->code_size() != vocabulary.code_size())
-    throw InvalidArgument("--descriptor " + descriptor + " gives " +
-                          std::to_string(extractor->code_size() * 8) +
-                          "-bit descriptors, the vocabulary has " +
-                          std::to_string(vocabulary.code_size() * 8) + "-bit words");
+  check_vocabulary_fits(vocabulary, vocabulary_name, descriptor, extractor->code_size());
   return extractor;
 }
 
 void run_db_build(const DbBuildArguments& arguments) {
   const Vocabulary vocabulary = load_vocabulary(arguments.vocabulary);
-  const auto extractor = extractor_for(vocabulary, arguments.descriptor, arguments.features);
+  const auto extractor =
+      extractor_for(vocabulary, arguments.vocabulary, arguments.descriptor, arguments.features);
   Database database(vocabulary, {!arguments.no_direct_index, arguments.levels_up});
   vision::ImageSource source(arguments.inputs);
   const long long known = source.size();
@@ -78,8 +77,8 @@ void run_db_query(const DbQueryArguments& arguments) {
       arguments.vocabulary.empty()
           ? Database::load(arguments.database)
           : Database::load(arguments.database, load_vocabulary(arguments.vocabulary));
-  const auto extractor =
-      extractor_for(database.vocabulary(), arguments.descriptor, arguments.features);
+  const auto extractor = extractor_for(database.vocabulary(), arguments.database,
+                                       arguments.descriptor, arguments.features);
   const vision::Features features = extractor->extract(vision::read_grey_image(arguments.image));
   BowVector bow;
   database.vocabulary().transform(features.descriptors.view(), bow);

@@ -64,4 +64,18 @@ std::string default_vocabulary_path(const std::string& descriptor) {
       "pass one with --vocab FILE");
 }
 
+void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,
+                           const std::string& descriptor, std::size_t code_size) {
+  if (vocabulary.code_size() != code_size)
+    throw InvalidArgument(vocabulary_name + ": vocabulary of " +
+                          std::to_string(vocabulary.code_size() * 8) + "-bit descriptors, but " +
+                          descriptor + " gives " + std::to_string(code_size * 8) +
+                          "-bit descriptors (--descriptor)");
+  if (!vocabulary.descriptor().empty() && vocabulary.descriptor() != descriptor)
+    throw InvalidArgument(vocabulary_name + ": the vocabulary was trained on " +
+                          vocabulary.descriptor() + " descriptors, not " + descriptor +
+                          ": pass --descriptor " + vocabulary.descriptor() +
+                          " or a vocabulary trained on " + descriptor);
+}
+
 }  // namespace binbow::cli

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "binbow/vocabulary.h"
+
 namespace binbow::cli {
 
 // File name of the default vocabulary of a descriptor: "orb_default.bbw" or
@@ -29,5 +31,12 @@ std::string find_bundled_data(const std::string& relative, const std::string& wh
 // The first existing candidate. Throws InvalidArgument, listing the places
 // searched and telling the user to pass --vocab, when none exists.
 std::string default_vocabulary_path(const std::string& descriptor);
+
+// Throws InvalidArgument, naming `vocabulary_name` and saying what to pass
+// instead, unless the vocabulary fits descriptors of extractor `descriptor`
+// with `code_size` bytes: same length, and trained on that extractor when
+// the vocabulary records one.
+void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,
+                           const std::string& descriptor, std::size_t code_size);
 
 }  // namespace binbow::cli

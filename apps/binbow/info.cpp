@@ -13,6 +13,7 @@ namespace {
 
 void print_vocabulary(const Vocabulary& v) {
   std::printf("kind: vocabulary\n");
+  std::printf("descriptor: %s\n", v.descriptor().empty() ? "unknown" : v.descriptor().c_str());
   std::printf("descriptor_bits: %zu\n", v.code_size() * 8);
   std::printf("branching: %u\n", v.branching());
   std::printf("levels: %u\n", v.levels());

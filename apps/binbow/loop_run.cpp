@@ -137,10 +137,7 @@ std::string load_loop_vocabulary(const std::string& vocab_argument, const std::s
   const std::string path =
       vocab_argument.empty() ? default_vocabulary_path(descriptor) : vocab_argument;
   vocabulary = load_vocabulary(path);
-  if (vocabulary.code_size() != code_size)
-    throw InvalidArgument(path + ": vocabulary of " + std::to_string(vocabulary.code_size() * 8) +
-                          "-bit descriptors, but " + descriptor + " gives " +
-                          std::to_string(code_size * 8) + "-bit descriptors (--descriptor)");
+  check_vocabulary_fits(vocabulary, path, descriptor, code_size);
   std::error_code error;
   const std::filesystem::path absolute = std::filesystem::absolute(path, error);
   return error ? path : absolute.string();

@@ -40,6 +40,11 @@ struct VocabularyTree {
   std::vector<NodeId> parent;             // parent[i] for i ≥ 1; parent[0] is ignored
   std::vector<std::uint8_t> descriptors;  // node_count() × code_size; the root's bytes are ignored
   std::vector<float> weights;             // per node; only leaves' (the words') weights are kept
+  // The feature extractor whose descriptors trained the tree ("orb", "brief",
+  // ...): at most 8 characters of a-z, 0-9, '_' and '-'; empty when unknown.
+  // Stored in .bbw files only, so that tools can refuse descriptors of
+  // another kind with the same length (ORB and BRIEF are both 256-bit).
+  std::string descriptor;
 
   std::size_t node_count() const noexcept { return parent.size(); }
 };
@@ -62,6 +67,7 @@ struct BuildOptions {
   // Words present in more than this fraction of training images get weight 0
   // (stop words; they then contribute nothing to BoW vectors). 1 disables.
   double stop_word_fraction = 1.0;
+  std::string descriptor;  // recorded in the vocabulary (see VocabularyTree::descriptor)
   std::function<void(const BuildProgress&)> progress;  // optional, called now and then
 };
 
@@ -111,6 +117,9 @@ class Vocabulary {
   // CRC32C of the vocabulary's content (tree, weights, types): two vocabularies
   // with equal checksums describe the same words. Databases store it.
   std::uint32_t checksum() const noexcept;
+  // The extractor that trained it ("orb", "brief", ...) or "" when unknown
+  // (files of other formats do not record it). Not part of checksum().
+  const std::string& descriptor() const noexcept;
   // "k=10 L=6 tf-idf l1, 24830 words, 56062 nodes, 256-bit descriptors"
   std::string description() const;
 

@@ -59,6 +59,16 @@ class VocabularyTest(unittest.TestCase):
             loaded = binbow.Vocabulary.load(path)
             self.assertEqual(loaded.transform(self.images[2]), self.voc.transform(self.images[2]))
 
+    def test_records_the_descriptor_it_was_trained_on(self):
+        self.assertEqual(self.voc.descriptor, "")
+        orb = binbow.Vocabulary.build(self.images, branching=5, levels=2, descriptor="orb")
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "orb.bbw")
+            orb.save(path)
+            self.assertEqual(binbow.Vocabulary.load(path).descriptor, "orb")
+        with self.assertRaises(ValueError):
+            binbow.Vocabulary.build(self.images, branching=5, levels=2, descriptor="ORB!")
+
     def test_errors_are_python_exceptions(self):
         with self.assertRaises(OSError):
             binbow.Vocabulary.load("/nonexistent/v.bbw")

@@ -37,6 +37,9 @@ void check_tree(const VocabularyTree& tree) {
          std::to_string(n * tree.code_size));
   if (tree.weights.size() != n)
     fail(std::to_string(tree.weights.size()) + " weights for " + std::to_string(n) + " nodes");
+  if (!detail::valid_descriptor_name(tree.descriptor))
+    fail("descriptor name \"" + tree.descriptor +
+         "\" is not a name of up to 8 characters a-z 0-9 _ -");
   if (static_cast<unsigned>(tree.weighting) > 3 || static_cast<unsigned>(tree.scoring) > 5)
     fail("unknown weighting or scoring type");
 }
@@ -145,9 +148,9 @@ Vocabulary Vocabulary::from_tree(const VocabularyTree& tree) {
   std::fill_n(descriptors.data(), tree.code_size, std::uint8_t{0});
 
   auto block = std::make_shared<detail::VocabularyBlock>();
-  block->owned = detail::encode_block(tree.code_size, tree.branching, tree.levels, tree.weighting,
-                                      tree.scoring, n, word_weights.size(), descriptors.data(),
-                                      links.data(), counts.data(), word_weights.data());
+  block->owned = detail::encode_block(
+      tree.code_size, tree.branching, tree.levels, tree.weighting, tree.scoring, tree.descriptor, n,
+      word_weights.size(), descriptors.data(), links.data(), counts.data(), word_weights.data());
   detail::parse_block(*block, "vocabulary tree", LoadOptions{false});
   return Vocabulary(std::move(block));
 }
@@ -160,6 +163,7 @@ VocabularyTree Vocabulary::to_tree() const {
   tree.levels = b.levels;
   tree.weighting = b.weighting;
   tree.scoring = scoring_;
+  tree.descriptor = b.descriptor;
   tree.parent.assign(b.node_count, 0);
   tree.descriptors.assign(b.tree.descriptors, b.tree.descriptors + b.node_count * b.code_size);
   tree.weights.assign(b.node_count, 0.0f);
@@ -202,6 +206,11 @@ std::size_t Vocabulary::word_count() const noexcept {
 
 std::uint32_t Vocabulary::checksum() const noexcept {
   return block_ ? detail::content_checksum(*block_, scoring_) : 0;
+}
+
+const std::string& Vocabulary::descriptor() const noexcept {
+  static const std::string unknown;
+  return block_ ? block_->descriptor : unknown;
 }
 
 std::string Vocabulary::description() const {

@@ -32,7 +32,13 @@ inline constexpr std::uint32_t kSectionCount = 4;
 inline constexpr std::size_t kMaxCodeSize = 1024;
 inline constexpr std::uint32_t kMaxBranching = 255;
 inline constexpr std::uint32_t kMaxLevels = 32;
+inline constexpr std::size_t kDescriptorNameOffset = 52;  // in the header
+inline constexpr std::size_t kMaxDescriptorName = 8;
 }  // namespace bbw
+
+// Whether `name` can be stored as a vocabulary's descriptor name: at most 8
+// characters of a-z, 0-9, '_' and '-' (empty: unknown).
+bool valid_descriptor_name(const std::string& name) noexcept;
 
 struct VocabularyBlock {
   // Exactly one of these holds the bytes.
@@ -47,6 +53,7 @@ struct VocabularyBlock {
   std::uint32_t levels = 0;
   Weighting weighting = Weighting::kTfIdf;
   Scoring scoring = Scoring::kL1;
+  std::string descriptor;
   std::size_t node_count = 0;
   std::size_t word_count = 0;
   std::uint32_t section_crcs[bbw::kSectionCount] = {};
@@ -62,9 +69,10 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
 // Lays out a .bbw image from its parts (sections already in final form).
 std::vector<std::uint8_t> encode_block(std::size_t code_size, std::uint32_t branching,
                                        std::uint32_t levels, Weighting weighting, Scoring scoring,
-                                       std::size_t node_count, std::size_t word_count,
-                                       const std::uint8_t* descriptors, const std::uint32_t* links,
-                                       const std::uint8_t* child_counts, const float* word_weights);
+                                       const std::string& descriptor, std::size_t node_count,
+                                       std::size_t word_count, const std::uint8_t* descriptors,
+                                       const std::uint32_t* links, const std::uint8_t* child_counts,
+                                       const float* word_weights);
 
 // CRC32C identity of the content under a given scoring type.
 std::uint32_t content_checksum(const VocabularyBlock& block, Scoring scoring);

@@ -16,6 +16,7 @@
 
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
+#include "core/vocabulary_block.h"
 #include "kmedians.h"
 #include "parallel_for.h"
 
@@ -55,6 +56,10 @@ std::size_t validate(const std::vector<DescriptorView>& images, const BuildOptio
   }
   if (!(options.stop_word_fraction >= 0.0 && options.stop_word_fraction <= 1.0)) {
     throw InvalidArgument("Vocabulary::build: stop_word_fraction must be in [0, 1]");
+  }
+  if (!detail::valid_descriptor_name(options.descriptor)) {
+    throw InvalidArgument("Vocabulary::build: descriptor name \"" + options.descriptor +
+                          "\" is not a name of up to 8 characters a-z 0-9 _ -");
   }
   if (images.empty()) throw InvalidArgument("Vocabulary::build: no training images");
   std::size_t code_size = 0;
@@ -254,6 +259,7 @@ class TreeBuilder {
     tree.levels = options_.levels;
     tree.weighting = options_.weighting;
     tree.scoring = options_.scoring;
+    tree.descriptor = options_.descriptor;
     tree.parent.resize(count);
     tree.descriptors.resize(count * code_size_);
     tree.weights.assign(count, 1.0f);

@@ -1,5 +1,6 @@
 // binbow's vocabulary format (.bbw): header, section table, aligned sections,
 // every part protected by a CRC32C, explicit little-endian, mapped in place.
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -28,11 +29,18 @@ std::string describe_size(std::size_t n) {
 
 }  // namespace
 
+bool valid_descriptor_name(const std::string& name) noexcept {
+  if (name.size() > bbw::kMaxDescriptorName) return false;
+  for (const char c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-')) return false;
+  return true;
+}
+
 std::vector<std::uint8_t> encode_block(std::size_t code_size, std::uint32_t branching,
                                        std::uint32_t levels, Weighting weighting, Scoring scoring,
-                                       std::size_t node_count, std::size_t word_count,
-                                       const std::uint8_t* descriptors, const std::uint32_t* links,
-                                       const std::uint8_t* child_counts,
+                                       const std::string& descriptor, std::size_t node_count,
+                                       std::size_t word_count, const std::uint8_t* descriptors,
+                                       const std::uint32_t* links, const std::uint8_t* child_counts,
                                        const float* word_weights) {
   const void* sources[bbw::kSectionCount] = {descriptors, links, child_counts, word_weights};
   const SectionLayout sections[bbw::kSectionCount] = {
@@ -66,6 +74,7 @@ std::vector<std::uint8_t> encode_block(std::size_t code_size, std::uint32_t bran
   store_le<std::uint64_t>(h + 32, node_count);
   store_le<std::uint64_t>(h + 40, word_count);
   store_le<std::uint32_t>(h + 48, bbw::kSectionCount);
+  std::memcpy(h + bbw::kDescriptorNameOffset, descriptor.data(), descriptor.size());
   store_le<std::uint32_t>(h + 60, crc32c(h, 60));
 
   std::uint8_t* table = out.data() + bbw::kHeaderSize;
@@ -123,6 +132,13 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   if (word_count == 0 || word_count >= node_count)
     fail("word count " + std::to_string(word_count) + " does not fit " +
          std::to_string(node_count) + " nodes");
+  const char* name_field = reinterpret_cast<const char*>(data + bbw::kDescriptorNameOffset);
+  const std::string descriptor(name_field,
+                               std::find(name_field, name_field + bbw::kMaxDescriptorName, '\0'));
+  if (!valid_descriptor_name(descriptor) ||
+      std::any_of(name_field + descriptor.size(), name_field + bbw::kMaxDescriptorName,
+                  [](char c) { return c != 0; }))
+    fail("the descriptor name field is not a name of up to 8 characters a-z 0-9 _ -");
   if (section_count != bbw::kSectionCount)
     fail("expected " + std::to_string(bbw::kSectionCount) + " sections, the header says " +
          std::to_string(section_count));
@@ -163,6 +179,7 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   block.code_size = code_size;
   block.branching = branching;
   block.levels = levels;
+  block.descriptor = descriptor;
   block.weighting = static_cast<Weighting>(data[28]);
   block.scoring = static_cast<Scoring>(data[29]);
   block.node_count = node_count;

@@ -46,6 +46,7 @@ TEST(CliBuildVocab, BuildsTheSameFileForAnyThreadCount) {
   EXPECT_EQ(vocabulary.branching(), 6u);
   EXPECT_EQ(vocabulary.levels(), 3u);
   EXPECT_EQ(vocabulary.code_size(), 32u);
+  EXPECT_EQ(vocabulary.descriptor(), "orb");
   EXPECT_GT(vocabulary.word_count(), 100u);
   EXPECT_LE(vocabulary.word_count(), 216u);
 }

@@ -36,12 +36,38 @@ TEST(CliInfo, PrintsTheKeysScriptsRelyOn) {
   int status = -1;
   const std::string out = run("info " + dir.file("v.bbw"), &status);
   ASSERT_EQ(status, 0) << out;
-  for (const std::string& line :
-       std::vector<std::string>{"kind: vocabulary\n", "descriptor_bits: 256\n", "branching: 6\n",
-                                "levels: 3\n", "nodes: " + std::to_string(v.node_count()) + "\n",
-                                "words: " + std::to_string(v.word_count()) + "\n",
-                                "weighting: tf-idf\n", "scoring: l1\n"})
+  for (const std::string& line : std::vector<std::string>{
+           "kind: vocabulary\n", "descriptor: unknown\n", "descriptor_bits: 256\n",
+           "branching: 6\n", "levels: 3\n", "nodes: " + std::to_string(v.node_count()) + "\n",
+           "words: " + std::to_string(v.word_count()) + "\n", "weighting: tf-idf\n",
+           "scoring: l1\n"})
     EXPECT_NE(out.find(line), std::string::npos) << "missing '" << line << "' in:\n" << out;
+}
+
+TEST(CliInfo, NamesTheTrainingDescriptorAndCommandsRefuseAnotherKind) {
+  const std::string orb = test::source_path("data/vocab/orb_default.bbw");
+  const std::string brief = test::source_path("data/vocab/brief_default.bbw");
+  int status = -1;
+  std::string out = run("info " + orb, &status);
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("descriptor: orb\n"), std::string::npos) << out;
+  out = run("info " + brief, &status);
+  EXPECT_NE(out.find("descriptor: brief\n"), std::string::npos) << out;
+
+  // ORB and BRIEF descriptors are both 256-bit: only the recorded name tells
+  // that an ORB vocabulary cannot quantise BRIEF descriptors.
+  test::TempDir dir;
+  const std::string frames = test::source_path("data/samples/rtabmap/samples");
+  for (const std::string& command :
+       {"bench --vocab " + orb + " --descriptor brief --stride 40 " + frames,
+        "db build --vocab " + orb + " --descriptor brief -o " + dir.file("d.bbdb") + " " +
+            frames}) {
+    out = run(command, &status);
+    EXPECT_EQ(status, 1) << command << "\n" << out;
+    EXPECT_NE(out.find("trained on orb descriptors, not brief: pass --descriptor orb"),
+              std::string::npos)
+        << out;
+  }
 }
 
 TEST(CliInfo, ReadsRealDbow2Vocabulary) {

@@ -6,11 +6,15 @@
 
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
+#include "core/crc32c.h"
+#include "core/little_endian.h"
 #include "core/reference_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {
 namespace {
+
+void expect_file_error(const std::string& path, const std::string& fragment);
 
 Vocabulary sample_vocabulary(std::uint64_t seed = 9) {
   std::mt19937_64 rng(seed);
@@ -34,6 +38,32 @@ TEST(VocabularyFile, SaveLoadIsBitExactAndBehavesTheSame) {
   // Scoring overrides are saved.
   v.with_scoring(Scoring::kBhattacharyya).save(dir.file("s.bbw"));
   EXPECT_EQ(Vocabulary::load(dir.file("s.bbw")).scoring(), Scoring::kBhattacharyya);
+}
+
+TEST(VocabularyFile, RecordsTheDescriptorNameOutsideTheContentChecksum) {
+  test::TempDir dir;
+  std::mt19937_64 rng(9);
+  VocabularyTree tree = test::random_tree(rng, 32, 5, 3);
+  const Vocabulary unnamed = Vocabulary::from_tree(tree);
+  EXPECT_EQ(unnamed.descriptor(), "");
+  tree.descriptor = "brief";
+  const Vocabulary named = Vocabulary::from_tree(tree);
+  named.save(dir.file("v.bbw"));
+  const Vocabulary loaded = Vocabulary::load(dir.file("v.bbw"));
+  EXPECT_EQ(loaded.descriptor(), "brief");
+  EXPECT_EQ(loaded.to_tree().descriptor, "brief");
+  // The same words whatever the label: databases stay compatible.
+  EXPECT_EQ(loaded.checksum(), unnamed.checksum());
+  for (const char* bad : {"BRIEF", "orb 2", "toolongname", "é"}) {
+    tree.descriptor = bad;
+    EXPECT_THROW(Vocabulary::from_tree(tree), InvalidArgument) << bad;
+  }
+  // A damaged name field with a valid header CRC is rejected.
+  std::vector<std::uint8_t> bytes = named.serialize();
+  bytes[52 + 6] = 'x';  // after the name's terminating zero
+  detail::store_le<std::uint32_t>(bytes.data() + 60, detail::crc32c(bytes.data(), 60));
+  test::write_file(dir.file("bad.bbw"), bytes);
+  expect_file_error(dir.file("bad.bbw"), "descriptor name");
 }
 
 TEST(VocabularyFile, SaveIsAtomicAndLeavesNoTemporaryFiles) {
