@@ -40,7 +40,8 @@ struct Kernels {
 const Kernels& kernels();
 // Kernels without hardware popcount, for tests that compare implementations.
 const Kernels& generic_kernels();
-// Every kernel set this CPU can run, the portable one first, for tests.
+// Every kernel set this CPU can run, from the portable one to the fastest;
+// kernels() is the last one.
 std::vector<const Kernels*> supported_kernels();
 
 }  // namespace binbow::detail
