@@ -11,15 +11,10 @@
 namespace binbow {
 namespace {
 
-using test::cli_path;
 using test::read_file;
-using test::run_command;
+using test::run_cli;
 using test::shared_data;
 using test::TempDir;
-
-int binbow_cli(const std::string& arguments, std::string* output) {
-  return run_command("'" + cli_path() + "' " + arguments, output);
-}
 
 TEST(CliBuildVocab, BuildsTheSameFileForAnyThreadCount) {
   TempDir dir;
@@ -27,11 +22,11 @@ TEST(CliBuildVocab, BuildsTheSameFileForAnyThreadCount) {
   const std::string folder = images.substr(0, images.rfind('/'));
   std::string output;
   for (const char* threads : {"1", "2"}) {
-    ASSERT_EQ(binbow_cli("build-vocab --descriptor orb --branching 6 --levels 3 --seed 7 "
-                         "--features-per-image 500 --threads " +
-                             std::string(threads) + " -o '" +
-                             dir.file(std::string(threads) + ".bbw") + "' '" + folder + "'",
-                         &output),
+    ASSERT_EQ(run_cli("build-vocab --descriptor orb --branching 6 --levels 3 --seed 7 "
+                      "--features-per-image 500 --threads " +
+                          std::string(threads) + " -o '" + dir.file(std::string(threads) + ".bbw") +
+                          "' '" + folder + "'",
+                      &output),
               0)
         << output;
   }
@@ -56,10 +51,10 @@ TEST(CliBuildVocab, SubsamplesWithWeightingScoringAndOtherFormats) {
   const std::string images = shared_data("dbow2-demo-images/image0.png");
   const std::string folder = images.substr(0, images.rfind('/'));
   std::string output;
-  ASSERT_EQ(binbow_cli("build-vocab --descriptor brief --branching 4 --levels 2 --max-descriptors "
-                       "300 --weighting binary --scoring l2 -o '" +
-                           dir.file("v.yml.gz") + "' '" + folder + "'",
-                       &output),
+  ASSERT_EQ(run_cli("build-vocab --descriptor brief --branching 4 --levels 2 --max-descriptors "
+                    "300 --weighting binary --scoring l2 -o '" +
+                        dir.file("v.yml.gz") + "' '" + folder + "'",
+                    &output),
             0)
       << output;
   EXPECT_NE(output.find("trained on 300 descriptors"), std::string::npos) << output;
@@ -72,23 +67,22 @@ TEST(CliBuildVocab, RejectsBadArgumentsClearly) {
   TempDir dir;
   const std::string images = shared_data("dbow2-demo-images/image0.png");
   std::string output;
-  EXPECT_EQ(binbow_cli("build-vocab --branching 1 -o '" + dir.file("v.bbw") + "' '" + images + "'",
-                       &output),
-            1);
+  EXPECT_EQ(
+      run_cli("build-vocab --branching 1 -o '" + dir.file("v.bbw") + "' '" + images + "'", &output),
+      1);
   EXPECT_NE(output.find("binbow: error: --branching must be in 2..255"), std::string::npos)
       << output;
-  EXPECT_EQ(binbow_cli("build-vocab --levels 17 -o '" + dir.file("v.bbw") + "' '" + images + "'",
-                       &output),
-            1);
+  EXPECT_EQ(
+      run_cli("build-vocab --levels 17 -o '" + dir.file("v.bbw") + "' '" + images + "'", &output),
+      1);
   EXPECT_NE(output.find("--levels must be in 1..16"), std::string::npos) << output;
-  EXPECT_EQ(binbow_cli("build-vocab -o '" + dir.file("v.bbw") + "' '" + dir.file("missing") + "'",
-                       &output),
-            1);
+  EXPECT_EQ(
+      run_cli("build-vocab -o '" + dir.file("v.bbw") + "' '" + dir.file("missing") + "'", &output),
+      1);
   EXPECT_NE(output.find("binbow: error:"), std::string::npos) << output;
-  EXPECT_NE(
-      binbow_cli("build-vocab --descriptor sift -o '" + dir.file("v.bbw") + "' '" + images + "'",
-                 &output),
-      0);
+  EXPECT_NE(run_cli("build-vocab --descriptor sift -o '" + dir.file("v.bbw") + "' '" + images + "'",
+                    &output),
+            0);
   EXPECT_TRUE(read_file(dir.file("v.bbw")).empty());
 }
 

@@ -14,15 +14,10 @@
 namespace binbow {
 namespace {
 
-using test::cli_path;
 using test::read_file;
-using test::run_command;
+using test::run_cli;
 using test::TempDir;
 using test::write_file;
-
-int binbow_cli(const std::string& arguments, std::string* output) {
-  return run_command("'" + cli_path() + "' " + arguments, output);
-}
 
 Vocabulary small_vocabulary() {
   // A hand-made two-level tree: no dependence on the builder.
@@ -46,14 +41,13 @@ TEST(CliConvert, ConvertsBetweenEveryFormatAndBack) {
   for (const char* name :
        {"v.txt", "v.bin", "v.yml", "v.yml.gz", "v.voc.gz", "v.dbow3", "v.fbow"}) {
     SCOPED_TRACE(name);
-    ASSERT_EQ(binbow_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file(name) + "'", &output),
-              0)
+    ASSERT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file(name) + "'", &output), 0)
         << output;
     EXPECT_NE(output.find("wrote " + dir.file(name)), std::string::npos) << output;
-    ASSERT_EQ(binbow_cli("info '" + dir.file(name) + "'", &output), 0) << output;
+    ASSERT_EQ(run_cli("info '" + dir.file(name) + "'", &output), 0) << output;
     EXPECT_NE(output.find("words: 6"), std::string::npos) << output;
-    ASSERT_EQ(
-        binbow_cli("convert '" + dir.file(name) + "' '" + dir.file("back.bbw") + "'", &output), 0)
+    ASSERT_EQ(run_cli("convert '" + dir.file(name) + "' '" + dir.file("back.bbw") + "'", &output),
+              0)
         << output;
     if (std::string(name) != "v.fbow") {  // fbow does not keep L and the types
       EXPECT_EQ(read_file(dir.file("back.bbw")), read_file(dir.file("v.bbw")));
@@ -65,25 +59,24 @@ TEST(CliConvert, FromAndToOverrideDetection) {
   TempDir dir;
   small_vocabulary().save(dir.file("v.bbw"));
   std::string output;
-  ASSERT_EQ(binbow_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("orbvoc.data") +
-                           "' --to orbslam-text",
-                       &output),
+  ASSERT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("orbvoc.data") +
+                        "' --to orbslam-text",
+                    &output),
             0)
       << output;
   EXPECT_EQ(load_vocabulary(dir.file("orbvoc.data"), VocabularyFormat::kOrbSlamText).word_count(),
             6u);
-  EXPECT_EQ(binbow_cli("convert '" + dir.file("orbvoc.data") + "' '" + dir.file("x.bbw") +
-                           "' --from dbow3",
-                       &output),
-            1);
+  EXPECT_EQ(
+      run_cli("convert '" + dir.file("orbvoc.data") + "' '" + dir.file("x.bbw") + "' --from dbow3",
+              &output),
+      1);
   EXPECT_NE(output.find("binbow: error: " + dir.file("orbvoc.data") + ": "), std::string::npos)
       << output;
-  EXPECT_EQ(
-      binbow_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("x.unknown") + "'", &output),
-      1);
+  EXPECT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("x.unknown") + "'", &output),
+            1);
   EXPECT_NE(output.find("cannot tell the vocabulary format"), std::string::npos) << output;
-  EXPECT_EQ(binbow_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("x.txt") + "' --to morse",
-                       &output),
+  EXPECT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("x.txt") + "' --to morse",
+                    &output),
             1);
 }
 
@@ -107,7 +100,7 @@ TEST(CliConvert, DamagedInputsExitWithOneAndNameTheFile) {
     for (const std::string& command :
          {"info '" + dir.file(c.name) + "'",
           "convert '" + dir.file(c.name) + "' '" + dir.file("o.bbw") + "'"}) {
-      EXPECT_EQ(binbow_cli(command, &output), 1) << output;
+      EXPECT_EQ(run_cli(command, &output), 1) << output;
       EXPECT_NE(output.find("binbow: error: " + dir.file(c.name) + ": "), std::string::npos)
           << output;
       EXPECT_NE(output.find(c.problem), std::string::npos) << output;
@@ -128,9 +121,9 @@ TEST(CliConvert, Dbow2YamlOutputReadsBackThroughOpenCvFileStorage) {
   for (const char* name : {"orb.yml", "brief.voc.gz"}) {
     SCOPED_TRACE(name);
     const bool bits = std::string(name) == "brief.voc.gz";
-    ASSERT_EQ(binbow_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file(name) +
-                             "' --descriptors " + (bits ? "bits" : "bytes"),
-                         &output),
+    ASSERT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file(name) +
+                          "' --descriptors " + (bits ? "bits" : "bytes"),
+                      &output),
               0)
         << output;
     cv::FileStorage fs(dir.file(name), cv::FileStorage::READ);

@@ -16,14 +16,9 @@
 namespace binbow {
 namespace {
 
-using test::cli_path;
-using test::run_command;
+using test::run_cli;
 using test::shared_data;
 using test::TempDir;
-
-int binbow_cli(const std::string& arguments, std::string* output) {
-  return run_command("'" + cli_path() + "' " + arguments, output);
-}
 
 std::string samples_folder() {
   const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
@@ -36,20 +31,19 @@ TEST(CliDb, BuildQueryInfo) {
   const std::string folder = samples_folder();
   const std::string database = dir.file("corridor.bbdb");
   std::string output;
-  ASSERT_EQ(
-      binbow_cli("db build --vocab '" + vocabulary + "' -o '" + database + "' '" + folder + "'",
-                 &output),
-      0)
+  ASSERT_EQ(run_cli("db build --vocab '" + vocabulary + "' -o '" + database + "' '" + folder + "'",
+                    &output),
+            0)
       << output;
   EXPECT_NE(output.find("84 entries"), std::string::npos) << output;
 
-  ASSERT_EQ(binbow_cli("info '" + database + "'", &output), 0) << output;
+  ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
   EXPECT_NE(output.find("kind: database\n"), std::string::npos) << output;
   EXPECT_NE(output.find("entries: 84\n"), std::string::npos) << output;
   EXPECT_NE(output.find("vocabulary: k=9 L=3"), std::string::npos) << output;
 
   // Frame 54 revisits frame 14 (ground truth): itself first, its old view next.
-  ASSERT_EQ(binbow_cli("db query '" + database + "' '" + folder + "/54.jpg' --top 3", &output), 0)
+  ASSERT_EQ(run_cli("db query '" + database + "' '" + folder + "/54.jpg' --top 3", &output), 0)
       << output;
   EXPECT_NE(output.find("rank\tentry\tfile\tscore\n"), std::string::npos) << output;
   EXPECT_NE(output.find("1\t53\t" + folder + "/54.jpg\t1.000000\n"), std::string::npos) << output;
@@ -61,21 +55,20 @@ TEST(CliDb, ClearErrors) {
   TempDir dir;
   const std::string folder = samples_folder();
   std::string output;
-  EXPECT_EQ(
-      binbow_cli("db query '" + dir.file("missing.bbdb") + "' '" + folder + "/1.jpg'", &output), 1);
+  EXPECT_EQ(run_cli("db query '" + dir.file("missing.bbdb") + "' '" + folder + "/1.jpg'", &output),
+            1);
   EXPECT_NE(output.find("binbow: error: " + dir.file("missing.bbdb") + ": cannot open"),
             std::string::npos)
       << output;
 
   test::write_file(dir.file("bad.bbdb"), std::vector<std::uint8_t>(200, 'B'));
-  EXPECT_EQ(binbow_cli("db query '" + dir.file("bad.bbdb") + "' '" + folder + "/1.jpg'", &output),
-            1);
+  EXPECT_EQ(run_cli("db query '" + dir.file("bad.bbdb") + "' '" + folder + "/1.jpg'", &output), 1);
   EXPECT_NE(output.find("not a binbow database"), std::string::npos) << output;
 
   const std::string vocabulary = shared_data("kimera-small-voc/small_voc.yml.gz");
-  EXPECT_NE(binbow_cli("db build --vocab '" + vocabulary + "' -o '" + dir.file("x.bbdb") + "' '" +
-                           dir.path() + "'",
-                       &output),
+  EXPECT_NE(run_cli("db build --vocab '" + vocabulary + "' -o '" + dir.file("x.bbdb") + "' '" +
+                        dir.path() + "'",
+                    &output),
             0);
   EXPECT_NE(output.find("error"), std::string::npos) << output;
 }

@@ -2,19 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <regex>
 #include <string>
 
 #include "support/test_support.h"
 
 namespace binbow {
 namespace {
-
-double value_of(const std::string& output, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(output, m, std::regex("(^|\n)" + key + ": ([0-9.eE+-]+)"))) return -1;
-  return std::stod(m[2]);
-}
 
 TEST(Demo, FindsLoopsWithPerfectPrecisionAndWritesAReportThatRenders) {
   test::TempDir dir;
@@ -26,10 +19,10 @@ TEST(Demo, FindsLoopsWithPerfectPrecisionAndWritesAReportThatRenders) {
             0)
       << out;
   const std::string summary = out.substr(out.find("== summary"));
-  EXPECT_EQ(value_of(summary, "frames"), 84) << summary;
-  EXPECT_EQ(value_of(summary, "precision"), 1.0) << summary;
-  EXPECT_GE(value_of(summary, "recall"), 0.75) << summary;
-  EXPECT_GT(value_of(summary, "time per frame"), 0) << summary;
+  EXPECT_EQ(test::printed_number(summary, "frames"), 84) << summary;
+  EXPECT_EQ(test::printed_number(summary, "precision"), 1.0) << summary;
+  EXPECT_GE(test::printed_number(summary, "recall"), 0.75) << summary;
+  EXPECT_GT(test::printed_number(summary, "time per frame"), 0) << summary;
   const std::string page = dir.file("demo/index.html");
   EXPECT_NE(summary.find("report: " + page), std::string::npos) << summary;
   ASSERT_TRUE(std::filesystem::exists(page));

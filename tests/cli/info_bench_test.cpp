@@ -14,7 +14,7 @@ namespace {
 
 std::string run(const std::string& arguments, int* status) {
   std::string output;
-  *status = test::run_command("'" + test::cli_path() + "' " + arguments, &output);
+  *status = test::run_cli(arguments, &output);
   return output;
 }
 

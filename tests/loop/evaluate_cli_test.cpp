@@ -1,19 +1,11 @@
 // `binbow evaluate` on a MATLAB ground truth, against the library's numbers.
 #include <gtest/gtest.h>
 
-#include <regex>
-
 #include "binbow/vision/evaluation.h"
 #include "support/test_support.h"
 
 namespace binbow::vision {
 namespace {
-
-double printed(const std::string& output, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(output, m, std::regex("(^|\n)" + key + ": ([0-9.eE+-]+)"))) return -1;
-  return std::stod(m[2]);
-}
 
 TEST(EvaluateCommand, MatGroundTruthAndErrors) {
   const std::string gt = test::shared_data("lcd-groundtruth-knzhang/Lip6IndoorGroundTruth.mat");
@@ -29,21 +21,16 @@ TEST(EvaluateCommand, MatGroundTruthAndErrors) {
   const PrecisionRecall expected = evaluate_detections(detections, truth);
 
   std::string out;
-  ASSERT_EQ(
-      test::run_command(
-          test::cli_path() + " evaluate --gt " + gt + " --sweep " + dir.file("loops.csv"), &out),
-      0)
+  ASSERT_EQ(test::run_cli("evaluate --gt " + gt + " --sweep " + dir.file("loops.csv"), &out), 0)
       << out;
-  EXPECT_NEAR(printed(out, "precision"), 5.0 / 6.0, 1e-5) << out;
-  EXPECT_NEAR(printed(out, "recall"), expected.recall, 1e-5) << out;
+  EXPECT_NEAR(test::printed_number(out, "precision"), 5.0 / 6.0, 1e-5) << out;
+  EXPECT_NEAR(test::printed_number(out, "recall"), expected.recall, 1e-5) << out;
   // Without a run record the sweep thresholds the scores (all equal here).
-  EXPECT_NEAR(printed(out, "recall at 100% precision"), 0, 1e-9) << out;
+  EXPECT_NEAR(test::printed_number(out, "recall at 100% precision"), 0, 1e-9) << out;
 
   detections.push_back({truth.frames(), 0, "", "", 1, 12});
   write_detections_csv(dir.file("outside.csv"), detections);
-  EXPECT_NE(test::run_command(
-                test::cli_path() + " evaluate --gt " + gt + " " + dir.file("outside.csv"), &out),
-            0);
+  EXPECT_NE(test::run_cli("evaluate --gt " + gt + " " + dir.file("outside.csv"), &out), 0);
   EXPECT_NE(out.find("wrong --gt"), std::string::npos) << out;
 }
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <regex>
 #include <stdexcept>
 
 namespace binbow::test {
@@ -109,6 +110,16 @@ std::string find_chromium() {
   return "";
 }
 }  // namespace
+
+int run_cli(const std::string& arguments, std::string* output) {
+  return run_command("'" + cli_path() + "' " + arguments, output);
+}
+
+double printed_number(const std::string& output, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(output, m, std::regex("(^|\n)" + key + ": ([0-9.eE+-]+)"))) return -1;
+  return std::stod(m[2]);
+}
 
 bool render_in_chromium(const std::string& page, const std::string& png,
                         const std::string& scratch_dir) {

@@ -49,6 +49,10 @@ void write_file(const std::string& path, const std::vector<std::uint8_t>& bytes)
 
 // Runs a shell command, returns its exit status; stdout+stderr go to `output`.
 int run_command(const std::string& command, std::string* output);
+// Runs the binbow CLI with `arguments` (already quoted as the shell needs).
+int run_cli(const std::string& arguments, std::string* output);
+// The number on the first "key: number" line of a command's output, or -1.
+double printed_number(const std::string& output, const std::string& key);
 
 // Renders an HTML page in headless Chromium into `png` (profile in
 // `scratch_dir`). Adds a test failure saying how to install Chromium when it
