@@ -38,8 +38,7 @@ void check_tree(const VocabularyTree& tree) {
   if (tree.weights.size() != n)
     fail(std::to_string(tree.weights.size()) + " weights for " + std::to_string(n) + " nodes");
   if (!detail::valid_descriptor_name(tree.descriptor))
-    fail("descriptor name \"" + tree.descriptor +
-         "\" is not a name of up to 8 characters a-z 0-9 _ -");
+    fail("descriptor name \"" + tree.descriptor + "\" is not " + detail::kDescriptorNameRule);
   if (static_cast<unsigned>(tree.weighting) > 3 || static_cast<unsigned>(tree.scoring) > 5)
     fail("unknown weighting or scoring type");
 }
@@ -307,16 +306,14 @@ void Vocabulary::quantize(const DescriptorView& descriptors, WordId* words, Node
 }
 
 double Vocabulary::mean_quantisation_error(const DescriptorView& descriptors) const {
-  const auto& b = require(block_);
-  check_descriptors(b, descriptors);
-  if (descriptors.rows == 0) return 0.0;
   std::vector<WordId> words(descriptors.rows);
-  detail::kernels().descend(b.tree, descriptors.data, descriptors.rows, words.data(), nullptr, 0);
+  quantize(descriptors, words.data());
+  if (descriptors.rows == 0) return 0.0;
   const std::vector<NodeId> leaves = word_nodes();
   double total = 0;
   for (std::size_t i = 0; i < descriptors.rows; ++i)
-    total += detail::kernels().hamming(descriptors.row(i), node_descriptor(leaves[words[i]]),
-                                       descriptors.code_size);
+    total += hamming_distance(descriptors.row(i), node_descriptor(leaves[words[i]]),
+                              descriptors.code_size);
   return total / static_cast<double>(descriptors.rows);
 }
 

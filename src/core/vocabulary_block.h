@@ -36,9 +36,10 @@ inline constexpr std::size_t kDescriptorNameOffset = 52;  // in the header
 inline constexpr std::size_t kMaxDescriptorName = 8;
 }  // namespace bbw
 
-// Whether `name` can be stored as a vocabulary's descriptor name: at most 8
-// characters of a-z, 0-9, '_' and '-' (empty: unknown).
+// Whether `name` can be stored as a vocabulary's descriptor name (empty:
+// unknown); kDescriptorNameRule says what is allowed, for error messages.
 bool valid_descriptor_name(const std::string& name) noexcept;
+inline constexpr char kDescriptorNameRule[] = "a name of up to 8 characters a-z 0-9 _ -";
 
 struct VocabularyBlock {
   // Exactly one of these holds the bytes.

@@ -59,7 +59,7 @@ std::size_t validate(const std::vector<DescriptorView>& images, const BuildOptio
   }
   if (!detail::valid_descriptor_name(options.descriptor)) {
     throw InvalidArgument("Vocabulary::build: descriptor name \"" + options.descriptor +
-                          "\" is not a name of up to 8 characters a-z 0-9 _ -");
+                          "\" is not " + detail::kDescriptorNameRule);
   }
   if (images.empty()) throw InvalidArgument("Vocabulary::build: no training images");
   std::size_t code_size = 0;

@@ -138,7 +138,7 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   if (!valid_descriptor_name(descriptor) ||
       std::any_of(name_field + descriptor.size(), name_field + bbw::kMaxDescriptorName,
                   [](char c) { return c != 0; }))
-    fail("the descriptor name field is not a name of up to 8 characters a-z 0-9 _ -");
+    fail(std::string("the descriptor name field is not ") + kDescriptorNameRule);
   if (section_count != bbw::kSectionCount)
     fail("expected " + std::to_string(bbw::kSectionCount) + " sections, the header says " +
          std::to_string(section_count));
