@@ -8,16 +8,18 @@
 // same order of increasing word id). "Best" is the highest score, except for
 // Scoring::kKL, a divergence, where it is the lowest (as in DBoW2).
 //
-// Index layout: a compact main tier (per word, contiguous entry ids and
-// weights: 8 bytes per posting) plus a tail tier of growable per-word lists
-// for recent entries, merged into the main tier when it holds a quarter of
-// all postings. add() is O(words of the image) amortised; a query costs
-// O(postings of the query's words).
+// Index layout: new entries go to a tail of growable lists, one per group
+// of words (at most 65,536 groups, so that adding stays in cache); when the
+// tail holds about two postings per vocabulary word it becomes a segment of
+// compact rows by word (16-bit entry offsets and weights: 6 bytes per
+// posting), and every 8 segments of one size merge into one. add() is
+// O(words of the image) amortised; a query costs O(postings of the query's
+// words), plus one row lookup per query word and segment.
 //
 // Removal: remove() marks the entry dead at once (it never appears in a
-// result again); its postings are dropped at the next merge, which also
-// happens when dead postings exceed a third of all postings, so remove() is
-// O(1) amortised over the entries added.
+// result again); its postings are dropped when the tail becomes a segment,
+// or when a segment's dead postings exceed a third of it (the segment is
+// compacted in place), so remove() is O(1) amortised over the entries added.
 //
 // Concurrency: any number of threads may call the const methods (query,
 // feature_vector, ...) at the same time; add, remove, clear and set_label need

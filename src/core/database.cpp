@@ -11,6 +11,10 @@
 #include <new>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "binbow/error.h"
 #include "core/database_impl.h"
 #include "core/scoring.h"
@@ -94,16 +98,17 @@ void PostingArena::clear() noexcept {
   chunk_bytes_ = 0;
 }
 
-namespace {
-
-bool is_power_of_two_or_zero(std::uint32_t n) noexcept {
-  return (n & (n - 1)) == 0;
+InvalidArgument non_finite_value(const char* what, WordId word) {
+  return InvalidArgument(std::string(what) + ": word " + std::to_string(word) +
+                         " has a non-finite value");
 }
 
+namespace {
+
 // A list whose size is 0 or a power of two is full (see TailList).
-void push_back(TailList& list, TailPosting posting, PostingArena& arena) {
-  if (is_power_of_two_or_zero(list.size)) {
-    const std::uint32_t capacity = list.size == 0 ? 1 : list.size * 2;
+void push_back(TailList& list, unsigned first_block_log, TailPosting posting, PostingArena& arena) {
+  if (tail_list_full(list.size, first_block_log)) {
+    const std::uint32_t capacity = list.size == 0 ? 1u << first_block_log : list.size * 2;
     const std::uint32_t block = arena.allocate(capacity);
     if (list.size > 0) {
       const TailPosting* from = arena.at(list.block);
@@ -124,22 +129,26 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
   const auto& indices = features.feature_indices();
   bool partition = node_count_ <= 0x10000;
   if (partition) {
-    std::vector<bool> seen(feature_count_, false);
+    // Every index below the count and none twice: a branch-free pass.
+    std::vector<std::uint64_t> seen((std::size_t{feature_count_} + 63) / 64 + 1, 0);
+    const std::size_t beyond = seen.size() - 1;  // out-of-range indices land here
+    std::uint64_t repeated = 0;
     for (std::uint32_t index : indices) {
-      if (index >= feature_count_ || seen[index]) {
-        partition = false;
-        break;
-      }
-      seen[index] = true;
+      const std::size_t word = index < feature_count_ ? index / 64 : beyond;
+      const std::uint64_t bit = std::uint64_t{1} << (index % 64);
+      repeated |= seen[word] & bit;
+      seen[word] |= bit;
     }
+    partition = repeated == 0 && seen[beyond] == 0;
   }
-  const bool wide =
-      feature_count_ > 0xFFFF ||
-      std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
-  if (partition)
+  if (partition) {
     layout_ = node_count_ <= 0x100 ? Layout::kPartition8 : Layout::kPartition16;
-  else
+  } else {
+    const bool wide =
+        feature_count_ > 0xFFFF ||
+        std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
     layout_ = wide ? Layout::kRows32 : Layout::kRows16;
+  }
   const std::size_t nodes_bytes = std::size_t{node_count_} * 4;
   if (partition) {
     const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
@@ -147,9 +156,13 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     if (node_count_ > 0) std::memcpy(bytes_.data(), features.nodes().data(), nodes_bytes);
     std::uint8_t* slots = bytes_.data() + nodes_bytes;
     for (std::size_t node = 0; node < node_count_; ++node) {
-      for (std::uint32_t index : features.features(node)) {
-        const auto slot = static_cast<std::uint16_t>(node);
-        std::memcpy(slots + std::size_t{index} * width, &slot, width);  // little-endian
+      const auto slot = static_cast<std::uint16_t>(node);
+      if (width == 1) {
+        for (std::uint32_t index : features.features(node))
+          slots[index] = static_cast<std::uint8_t>(slot);
+      } else {
+        for (std::uint32_t index : features.features(node))
+          std::memcpy(slots + std::size_t{index} * 2, &slot, 2);  // little-endian
       }
     }
     return;
@@ -221,14 +234,6 @@ struct QueryScratch {
 
 thread_local QueryScratch scratch;
 
-struct IndexView {
-  const std::uint32_t* main_offsets;  // null when the main tier is empty
-  const EntryId* main_ids;
-  const float* main_weights;
-  const detail::TailList* tail_lists;
-  const detail::PostingArena* arena;
-};
-
 template <Scoring kScoring>
 inline void accumulate_posting(EntryId entry, float weight, double v, Accumulator* accumulators,
                                EntryId* touched, std::size_t& touched_count) {
@@ -239,77 +244,147 @@ inline void accumulate_posting(EntryId entry, float weight, double v, Accumulato
   accumulator.sum += detail::score_term(kScoring, v, weight);
 }
 
-// Adds the terms of one word's postings; ids increase, so `last_entry` cuts
-// them short.
-template <Scoring kScoring>
-inline void accumulate_main(const EntryId* ids, const float* weights, std::uint32_t count, double v,
-                            EntryId last_entry, Accumulator* accumulators, EntryId* touched,
-                            std::size_t& touched_count) {
-  if (count > 0 && ids[count - 1] > last_entry)
-    count = static_cast<std::uint32_t>(std::upper_bound(ids, ids + count, last_entry) - ids);
-  for (std::uint32_t i = 0; i < count; ++i)
-    accumulate_posting<kScoring>(ids[i], weights[i], v, accumulators, touched, touched_count);
-}
+// Posting lists are scattered in memory: the rows of words a few steps
+// ahead are prefetched so that their cache misses overlap.
+constexpr std::size_t kPrefetchAhead = 8;
 
-template <Scoring kScoring>
-inline void accumulate_tail(const detail::TailPosting* postings, std::uint32_t count, double v,
-                            EntryId last_entry, Accumulator* accumulators, EntryId* touched,
-                            std::size_t& touched_count) {
-  if (count > 0 && postings[count - 1].entry > last_entry)
-    count = static_cast<std::uint32_t>(
-        std::upper_bound(postings, postings + count, last_entry,
-                         [](EntryId id, const detail::TailPosting& p) { return id < p.entry; }) -
-        postings);
-  for (std::uint32_t i = 0; i < count; ++i)
-    accumulate_posting<kScoring>(postings[i].entry, postings[i].weight, v, accumulators, touched,
-                                 touched_count);
-}
-
-// Every term is computed and summed exactly as Vocabulary::score does, in the
-// same order (increasing word id), so scores agree to the last bit. Posting
-// lists are scattered in memory: the lists of words a few steps ahead are
-// prefetched so that their cache misses overlap.
-template <Scoring kScoring>
-std::size_t accumulate(IndexView index, const BowVector& bow, EntryId last_entry,
-                       Accumulator* accumulators, EntryId* touched) {
-  constexpr std::size_t kAhead = 8;
-  std::size_t touched_count = 0;
+// Entries are increasing within a row, so `last_entry` cuts it short.
+template <Scoring kScoring, typename Relative>
+void accumulate_segment(const detail::Segment& segment, const Relative* entries,
+                        detail::RowOrder order, const BowVector& bow, EntryId last_entry,
+                        Accumulator* accumulators, EntryId* touched, std::size_t& touched_count) {
+  const std::uint32_t* offsets = segment.offsets.data();
+  const float* weights = segment.weights.data();
+  const EntryId first = segment.first_entry;
+  const bool cut = last_entry < segment.end_entry - 1;
+  const auto last = static_cast<Relative>(cut ? last_entry - first : 0);
   const std::size_t n = bow.size();
   const BowEntry* query = bow.begin();
   for (std::size_t q = 0; q < n; ++q) {
-    if (q + 2 * kAhead < n) {
-      const WordId far = query[q + 2 * kAhead].word;
-      if (index.main_offsets != nullptr) __builtin_prefetch(index.main_offsets + far);
-      __builtin_prefetch(index.tail_lists + far);
+    if (q + 2 * kPrefetchAhead < n)
+      __builtin_prefetch(offsets + order.row(query[q + 2 * kPrefetchAhead].word));
+    if (q + kPrefetchAhead < n) {
+      const std::uint32_t begin = offsets[order.row(query[q + kPrefetchAhead].word)];
+      __builtin_prefetch(entries + begin);
+      __builtin_prefetch(weights + begin);
     }
-    if (q + kAhead < n) {
-      const WordId near = query[q + kAhead].word;
-      if (index.main_offsets != nullptr) {
-        const std::uint32_t begin = index.main_offsets[near];
-        __builtin_prefetch(index.main_ids + begin);
-        __builtin_prefetch(index.main_weights + begin);
-      }
-      const detail::TailList list = index.tail_lists[near];
-      if (list.size != 0) __builtin_prefetch(index.arena->at(list.block));
+    const std::uint32_t row = order.row(query[q].word);
+    const std::uint32_t begin = offsets[row];
+    std::uint32_t end = offsets[row + 1];
+    if (cut)
+      end = static_cast<std::uint32_t>(std::upper_bound(entries + begin, entries + end, last) -
+                                       entries);
+    const double v = query[q].value;
+    for (std::uint32_t i = begin; i < end; ++i)
+      accumulate_posting<kScoring>(first + entries[i], weights[i], v, accumulators, touched,
+                                   touched_count);
+  }
+}
+
+template <Scoring kScoring>
+void accumulate_segment(const detail::Segment& segment, detail::RowOrder order,
+                        const BowVector& bow, EntryId last_entry, Accumulator* accumulators,
+                        EntryId* touched, std::size_t& touched_count) {
+  if (segment.wide)
+    accumulate_segment<kScoring>(segment, segment.entries32.data(), order, bow, last_entry,
+                                 accumulators, touched, touched_count);
+  else
+    accumulate_segment<kScoring>(segment, segment.entries16.data(), order, bow, last_entry,
+                                 accumulators, touched, touched_count);
+}
+
+// What a query reads of the index (Database::Impl is private).
+struct IndexView {
+  const std::vector<std::unique_ptr<detail::Segment>>& segments;
+  const detail::TailList* tail_lists;
+  const detail::PostingArena& arena;
+  unsigned high_bits;
+  detail::RowOrder row_order;
+  std::size_t tail_postings;
+  EntryId tail_first_entry;
+};
+
+// Calls take(i) for the postings of a group list whose key has the given
+// low bits (the postings of one word), in order, until take returns false. Four keys are compared
+// at once: a word's postings are a small part of its group's.
+template <typename Take>
+inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t size,
+                             std::uint32_t mask, std::uint32_t low, Take&& take) {
+  std::uint32_t i = 0;
+#if defined(__SSE2__)
+  const __m128i masks = _mm_set1_epi32(static_cast<int>(mask));
+  const __m128i lows = _mm_set1_epi32(static_cast<int>(low));
+  for (; i + 4 <= size; i += 4) {
+    const __m128 a = _mm_loadu_ps(reinterpret_cast<const float*>(postings + i));
+    const __m128 b = _mm_loadu_ps(reinterpret_cast<const float*>(postings + i + 2));
+    const __m128i keys = _mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)));
+    unsigned hits = static_cast<unsigned>(
+        _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(keys, masks), lows))));
+    while (hits != 0) {
+      if (!take(i + static_cast<std::uint32_t>(__builtin_ctz(hits)))) return;
+      hits &= hits - 1;
+    }
+  }
+#endif
+  for (; i < size; ++i)
+    if ((postings[i].key & mask) == low && !take(i)) return;
+}
+
+// A query word's group list holds the postings of up to 2^high_bits words,
+// in increasing entry order: the word's own are picked out by their high
+// bits.
+template <Scoring kScoring>
+void accumulate_tail(const IndexView& index, const BowVector& bow, EntryId last_entry,
+                     Accumulator* accumulators, EntryId* touched, std::size_t& touched_count) {
+  const detail::TailList* lists = index.tail_lists;
+  const EntryId first = index.tail_first_entry;
+  const unsigned bits = index.high_bits;
+  const std::uint32_t mask = (1u << bits) - 1;
+  const std::uint64_t key_end = (std::uint64_t{last_entry} - first + 1) << bits;
+  const std::size_t n = bow.size();
+  const BowEntry* query = bow.begin();
+  for (std::size_t q = 0; q < n; ++q) {
+    if (q + 2 * kPrefetchAhead < n)
+      __builtin_prefetch(lists + detail::group_of(query[q + 2 * kPrefetchAhead].word));
+    if (q + kPrefetchAhead < n) {
+      const detail::TailList ahead = lists[detail::group_of(query[q + kPrefetchAhead].word)];
+      if (ahead.size != 0) __builtin_prefetch(index.arena.at(ahead.block));
     }
     const WordId word = query[q].word;
+    const detail::TailList list = lists[detail::group_of(word)];
+    if (list.size == 0) continue;
+    const detail::TailPosting* postings = index.arena.at(list.block);
     const double v = query[q].value;
-    if (index.main_offsets != nullptr) {
-      const std::uint32_t begin = index.main_offsets[word];
-      accumulate_main<kScoring>(index.main_ids + begin, index.main_weights + begin,
-                                index.main_offsets[word + 1] - begin, v, last_entry, accumulators,
-                                touched, touched_count);
-    }
-    const detail::TailList list = index.tail_lists[word];
-    if (list.size != 0)
-      accumulate_tail<kScoring>(index.arena->at(list.block), list.size, v, last_entry, accumulators,
-                                touched, touched_count);
+    for_each_of_word(postings, list.size, mask, word >> detail::kGroupBits, [&](std::uint32_t i) {
+      const std::uint32_t key = postings[i].key;
+      if (key >= key_end) return false;
+      accumulate_posting<kScoring>(first + (key >> bits), postings[i].weight, v, accumulators,
+                                   touched, touched_count);
+      return true;
+    });
   }
+}
+
+// Every term is computed and summed exactly as Vocabulary::score does, in the
+// same order (increasing word id), so scores agree to the last bit: each
+// entry lives in one segment or in the tail, whose pass visits the query's
+// words in order.
+template <Scoring kScoring>
+std::size_t accumulate(const IndexView& impl, const BowVector& bow, EntryId last_entry,
+                       Accumulator* accumulators, EntryId* touched) {
+  std::size_t touched_count = 0;
+  for (const auto& segment : impl.segments) {
+    if (segment->first_entry > last_entry) return touched_count;
+    accumulate_segment<kScoring>(*segment, impl.row_order, bow, last_entry, accumulators, touched,
+                                 touched_count);
+  }
+  if (impl.tail_postings > 0 && impl.tail_first_entry <= last_entry)
+    accumulate_tail<kScoring>(impl, bow, last_entry, accumulators, touched, touched_count);
   return touched_count;
 }
 
-std::size_t accumulate(Scoring scoring, IndexView impl, const BowVector& bow, EntryId last_entry,
-                       Accumulator* accumulators, EntryId* touched) {
+std::size_t accumulate(Scoring scoring, const IndexView& impl, const BowVector& bow,
+                       EntryId last_entry, Accumulator* accumulators, EntryId* touched) {
   switch (scoring) {
     case Scoring::kL1:
       return accumulate<Scoring::kL1>(impl, bow, last_entry, accumulators, touched);
@@ -344,15 +419,17 @@ struct BetterResult {
   }
 };
 
-void check_bow(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
+void check_words(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
   if (!bow.empty() && bow[bow.size() - 1].word >= vocabulary.word_count())
     throw InvalidArgument(
         std::string(what) + ": word id " + std::to_string(bow[bow.size() - 1].word) +
         " is outside the vocabulary (" + std::to_string(vocabulary.word_count()) + " words)");
+}
+
+void check_bow(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
+  check_words(bow, vocabulary, what);
   for (const BowEntry& entry : bow)
-    if (!std::isfinite(entry.value))
-      throw InvalidArgument(std::string(what) + ": word " + std::to_string(entry.word) +
-                            " has a non-finite value");
+    if (!std::isfinite(entry.value)) throw detail::non_finite_value(what, entry.word);
 }
 
 std::string no_entry_message(EntryId entry, EntryId next) {
@@ -362,37 +439,21 @@ std::string no_entry_message(EntryId entry, EntryId next) {
   return "entry " + std::to_string(entry) + " was removed";
 }
 
-// Walks the set bits of a bitmap from the highest to the lowest.
-class TailWordCursor {
- public:
-  static constexpr std::size_t kEnd = ~std::size_t{0};
-
-  explicit TailWordCursor(const std::vector<std::uint64_t>& bits) noexcept
-      : bits_(bits.data()), block_(bits.size()) {}
-
-  std::size_t next() noexcept {
-    while (current_ == 0) {
-      if (block_ == 0) return kEnd;
-      current_ = bits_[--block_];
-    }
-    const auto bit = static_cast<std::size_t>(63 - __builtin_clzll(current_));
-    current_ &= ~(std::uint64_t{1} << bit);
-    return block_ * 64 + bit;
-  }
-
- private:
-  const std::uint64_t* bits_;
-  std::size_t block_;
-  std::uint64_t current_ = 0;
-};
-
 }  // namespace
 
 Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
     : vocabulary(std::move(vocabulary_in)), options(options_in) {
   if (vocabulary.empty()) throw InvalidArgument("Database: the vocabulary is empty");
-  tail_lists.resize(vocabulary.word_count());
-  tail_words.resize((vocabulary.word_count() + 63) / 64);
+  const std::size_t words = vocabulary.word_count();
+  while ((words - 1) >> (detail::kGroupBits + high_bits) != 0) ++high_bits;
+  row_order = detail::RowOrder(words);
+  // Two postings per word: a segment's offsets (4 bytes per word) cost 2
+  // bytes per posting; two thousand images of 1000 words for a million
+  // words. Within bounds, so that small vocabularies make segments of
+  // useful size and a huge one does not grow the tail that queries scan.
+  segment_postings = std::clamp(2 * words, std::size_t{1} << 16, std::size_t{1} << 22);
+  tail_lists.resize(std::min(words, std::size_t{1} << detail::kGroupBits));
+  first_block_logs.assign(tail_lists.size(), detail::kFirstBlockLog);
 }
 
 EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& features) {
@@ -402,34 +463,47 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   const auto entry = static_cast<EntryId>(alive.size());
   const BowEntry* words = bow.begin();
   const std::size_t n = bow.size();
+  // freeze_tail_if_full keeps the tail within kSegmentSpan entries.
+  const std::uint32_t key_base = (entry - tail_first_entry) << high_bits;
   std::size_t appended = 0;
   try {
     alive.push_back(0);
     word_counts.push_back(static_cast<std::uint32_t>(n));
     if (options.direct_index) direct.emplace_back(features);
     if (!labels.empty()) labels.emplace_back();
-    // Each posting touches two cache lines nothing predicts: its word's list
-    // and the end of that list's block. A software pipeline fetches the list
-    // kListAhead words ahead and the block end kBlockAhead words ahead, so
-    // their misses overlap instead of stalling the loop one after the other.
-    constexpr std::size_t kListAhead = 24;
-    constexpr std::size_t kBlockAhead = 12;
+    // The group heads and the ends of their blocks mostly are in cache, and
+    // are fetched a few words ahead for when they are not.
+    constexpr std::size_t kHeadAhead = 32;
+    constexpr std::size_t kAhead = 16;
     detail::TailList* lists = tail_lists.data();
     for (; appended < n; ++appended) {
-      if (appended + kListAhead < n) __builtin_prefetch(lists + words[appended + kListAhead].word);
-      if (appended + kBlockAhead < n) {
-        const detail::TailList ahead = lists[words[appended + kBlockAhead].word];
-        if (ahead.size != 0) __builtin_prefetch(arena.at(ahead.block) + ahead.size);
+      if (appended + kHeadAhead < n)
+        __builtin_prefetch(lists + detail::group_of(words[appended + kHeadAhead].word));
+      if (appended + kAhead < n) {
+        const std::uint32_t group = detail::group_of(words[appended + kAhead].word);
+        const detail::TailList ahead = lists[group];
+        if (ahead.size != 0) {
+          const detail::TailPosting* block = arena.at(ahead.block);
+          if (!detail::tail_list_full(ahead.size, first_block_logs[group])) {
+            __builtin_prefetch(block + ahead.size);
+          } else {
+            // A full list is copied to a bigger block: fetch all of it (the
+            // hardware prefetcher follows longer blocks).
+            const std::uint32_t lines = std::min<std::uint32_t>(ahead.size, 64);
+            for (std::uint32_t i = 0; i < lines; i += 8) __builtin_prefetch(block + i);
+          }
+        }
       }
       const WordId word = words[appended].word;
-      if (lists[word].size == 0) tail_words[word / 64] |= std::uint64_t{1} << (word % 64);
-      detail::push_back(lists[word], {entry, words[appended].value}, arena);
+      if (!std::isfinite(words[appended].value))
+        throw detail::non_finite_value("Database::add", word);
+      const std::uint32_t group = detail::group_of(word);
+      detail::push_back(lists[group], first_block_logs[group],
+                        {key_base | (word >> detail::kGroupBits), words[appended].value}, arena);
     }
   } catch (...) {
     // The lists that got this entry end with it; undo them.
-    for (std::size_t i = 0; i < appended; ++i)
-      if (--tail_lists[words[i].word].size == 0)
-        tail_words[words[i].word / 64] &= ~(std::uint64_t{1} << (words[i].word % 64));
+    for (std::size_t i = 0; i < appended; ++i) --tail_lists[detail::group_of(words[i].word)].size;
     alive.resize(entry);
     word_counts.resize(entry);
     if (direct.size() > entry) direct.resize(entry);
@@ -438,137 +512,225 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   }
   alive[entry] = 1;
   ++live_entries;
-  postings += n;
   tail_postings += n;
   return entry;
 }
 
-void Database::Impl::merge_if_worthwhile() {
-  constexpr std::size_t kMinimumTail = 1 << 16;
-  if (tail_postings <= std::max(kMinimumTail, postings / 4) && dead_postings * 3 <= postings)
+void Database::Impl::freeze_tail_if_full() {
+  if (tail_postings < segment_postings && alive.size() - tail_first_entry < detail::kSegmentSpan)
     return;
   try {
-    merge();
+    freeze_tail();
+    merge_segments_if_many();
   } catch (...) {
-    // Out of memory for the merged copy: the two tiers stay valid as they
-    // are, and the add or remove that got here has succeeded.
+    // Out of memory for the new segment: the index stays valid as it is,
+    // and the add that got here has succeeded.
   }
 }
 
-// In place: the main arrays grow (realloc) to the merged size, then one pass
-// from the last word with tail postings to the first moves the main runs
-// right by the number of tail postings of the words before them and puts
-// each word's tail postings after its main run. A word's new place never
-// starts before its old one, so nothing is overwritten before it is read.
-// The runs between two words with tail postings move together, so a merge
-// costs the postings it moves plus one add per offset, and the tail blocks,
-// the only scattered reads, are prefetched a few words ahead.
-void Database::Impl::merge() {
-  const std::size_t words = tail_lists.size();
-  const std::size_t main_size = postings - tail_postings;
-  std::size_t live_tail = tail_postings;
-  std::size_t live_main = main_size;
-  if (dead_postings > 0) {
-    live_tail = 0;
-    for (std::size_t entry = tail_first_entry; entry < alive.size(); ++entry)
-      live_tail += alive[entry] != 0 ? word_counts[entry] : 0;
-    live_main = postings - dead_postings - live_tail;
+void Database::Impl::merge_segments_if_many() {
+  for (;;) {
+    const std::size_t n = segments.size();
+    if (n < detail::kSegmentFanIn) return;
+    const unsigned level = segments[n - 1]->level;
+    if (level == detail::kLoadedLevel) return;
+    for (std::size_t i = n - detail::kSegmentFanIn; i < n; ++i)
+      if (segments[i]->level != level) return;
+    merge_segments(n - detail::kSegmentFanIn, n);
   }
-  const std::size_t merged = live_main + live_tail;
-  if (merged > std::numeric_limits<std::uint32_t>::max())
-    throw InvalidArgument("Database: more than 2^32 postings");
-  const bool first = main_offsets.empty();
-  if (first) main_offsets.assign(words + 1, 0);
-  try {
-    if (merged > main_size) {
-      main_ids.resize(merged);
-      main_weights.resize(merged);
+}
+
+namespace {
+
+// Row by row, the rows of the segments [begin, end), oldest first: entries
+// stay in increasing order. Every source is read sequentially.
+template <typename Relative>
+void merge_rows(const std::unique_ptr<detail::Segment>* begin,
+                const std::unique_ptr<detail::Segment>* end, detail::Segment& merged,
+                Relative* entries) noexcept {
+  const std::size_t rows = merged.offsets.size() - 1;
+  float* weights = merged.weights.data();
+  std::uint32_t* offsets = merged.offsets.data();
+  std::uint32_t at = 0;
+  offsets[0] = 0;
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (auto source = begin; source != end; ++source) {
+      const detail::Segment& s = **source;
+      const std::uint32_t from = s.offsets[r];
+      const std::uint32_t count = s.offsets[r + 1] - from;
+      const std::uint32_t delta = s.first_entry - merged.first_entry;
+      if (s.wide)
+        for (std::uint32_t i = 0; i < count; ++i)
+          entries[at + i] = static_cast<Relative>(s.entries32.data()[from + i] + delta);
+      else
+        for (std::uint32_t i = 0; i < count; ++i)
+          entries[at + i] = static_cast<Relative>(s.entries16.data()[from + i] + delta);
+      std::memcpy(weights + at, s.weights.data() + from, count * sizeof(float));
+      at += count;
     }
-  } catch (...) {
-    if (first) std::vector<std::uint32_t>().swap(main_offsets);
-    throw;
+    offsets[r + 1] = at;
+  }
+}
+
+}  // namespace
+
+void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
+  std::size_t total = 0;
+  for (std::size_t i = begin; i < end; ++i) total += segments[i]->postings();
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    throw InvalidArgument("Database: more than 2^32 postings in one segment");
+  auto merged = std::make_unique<detail::Segment>();
+  merged->first_entry = segments[begin]->first_entry;
+  merged->end_entry = segments[end - 1]->end_entry;
+  merged->level = segments[begin]->level + 1;
+  merged->wide = merged->end_entry - merged->first_entry > detail::kSegmentSpan;
+  merged->offsets.resize(segments[begin]->offsets.size());
+  if (merged->wide)
+    merged->entries32.resize(total);
+  else
+    merged->entries16.resize(total);
+  merged->weights.resize(total);
+  // Nothing below can throw.
+  const auto* sources = segments.data();
+  if (merged->wide)
+    merge_rows(sources + begin, sources + end, *merged, merged->entries32.data());
+  else
+    merge_rows(sources + begin, sources + end, *merged, merged->entries16.data());
+  for (std::size_t i = begin; i < end; ++i) merged->dead_postings += segments[i]->dead_postings;
+  segments[begin] = std::move(merged);
+  segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(begin) + 1,
+                 segments.begin() + static_cast<std::ptrdiff_t>(end));
+}
+
+void Database::Impl::freeze_tail() {
+  const std::size_t words = vocabulary.word_count();
+  const std::size_t live = tail_postings - tail_dead_postings;
+  if (alive.size() - tail_first_entry > detail::kSegmentSpan)
+    throw InvalidArgument("Database: the tail outgrew a segment");  // kept from happening
+  std::unique_ptr<detail::Segment> segment;
+  std::vector<std::uint32_t> next;  // per word of a group: its row's next slot
+  if (live > 0) {
+    next.resize(std::size_t{1} << high_bits);
+    segment = std::make_unique<detail::Segment>();
+    segment->offsets.resize(words + 1);
+    segment->entries16.resize(live);
+    segment->weights.resize(live);
+    segments.reserve(segments.size() + 1);
   }
   // Nothing below can throw: the index changes all at once.
-  std::uint32_t* offsets = main_offsets.data();
-  EntryId* ids = main_ids.data();
-  float* weights = main_weights.data();
-  if (live_main < main_size) {
-    // Drop the main tier's dead postings first (moving left), so that the
-    // pass below only ever moves postings right.
-    std::uint32_t kept = 0;
-    std::uint32_t begin = 0;
-    for (std::size_t w = 0; w < words; ++w) {
-      const std::uint32_t end = offsets[w + 1];
-      for (std::uint32_t i = begin; i < end; ++i) {
-        ids[kept] = ids[i];
-        weights[kept] = weights[i];
-        kept += alive[ids[i]];
+  if (segment) {
+    segment->first_entry = tail_first_entry;
+    segment->end_entry = static_cast<EntryId>(alive.size());
+    std::uint32_t* offsets = segment->offsets.data();
+    std::uint16_t* entries = segment->entries16.data();
+    float* weights = segment->weights.data();
+    const std::uint8_t* live_at = alive.data() + tail_first_entry;
+    const bool drop_dead = tail_dead_postings > 0;
+    // One pass over the groups: a group's rows are consecutive (RowOrder),
+    // so each group's postings are counted by word, which gives its rows'
+    // offsets, then put in their rows, all written sequentially. Within a
+    // group's list entries increase, so the rows come out in entry order.
+    const std::uint32_t high_mask = (1u << high_bits) - 1;
+    constexpr std::size_t kAhead = 4;
+    constexpr std::uint32_t kLinesAhead = 8;
+    std::uint32_t row_end = 0;  // of the previous group
+    for (std::size_t group = 0; group < tail_lists.size(); ++group) {
+      if (group + kAhead < tail_lists.size()) {
+        const detail::TailList ahead = tail_lists[group + kAhead];
+        const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
+        for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
+          __builtin_prefetch(block + i);
       }
-      begin = end;
-      offsets[w + 1] = kept;
+      const auto g = static_cast<std::uint32_t>(group);
+      const std::uint32_t first_row = row_order.group_start(g);
+      const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
+      const detail::TailList list = tail_lists[group];
+      const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
+      std::fill(next.begin(), next.begin() + rows, 0);
+      for (std::uint32_t i = 0; i < list.size; ++i) {
+        const std::uint32_t key = postings[i].key;
+        if (!drop_dead || live_at[key >> high_bits] != 0) ++next[key & high_mask];
+      }
+      for (std::uint32_t r = 0; r < rows; ++r) {
+        const std::uint32_t count = next[r];
+        next[r] = row_end;
+        row_end += count;
+        offsets[first_row + r + 1] = row_end;
+      }
+      for (std::uint32_t i = 0; i < list.size; ++i) {
+        const std::uint32_t key = postings[i].key;
+        const std::uint32_t relative = key >> high_bits;
+        if (drop_dead && live_at[relative] == 0) continue;
+        const std::uint32_t at = next[key & high_mask]++;
+        entries[at] = static_cast<std::uint16_t>(relative);
+        weights[at] = postings[i].weight;
+      }
     }
+    offsets[0] = 0;
+    segments.push_back(std::move(segment));
   }
-
-  const bool drop_dead = live_tail < tail_postings;
-  const auto move_right = [&](std::uint32_t begin, std::uint32_t end, std::uint32_t shift) {
-    if (shift == 0) return;
-    if (end - begin > 64) {
-      std::memmove(ids + begin + shift, ids + begin, std::size_t{end - begin} * sizeof(EntryId));
-      std::memmove(weights + begin + shift, weights + begin,
-                   std::size_t{end - begin} * sizeof(float));
-      return;
-    }
-    for (std::uint32_t i = end; i-- > begin;) {  // most runs are short: no call
-      ids[i + shift] = ids[i];
-      weights[i + shift] = weights[i];
-    }
-  };
-  // The words with tail postings, last first; the cursors ahead of the one
-  // merging prefetch the list, then the block, of the words it comes to next.
-  TailWordCursor far(tail_words), near(tail_words), current(tail_words);
-  constexpr int kFar = 32;
-  constexpr int kNear = 16;
-  for (int i = 0; i < kFar; ++i) {
-    const std::size_t w = far.next();
-    if (w != TailWordCursor::kEnd) __builtin_prefetch(tail_lists.data() + w);
-    if (i >= kFar - kNear) near.next();
+  for (std::size_t group = 0; group < tail_lists.size(); ++group) {
+    const std::uint32_t size = tail_lists[group].size;
+    // At most 2^16 postings (512 KiB): a burst in one round does not
+    // reserve much in the next.
+    first_block_logs[group] = static_cast<std::uint8_t>(
+        size <= (1u << detail::kFirstBlockLog) ? detail::kFirstBlockLog
+                                               : std::min(32 - __builtin_clz(size - 1), 16));
+    tail_lists[group] = {};
   }
-  std::size_t remaining = live_tail;  // of the words up to the current one
-  std::size_t span_end = words;       // the first word already merged
-  for (std::size_t w = current.next(); w != TailWordCursor::kEnd; w = current.next()) {
-    const std::size_t w_far = far.next();
-    if (w_far != TailWordCursor::kEnd) __builtin_prefetch(tail_lists.data() + w_far);
-    const std::size_t w_near = near.next();
-    if (w_near != TailWordCursor::kEnd) __builtin_prefetch(arena.at(tail_lists[w_near].block));
-    // The words between this one and the last merged one have no tail
-    // postings: their runs move right together.
-    const auto shift = static_cast<std::uint32_t>(remaining);
-    const std::uint32_t old_end = offsets[w + 1];
-    move_right(old_end, offsets[span_end], shift);
-    if (shift != 0)
-      for (std::size_t u = w + 1; u <= span_end; ++u) offsets[u] += shift;
-    // This word's tail postings go after its main run, which then moves
-    // right by the tail postings of the words before it.
-    detail::TailList& list = tail_lists[w];
-    const detail::TailPosting* tail = arena.at(list.block);
-    std::uint32_t to = old_end + shift;
-    for (std::uint32_t i = list.size; i-- > 0;) {
-      if (drop_dead && alive[tail[i].entry] == 0) continue;
-      --to;
-      ids[to] = tail[i].entry;
-      weights[to] = tail[i].weight;
-    }
-    remaining -= old_end + shift - to;
-    move_right(offsets[w], old_end, static_cast<std::uint32_t>(remaining));
-    list = {};
-    span_end = w;
-  }
-  std::fill(tail_words.begin(), tail_words.end(), 0);
   arena.reset();
   tail_postings = 0;
+  tail_dead_postings = 0;
   tail_first_entry = static_cast<EntryId>(alive.size());
-  postings = merged;
-  dead_postings = 0;
+}
+
+namespace {
+
+template <typename Relative>
+std::uint32_t drop_dead_postings(detail::Segment& segment, Relative* entries,
+                                 const std::uint8_t* live_at) noexcept {
+  std::uint32_t* offsets = segment.offsets.data();
+  float* weights = segment.weights.data();
+  std::uint32_t kept = 0;
+  std::uint32_t begin = 0;
+  for (std::size_t w = 0; w + 1 < segment.offsets.size(); ++w) {
+    const std::uint32_t end = offsets[w + 1];
+    for (std::uint32_t i = begin; i < end; ++i) {
+      entries[kept] = entries[i];
+      weights[kept] = weights[i];
+      kept += live_at[entries[i]];
+    }
+    begin = end;
+    offsets[w + 1] = kept;
+  }
+  return kept;
+}
+
+}  // namespace
+
+void Database::Impl::compact(std::size_t index) {
+  detail::Segment& segment = *segments[index];
+  if (segment.dead_postings == segment.postings()) {
+    segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(index));
+    return;
+  }
+  const std::uint8_t* live_at = alive.data() + segment.first_entry;
+  // Shrinking never throws.
+  if (segment.wide) {
+    segment.entries32.resize(drop_dead_postings(segment, segment.entries32.data(), live_at));
+  } else {
+    segment.entries16.resize(drop_dead_postings(segment, segment.entries16.data(), live_at));
+  }
+  segment.weights.resize(segment.wide ? segment.entries32.size() : segment.entries16.size());
+  segment.dead_postings = 0;
+}
+
+std::size_t Database::Impl::segment_of(EntryId entry) const noexcept {
+  if (entry >= tail_first_entry) return segments.size();
+  const auto after = std::upper_bound(
+      segments.begin(), segments.end(), entry,
+      [](EntryId id, const std::unique_ptr<detail::Segment>& s) { return id < s->first_entry; });
+  return static_cast<std::size_t>(after - segments.begin()) - 1;
 }
 
 Database::Database(Vocabulary vocabulary, DatabaseOptions options)
@@ -587,12 +749,13 @@ EntryId Database::add(const DescriptorView& descriptors) {
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
-  impl_->merge_if_worthwhile();
+  impl_->freeze_tail_if_full();
   return entry;
 }
 
 EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
-  check_bow(bow, impl_->vocabulary, "Database::add");
+  // The values are checked while they are added (one pass over the image).
+  check_words(bow, impl_->vocabulary, "Database::add");
   if (impl_->options.direct_index && !features.empty() &&
       features.node(features.size() - 1) >= impl_->vocabulary.node_count())
     throw InvalidArgument("Database::add: feature vector node " +
@@ -601,7 +764,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
-  impl_->merge_if_worthwhile();
+  impl_->freeze_tail_if_full();
   return entry;
 }
 
@@ -621,9 +784,9 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   // accumulate() may write one element past the last new id.
   if (buffers.touched.size() < entry_count + 1) buffers.touched.resize(entry_count + 1);
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
-  const IndexView index{impl_->main_offsets.empty() ? nullptr : impl_->main_offsets.data(),
-                        impl_->main_ids.data(), impl_->main_weights.data(),
-                        impl_->tail_lists.data(), &impl_->arena};
+  const IndexView index{impl_->segments,        impl_->tail_lists.data(), impl_->arena,
+                        impl_->high_bits,       impl_->row_order,         impl_->tail_postings,
+                        impl_->tail_first_entry};
   const std::size_t touched = accumulate(scoring, index, bow, last_entry,
                                          buffers.accumulators.data(), buffers.touched.data());
 
@@ -666,10 +829,16 @@ void Database::remove(EntryId entry) {
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
   impl_->alive[entry] = 0;
   --impl_->live_entries;
-  impl_->dead_postings += impl_->word_counts[entry];
+  const std::size_t segment = impl_->segment_of(entry);
+  if (segment == impl_->segments.size()) {
+    impl_->tail_dead_postings += impl_->word_counts[entry];
+  } else {
+    detail::Segment& thinned = *impl_->segments[segment];
+    thinned.dead_postings += impl_->word_counts[entry];
+    if (thinned.dead_postings * 3 > thinned.postings()) impl_->compact(segment);
+  }
   if (!impl_->direct.empty()) impl_->direct[entry] = {};
   if (!impl_->labels.empty()) std::string().swap(impl_->labels[entry]);
-  impl_->merge_if_worthwhile();
 }
 
 bool Database::contains(EntryId entry) const {
@@ -716,34 +885,32 @@ EntryId Database::next_entry_id() const {
 
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
-  std::vector<std::uint32_t>().swap(impl_->main_offsets);
-  impl_->main_ids.resize(0);
-  impl_->main_weights.resize(0);
+  std::vector<std::unique_ptr<detail::Segment>>().swap(impl_->segments);
   std::fill(impl_->tail_lists.begin(), impl_->tail_lists.end(), detail::TailList{});
-  std::fill(impl_->tail_words.begin(), impl_->tail_words.end(), 0);
+  std::fill(impl_->first_block_logs.begin(), impl_->first_block_logs.end(), detail::kFirstBlockLog);
   impl_->arena.clear();
   impl_->tail_postings = 0;
+  impl_->tail_dead_postings = 0;
   impl_->tail_first_entry = 0;
   std::vector<std::uint8_t>().swap(impl_->alive);
   std::vector<std::uint32_t>().swap(impl_->word_counts);
   std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
   std::vector<std::string>().swap(impl_->labels);
   impl_->live_entries = 0;
-  impl_->postings = 0;
-  impl_->dead_postings = 0;
 }
 
 std::size_t Database::memory_usage() const {
   std::shared_lock lock(impl_->mutex);
   const Impl& impl = *impl_;
-  std::size_t bytes = impl.main_offsets.capacity() * sizeof(std::uint32_t) +
-                      impl.main_ids.size() * sizeof(EntryId) +
-                      impl.main_weights.size() * sizeof(float) +
+  std::size_t bytes = impl.segments.capacity() * sizeof(impl.segments[0]) +
                       impl.tail_lists.capacity() * sizeof(detail::TailList) +
-                      impl.tail_words.capacity() * sizeof(std::uint64_t) + impl.alive.capacity() +
+                      impl.first_block_logs.capacity() + impl.alive.capacity() +
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
                       impl.labels.capacity() * sizeof(std::string);
+  for (const auto& segment : impl.segments)
+    bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
+             segment->postings() * ((segment->wide ? 4 : 2) + sizeof(float));
   bytes += impl.arena.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();
   for (const auto& label : impl.labels)

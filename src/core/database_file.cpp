@@ -186,22 +186,25 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
 
   // Live postings only, words in increasing order.
   std::uint64_t posting_count = 0;
-  for (WordId word = 0; word < impl.tail_lists.size(); ++word) {
-    // Main tier first: its entries are older than the tail's.
-    const EntryId* main_ids = nullptr;
-    const float* main_weights = nullptr;
-    std::uint32_t main_size = 0;
-    if (!impl.main_offsets.empty()) {
-      const std::uint32_t begin = impl.main_offsets[word];
-      main_ids = impl.main_ids.data() + begin;
-      main_weights = impl.main_weights.data() + begin;
-      main_size = impl.main_offsets[word + 1] - begin;
-    }
-    const detail::TailList list = impl.tail_lists[word];
+  const std::size_t word_count = impl.vocabulary.word_count();
+  for (WordId word = 0; word < word_count; ++word) {
+    // Segments first, oldest first, then the tail: entry ids increase.
+    const detail::TailList list = impl.tail_lists[detail::group_of(word)];
+    const std::uint32_t high_mask = (1u << impl.high_bits) - 1;
     const detail::TailPosting* tail = list.size != 0 ? impl.arena.at(list.block) : nullptr;
+    const auto in_tail = [&](std::uint32_t i) {
+      return (tail[i].key & high_mask) == word >> detail::kGroupBits;
+    };
+    const auto tail_entry = [&](std::uint32_t i) {
+      return static_cast<EntryId>(impl.tail_first_entry + (tail[i].key >> impl.high_bits));
+    };
     std::uint32_t live = 0;
-    for (std::uint32_t i = 0; i < main_size; ++i) live += impl.alive[main_ids[i]];
-    for (std::uint32_t i = 0; i < list.size; ++i) live += impl.alive[tail[i].entry];
+    const std::uint32_t row = impl.row_order.row(word);
+    for (const auto& segment : impl.segments)
+      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i)
+        live += impl.alive[segment->entry(i)];
+    for (std::uint32_t i = 0; i < list.size; ++i)
+      if (in_tail(i)) live += impl.alive[tail_entry(i)];
     if (live == 0) continue;
     detail::put_le<std::uint32_t>(sections[kWords], word);
     detail::put_le<std::uint32_t>(sections[kListLengths], live);
@@ -210,8 +213,11 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
       detail::put_le<std::uint32_t>(sections[kPostingIds], entry);
       detail::put_le<float>(sections[kPostingWeights], weight);
     };
-    for (std::uint32_t i = 0; i < main_size; ++i) put_posting(main_ids[i], main_weights[i]);
-    for (std::uint32_t i = 0; i < list.size; ++i) put_posting(tail[i].entry, tail[i].weight);
+    for (const auto& segment : impl.segments)
+      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i)
+        put_posting(segment->entry(i), segment->weights.data()[i]);
+    for (std::uint32_t i = 0; i < list.size; ++i)
+      if (in_tail(i)) put_posting(tail_entry(i), tail[i].weight);
     posting_count += live;
   }
 
@@ -335,7 +341,9 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
   if (posting_count > std::numeric_limits<std::uint32_t>::max())
     layout.fail("more postings than this binbow supports (2^32)");
   impl->word_counts.assign(next_id, 0);
-  impl->main_offsets.assign(word_count + 1, 0);
+  auto segment = std::make_unique<detail::Segment>();
+  std::vector<std::uint32_t>& row_ends = segment->offsets;
+  row_ends.assign(word_count + 1, 0);
   std::size_t at = 0;
   for (std::size_t l = 0; l < list_count; ++l) {
     if (words[l] >= word_count || (l > 0 && words[l] <= words[l - 1]))
@@ -353,14 +361,27 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
                     " has a non-finite weight");
       ++impl->word_counts[ids[i]];
     }
-    impl->main_offsets[words[l] + 1] = length;
+    row_ends[impl->row_order.row(words[l]) + 1] = length;
     at += length;
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
-  for (std::size_t w = 0; w < word_count; ++w) impl->main_offsets[w + 1] += impl->main_offsets[w];
-  impl->main_ids.assign(ids.data(), ids.size());
-  impl->main_weights.assign(weights.data(), weights.size());
-  impl->postings = posting_count;
+  for (std::size_t r = 0; r < word_count; ++r) row_ends[r + 1] += row_ends[r];
+  // Everything loaded is one wide segment: no tail, however many entries.
+  if (posting_count > 0) {
+    segment->end_entry = next_id;
+    segment->level = detail::kLoadedLevel;
+    segment->wide = true;
+    segment->entries32.resize(posting_count);
+    segment->weights.resize(posting_count);
+    std::size_t from = 0;
+    for (std::size_t l = 0; l < list_count; ++l) {
+      const std::uint32_t to = row_ends[impl->row_order.row(words[l])];
+      std::memcpy(segment->entries32.data() + to, ids.data() + from, lengths[l] * sizeof(EntryId));
+      std::memcpy(segment->weights.data() + to, weights.data() + from, lengths[l] * sizeof(float));
+      from += lengths[l];
+    }
+    impl->segments.push_back(std::move(segment));
+  }
   impl->tail_first_entry = next_id;
 
   if (options.direct_index) {

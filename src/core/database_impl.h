@@ -2,6 +2,7 @@
 // the .bbdb reader and writer (database_file.cpp).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -14,33 +15,79 @@
 
 #include "binbow/bow_vector.h"
 #include "binbow/database.h"
+#include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
 
 namespace binbow::detail {
 
-// A posting of the tail tier: entry id and weight side by side, so that a
-// short list (most are) is one cache line for both append and query.
+// The tail keeps one list per group of words: word w is in group
+// w mod 2^kGroupBits, so there are at most 65,536 lists, whose 8-byte heads
+// (512 KiB) and growing ends stay in cache while images are added, where a
+// list per word would cost two cache misses per posting. Words of a group
+// are 65,536 ids apart: sibling leaves of the vocabulary tree, which similar
+// descriptors reach, fall in different groups.
+constexpr unsigned kGroupBits = 16;
+constexpr std::uint32_t group_of(WordId word) noexcept {
+  return word & ((1u << kGroupBits) - 1);
+}
+
+// The order of a segment's rows: by group, then word (w, w + 65,536, ...),
+// so that a segment is written from the tail group by group, sequentially.
+// Identity for vocabularies of up to 65,536 words.
+class RowOrder {
+ public:
+  RowOrder() = default;
+  explicit RowOrder(std::size_t word_count) noexcept
+      : per_group_(static_cast<std::uint32_t>(word_count >> kGroupBits)),
+        longer_groups_(group_of(static_cast<WordId>(word_count))) {}
+  // Groups [0, longer_groups_) have per_group_ + 1 words, the others per_group_.
+  std::uint32_t group_start(std::uint32_t group) const noexcept {
+    return group * per_group_ + std::min(group, longer_groups_);
+  }
+  std::uint32_t row(WordId word) const noexcept {
+    return group_start(group_of(word)) + (word >> kGroupBits);
+  }
+
+ private:
+  std::uint32_t per_group_ = 0;
+  std::uint32_t longer_groups_ = 0;
+};
+
+// A posting of the tail: the entry (relative to the tail's first entry, so
+// it fits) and the word's bits above kGroupBits in one key, then the weight.
+// A group's list is in increasing entry order.
 struct TailPosting {
-  EntryId entry;
+  std::uint32_t key;  // (entry - tail_first_entry) << high_bits | word >> kGroupBits
   float weight;
 };
 
-// The tail postings of one word: where its block is in the arena, and how
-// many postings it holds. Blocks grow by doubling from one posting, so the
-// capacity is the smallest power of two ≥ size (at least that much: undoing
-// an append may leave more room, never less).
+// The tail postings of one group: where its block is in the arena, and how
+// many postings it holds. A list's first block holds 2^first_block_log
+// postings (the group's size when the tail was last frozen, so that most
+// lists never move), and each time the list outgrows its block it moves to
+// one twice as large: the block holds max(2^first_block_log, the smallest
+// power of two ≥ size) postings (at least that many: undoing an append may
+// leave more room, never less).
 struct TailList {
   std::uint32_t block = 0;  // a PostingArena address; meaningless while size is 0
   std::uint32_t size = 0;
 };
 
+// The error for a BoW value that is not finite.
+InvalidArgument non_finite_value(const char* what, WordId word);
+
+constexpr unsigned kFirstBlockLog = 2;
+constexpr bool tail_list_full(std::uint32_t size, unsigned first_block_log) noexcept {
+  return size == 0 || (size >= (1u << first_block_log) && (size & (size - 1)) == 0);
+}
+
 // Storage of the tail tier's posting lists: blocks of 2^k postings carved
 // from large chunks, with a free list per block size for the blocks that
 // growing lists leave behind. Blocks are named by 32-bit addresses (chunk
-// index, then position in the chunk) so a word's TailList is 8 bytes. The
-// whole tier is dropped at once when it is merged, so there is no per-list
-// malloc, free or header.
+// index, then position in the chunk) so a group's TailList is 8 bytes. The
+// whole tail is dropped at once when it becomes a segment, so there is no
+// per-list malloc, free or header.
 class PostingArena {
  public:
   static constexpr unsigned kChunkBits = 17;  // 2^17 postings: 1 MiB chunks
@@ -50,7 +97,7 @@ class PostingArena {
   std::uint32_t allocate(std::uint32_t capacity);
   void release(std::uint32_t block, std::uint32_t capacity) noexcept;
   // Forgets every block but keeps the chunks of the usual size for reuse:
-  // the tail fills again after each merge, and fresh memory costs a page
+  // the tail fills again after each freeze, and fresh memory costs a page
   // fault (about 2 µs in our VM) per 4 KiB.
   void reset() noexcept;
   void clear() noexcept;
@@ -146,40 +193,87 @@ class PackedFeatureVector {
 
 namespace binbow {
 
-// The inverted index has two tiers. The main tier is compressed rows by word
-// (one offset per word, then all entry ids and all weights, exact size: 8
-// bytes per posting). New entries go to the tail tier, one growable list per
-// word, which is merged into the main tier (dropping removed entries) when it
-// holds more than a quarter of all postings: each posting is copied a bounded
-// number of times, the index stays compact, and every entry lives in exactly
-// one tier (the tail holds the entries from tail_first_entry on), its
+namespace detail {
+
+// A part of the inverted index: the postings of the entries
+// [first_entry, end_entry) as compressed rows by word (in RowOrder): one
+// offset per word, then the entries as offsets from first_entry and the
+// weights. Segments that span at most kSegmentSpan ids store their entries
+// in 16 bits (6 bytes per posting), wider ones (merged or loaded) in 32. A
+// query pays one offset lookup per word and segment, small next to the
+// postings it reads.
+constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
+
+// So that a query's offset lookups stay few as the database grows, every
+// kSegmentFanIn segments of one level are merged into one of the next: a
+// posting is copied once per level, and a query visits at most
+// kSegmentFanIn - 1 segments of each level (8 for 100,000 images of 1000
+// words).
+constexpr std::size_t kSegmentFanIn = 8;
+constexpr unsigned kLoadedLevel = ~0u;
+
+struct Segment {
+  EntryId first_entry = 0;
+  EntryId end_entry = 0;
+  // Frozen from the tail: 0; merged from kSegmentFanIn segments of level l:
+  // l + 1; loaded: kLoadedLevel, never merged.
+  unsigned level = 0;
+  bool wide = false;
+  std::vector<std::uint32_t> offsets;      // word_count + 1, by RowOrder
+  GrowableArray<std::uint16_t> entries16;  // when !wide
+  GrowableArray<std::uint32_t> entries32;  // when wide
+  GrowableArray<float> weights;
+  std::size_t dead_postings = 0;  // of removed entries, not yet dropped
+
+  std::size_t postings() const noexcept { return weights.size(); }
+  EntryId entry(std::size_t posting) const noexcept {
+    return first_entry + (wide ? entries32.data()[posting] : entries16.data()[posting]);
+  }
+};
+
+}  // namespace detail
+
+// The inverted index is a list of segments (oldest first) and a tail. New
+// entries go to the tail; when it holds enough postings, or spans
+// kSegmentSpan entries, it becomes a new segment (dropping removed entries),
+// and a segment that removals have thinned out is compacted in place. Every
+// entry lives in exactly one place: segments cover increasing entry ranges,
+// the tail holds the entries from tail_first_entry on, each entry with its
 // postings in increasing word order.
 struct Database::Impl {
   Impl(Vocabulary vocabulary_in, DatabaseOptions options_in);
 
   // Appends an entry whose arguments are already validated; exclusive lock held.
   EntryId append(const BowVector& bow, const FeatureVector& features);
-  // Merges the tail into the main tier when worthwhile (or always).
-  void merge_if_worthwhile();
-  void merge();
+  // Turns the tail into a segment when it is full enough (or always).
+  void freeze_tail_if_full();
+  void freeze_tail();
+  // Merges the newest segments while kSegmentFanIn of them share a level.
+  void merge_segments_if_many();
+  void merge_segments(std::size_t begin, std::size_t end);
+  // Drops the postings of removed entries from a segment, or the whole
+  // segment when none is left alive.
+  void compact(std::size_t segment);
+  // The segment that holds `entry`, or segments.size() when the tail does.
+  std::size_t segment_of(EntryId entry) const noexcept;
   bool is_live(EntryId entry) const noexcept { return entry < alive.size() && alive[entry] != 0; }
 
   Vocabulary vocabulary;
   DatabaseOptions options;
   mutable std::shared_mutex mutex;
 
-  // Main tier: postings of word w are [main_offsets[w], main_offsets[w + 1]).
-  std::vector<std::uint32_t> main_offsets;  // word_count + 1, or empty
-  detail::GrowableArray<EntryId> main_ids;
-  detail::GrowableArray<float> main_weights;
+  std::vector<std::unique_ptr<detail::Segment>> segments;
 
-  // Tail tier: one list per word, and one bit per word set while its list is
-  // not empty (128 KiB for a million words: merges skip the words without
-  // tail postings, and queries skip their lists, without touching them).
+  // Tail: one list per group of words (see kGroupBits); a word id has
+  // kGroupBits + high_bits significant bits.
+  unsigned high_bits = 0;
+  detail::RowOrder row_order;
   std::vector<detail::TailList> tail_lists;
-  std::vector<std::uint64_t> tail_words;
+  std::vector<std::uint8_t> first_block_logs;  // per group, see TailList
   detail::PostingArena arena;
   std::size_t tail_postings = 0;
+  std::size_t tail_dead_postings = 0;
+  std::size_t segment_postings = 0;  // the tail becomes a segment at this size
   EntryId tail_first_entry = 0;
 
   // Per entry, indexed by entry id (dead entries keep their place).
@@ -189,8 +283,6 @@ struct Database::Impl {
   std::vector<std::string> labels;                  // empty until a label is set
 
   std::size_t live_entries = 0;
-  std::size_t postings = 0;       // in both tiers, dead ones included
-  std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 };
 
 }  // namespace binbow

@@ -201,9 +201,10 @@ TEST(Database, RemovedEntriesNeverAppear) {
   }
 }
 
-TEST(Database, QueriesSpanningBothTiers) {
-  // Enough postings that the tail is merged into the main tier several times
-  // while entries keep being added and removed.
+TEST(Database, QueriesAcrossSegmentsAndTail) {
+  // Enough postings (the vocabulary has 125 words, so the tail becomes a
+  // segment every 65,536 postings) for several segments while entries keep
+  // being added and removed, some of them from segments.
   for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kChiSquare}) {
     const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf).with_scoring(scoring);
     const Corpus corpus = random_corpus(vocabulary, 6000, 21);
@@ -227,7 +228,7 @@ TEST(Database, QueriesSpanningBothTiers) {
           for (EntryId max_id : {kAllEntries, static_cast<EntryId>(i / 2)})
             expect_same(database.query(query, 20, max_id),
                         brute_force(vocabulary, corpus.bows, live, query, 20, max_id),
-                        std::string("two tiers ") + to_string(scoring));
+                        std::string("segments and tail ") + to_string(scoring));
           ++checks;
         }
       }
@@ -259,12 +260,13 @@ Vocabulary wide_vocabulary(std::uint32_t k, std::uint32_t levels, Scoring scorin
   return Vocabulary::from_tree(tree).with_scoring(scoring);
 }
 
-TEST(Database, ManyMergesOfSparseAndDenseTails) {
-  // 10,000 words; images mix rare words (tail lists of one posting, most
-  // words untouched by a merge) with a few very common ones (long lists), so
-  // merges move runs both word by word and in long spans. Removals make
-  // some merges drop dead postings from both tiers. Queries are checked
-  // between merges (tail large or small) and after a save/load.
+TEST(Database, ManySegmentsOfSparseAndDenseImages) {
+  // 10,000 words: the tail becomes a segment every 65,536 postings, about
+  // 300 images, and every 8 segments merge, so there are segments of two
+  // levels. Images mix rare words (rows of one posting, most words absent
+  // from a segment) with a few very common ones (long rows). Removals drop
+  // postings from the tail, thin segments out until they are compacted.
+  // Queries are checked as segments come and go and after a save/load.
   for (Scoring scoring : {Scoring::kL1, Scoring::kKL}) {
     const Vocabulary vocabulary = wide_vocabulary(10, 4, scoring);
     ASSERT_EQ(vocabulary.word_count(), 10000u);
@@ -300,7 +302,7 @@ TEST(Database, ManyMergesOfSparseAndDenseTails) {
           expect_same(
               database.query(query, 15, max_id),
               brute_force(vocabulary, bows, live, query, 15, max_id),
-              std::string("many merges ") + to_string(scoring) + " after " + std::to_string(i));
+              std::string("many segments ") + to_string(scoring) + " after " + std::to_string(i));
         ++checks;
       }
     }
@@ -311,6 +313,157 @@ TEST(Database, ManyMergesOfSparseAndDenseTails) {
       const BowVector& query = bows[rng() % bows.size()];
       expect_same(loaded.query(query, 15), brute_force(vocabulary, bows, live, query, 15),
                   "loaded");
+    }
+  }
+}
+
+// Random distinct words, sorted, with random values: an image of a big
+// vocabulary without the cost of transforming descriptors.
+BowVector random_bow(std::size_t words, std::size_t word_count, std::mt19937_64& rng) {
+  std::uniform_real_distribution<float> value(0.01f, 1.0f);
+  std::vector<WordId> ids;
+  while (ids.size() < words) ids.push_back(static_cast<WordId>(rng() % word_count));
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<BowEntry> entries;
+  for (WordId w : ids) entries.push_back({w, value(rng)});
+  return BowVector(std::move(entries));
+}
+
+TEST(Database, SegmentsOfAVocabularyOfMoreThan65536Words) {
+  // 100,000 words: the tail groups words w and w + 65,536 in one list, and
+  // becomes a segment every 200,000 postings (about 280 images), so 2,600
+  // images make 8 segments that merge, then more. Some words are common,
+  // on both sides of a group boundary.
+  const Vocabulary vocabulary = wide_vocabulary(10, 5, Scoring::kL1);
+  ASSERT_EQ(vocabulary.word_count(), 100000u);
+  std::mt19937_64 rng(12);
+  std::vector<BowVector> bows;
+  for (int i = 0; i < 2600; ++i) {
+    BowVector bow = random_bow(700, vocabulary.word_count(), rng);
+    std::vector<BowEntry> entries(bow.begin(), bow.end());
+    for (WordId w = 65530; w < 65545; ++w)  // both sides of a group boundary
+      if (rng() % 2 == 0) entries.push_back({w, 0.5f});
+    for (WordId w : {WordId{0}, WordId{65536}, WordId{99999}})
+      if (rng() % 3 == 0) entries.push_back({w, 0.25f});
+    std::sort(entries.begin(), entries.end(),
+              [](const BowEntry& a, const BowEntry& b) { return a.word < b.word; });
+    entries.erase(
+        std::unique(entries.begin(), entries.end(),
+                    [](const BowEntry& a, const BowEntry& b) { return a.word == b.word; }),
+        entries.end());
+    bows.emplace_back(std::move(entries));
+  }
+  Database database(vocabulary, {false, 0});
+  std::vector<bool> live(bows.size(), false);
+  const auto check = [&](const std::string& context) {
+    for (int q = 0; q < 3; ++q) {
+      const BowVector& query = bows[rng() % bows.size()];
+      for (EntryId max_id : {kAllEntries, static_cast<EntryId>(rng() % bows.size())})
+        expect_same(database.query(query, 12, max_id),
+                    brute_force(vocabulary, bows, live, query, 12, max_id), context);
+    }
+  };
+  for (std::size_t i = 0; i < bows.size(); ++i) {
+    database.add(bows[i]);
+    live[i] = true;
+    if (i % 400 == 399) check("after " + std::to_string(i + 1) + " images");
+  }
+  // Thin out the merged segment until it is compacted, several times, and
+  // the tail.
+  for (EntryId id = 0; id < bows.size(); ++id) {
+    if (id % 97 == 0 || (id < 2000 && id % 2 == 0)) continue;
+    database.remove(id);
+    live[id] = false;
+    if (id % 500 == 0) check("after removing up to " + std::to_string(id));
+  }
+  check("after removals");
+  const std::vector<std::uint8_t> bytes = database.serialize(false);
+  const Database loaded = Database::deserialize(bytes.data(), bytes.size(), "memory", vocabulary);
+  for (int q = 0; q < 3; ++q) {
+    const BowVector& query = bows[rng() % bows.size()];
+    expect_same(loaded.query(query, 12), brute_force(vocabulary, bows, live, query, 12), "loaded");
+  }
+}
+
+TEST(Database, SegmentsOfManySmallImages) {
+  // Images of 0-2 words: the tail becomes a segment when it spans 65,536
+  // ids (entries are 16-bit offsets in a segment), and 8 such segments merge
+  // into one with 32-bit entries. Removing every image of one segment drops
+  // it.
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  std::mt19937_64 rng(5);
+  std::vector<BowVector> bows;
+  const std::size_t count = 10 * 65536 + 100;
+  for (std::size_t i = 0; i < count; ++i)
+    bows.push_back(i % 61 == 0 ? random_bow(2, vocabulary.word_count(), rng) : BowVector());
+  Database database(vocabulary, {false, 0});
+  std::vector<bool> live(bows.size(), true);
+  for (std::size_t i = 0; i < count; ++i) {
+    database.add(bows[i]);
+    if (i == 3 * 65536) {
+      // The second segment goes, one image at a time.
+      for (EntryId id = 65536; id < 2 * 65536; ++id) {
+        database.remove(id);
+        live[id] = false;
+      }
+    }
+  }
+  const auto check = [&](const std::string& context) {
+    for (int q = 0; q < 4; ++q) {
+      const BowVector& query = bows[61 * (rng() % (count / 61))];
+      for (EntryId max_id : {kAllEntries, EntryId{600000}, EntryId{70000}})
+        expect_same(database.query(query, 30, max_id),
+                    brute_force(vocabulary, bows, live, query, 30, max_id),
+                    context + ", up to " + std::to_string(max_id));
+    }
+  };
+  check("small images");
+  EXPECT_EQ(database.size(), count - 65536);
+  // Then the merged segment loses enough images to be compacted.
+  for (EntryId id = 0; id < 4 * 65536; ++id) {
+    if (!live[id]) continue;
+    database.remove(id);
+    live[id] = false;
+  }
+  check("small images, after removals");
+}
+
+TEST(Database, LoadedDatabasesKeepChanging) {
+  // A loaded database is one segment; adds make new ones after it, and
+  // removals compact it.
+  const Vocabulary vocabulary = wide_vocabulary(10, 4, Scoring::kChiSquare);
+  std::mt19937_64 rng(21);
+  std::vector<BowVector> bows;
+  for (int i = 0; i < 900; ++i) bows.push_back(random_bow(200, vocabulary.word_count(), rng));
+  std::vector<bool> live(bows.size(), false);
+  Database first(vocabulary, {false, 0});
+  for (std::size_t i = 0; i < 300; ++i) {
+    first.add(bows[i]);
+    live[i] = true;
+  }
+  const std::vector<std::uint8_t> bytes = first.serialize(false);
+  Database database = Database::deserialize(bytes.data(), bytes.size(), "memory", vocabulary);
+  for (std::size_t i = 300; i < bows.size(); ++i) {
+    database.add(bows[i]);
+    live[i] = true;
+  }
+  for (EntryId id = 0; id < 600; id += 3) {
+    database.remove(id);
+    live[id] = false;
+  }
+  for (EntryId id = 1; id < 300; id += 3) {
+    database.remove(id);
+    live[id] = false;
+  }
+  const std::vector<std::uint8_t> again = database.serialize(false);
+  const Database reloaded = Database::deserialize(again.data(), again.size(), "memory", vocabulary);
+  for (int q = 0; q < 6; ++q) {
+    const BowVector& query = bows[rng() % bows.size()];
+    for (EntryId max_id : {kAllEntries, EntryId{250}, EntryId{450}}) {
+      const auto expected = brute_force(vocabulary, bows, live, query, 20, max_id);
+      expect_same(database.query(query, 20, max_id), expected, "loaded, then changed");
+      expect_same(reloaded.query(query, 20, max_id), expected, "saved again and loaded");
     }
   }
 }
@@ -405,6 +558,21 @@ TEST(Database, BadInput) {
   EXPECT_THROW(database.query(BowVector({{word_count, 1.0f}}), 5), InvalidArgument);
   EXPECT_THROW(database.add(BowVector({{word_count, 1.0f}})), InvalidArgument);
   EXPECT_THROW(database.add(BowVector({{0, std::nanf("")}})), InvalidArgument);
+  {
+    // Found after some words went in: the database is left as it was.
+    const EntryId next = database.next_entry_id();
+    const std::size_t size = database.size();
+    const auto before = database.query(BowVector({{0, 0.5f}, {1, 0.5f}, {2, 0.5f}}), 100);
+    EXPECT_THROW(database.add(BowVector({{0, 0.5f}, {1, 0.5f}, {2, INFINITY}})), InvalidArgument);
+    EXPECT_EQ(database.next_entry_id(), next);
+    EXPECT_EQ(database.size(), size);
+    const auto after = database.query(BowVector({{0, 0.5f}, {1, 0.5f}, {2, 0.5f}}), 100);
+    ASSERT_EQ(after.size(), before.size());
+    for (std::size_t i = 0; i < after.size(); ++i) {
+      EXPECT_EQ(after[i].entry, before[i].entry);
+      EXPECT_EQ(after[i].score, before[i].score);
+    }
+  }
   EXPECT_THROW(database.query(BowVector({{0, INFINITY}}), 5), InvalidArgument);
   const auto node_count = static_cast<NodeId>(vocabulary.node_count());
   EXPECT_THROW(
