@@ -347,8 +347,14 @@ void accumulate_tail(const IndexView& index, const BowVector& bow, EntryId last_
     if (q + 2 * kPrefetchAhead < n)
       __builtin_prefetch(lists + detail::group_of(query[q + 2 * kPrefetchAhead].word));
     if (q + kPrefetchAhead < n) {
+      // The whole list (up to 2 KiB) is read: fetch it all, not its start.
       const detail::TailList ahead = lists[detail::group_of(query[q + kPrefetchAhead].word)];
-      if (ahead.size != 0) __builtin_prefetch(index.arena.at(ahead.block));
+      if (ahead.size != 0) {
+        const auto* block = reinterpret_cast<const char*>(index.arena.at(ahead.block));
+        const std::size_t bytes =
+            std::min<std::size_t>(ahead.size, 256) * sizeof(detail::TailPosting);
+        for (std::size_t b = 0; b < bytes; b += 64) __builtin_prefetch(block + b);
+      }
     }
     const WordId word = query[q].word;
     const detail::TailList list = lists[detail::group_of(word)];
@@ -790,12 +796,16 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const std::size_t touched = accumulate(scoring, index, bow, last_entry,
                                          buffers.accumulators.data(), buffers.touched.data());
 
-  // Collecting candidates also zeroes the accumulators for the next query;
-  // reserve first so nothing can throw with dirty accumulators.
+  // Collecting the best also zeroes the accumulators for the next query;
+  // reserve first so nothing can throw with dirty accumulators. The best
+  // max_results so far are a heap whose front is the worst of them, so most
+  // entries cost one comparison.
+  const BetterResult better{scoring == Scoring::kKL};
+  const std::size_t keep = std::min(max_results, touched);
   std::vector<QueryResult>& candidates = buffers.candidates;
   candidates.clear();
   try {
-    candidates.reserve(touched);
+    candidates.reserve(keep);
   } catch (...) {
     for (std::size_t i = 0; i < touched; ++i) buffers.accumulators[buffers.touched[i]] = {};
     throw;
@@ -803,20 +813,22 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   for (std::size_t i = 0; i < touched; ++i) {
     const EntryId entry = buffers.touched[i];
     Accumulator& accumulator = buffers.accumulators[entry];
-    if (impl_->alive[entry] != 0)
-      candidates.push_back(
-          {entry, detail::finish_score(scoring, accumulator.sum, base), accumulator.shared});
+    if (impl_->alive[entry] != 0) {
+      const QueryResult result{entry, detail::finish_score(scoring, accumulator.sum, base),
+                               accumulator.shared};
+      if (candidates.size() < keep) {
+        candidates.push_back(result);
+        if (candidates.size() == keep) std::make_heap(candidates.begin(), candidates.end(), better);
+      } else if (better(result, candidates.front())) {
+        std::pop_heap(candidates.begin(), candidates.end(), better);
+        candidates.back() = result;
+        std::push_heap(candidates.begin(), candidates.end(), better);
+      }
+    }
     accumulator = {};
   }
   lock.unlock();
 
-  const BetterResult better{scoring == Scoring::kKL};
-  if (candidates.size() > max_results) {
-    std::nth_element(candidates.begin(),
-                     candidates.begin() + static_cast<std::ptrdiff_t>(max_results),
-                     candidates.end(), better);
-    candidates.resize(max_results);
-  }
   std::sort(candidates.begin(), candidates.end(), better);
   results.assign(candidates.begin(), candidates.end());
   return results;
