@@ -131,7 +131,8 @@ void BM_Add(benchmark::State& state) {
   state.SetLabel(skewed ? "skewed" : "uniform");
 }
 // Exactly one fill from empty to 10k entries per run, so every run pays the
-// same merges (an automatic iteration count would stop at an arbitrary size).
+// same segment builds (an automatic iteration count would stop at an
+// arbitrary size).
 BENCHMARK(BM_Add)->Arg(0)->Arg(1)->Iterations(10000)->Unit(benchmark::kMicrosecond);
 
 void BM_Query(benchmark::State& state) {
