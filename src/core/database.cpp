@@ -26,7 +26,7 @@ namespace detail {
 std::uint32_t PostingArena::new_chunk(std::size_t postings) {
   // Addresses are 32 bits: chunk index, then kChunkBits of position.
   if (chunks_.size() >= (std::size_t{1} << (32 - kChunkBits)))
-    throw InvalidArgument("Database: the tail tier outgrew its 32 GiB of addresses");
+    throw InvalidArgument("Database: the tail outgrew its 32 GiB of addresses");
   chunk_starts_.reserve(chunks_.size() + 1);
   chunk_postings_.reserve(chunks_.size() + 1);
   chunks_.emplace_back(new TailPosting[postings]);  // left uninitialised

@@ -82,7 +82,7 @@ constexpr bool tail_list_full(std::uint32_t size, unsigned first_block_log) noex
   return size == 0 || (size >= (1u << first_block_log) && (size & (size - 1)) == 0);
 }
 
-// Storage of the tail tier's posting lists: blocks of 2^k postings carved
+// Storage of the tail's posting lists: blocks of 2^k postings carved
 // from large chunks, with a free list per block size for the blocks that
 // growing lists leave behind. Blocks are named by 32-bit addresses (chunk
 // index, then position in the chunk) so a group's TailList is 8 bytes. The
@@ -124,9 +124,9 @@ class PostingArena {
   std::size_t chunk_bytes_ = 0;
 };
 
-// A trivially copyable array in one malloc'd block, resized with realloc:
-// the main tier grows in place this way (large blocks are remapped by the
-// kernel, not copied) and no element is value-initialised for nothing.
+// A trivially copyable array in one malloc'd block, resized with realloc: a
+// segment's arrays are allocated at their final size without initialising
+// elements that are written next, and shrink in place when compacted.
 template <typename T>
 class GrowableArray {
  public:
