@@ -105,7 +105,7 @@ InvalidArgument non_finite_value(const char* what, WordId word) {
 
 namespace {
 
-// A list whose size is 0 or a power of two is full (see TailList).
+// A full list moves to a block twice its size (see TailList).
 void push_back(TailList& list, unsigned first_block_log, TailPosting posting, PostingArena& arena) {
   if (tail_list_full(list.size, first_block_log)) {
     const std::uint32_t capacity = list.size == 0 ? 1u << first_block_log : list.size * 2;
@@ -467,9 +467,12 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     throw InvalidArgument("Database: no entry id left (" + std::to_string(alive.size()) +
                           " entries added)");
   const auto entry = static_cast<EntryId>(alive.size());
+  // Tail entries are 16-bit offsets. freeze_tail_if_full keeps the tail
+  // within kSegmentSpan entries unless it ran out of memory: then try again,
+  // and if that fails too, this add fails with nothing changed.
+  if (entry - tail_first_entry >= detail::kSegmentSpan) freeze_tail();
   const BowEntry* words = bow.begin();
   const std::size_t n = bow.size();
-  // freeze_tail_if_full keeps the tail within kSegmentSpan entries.
   const std::uint32_t key_base = (entry - tail_first_entry) << high_bits;
   std::size_t appended = 0;
   try {
@@ -611,8 +614,6 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
 void Database::Impl::freeze_tail() {
   const std::size_t words = vocabulary.word_count();
   const std::size_t live = tail_postings - tail_dead_postings;
-  if (alive.size() - tail_first_entry > detail::kSegmentSpan)
-    throw InvalidArgument("Database: the tail outgrew a segment");  // kept from happening
   std::unique_ptr<detail::Segment> segment;
   std::vector<std::uint32_t> next;  // per word of a group: its row's next slot
   if (live > 0) {
