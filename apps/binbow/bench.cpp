@@ -15,6 +15,7 @@
 #include "binbow/vision/image_source.h"
 #include "binbow/vision/loop_detector.h"
 #include "commands.h"
+#include "extractor_options.h"
 #include "image_source_options.h"
 #include "loop_run.h"
 #include "progress.h"
@@ -143,10 +144,7 @@ void add_bench_command(CLI::App& app) {
       ->required();
   cmd->add_option("--vocab", args->vocabulary,
                   "Vocabulary (any supported format); default: the bundled one for --descriptor");
-  cmd->add_option("--descriptor", args->descriptor, "orb or brief")
-      ->check(CLI::IsMember({"orb", "brief"}))
-      ->capture_default_str();
-  cmd->add_option("--features", args->features, "Features per image (0: the extractor's default)");
+  add_extractor_options(cmd, args->descriptor, args->features);
   cmd->add_option("--database-size", args->database_size,
                   "Entries in the database for the add and query timings")
       ->check(CLI::Range(1, 10000000))

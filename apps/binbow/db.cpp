@@ -14,6 +14,7 @@
 #include "binbow/vision/image_source.h"
 #include "commands.h"
 #include "default_vocabulary.h"
+#include "extractor_options.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -121,11 +122,7 @@ void add_db_command(CLI::App& app) {
   build_command->add_option("--vocab", build->vocabulary, "Vocabulary (any format binbow reads)")
       ->required();
   build_command->add_option("-o,--output", build->output, "Output database (.bbdb)")->required();
-  build_command->add_option("--descriptor", build->descriptor, "Binary descriptor: orb or brief")
-      ->check(CLI::IsMember({"orb", "brief"}))
-      ->capture_default_str();
-  build_command->add_option("--features", build->features,
-                            "Features per image (0: the extractor's default)");
+  add_extractor_options(build_command, build->descriptor, build->features);
   build_command
       ->add_option("--direct-index-levels-up", build->levels_up,
                    "Direct index nodes this many levels above the words")
@@ -146,13 +143,8 @@ void add_db_command(CLI::App& app) {
   query_command->add_option("DB", query->database, "Database (.bbdb)")->required();
   query_command->add_option("IMAGE", query->image, "Query image")->required();
   query_command->add_option("--top", query->top, "Number of results")->capture_default_str();
-  query_command
-      ->add_option("--descriptor", query->descriptor,
-                   "Binary descriptor: orb or brief (as used to build the database)")
-      ->check(CLI::IsMember({"orb", "brief"}))
-      ->capture_default_str();
-  query_command->add_option("--features", query->features,
-                            "Features per image (0: the extractor's default)");
+  add_extractor_options(query_command, query->descriptor, query->features,
+                        "as used to build the database");
   query_command->add_option("--vocab", query->vocabulary,
                             "Vocabulary, for databases built with --external-vocab");
   query_command->callback([query] { run_db_query(*query); });

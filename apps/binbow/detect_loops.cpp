@@ -14,6 +14,7 @@
 #include "binbow/vision/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "extractor_options.h"
 #include "loop_report.h"
 #include "loop_run.h"
 #include "progress.h"
@@ -124,11 +125,7 @@ void add_detect_loops_command(CLI::App& app) {
   command->add_option("--vocab", arguments->vocab,
                       "Vocabulary file (any supported format); default: the bundled "
                       "data/vocab/<descriptor>_default.bbw");
-  command->add_option("--descriptor", arguments->descriptor, "Binary descriptor: orb or brief")
-      ->check(CLI::IsMember({"orb", "brief"}))
-      ->capture_default_str();
-  command->add_option("--features", arguments->max_features,
-                      "Features per image (0: the extractor's default, ORB 1000, BRIEF 300)");
+  add_extractor_options(command, arguments->descriptor, arguments->max_features);
   command->add_option("--params", arguments->params,
                       "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams)");
   command->add_option("--report", arguments->report, "Write an HTML report into this directory");
