@@ -305,8 +305,9 @@ struct IndexView {
 };
 
 // Calls take(i) for the postings of a group list whose key has the given
-// low bits (the postings of one word), in order, until take returns false. Four keys are compared
-// at once: a word's postings are a small part of its group's.
+// low bits (the postings of one word), in order, until take returns false.
+// Four keys are compared at once: a word's postings are a small part of its
+// group's.
 template <typename Take>
 inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t size,
                              std::uint32_t mask, std::uint32_t low, Take&& take) {
