@@ -7,6 +7,7 @@
 #include <string>
 
 #include "binbow/vocabulary.h"
+#include "support/random_tree.h"
 
 namespace binbow::bench {
 
@@ -16,26 +17,7 @@ namespace binbow::bench {
 // depend on the descriptor values, so it times transform like a trained tree.
 inline Vocabulary full_random_vocabulary(std::uint32_t k, std::uint32_t levels,
                                          std::size_t code_size = 32, std::uint64_t seed = 42) {
-  std::mt19937_64 rng(seed);
-  VocabularyTree t;
-  t.code_size = code_size;
-  t.branching = k;
-  t.levels = levels;
-  std::size_t level_begin = 0, level_size = 1;
-  t.parent.push_back(0);
-  for (std::uint32_t depth = 0; depth < levels; ++depth) {
-    for (std::size_t i = 0; i < level_size; ++i)
-      for (std::uint32_t c = 0; c < k; ++c)
-        t.parent.push_back(static_cast<NodeId>(level_begin + i));
-    level_begin += level_size;
-    level_size *= k;
-  }
-  t.descriptors.resize(t.parent.size() * code_size);
-  for (auto& b : t.descriptors) b = static_cast<std::uint8_t>(rng());
-  std::uniform_real_distribution<float> weight(0.5f, 5.0f);
-  t.weights.resize(t.parent.size());
-  for (auto& w : t.weights) w = weight(rng);
-  return Vocabulary::from_tree(t);
+  return Vocabulary::from_tree(test::complete_random_tree(k, levels, code_size, seed));
 }
 
 inline DescriptorMatrix random_descriptors(std::size_t rows, std::size_t code_size,

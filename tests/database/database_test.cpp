@@ -10,6 +10,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
+#include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -201,6 +202,16 @@ TEST(Database, RemovedEntriesNeverAppear) {
   }
 }
 
+// Picks one of the entries below `count` at random and removes it if it is
+// still there.
+void remove_one_of(Database& database, std::vector<bool>& live, std::size_t count,
+                   std::mt19937_64& rng) {
+  const auto victim = static_cast<EntryId>(rng() % count);
+  if (!live[victim]) return;
+  database.remove(victim);
+  live[victim] = false;
+}
+
 TEST(Database, QueriesAcrossSegmentsAndTail) {
   // Enough postings (the vocabulary has 125 words, so the tail becomes a
   // segment every 65,536 postings) for several segments while entries keep
@@ -215,13 +226,7 @@ TEST(Database, QueriesAcrossSegmentsAndTail) {
     for (std::size_t i = 0; i < corpus.bows.size(); ++i) {
       database.add(corpus.bows[i]);
       live[i] = true;
-      if (i % 7 == 3) {
-        const auto victim = static_cast<EntryId>(rng() % (i + 1));
-        if (live[victim]) {
-          database.remove(victim);
-          live[victim] = false;
-        }
-      }
+      if (i % 7 == 3) remove_one_of(database, live, i + 1, rng);
       if (i % 1500 == 1499 || i + 1 == corpus.bows.size()) {
         for (std::size_t q = 0; q < 5; ++q) {
           const BowVector& query = corpus.bows[rng() % corpus.bows.size()];
@@ -237,27 +242,11 @@ TEST(Database, QueriesAcrossSegmentsAndTail) {
   }
 }
 
-// A complete k-ary tree with random descriptors: word ids 0..k^levels-1,
-// enough words for sparse tail lists, without training.
+// A complete k-ary tree: word ids 0..k^levels-1, enough words for sparse
+// tail lists, without training. Its weights do not matter: the tests that
+// use it give their own BoW vectors.
 Vocabulary wide_vocabulary(std::uint32_t k, std::uint32_t levels, Scoring scoring) {
-  std::mt19937_64 rng(3);
-  VocabularyTree tree;
-  tree.code_size = 32;
-  tree.branching = k;
-  tree.levels = levels;
-  tree.parent.push_back(0);
-  std::size_t level_begin = 0, level_size = 1;
-  for (std::uint32_t depth = 0; depth < levels; ++depth) {
-    for (std::size_t i = 0; i < level_size; ++i)
-      for (std::uint32_t c = 0; c < k; ++c)
-        tree.parent.push_back(static_cast<NodeId>(level_begin + i));
-    level_begin += level_size;
-    level_size *= k;
-  }
-  tree.descriptors.resize(tree.parent.size() * tree.code_size);
-  for (auto& b : tree.descriptors) b = static_cast<std::uint8_t>(rng());
-  tree.weights.assign(tree.parent.size(), 1.0f);
-  return Vocabulary::from_tree(tree).with_scoring(scoring);
+  return Vocabulary::from_tree(test::complete_random_tree(k, levels, 32, 3)).with_scoring(scoring);
 }
 
 TEST(Database, ManySegmentsOfSparseAndDenseImages) {
@@ -289,13 +278,7 @@ TEST(Database, ManySegmentsOfSparseAndDenseImages) {
     for (std::size_t i = 0; i < bows.size(); ++i) {
       ASSERT_EQ(database.add(bows[i]), static_cast<EntryId>(i));
       live[i] = true;
-      if (i % 5 == 2) {
-        const auto victim = static_cast<EntryId>(rng() % (i + 1));
-        if (live[victim]) {
-          database.remove(victim);
-          live[victim] = false;
-        }
-      }
+      if (i % 5 == 2) remove_one_of(database, live, i + 1, rng);
       if (i % 211 == 0 || i + 1 == bows.size()) {
         const BowVector& query = bows[rng() % bows.size()];
         for (EntryId max_id : {kAllEntries, static_cast<EntryId>(i / 3)})
