@@ -1,13 +1,20 @@
 include(CMakePackageConfigHelpers)
 
-install(TARGETS binbow_core binbow_vision EXPORT binbowTargets
+# Two export sets, so that a consumer of binbow::core alone needs no OpenCV:
+# binbowConfig.cmake loads the vision targets only when their dependencies are found.
+install(TARGETS binbow_core EXPORT binbowCoreTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-        RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(TARGETS binbow_vision EXPORT binbowVisionTargets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS binbow RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY include/binbow DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(EXPORT binbowTargets NAMESPACE binbow::
+install(EXPORT binbowCoreTargets NAMESPACE binbow::
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
+install(EXPORT binbowVisionTargets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
 
 configure_package_config_file(cmake/binbowConfig.cmake.in
@@ -18,6 +25,16 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/binbowConfigVersion
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/binbowConfig.cmake
               ${CMAKE_CURRENT_BINARY_DIR}/binbowConfigVersion.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
+
+# pkg-config files for builds without CMake, relocatable (the prefix is found
+# from the file's own folder). The libraries are static, so their dependencies
+# are public requirements.
+file(RELATIVE_PATH BINBOW_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
+foreach(pc_file binbow binbow-vision)
+  configure_file(cmake/${pc_file}.pc.in ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc @ONLY)
+  install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc
+          DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+endforeach()
 
 # Bundled data, found by the CLI at <prefix>/share/binbow (default vocabularies, demo sample).
 install(DIRECTORY data/vocab data/samples DESTINATION ${CMAKE_INSTALL_DATADIR}/binbow)

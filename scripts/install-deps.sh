@@ -13,6 +13,11 @@ packages=(
   chromium
 )
 if [ "$(id -u)" -ne 0 ]; then
+  if ! command -v sudo >/dev/null 2>&1; then
+    echo "install-deps.sh: error: installing packages needs root: run this script as root," \
+      "or install sudo, or install these Debian packages yourself: ${packages[*]}" >&2
+    exit 1
+  fi
   exec sudo "$0" "$@"
 fi
 export DEBIAN_FRONTEND=noninteractive

@@ -20,11 +20,9 @@ std::vector<std::string> data_directories() {
     directories.push_back(fs::path(data_dir).lexically_normal().string());
   std::error_code error;
   const fs::path exe = fs::read_symlink("/proc/self/exe", error);
-  if (!error) {
-    const fs::path dir = exe.parent_path();
-    directories.push_back((dir / ".." / "share" / "binbow").lexically_normal().string());
-    directories.push_back((dir / ".." / ".." / "data").lexically_normal().string());
-  }
+  if (!error)
+    directories.push_back(
+        (exe.parent_path() / ".." / "share" / "binbow").lexically_normal().string());
   return directories;
 }
 
@@ -42,7 +40,7 @@ std::string first_existing(const std::vector<std::string>& candidates, const std
   std::string searched;
   for (const std::string& path : candidates) {
     std::error_code error;
-    if (fs::exists(path, error)) return path;
+    if (fs::exists(path, error)) return fs::canonical(path, error).string();
     searched += "\n  " + path;
   }
   throw InvalidArgument(what + " is not installed; " + advice + ". Searched:" + searched);

@@ -13,16 +13,15 @@ namespace binbow::cli {
 // "brief_default.bbw". Throws InvalidArgument for other descriptors.
 std::string default_vocabulary_name(const std::string& descriptor);
 
-// The places searched for it, in order:
-//   1. $BINBOW_DATA_DIR/vocab/            (explicit override)
-//   2. <exe>/../share/binbow/vocab/       (installed: bin/binbow beside share/binbow)
-//   3. <exe>/../../data/vocab/            (build directory inside the source tree,
-//                                          e.g. build/bin/binbow → data/vocab)
-// where <exe> is the directory of the running binbow executable.
+// The places searched for it: vocab/ in each of data_directories().
 std::vector<std::string> default_vocabulary_candidates(const std::string& descriptor);
 
-// The bundled data directories, in search order: $BINBOW_DATA_DIR,
-// <exe>/../share/binbow (installed), <exe>/../../data (build tree).
+// The bundled data directories, in search order:
+//   1. $BINBOW_DATA_DIR                (explicit override)
+//   2. <exe>/../share/binbow           (installed: bin/binbow beside share/binbow;
+//                                       in a build tree, a link to the source's
+//                                       data/ made at configure time)
+// where <exe> is the directory of the running binbow executable.
 std::vector<std::string> data_directories();
 // The first existing <data directory>/<relative>; throws InvalidArgument
 // naming `what` and the places searched when there is none.

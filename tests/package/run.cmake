@@ -1,23 +1,58 @@
-# Installs the build tree into a scratch prefix, then configures, builds and
-# runs a separate project that finds binbow with find_package(binbow).
+# Installs the build tree into a scratch prefix, then builds and runs separate
+# consumer projects: one of binbow::core alone (find_package COMPONENTS core),
+# one of binbow::vision exactly as the README shows, and the same two sources
+# built with nothing but the compiler and pkg-config.
 file(REMOVE_RECURSE ${WORK_DIR})
-execute_process(COMMAND ${CMAKE_COMMAND} --install ${BINBOW_BUILD_DIR} --prefix ${WORK_DIR}/prefix
-                RESULT_VARIABLE rc)
-if(rc)
-  message(FATAL_ERROR "installing binbow failed")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR} -B ${WORK_DIR}/build
-                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_BUILD_TYPE=Release
-                RESULT_VARIABLE rc)
-if(rc)
-  message(FATAL_ERROR "configuring the consumer project failed")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR}/build RESULT_VARIABLE rc)
-if(rc)
-  message(FATAL_ERROR "building the consumer project failed")
-endif()
-execute_process(COMMAND ${WORK_DIR}/build/consumer RESULT_VARIABLE rc OUTPUT_VARIABLE out)
-message(STATUS "${out}")
-if(rc OR NOT out MATCHES "words: [0-9]+")
-  message(FATAL_ERROR "the consumer program failed")
-endif()
+set(prefix ${WORK_DIR}/prefix)
+
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(rc)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  set(output "${out}" PARENT_SCOPE)
+endfunction()
+
+run("installing binbow" ${CMAKE_COMMAND} --install ${BINBOW_BUILD_DIR} --prefix ${prefix})
+set(vocabulary ${prefix}/share/binbow/vocab/orb_default.bbw)
+set(sample ${prefix}/share/binbow/samples/rtabmap/samples)
+foreach(path ${vocabulary} ${sample})
+  if(NOT EXISTS ${path})
+    message(FATAL_ERROR "the install did not put ${path} in place")
+  endif()
+endforeach()
+
+set(core_expect "words: [0-9]+")
+set(vision_expect "frames: 84, database entries: 84, loops: [1-9][0-9]*")
+foreach(consumer core vision)
+  set(build ${WORK_DIR}/${consumer}-cmake)
+  run("configuring the ${consumer} consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/${consumer}
+      -B ${build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+  run("building the ${consumer} consumer" ${CMAKE_COMMAND} --build ${build})
+  run("running the ${consumer} consumer (CMake)" ${build}/consumer ${vocabulary} ${sample})
+  if(NOT output MATCHES "${${consumer}_expect}")
+    message(FATAL_ERROR "the ${consumer} consumer printed: ${output}")
+  endif()
+  message(STATUS "CMake ${consumer}: ${output}")
+endforeach()
+
+# pkg-config: binbow (core) and binbow-vision.
+set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
+foreach(consumer core vision)
+  if(consumer STREQUAL "core")
+    set(module binbow)
+  else()
+    set(module binbow-vision)
+  endif()
+  run("pkg-config ${module}" pkg-config --cflags --libs ${module})
+  string(STRIP "${output}" flags)
+  separate_arguments(flags UNIX_COMMAND "${flags}")
+  set(program ${WORK_DIR}/${consumer}-pkgconfig)
+  run("building the ${consumer} consumer with pkg-config" ${CXX} -std=c++17 -O1
+      ${CONSUMER_SOURCE_DIR}/${consumer}/main.cpp -o ${program} ${flags})
+  run("running the ${consumer} consumer (pkg-config)" ${program} ${vocabulary} ${sample})
+  if(NOT output MATCHES "${${consumer}_expect}")
+    message(FATAL_ERROR "the ${consumer} consumer built with pkg-config printed: ${output}")
+  endif()
+  message(STATUS "pkg-config ${consumer}: ${output}")
+endforeach()
