@@ -1,12 +1,25 @@
-// Python bindings: descriptors are numpy uint8 arrays of shape (n, code_size),
-// BoW vectors are BowVector objects with numpy views; the GIL is released
-// around every call that does real work, so threads can run in parallel.
+// The compiled part of the `binbow` Python package, imported as binbow._binbow
+// and re-exported by binbow/__init__.py (which adds Vocabulary.default).
+//
+// Descriptors are taken strictly: a numpy uint8 array of shape (n, code_size),
+// one row per feature, or None (what OpenCV returns for an image without
+// keypoints), which is an image with no features. Any other dtype is a
+// TypeError and any other shape a ValueError: a silent conversion would turn
+// float SIFT descriptors or out-of-range values into wrong bits. Only a
+// non-contiguous array is copied. The GIL is released around every call that
+// does real work, so threads run in parallel.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <optional>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "binbow/database.h"
@@ -19,14 +32,61 @@ using namespace binbow;
 
 namespace {
 
-using Bytes = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>;
+using Path = std::filesystem::path;
 
-DescriptorView as_view(const Bytes& array) {
+std::string type_name(const py::handle& object) {
+  return py::str(py::type::of(object).attr("__name__")).cast<std::string>();
+}
+
+std::string shape_of(const py::array& array) {
+  std::string shape = "(";
+  for (py::ssize_t i = 0; i < array.ndim(); ++i)
+    shape += (i ? ", " : "") + std::to_string(array.shape(i));
+  return shape + (array.ndim() == 1 ? ",)" : ")");
+}
+
+// The uint8 array of one image's descriptors: `what` names it in errors
+// ("descriptors", "images[3]").
+py::array checked_uint8_array(const py::handle& object, const std::string& what) {
+  if (!py::isinstance<py::array>(object))
+    throw py::type_error(what + " must be a numpy uint8 array, got " + type_name(object));
+  auto array = py::reinterpret_borrow<py::array>(object);
+  if (array.dtype().kind() != 'u' || array.dtype().itemsize() != 1)
+    throw py::type_error(what + " must be a numpy uint8 array, got dtype " +
+                         py::str(array.dtype()).cast<std::string>() +
+                         " (binary descriptors are bytes; convert explicitly if that is meant)");
+  return array;
+}
+
+// Descriptors of one image received from Python, kept alive while the view is used.
+struct Descriptors {
+  py::array_t<std::uint8_t, py::array::c_style> array;  // null for None
+  DescriptorView view;
+};
+
+// `code_size`: the size the caller needs (the vocabulary's), 0 when any size
+// fits (training). None becomes an empty view of that size.
+Descriptors to_descriptors(const py::handle& object, const std::string& what,
+                           std::size_t code_size) {
+  Descriptors out;
+  out.view.code_size = code_size;
+  if (object.is_none()) return out;
+  const py::array array = checked_uint8_array(object, what);
   if (array.ndim() != 2)
-    throw InvalidArgument("descriptors must be a 2-D uint8 array of shape (n, code_size), got " +
-                          std::to_string(array.ndim()) + " dimensions");
-  return {array.data(), static_cast<std::size_t>(array.shape(0)),
-          static_cast<std::size_t>(array.shape(1))};
+    throw py::value_error(
+        what + " must be 2-D with one row per feature, shape (n, code_size); got shape " +
+        shape_of(array));
+  const auto columns = static_cast<std::size_t>(array.shape(1));
+  if (code_size != 0 && columns != code_size)
+    throw py::value_error(what + " have " + std::to_string(columns) + " bytes (" +
+                          std::to_string(columns * 8) + " bits) per row, the vocabulary's words " +
+                          std::to_string(code_size) + " bytes (" + std::to_string(code_size * 8) +
+                          " bits): wrong descriptor type for this vocabulary?");
+  // Copies only an array that is not C-contiguous: the dtype is already uint8.
+  out.array = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
+  if (!out.array) throw py::error_already_set();
+  out.view = {out.array.data(), static_cast<std::size_t>(out.array.shape(0)), columns};
+  return out;
 }
 
 py::array_t<WordId> words_of(const BowVector& bow) {
@@ -41,11 +101,31 @@ py::array_t<float> values_of(const BowVector& bow) {
   return out;
 }
 
-BowVector bow_from_arrays(const py::array_t<WordId>& words, const py::array_t<float>& values) {
+// Word ids must be integers in the uint32 range and values real numbers: a
+// negative id must not wrap around to a large one.
+BowVector bow_from_arrays(const py::array& words, const py::array& values) {
+  const char words_kind = words.dtype().kind();
+  if (words_kind != 'i' && words_kind != 'u')
+    throw py::type_error("words must be an integer array, got dtype " +
+                         py::str(words.dtype()).cast<std::string>());
+  const char values_kind = values.dtype().kind();
+  if (values_kind != 'f' && values_kind != 'i' && values_kind != 'u')
+    throw py::type_error("values must be a real-valued array, got dtype " +
+                         py::str(values.dtype()).cast<std::string>());
   if (words.ndim() != 1 || values.ndim() != 1 || words.size() != values.size())
-    throw InvalidArgument("words and values must be 1-D arrays of the same length");
+    throw py::value_error("words and values must be 1-D arrays of the same length, got shapes " +
+                          shape_of(words) + " and " + shape_of(values));
+  const auto ids = py::array_t<std::int64_t, py::array::forcecast>::ensure(words);
+  const auto weights = py::array_t<float, py::array::forcecast>::ensure(values);
+  if (!ids || !weights) throw py::error_already_set();
   std::vector<BowEntry> entries(static_cast<std::size_t>(words.size()));
-  for (std::size_t i = 0; i < entries.size(); ++i) entries[i] = {words.at(i), values.at(i)};
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const std::int64_t id = ids.at(static_cast<py::ssize_t>(i));
+    if (words_kind == 'u' ? static_cast<std::uint64_t>(id) > std::numeric_limits<WordId>::max()
+                          : (id < 0 || id > std::int64_t{std::numeric_limits<WordId>::max()}))
+      throw py::value_error("words[" + std::to_string(i) + "] is not a word id (0 to 2**32 - 1)");
+    entries[i] = {static_cast<WordId>(id), weights.at(static_cast<py::ssize_t>(i))};
+  }
   return BowVector(std::move(entries));
 }
 
@@ -67,12 +147,125 @@ std::vector<std::tuple<EntryId, double, std::uint32_t>> results_list(
   return out;
 }
 
+py::bytes to_bytes(const std::vector<std::uint8_t>& bytes) {
+  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+// The bytes of a pickled state; `data` stays valid while `bytes` lives.
+std::pair<const std::uint8_t*, std::size_t> bytes_of(const py::bytes& bytes) {
+  char* data = nullptr;
+  py::ssize_t size = 0;
+  if (PYBIND11_BYTES_AS_STRING_AND_SIZE(bytes.ptr(), &data, &size) != 0)
+    throw py::error_already_set();
+  return {reinterpret_cast<const std::uint8_t*>(data), static_cast<std::size_t>(size)};
+}
+
+Vocabulary vocabulary_from_bytes(const py::bytes& state) {
+  const auto [data, size] = bytes_of(state);
+  py::gil_scoped_release release;
+  return Vocabulary::deserialize(data, size, "<pickled binbow.Vocabulary>");
+}
+
+py::bytes vocabulary_bytes(const Vocabulary& vocabulary) {
+  std::vector<std::uint8_t> bytes;
+  {
+    py::gil_scoped_release release;
+    bytes = vocabulary.serialize();
+  }
+  return to_bytes(bytes);
+}
+
+// Vocabulary::build's progress callback runs on the calling thread, which has
+// released the GIL; an exception it raises (KeyboardInterrupt, ...) stops the
+// build and reaches the caller.
+std::function<void(const BuildProgress&)> progress_callback(const py::object& progress) {
+  if (progress.is_none()) return {};
+  if (!PyCallable_Check(progress.ptr()))
+    throw py::type_error("progress must be callable, got " + type_name(progress));
+  return [progress](const BuildProgress& state) {
+    py::gil_scoped_acquire acquire;
+    progress(state);
+  };
+}
+
+Vocabulary build_vocabulary(const py::iterable& images, std::uint32_t branching,
+                            std::uint32_t levels, const std::string& weighting,
+                            const std::string& scoring, std::uint64_t seed, unsigned threads,
+                            const std::string& descriptor, double stop_word_fraction,
+                            unsigned max_iterations, const py::object& progress) {
+  if (py::isinstance<py::array>(images))
+    throw py::type_error(
+        "images must be a list of descriptor arrays, one per training image; got one array "
+        "(wrap it in a list if it is one image)");
+  std::vector<Descriptors> arrays;
+  std::size_t index = 0;
+  for (const py::handle image : images)
+    arrays.push_back(to_descriptors(image, "images[" + std::to_string(index++) + "]", 0));
+  std::vector<DescriptorView> views;
+  views.reserve(arrays.size());
+  for (const Descriptors& d : arrays) views.push_back(d.view);
+  BuildOptions options;
+  options.branching = branching;
+  options.levels = levels;
+  options.weighting = parse_weighting(weighting);
+  options.scoring = parse_scoring(scoring);
+  options.seed = seed;
+  options.threads = threads;
+  options.descriptor = descriptor;
+  options.stop_word_fraction = stop_word_fraction;
+  options.max_iterations = max_iterations;
+  options.progress = progress_callback(progress);
+  py::gil_scoped_release release;
+  return Vocabulary::build(views, options);
+}
+
+EntryId add_descriptors(Database& db, const py::object& descriptors,
+                        const std::optional<std::string>& label) {
+  const Descriptors d = to_descriptors(descriptors, "descriptors", db.vocabulary().code_size());
+  py::gil_scoped_release release;
+  const EntryId entry = db.add(d.view);
+  if (label) db.set_label(entry, *label);
+  return entry;
+}
+
+py::bytes database_bytes(const Database& db, bool include_vocabulary) {
+  std::vector<std::uint8_t> bytes;
+  {
+    py::gil_scoped_release release;
+    bytes = db.serialize(include_vocabulary);
+  }
+  return to_bytes(bytes);
+}
+
+// Copies share the (immutable) vocabulary; only the index is duplicated.
+Database copy_database(const Database& db) {
+  std::vector<std::uint8_t> bytes;
+  py::gil_scoped_release release;
+  bytes = db.serialize(false);
+  return Database::deserialize(bytes.data(), bytes.size(), "<copied binbow.Database>",
+                               db.vocabulary());
+}
+
+std::string database_repr(const Database& db) {
+  return "<binbow.Database with " + std::to_string(db.size()) + " entries, vocabulary " +
+         db.vocabulary().description() + ">";
+}
+
 }  // namespace
 
-PYBIND11_MODULE(binbow, m) {
-  m.doc() = "Bags of binary words for fast place recognition (Galvez-Lopez & Tardos 2012)";
+PYBIND11_MODULE(_binbow, m) {
+  m.doc() =
+      "Bags of binary words for fast place recognition (Galvez-Lopez & Tardos 2012).\n\n"
+      "The compiled part of the binbow package: import binbow, not binbow._binbow.";
+  m.attr("__version__") = BINBOW_VERSION;
+  // Classes and their signatures are named after the public package
+  // (binbow.Vocabulary), which is also where pickle finds them again.
+  m.attr("__module__") = "binbow";
 
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  error.attr("__module__") = "binbow";
+  error.doc() =
+      "A binbow error that is neither a bad argument (ValueError) nor a file problem (OSError).";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -87,150 +280,249 @@ PYBIND11_MODULE(binbow, m) {
 
   m.def(
       "hamming",
-      [](const Bytes& a, const Bytes& b) {
-        if (a.ndim() != 1 || b.ndim() != 1 || a.size() != b.size())
-          throw InvalidArgument("hamming takes two 1-D uint8 arrays of the same length");
-        return hamming_distance(a.data(), b.data(), static_cast<std::size_t>(a.size()));
+      [](const py::object& a, const py::object& b) {
+        const py::array x = checked_uint8_array(a, "a");
+        const py::array y = checked_uint8_array(b, "b");
+        if (x.ndim() != 1 || y.ndim() != 1 || x.size() != y.size())
+          throw py::value_error(
+              "hamming takes two 1-D descriptors of the same length, got shapes " + shape_of(x) +
+              " and " + shape_of(y));
+        const auto u = py::array_t<std::uint8_t, py::array::c_style>::ensure(x);
+        const auto v = py::array_t<std::uint8_t, py::array::c_style>::ensure(y);
+        return hamming_distance(u.data(), v.data(), static_cast<std::size_t>(u.size()));
       },
-      py::arg("a"), py::arg("b"), "Number of differing bits between two descriptors.");
+      py::arg("a"), py::arg("b"),
+      "Number of differing bits between two descriptors (1-D uint8 arrays of equal length).");
 
-  py::class_<BowVector>(m, "BowVector", "Sparse bag-of-words vector, sorted by word id.")
-      .def(py::init(&bow_from_arrays), py::arg("words"), py::arg("values"))
-      .def_property_readonly("words", &words_of, "word ids (uint32)")
-      .def_property_readonly("values", &values_of, "normalised weights (float32)")
-      .def("__len__", &BowVector::size)
-      .def("__eq__", [](const BowVector& a, const BowVector& b) { return a == b; })
-      .def("__repr__", [](const BowVector& b) {
-        return "<binbow.BowVector with " + std::to_string(b.size()) + " words>";
-      });
+  py::class_<BuildProgress>(m, "BuildProgress",
+                            "Progress of Vocabulary.build, passed to its progress callable.")
+      .def_readonly("clustered_descriptors", &BuildProgress::clustered_descriptors,
+                    "Descriptors that reached a leaf so far.")
+      .def_readonly("total_descriptors", &BuildProgress::total_descriptors,
+                    "Descriptors being clustered.")
+      .def_readonly("nodes", &BuildProgress::nodes, "Tree nodes created so far.")
+      .def(
+          "__repr__",
+          [](const BuildProgress& p) {
+            return "<binbow.BuildProgress " + std::to_string(p.clustered_descriptors) + "/" +
+                   std::to_string(p.total_descriptors) + " descriptors, " +
+                   std::to_string(p.nodes) + " nodes>";
+          },
+          "Counts as text.");
 
-  py::class_<Vocabulary>(m, "Vocabulary", "A vocabulary tree of binary words.")
+  py::class_<BowVector>(m, "BowVector",
+                        "Sparse bag-of-words vector: words sorted by id, with their weights.")
+      .def(py::init(&bow_from_arrays), py::arg("words"), py::arg("values"),
+           "From word ids (integers, strictly increasing) and their values.")
+      .def_property_readonly("words", &words_of, "Word ids, increasing (uint32 array).")
+      .def_property_readonly("values", &values_of, "Normalised weights (float32 array).")
+      .def("__len__", &BowVector::size, "Number of words present.")
+      .def(
+          "__eq__", [](const BowVector& a, const BowVector& b) { return a == b; },
+          py::is_operator(), "Same words with the same values.")
+      .def(
+          "__repr__",
+          [](const BowVector& b) {
+            return "<binbow.BowVector with " + std::to_string(b.size()) + " words>";
+          },
+          "Size as text.")
+      .def(py::pickle([](const BowVector& b) { return py::make_tuple(words_of(b), values_of(b)); },
+                      [](const py::tuple& state) {
+                        if (state.size() != 2)
+                          throw py::value_error("invalid pickled binbow.BowVector");
+                        return bow_from_arrays(state[0].cast<py::array>(),
+                                               state[1].cast<py::array>());
+                      }));
+
+  py::class_<Vocabulary>(m, "Vocabulary",
+                         "A vocabulary tree of binary words. Immutable: copies share the tree.")
       .def_static(
-          "load", [](const std::string& path) { return load_vocabulary(path); }, py::arg("path"),
+          "load", [](const Path& path) { return load_vocabulary(path.string()); }, py::arg("path"),
           py::call_guard<py::gil_scoped_release>(),
           "Load any supported format (.bbw, DBoW2 YAML, ORBvoc.txt, DBoW3, fbow).")
       .def(
-          "save", [](const Vocabulary& v, const std::string& path) { save_vocabulary(v, path); },
+          "save", [](const Vocabulary& v, const Path& path) { save_vocabulary(v, path.string()); },
           py::arg("path"), py::call_guard<py::gil_scoped_release>(),
           "Save; the extension chooses the format (.bbw, .txt, .yml.gz, .dbow3, .fbow).")
-      .def_static(
-          "build",
-          [](const std::vector<Bytes>& images, std::uint32_t branching, std::uint32_t levels,
-             const std::string& weighting, const std::string& scoring, std::uint64_t seed,
-             unsigned threads, const std::string& descriptor) {
-            std::vector<DescriptorView> views;
-            for (const Bytes& image : images) views.push_back(as_view(image));
-            BuildOptions options;
-            options.branching = branching;
-            options.levels = levels;
-            options.weighting = parse_weighting(weighting);
-            options.scoring = parse_scoring(scoring);
-            options.seed = seed;
-            options.threads = threads;
-            options.descriptor = descriptor;
-            py::gil_scoped_release release;
-            return Vocabulary::build(views, options);
-          },
-          py::arg("images"), py::arg("branching") = 10, py::arg("levels") = 6,
-          py::arg("weighting") = "tf-idf", py::arg("scoring") = "l1", py::arg("seed") = 0,
-          py::arg("threads") = 0, py::arg("descriptor") = "",
-          "Hierarchical k-medians over a list of (n_i, code_size) uint8 arrays, one per image;\n"
-          "descriptor names the extractor (\"orb\", \"brief\", ...) to record in the vocabulary.")
+      .def_static("build", &build_vocabulary, py::arg("images"), py::arg("branching") = 10,
+                  py::arg("levels") = 6, py::arg("weighting") = "tf-idf", py::arg("scoring") = "l1",
+                  py::arg("seed") = 0, py::arg("threads") = 0, py::arg("descriptor") = "",
+                  py::arg("stop_word_fraction") = 1.0, py::arg("max_iterations") = 20,
+                  py::arg("progress") = py::none(),
+                  "Train a vocabulary by hierarchical k-medians (k-means++ seeding).\n\n"
+                  "images: one uint8 (n_i, code_size) array per training image (None: an image\n"
+                  "without features); they define the IDF weights. descriptor names the\n"
+                  "extractor (\"orb\", \"brief\", ...) to record. Words present in more than\n"
+                  "stop_word_fraction of the images get weight 0. max_iterations bounds the\n"
+                  "k-medians iterations per node. progress, if given, is called now and then\n"
+                  "with a BuildProgress. The same seed gives the same vocabulary for any threads.")
       .def(
           "transform",
-          [](const Vocabulary& v, const Bytes& descriptors) {
-            const DescriptorView view = as_view(descriptors);
+          [](const Vocabulary& v, const py::object& descriptors) {
+            const Descriptors d = to_descriptors(descriptors, "descriptors", v.code_size());
             BowVector bow;
             py::gil_scoped_release release;
-            v.transform(view, bow);
+            v.transform(d.view, bow);
             return bow;
           },
-          py::arg("descriptors"), "Descriptors → BowVector.")
+          py::arg("descriptors"), "Descriptors (uint8 (n, code_size) array, or None) -> BowVector.")
       .def(
           "transform_with_features",
-          [](const Vocabulary& v, const Bytes& descriptors, unsigned levels_up) {
-            const DescriptorView view = as_view(descriptors);
+          [](const Vocabulary& v, const py::object& descriptors, unsigned levels_up) {
+            const Descriptors d = to_descriptors(descriptors, "descriptors", v.code_size());
             BowVector bow;
             FeatureVector fv;
             {
               py::gil_scoped_release release;
-              v.transform(view, bow, fv, levels_up);
+              v.transform(d.view, bow, fv, levels_up);
             }
             return py::make_tuple(bow, feature_vector_dict(fv));
           },
           py::arg("descriptors"), py::arg("levels_up") = 4,
-          "Descriptors → (BowVector, {node id: feature indices}).")
+          "Descriptors -> (BowVector, {node id: indices of the features under that node}),\n"
+          "nodes levels_up levels above the words (DBoW2's direct index).")
       .def(
           "quantize",
-          [](const Vocabulary& v, const Bytes& descriptors) {
-            const DescriptorView view = as_view(descriptors);
-            py::array_t<WordId> words(static_cast<py::ssize_t>(view.rows));
+          [](const Vocabulary& v, const py::object& descriptors) {
+            const Descriptors d = to_descriptors(descriptors, "descriptors", v.code_size());
+            py::array_t<WordId> words(static_cast<py::ssize_t>(d.view.rows));
             WordId* out = words.mutable_data();
             py::gil_scoped_release release;
-            v.quantize(view, out);
+            v.quantize(d.view, out);
             return words;
           },
-          py::arg("descriptors"), "Word id of every descriptor.")
-      .def("score", &Vocabulary::score, py::arg("a"), py::arg("b"))
-      .def_property_readonly("word_count", &Vocabulary::word_count)
-      .def_property_readonly("node_count", &Vocabulary::node_count)
-      .def_property_readonly("branching", &Vocabulary::branching)
-      .def_property_readonly("levels", &Vocabulary::levels)
-      .def_property_readonly("code_size", &Vocabulary::code_size)
+          py::arg("descriptors"), "Word id of every descriptor (uint32 array).")
+      .def("score", &Vocabulary::score, py::arg("a"), py::arg("b"),
+           py::call_guard<py::gil_scoped_release>(),
+           "Similarity of two BowVectors made by this vocabulary, with its scoring type.")
+      .def_property_readonly("word_count", &Vocabulary::word_count, "Number of words (leaves).")
+      .def_property_readonly("node_count", &Vocabulary::node_count,
+                             "Number of tree nodes, root included.")
+      .def_property_readonly("branching", &Vocabulary::branching, "k: children per node, at most.")
+      .def_property_readonly("levels", &Vocabulary::levels, "L: depth of the deepest leaves.")
+      .def_property_readonly("code_size", &Vocabulary::code_size, "Bytes per descriptor.")
       .def_property_readonly(
           "descriptor", &Vocabulary::descriptor,
           "Extractor that trained it (\"orb\", \"brief\", ...), \"\" if unknown.")
-      .def_property_readonly("weighting",
-                             [](const Vocabulary& v) { return to_string(v.weighting()); })
-      .def_property_readonly("scoring", [](const Vocabulary& v) { return to_string(v.scoring()); })
-      .def("__repr__",
-           [](const Vocabulary& v) { return "<binbow.Vocabulary " + v.description() + ">"; });
+      .def_property_readonly(
+          "weighting", [](const Vocabulary& v) { return to_string(v.weighting()); },
+          "Word weighting: \"tf-idf\", \"tf\", \"idf\" or \"binary\".")
+      .def_property_readonly(
+          "scoring", [](const Vocabulary& v) { return to_string(v.scoring()); },
+          "Scoring: \"l1\", \"l2\", \"chi-square\", \"kl\", \"bhattacharyya\" or \"dot-product\".")
+      .def_property_readonly("checksum", &Vocabulary::checksum,
+                             "CRC32C of the words: equal checksums, same vocabulary.")
+      .def(
+          "__repr__",
+          [](const Vocabulary& v) { return "<binbow.Vocabulary " + v.description() + ">"; },
+          "Shape and types as text.")
+      .def(
+          "__copy__", [](const Vocabulary& v) { return v; },
+          "The same vocabulary (it is immutable; the tree is shared).")
+      .def(
+          "__deepcopy__", [](const Vocabulary& v, const py::object&) { return v; }, py::arg("memo"),
+          "The same vocabulary (it is immutable; the tree is shared).")
+      .def(py::pickle(&vocabulary_bytes, &vocabulary_from_bytes));
 
-  py::class_<Database>(m, "Database", "Inverted + direct index of images over a vocabulary.")
+  py::class_<Database>(m, "Database",
+                       "Inverted + direct index of images over a vocabulary. Thread-safe.")
       .def(py::init([](Vocabulary vocabulary, bool direct_index, unsigned levels_up) {
              DatabaseOptions options;
              options.direct_index = direct_index;
              options.direct_index_levels_up = levels_up;
              return Database(std::move(vocabulary), options);
            }),
-           py::arg("vocabulary"), py::arg("direct_index") = true, py::arg("levels_up") = 4)
+           py::arg("vocabulary"), py::arg("direct_index") = true, py::arg("levels_up") = 4,
+           "An empty database; with direct_index, each entry keeps its features grouped by\n"
+           "the nodes levels_up levels above the words (for geometric checks).")
+      .def("add", &add_descriptors, py::arg("descriptors"), py::arg("label") = py::none(),
+           "Transform an image's descriptors (uint8 (n, code_size) array, or None for an\n"
+           "image without features) and add it, with an optional label; returns its entry id.")
       .def(
-          "add",
-          [](Database& db, const Bytes& descriptors) {
-            const DescriptorView view = as_view(descriptors);
+          "add_bow",
+          [](Database& db, const BowVector& bow, const std::optional<std::string>& label) {
             py::gil_scoped_release release;
-            return db.add(view);
+            const EntryId entry = db.add(bow);
+            if (label) db.set_label(entry, *label);
+            return entry;
           },
-          py::arg("descriptors"), "Transform and add an image; returns its entry id.")
-      .def(
-          "add_bow", [](Database& db, const BowVector& bow) { return db.add(bow); }, py::arg("bow"),
-          py::call_guard<py::gil_scoped_release>())
+          py::arg("bow"), py::arg("label") = py::none(),
+          "Add an image already transformed with this database's vocabulary; returns its id.")
       .def(
           "query",
           [](const Database& db, const BowVector& bow, std::size_t max_results,
-             long long max_entry) {
+             std::optional<EntryId> max_entry_id) {
             std::vector<QueryResult> results;
             {
               py::gil_scoped_release release;
-              results = db.query(bow, max_results,
-                                 max_entry < 0 ? kAllEntries : static_cast<EntryId>(max_entry));
+              results = db.query(bow, max_results, max_entry_id.value_or(kAllEntries));
             }
             return results_list(results);
           },
-          py::arg("bow"), py::arg("max_results") = 10, py::arg("max_entry_id") = -1,
-          "Best matches as a list of (entry, score, shared_words), best first.")
-      .def("remove", &Database::remove, py::arg("entry"))
-      .def("__contains__", &Database::contains)
-      .def("__len__", &Database::size)
-      .def("clear", &Database::clear)
-      .def("feature_vector",
-           [](const Database& db, EntryId entry) {
-             return feature_vector_dict(db.feature_vector(entry));
-           })
-      .def_property_readonly("vocabulary", &Database::vocabulary)
-      .def("save", &Database::save, py::arg("path"), py::arg("include_vocabulary") = true,
-           py::call_guard<py::gil_scoped_release>())
+          py::arg("bow"), py::arg("max_results") = 10, py::arg("max_entry_id") = py::none(),
+          "Best matches as a list of (entry, score, shared_words), best first; only entries\n"
+          "with id <= max_entry_id when given.")
+      .def(
+          "label",
+          [](const Database& db, EntryId entry) -> std::optional<std::string> {
+            std::string label = db.label(entry);
+            if (label.empty()) return std::nullopt;
+            return label;
+          },
+          py::arg("entry"), "The entry's label, None if it has none (\"\" is no label).")
+      .def("set_label", &Database::set_label, py::arg("entry"), py::arg("label"),
+           "Set (or with \"\", remove) an entry's label.")
+      .def("remove", &Database::remove, py::arg("entry"), py::call_guard<py::gil_scoped_release>(),
+           "Remove an entry; its id is never reused. ValueError if it does not exist.")
+      .def("__contains__", &Database::contains, py::arg("entry"), "Whether the entry exists.")
+      .def("__len__", &Database::size, "Number of entries.")
+      .def("__repr__", &database_repr, "Size and vocabulary as text.")
+      .def("clear", &Database::clear, py::call_guard<py::gil_scoped_release>(),
+           "Remove every entry; ids restart at 0.")
+      .def(
+          "feature_vector",
+          [](const Database& db, EntryId entry) {
+            return feature_vector_dict(db.feature_vector(entry));
+          },
+          py::arg("entry"), "The entry's {node id: feature indices} (needs the direct index).")
+      .def_property_readonly("next_entry_id", &Database::next_entry_id,
+                             "The id the next add returns.")
+      .def_property_readonly("memory_usage", &Database::memory_usage,
+                             "Bytes of memory held by the index, the vocabulary excluded.")
+      .def_property_readonly(
+          "direct_index", [](const Database& db) { return db.options().direct_index; },
+          "Whether entries keep their feature vectors.")
+      .def_property_readonly(
+          "levels_up", [](const Database& db) { return db.options().direct_index_levels_up; },
+          "Levels above the words of the direct index's nodes.")
+      .def_property_readonly("vocabulary", &Database::vocabulary, "The database's vocabulary.")
+      .def(
+          "save",
+          [](const Database& db, const Path& path, bool include_vocabulary) {
+            db.save(path.string(), include_vocabulary);
+          },
+          py::arg("path"), py::arg("include_vocabulary") = true,
+          py::call_guard<py::gil_scoped_release>(),
+          "Save as .bbdb; without the vocabulary, load it with Database.load(path, vocabulary).")
       .def_static(
-          "load", [](const std::string& path) { return Database::load(path); }, py::arg("path"),
-          py::call_guard<py::gil_scoped_release>());
+          "load",
+          [](const Path& path, const std::optional<Vocabulary>& vocabulary) {
+            return vocabulary ? Database::load(path.string(), *vocabulary)
+                              : Database::load(path.string());
+          },
+          py::arg("path"), py::arg("vocabulary") = py::none(),
+          py::call_guard<py::gil_scoped_release>(),
+          "Load a .bbdb file; a file saved without its vocabulary needs the same vocabulary.")
+      .def("__copy__", &copy_database, "An independent copy sharing the vocabulary.")
+      .def(
+          "__deepcopy__", [](const Database& db, const py::object&) { return copy_database(db); },
+          py::arg("memo"), "An independent copy sharing the (immutable) vocabulary.")
+      .def(py::pickle([](const Database& db) { return database_bytes(db, true); },
+                      [](const py::bytes& state) {
+                        const auto [data, size] = bytes_of(state);
+                        py::gil_scoped_release release;
+                        return Database::deserialize(data, size, "<pickled binbow.Database>");
+                      }));
+
+  py::delattr(m, "__module__");
 }

@@ -1,0 +1,56 @@
+"""Shared helpers of the binbow Python tests (run with python3 -m pytest).
+
+The package under test is the one on PYTHONPATH: ctest points it at the build
+tree's build/python.
+"""
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SOURCE_DIR = Path(__file__).resolve().parents[2]
+
+try:
+    import binbow
+except ImportError as error:  # pragma: no cover - a setup problem, said plainly
+    raise ImportError(
+        f"cannot import binbow ({error}): build it (cmake --build build) and run the tests with "
+        "PYTHONPATH=build/python, or through ctest"
+    ) from error
+
+
+def clustered(rng, rows, centers=50, noise=0.08, code_size=32):
+    """Random descriptors around `centers` random centres, like real features."""
+    base = rng.integers(0, 256, size=(centers, code_size), dtype=np.uint8)
+    picked = base[rng.integers(0, centers, size=rows)]
+    bits = np.unpackbits(picked, axis=1)
+    flips = rng.random(bits.shape) < noise
+    return np.packbits(bits ^ flips, axis=1)
+
+
+@pytest.fixture(scope="session")
+def images():
+    rng = np.random.default_rng(1)
+    return [clustered(rng, 300) for _ in range(12)]
+
+
+@pytest.fixture(scope="session")
+def vocabulary(images):
+    return binbow.Vocabulary.build(images, branching=5, levels=3, seed=3)
+
+
+@pytest.fixture()
+def database(vocabulary, images):
+    db = binbow.Database(vocabulary)
+    for i, image in enumerate(images):
+        db.add(image, label=f"image {i}")
+    return db
+
+
+def require_env(name):
+    """The value of an environment variable ctest sets; a clear failure without it."""
+    value = os.environ.get(name)
+    if not value:
+        pytest.fail(f"${name} is not set: run this test through ctest (python.packaging)")
+    return value

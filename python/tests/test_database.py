@@ -1,0 +1,99 @@
+"""Database: queries against brute force, labels, files, memory usage."""
+import numpy as np
+import pytest
+
+import binbow
+from conftest import clustered
+
+
+def test_query_equals_brute_force_and_remove():
+    rng = np.random.default_rng(2)
+    images = [clustered(rng, 200) for _ in range(30)]
+    voc = binbow.Vocabulary.build(images[:10], branching=6, levels=3, seed=1)
+    db = binbow.Database(voc)
+    for image in images:
+        db.add(image)
+    assert len(db) == 30
+    query = voc.transform(images[7])
+    results = db.query(query, max_results=5)
+    bows = [voc.transform(image) for image in images]
+    brute = sorted((-voc.score(query, b), i) for i, b in enumerate(bows))[:5]
+    assert [r[0] for r in results] == [i for _, i in brute]
+    for (_, score, _), (negative, _) in zip(results, brute):
+        assert score == pytest.approx(-negative, abs=1e-6)
+    limited = db.query(query, max_results=30, max_entry_id=4)
+    assert sorted(r[0] for r in limited) == [0, 1, 2, 3, 4]
+    db.remove(7)
+    assert 7 not in [r[0] for r in db.query(query, max_results=30)]
+    assert 7 not in db
+    with pytest.raises(ValueError):
+        db.remove(7)
+
+
+def test_labels(vocabulary, images):
+    db = binbow.Database(vocabulary)
+    first = db.add(images[0], label="a.png")
+    second = db.add(images[1])
+    third = db.add_bow(vocabulary.transform(images[2]), label="c.png")
+    assert (first, second, third) == (0, 1, 2)
+    assert db.label(first) == "a.png"
+    assert db.label(second) is None
+    assert db.label(third) == "c.png"
+    db.set_label(second, "b.png")
+    assert db.label(second) == "b.png"
+    with pytest.raises(ValueError):
+        db.label(99)
+
+
+def test_an_image_without_features_is_an_empty_entry(vocabulary, images):
+    db = binbow.Database(vocabulary)
+    db.add(images[0])
+    empty = db.add(None, label="blank wall")
+    assert empty in db and len(db) == 2
+    assert db.label(empty) == "blank wall"
+    assert db.feature_vector(empty) == {}
+    assert [r[0] for r in db.query(vocabulary.transform(images[0]), 5)] == [0]
+    assert db.query(vocabulary.transform(None), 5) == []
+
+
+def test_save_and_load_with_and_without_vocabulary(tmp_path, database, vocabulary, images):
+    query = vocabulary.transform(images[4])
+    expected = database.query(query, 5)
+    database.save(tmp_path / "full.bbdb")
+    database.save(tmp_path / "lean.bbdb", include_vocabulary=False)
+    assert binbow.Database.load(tmp_path / "full.bbdb").query(query, 5) == expected
+    lean = binbow.Database.load(str(tmp_path / "lean.bbdb"), vocabulary)
+    assert lean.query(query, 5) == expected
+    assert lean.label(4) == "image 4"
+    assert lean.vocabulary.checksum == vocabulary.checksum
+    with pytest.raises(OSError, match="does not include its vocabulary"):
+        binbow.Database.load(tmp_path / "lean.bbdb")
+    other = binbow.Vocabulary.build(images, branching=4, levels=2, seed=9)
+    with pytest.raises(OSError, match="different vocabulary"):
+        binbow.Database.load(tmp_path / "lean.bbdb", other)
+
+
+def test_memory_usage_grows_with_entries(vocabulary, images):
+    db = binbow.Database(vocabulary)
+    before = db.memory_usage
+    for image in images:
+        db.add(image)
+    assert isinstance(before, int)
+    assert db.memory_usage > before
+
+
+def test_options_and_feature_vectors(vocabulary, images):
+    db = binbow.Database(vocabulary, direct_index=True, levels_up=1)
+    assert db.direct_index and db.levels_up == 1
+    entry = db.add(images[5])
+    _, expected = vocabulary.transform_with_features(images[5], levels_up=1)
+    got = db.feature_vector(entry)
+    assert got.keys() == expected.keys()
+    assert all(np.array_equal(got[k], expected[k]) for k in got)
+    plain = binbow.Database(vocabulary, direct_index=False)
+    plain.add(images[5])
+    with pytest.raises(ValueError):
+        plain.feature_vector(0)
+    db.clear()
+    assert len(db) == 0 and db.next_entry_id == 0
+    assert "0 entries" in repr(db)

@@ -1,0 +1,86 @@
+"""Builds the binbow Python package.
+
+The extension is built by the project's CMake (Release, the library's runtime
+CPU dispatch: per-file -mpopcnt / -mavx512* kernels chosen at run time), so it
+is the same code as the C++ library; the bundled default vocabularies are
+shipped inside the package (binbow/data/vocab). The version is the one of
+CMakeLists.txt's project(VERSION).
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+from setuptools.command.build_py import build_py
+
+ROOT = Path(__file__).resolve().parent
+# setuptools' own folders (and the CMake build in it), apart from the
+# developers' CMake build folder and out of the source tree's python/.
+BUILD_BASE = "build/python-package"
+
+
+def project_version():
+    text = (ROOT / "CMakeLists.txt").read_text(encoding="utf-8")
+    match = re.search(r"project\(\s*binbow\s+VERSION\s+([0-9][0-9.]*)", text)
+    if not match:
+        sys.exit("setup.py: no project(binbow VERSION x.y.z) in CMakeLists.txt")
+    return match.group(1)
+
+
+class BuildWithCMake(build_ext):
+    """Configures the project in the build folder and builds only the module's target."""
+
+    def build_extension(self, ext):
+        build_dir = Path(self.build_temp).resolve() / "cmake"
+        configure = [
+            "cmake", "-S", str(ROOT), "-B", str(build_dir),
+            "-DCMAKE_BUILD_TYPE=Release",
+            "-DBINBOW_BUILD_TESTS=OFF", "-DBINBOW_BUILD_BENCH=OFF", "-DBINBOW_BUILD_PYTHON=ON",
+            f"-DPython3_EXECUTABLE={sys.executable}",
+        ]
+        if shutil.which("ninja"):
+            configure += ["-G", "Ninja"]
+        if shutil.which("ccache"):
+            configure.append("-DCMAKE_CXX_COMPILER_LAUNCHER=ccache")
+        jobs = self.parallel or os.cpu_count() or 1
+        subprocess.run(configure, check=True)
+        subprocess.run(
+            ["cmake", "--build", str(build_dir), "--target", "binbow_python", "-j", str(jobs)],
+            check=True,
+        )
+        built = sorted((build_dir / "python" / "binbow").glob("_binbow*.so"))
+        if not built:
+            sys.exit(f"setup.py: CMake built no _binbow module in {build_dir / 'python' / 'binbow'}")
+        target = Path(self.get_ext_fullpath(ext.name))
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(built[0], target)
+
+
+class BuildWithData(build_py):
+    """Adds the bundled vocabularies and tells the package they are inside it."""
+
+    def run(self):
+        super().run()
+        package = Path(self.build_lib) / "binbow"
+        vocab = package / "data" / "vocab"
+        vocab.mkdir(parents=True, exist_ok=True)
+        for source in sorted((ROOT / "data" / "vocab").glob("*.bbw")):
+            shutil.copyfile(source, vocab / source.name)
+        (package / "_data_location.py").write_text(
+            "# Written by setup.py: the bundled data folder, relative to this package.\n"
+            'DATA_DIRECTORY = "data"\n',
+            encoding="utf-8",
+        )
+
+
+Path(BUILD_BASE).mkdir(parents=True, exist_ok=True)
+setup(
+    version=project_version(),
+    options={"build": {"build_base": BUILD_BASE}, "egg_info": {"egg_base": BUILD_BASE}},
+    ext_modules=[Extension("binbow._binbow", sources=[])],
+    cmdclass={"build_ext": BuildWithCMake, "build_py": BuildWithData},
+)
