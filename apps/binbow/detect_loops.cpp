@@ -97,6 +97,8 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   run.save(LoopRun::path_for(arguments.output));
   std::fprintf(stderr, "%zu frames, %zu loops -> %s\n", run.frames.size(), detections.size(),
                arguments.output.c_str());
+  if (source.unreadable_frames() > 0)
+    std::fprintf(stderr, "frames unreadable: %zu\n", source.unreadable_frames());
   if (arguments.timing) std::cout << format_timing_table(run.timing) << std::flush;
   if (!arguments.report.empty()) {
     LoopReport report;

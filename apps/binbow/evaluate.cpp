@@ -1,8 +1,10 @@
 // binbow evaluate: precision and recall of detected loops against ground truth.
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "binbow/error.h"
@@ -82,8 +84,14 @@ std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
 }
 
 void run_evaluate(const EvaluateArguments& arguments) {
+  const std::string run_path = LoopRun::path_for(arguments.detections);
+  std::unique_ptr<LoopRun> run;
+  if (std::filesystem::exists(run_path)) run = std::make_unique<LoopRun>(LoopRun::load(run_path));
+
   vision::GroundTruthOptions options;
   options.pairs_index_base = arguments.ground_truth_base;
+  // The run's frames size the ground truth: a larger matrix is read only that far.
+  if (run) options.frames = run->frames.size();
   const vision::GroundTruth truth = vision::GroundTruth::load(arguments.ground_truth, options);
   const std::vector<vision::Detection> detections =
       vision::read_detections_csv(arguments.detections);
@@ -94,9 +102,6 @@ void run_evaluate(const EvaluateArguments& arguments) {
     throw InvalidArgument(arguments.detections + ": " + e.what() + " (wrong --gt?)");
   }
 
-  const std::string run_path = LoopRun::path_for(arguments.detections);
-  std::unique_ptr<LoopRun> run;
-  if (std::filesystem::exists(run_path)) run = std::make_unique<LoopRun>(LoopRun::load(run_path));
   if (run && run->frames.size() != truth.frames())
     std::fprintf(stderr, "warning: %zu frames were processed but the ground truth has %zu\n",
                  run->frames.size(), truth.frames());
@@ -146,11 +151,14 @@ void run_evaluate(const EvaluateArguments& arguments) {
       report.params_json = run->params_json;
       report.timing = run->timing;
     }
+    // The run's loops by (query, match): one lookup per detection, not a scan.
+    std::map<std::pair<std::size_t, std::size_t>, const LoopRecord*> recorded;
+    if (run)
+      for (const LoopRecord& r : run->loops) recorded[{r.query, r.match}] = &r;
     for (const vision::Detection& d : detections) {
       ReportLoop loop{d, {}, truth.is_loop(d.query, d.match) ? 1 : 0};
-      if (run)
-        for (const LoopRecord& r : run->loops)
-          if (r.query == d.query && r.match == d.match) loop.inliers = r.inliers;
+      const auto found = recorded.find({d.query, d.match});
+      if (found != recorded.end()) loop.inliers = found->second->inliers;
       report.loops.push_back(std::move(loop));
     }
     const std::string page = write_loop_report(arguments.report, report);

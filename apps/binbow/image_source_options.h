@@ -1,5 +1,5 @@
 // The image-input flags shared by every command that reads image sequences
-// (--stride, --max-width, --video-fps), so they read the same everywhere.
+// (--stride, --max-width, --video-fps, --max-pixels), so they read the same everywhere.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -21,6 +21,12 @@ inline void add_image_source_options(CLI::App* command, vision::ImageSourceOptio
       ->add_option("--video-fps", options.video_fps,
                    "Videos: sample at most this many frames per second (0: every frame)")
       ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  command
+      ->add_option("--max-pixels", options.max_pixels,
+                   "Refuse images and video frames with more pixels, from their header, before "
+                   "decoding")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40))
       ->capture_default_str();
 }
 

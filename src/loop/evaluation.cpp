@@ -5,27 +5,50 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <sstream>
 
 #include <matio.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "binbow/error.h"
+#include "binbow/vision/image_source.h"
 #include "core/file_io.h"
+#include "vision/regular_file.h"
 
 namespace binbow::vision {
 namespace {
 
-using Pairs = std::vector<std::pair<std::size_t, std::size_t>>;
+// (later, earlier) index pairs, as GroundTruth::from_later_earlier takes them.
+using LaterEarlier = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+
+// What a ground-truth file holds: its frame count and its pairs.
+struct Loaded {
+  std::size_t frames = 0;
+  LaterEarlier pairs;
+};
 
 // No loop-closure sequence comes near this; bounds what a damaged header can make us allocate.
-constexpr std::size_t kMaxFrames = 50'000'000;
+constexpr std::size_t kMaxFrames = kMaxGroundTruthFrames;
 constexpr std::size_t kMaxTextBytes = std::size_t{1} << 31;
+
+// The frames of a ground truth declaring `declared` frames, cut to the run's
+// `frames` when known.
+std::size_t cut_to_run(std::size_t declared, const GroundTruthOptions& options) {
+  return options.frames > 0 ? std::min(declared, options.frames) : declared;
+}
+
+// Adds the pair (a, b) unless it is on the diagonal or outside `frames`.
+void add_pair(std::size_t a, std::size_t b, std::size_t frames, LaterEarlier& pairs) {
+  if (a == b || a >= frames || b >= frames) return;
+  pairs.emplace_back(static_cast<std::uint32_t>(std::max(a, b)),
+                     static_cast<std::uint32_t>(std::min(a, b)));
+}
 // Dense .mat matrices are read this many cells at a time.
 constexpr std::size_t kMatBlockBytes = std::size_t{128} << 20;
 
@@ -40,39 +63,39 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 }
 
 std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));
-  std::string text;
-  char buffer[1 << 16];
-  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-    text.append(buffer, static_cast<std::size_t>(in.gcount()));
-    if (text.size() > kMaxTextBytes) throw FileError(path, "file larger than 2 GiB");
-  }
-  if (in.bad()) throw FileError(path, "read error");
-  return text;
+  return read_regular_file(path, kMaxTextBytes);
 }
 
-GroundTruth from_image(const std::string& path) {
-  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) throw FileError(path, "cannot read as an image");
-  const std::size_t frames = static_cast<std::size_t>(std::max(image.rows, image.cols));
-  Pairs pairs;
-  for (int r = 0; r < image.rows; ++r) {
-    const std::uint8_t* row = image.ptr<std::uint8_t>(r);
-    for (int c = 0; c < image.cols; ++c)
-      if (row[c] != 0) pairs.emplace_back(r, c);
+Loaded from_image(const std::string& path, const GroundTruthOptions& options) {
+  const cv::Mat image = read_grey_image(path, options.max_image_pixels);
+  if (image.rows != image.cols) {
+    throw FileError(path, "ground-truth image is " + std::to_string(image.cols) + "x" +
+                              std::to_string(image.rows) +
+                              " pixels; it must be square (row = query, column = match)");
   }
-  return GroundTruth(frames, pairs);
+  Loaded loaded;
+  loaded.frames = cut_to_run(static_cast<std::size_t>(image.rows), options);
+  // Row q lists the earlier images that share a place with q, merged from
+  // row q left of the diagonal and column q above it: increasing, without
+  // duplicates, so the pairs come out sorted and exactly as many as there are.
+  const int n = static_cast<int>(loaded.frames);
+  for (int q = 0; q < n; ++q) {
+    const std::uint8_t* row = image.ptr<std::uint8_t>(q);
+    for (int j = 0; j < q; ++j)
+      if (row[j] != 0 || image.ptr<std::uint8_t>(j)[q] != 0)
+        loaded.pairs.emplace_back(static_cast<std::uint32_t>(q), static_cast<std::uint32_t>(j));
+  }
+  return loaded;
 }
 
 // Cells of a dense block as "non-zero?", whatever the MATLAB class.
 template <class T>
 void collect_nonzero(const void* data, std::size_t rows, std::size_t first_column,
-                     std::size_t columns, Pairs& pairs) {
+                     std::size_t columns, std::size_t frames, LaterEarlier& pairs) {
   const T* cells = static_cast<const T*>(data);
   for (std::size_t c = 0; c < columns; ++c)
     for (std::size_t r = 0; r < rows; ++r)
-      if (cells[c * rows + r] != T(0)) pairs.emplace_back(r, first_column + c);
+      if (cells[c * rows + r] != T(0)) add_pair(r, first_column + c, frames, pairs);
 }
 
 struct MatCloser {
@@ -118,7 +141,7 @@ void check_level5_elements(const std::string& path) {
   }
 }
 
-GroundTruth from_mat(const std::string& path) {
+Loaded from_mat(const std::string& path, const GroundTruthOptions& options) {
   check_level5_elements(path);
   std::unique_ptr<mat_t, MatCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) throw FileError(path, "not a readable MATLAB .mat file");
@@ -137,7 +160,12 @@ GroundTruth from_mat(const std::string& path) {
   if (rows > kMaxFrames || columns > kMaxFrames)
     throw FileError(path, "variable '" + name + "' is " + std::to_string(rows) + "x" +
                               std::to_string(columns) + ", too large for a ground truth");
-  Pairs pairs;
+  Loaded loaded;
+  loaded.frames = cut_to_run(std::max(rows, columns), options);
+  LaterEarlier& pairs = loaded.pairs;
+  // Cells beyond the run's frames are not read at all.
+  const std::size_t rows_read = std::min(rows, loaded.frames);
+  const std::size_t columns_read = std::min(columns, loaded.frames);
   if (var->class_type == MAT_C_SPARSE) {
     if (Mat_VarReadDataAll(file.get(), var.get()) != 0 || var->data == nullptr)
       throw FileError(path, "cannot read sparse variable '" + name + "'");
@@ -145,7 +173,7 @@ GroundTruth from_mat(const std::string& path) {
     if (sparse->jc == nullptr || sparse->ir == nullptr ||
         sparse->njc != static_cast<decltype(sparse->njc)>(columns + 1))
       throw FileError(path, "damaged sparse variable '" + name + "'");
-    for (std::size_t c = 0; c < columns; ++c) {
+    for (std::size_t c = 0; c < columns_read; ++c) {
       const std::size_t begin = sparse->jc[c], end = sparse->jc[c + 1];
       if (begin > end || end > static_cast<std::size_t>(sparse->nir))
         throw FileError(path, "damaged sparse variable '" + name + "'");
@@ -153,7 +181,7 @@ GroundTruth from_mat(const std::string& path) {
       for (std::size_t k = begin; k < end; ++k) {
         if (static_cast<std::size_t>(sparse->ir[k]) >= rows)
           throw FileError(path, "damaged sparse variable '" + name + "'");
-        pairs.emplace_back(sparse->ir[k], c);
+        add_pair(static_cast<std::size_t>(sparse->ir[k]), c, loaded.frames, pairs);
       }
     }
   } else {
@@ -181,42 +209,43 @@ GroundTruth from_mat(const std::string& path) {
         throw FileError(path, "variable '" + name + "' has an unsupported class");
     }
     const std::size_t block_columns =
-        std::max<std::size_t>(1, kMatBlockBytes / std::max<std::size_t>(1, rows * cell_bytes));
+        std::max<std::size_t>(1, kMatBlockBytes / std::max<std::size_t>(1, rows_read * cell_bytes));
     std::vector<std::uint8_t> buffer;
-    for (std::size_t first = 0; first < columns; first += block_columns) {
-      const std::size_t count = std::min(block_columns, columns - first);
-      buffer.assign(rows * count * cell_bytes, 0);
+    for (std::size_t first = 0; rows_read > 0 && first < columns_read; first += block_columns) {
+      const std::size_t count = std::min(block_columns, columns_read - first);
+      buffer.assign(rows_read * count * cell_bytes, 0);
       int start[2] = {0, static_cast<int>(first)};
       int stride[2] = {1, 1};
-      int edge[2] = {static_cast<int>(rows), static_cast<int>(count)};
+      int edge[2] = {static_cast<int>(rows_read), static_cast<int>(count)};
       if (Mat_VarReadData(file.get(), var.get(), buffer.data(), start, stride, edge) != 0)
         throw FileError(path, "cannot read variable '" + name + "' (truncated or damaged)");
+      const std::size_t f = loaded.frames;
       switch (var->class_type) {
         case MAT_C_DOUBLE:
-          collect_nonzero<double>(buffer.data(), rows, first, count, pairs);
+          collect_nonzero<double>(buffer.data(), rows_read, first, count, f, pairs);
           break;
         case MAT_C_SINGLE:
-          collect_nonzero<float>(buffer.data(), rows, first, count, pairs);
+          collect_nonzero<float>(buffer.data(), rows_read, first, count, f, pairs);
           break;
         case MAT_C_INT64:
         case MAT_C_UINT64:
-          collect_nonzero<std::uint64_t>(buffer.data(), rows, first, count, pairs);
+          collect_nonzero<std::uint64_t>(buffer.data(), rows_read, first, count, f, pairs);
           break;
         case MAT_C_INT32:
         case MAT_C_UINT32:
-          collect_nonzero<std::uint32_t>(buffer.data(), rows, first, count, pairs);
+          collect_nonzero<std::uint32_t>(buffer.data(), rows_read, first, count, f, pairs);
           break;
         case MAT_C_INT16:
         case MAT_C_UINT16:
-          collect_nonzero<std::uint16_t>(buffer.data(), rows, first, count, pairs);
+          collect_nonzero<std::uint16_t>(buffer.data(), rows_read, first, count, f, pairs);
           break;
         default:
-          collect_nonzero<std::uint8_t>(buffer.data(), rows, first, count, pairs);
+          collect_nonzero<std::uint8_t>(buffer.data(), rows_read, first, count, f, pairs);
           break;
       }
     }
   }
-  return GroundTruth(std::max(rows, columns), pairs);
+  return loaded;
 }
 
 int detect_index_base(const std::string& text) {
@@ -242,7 +271,7 @@ int detect_index_base(const std::string& text) {
   return zero_seen ? 0 : -1;
 }
 
-GroundTruth from_pairs_text(const std::string& path, const GroundTruthOptions& options) {
+Loaded from_pairs_text(const std::string& path, const GroundTruthOptions& options) {
   const std::string text = read_text(path);
   int base = options.pairs_index_base;
   if (base != 0 && base != 1) {
@@ -252,7 +281,7 @@ GroundTruth from_pairs_text(const std::string& path, const GroundTruthOptions& o
                       "cannot tell whether the pairs are 0-based or 1-based: "
                       "add a comment line saying \"0-based\" or \"1-based\", or give the base");
   }
-  Pairs pairs;
+  Loaded loaded;
   std::size_t frames = 0, line_number = 0;
   std::istringstream lines(text);
   std::string line;
@@ -280,10 +309,12 @@ GroundTruth from_pairs_text(const std::string& path, const GroundTruthOptions& o
     const std::size_t query = parse(a), match = parse(b);
     if (fields >> extra)
       throw FileError(path, "line " + std::to_string(line_number) + ": more than two fields");
-    pairs.emplace_back(query, match);
+    // Without the run's frame count, the largest index says how many there are.
+    add_pair(query, match, options.frames > 0 ? options.frames : kMaxFrames, loaded.pairs);
     frames = std::max({frames, query + 1, match + 1});
   }
-  return GroundTruth(frames, pairs);
+  loaded.frames = options.frames > 0 ? options.frames : frames;
+  return loaded;
 }
 
 std::string csv_field(const std::string& s) {
@@ -336,40 +367,50 @@ bool next_record(const std::string& text, std::size_t& pos, std::vector<std::str
 }  // namespace
 
 GroundTruth::GroundTruth(std::size_t frames,
-                         const std::vector<std::pair<std::size_t, std::size_t>>& pairs)
-    : frames_(frames) {
+                         const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
   if (frames > kMaxFrames) throw InvalidArgument("ground truth too large");
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> later_earlier;
+  LaterEarlier later_earlier;
   later_earlier.reserve(pairs.size());
   for (const auto& [a, b] : pairs) {
     if (a >= frames || b >= frames)
       throw InvalidArgument("ground-truth pair (" + std::to_string(a) + ", " + std::to_string(b) +
                             ") outside " + std::to_string(frames) + " frames");
-    if (a == b) continue;
-    later_earlier.emplace_back(static_cast<std::uint32_t>(std::max(a, b)),
-                               static_cast<std::uint32_t>(std::min(a, b)));
+    add_pair(a, b, frames, later_earlier);
   }
-  std::sort(later_earlier.begin(), later_earlier.end());
-  later_earlier.erase(std::unique(later_earlier.begin(), later_earlier.end()), later_earlier.end());
-  offsets_.assign(frames + 1, 0);
-  earlier_.reserve(later_earlier.size());
-  for (const auto& [later, earlier] : later_earlier) {
-    ++offsets_[later + 1];
-    earlier_.push_back(earlier);
+  *this = from_later_earlier(frames, std::move(later_earlier));
+}
+
+GroundTruth GroundTruth::from_later_earlier(std::size_t frames, LaterEarlier pairs) {
+  if (!std::is_sorted(pairs.begin(), pairs.end())) std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  GroundTruth truth;
+  truth.frames_ = frames;
+  truth.later_.reserve(pairs.size());
+  truth.earlier_.reserve(pairs.size());
+  for (const auto& [later, earlier] : pairs) {
+    if (truth.later_.empty() || truth.later_.back() != later) ++truth.queries_with_loops_;
+    truth.later_.push_back(later);
+    truth.earlier_.push_back(earlier);
   }
-  for (std::size_t q = 0; q < frames; ++q) {
-    if (offsets_[q + 1] > 0) ++queries_with_loops_;
-    offsets_[q + 1] += offsets_[q];
-  }
+  return truth;
 }
 
 GroundTruth GroundTruth::load(const std::string& path, const GroundTruthOptions& options) {
   const std::string name = lower(path);
   try {
+    require_regular_file(path);
+    Loaded loaded;
+    bool image = false;
     for (const char* ext : {".bmp", ".png", ".pgm", ".pbm", ".tif", ".tiff", ".jpg", ".jpeg"})
-      if (ends_with(name, ext)) return from_image(path);
-    if (ends_with(name, ".mat")) return from_mat(path);
-    return from_pairs_text(path, options);
+      image = image || ends_with(name, ext);
+    if (image) {
+      loaded = from_image(path, options);
+    } else if (ends_with(name, ".mat")) {
+      loaded = from_mat(path, options);
+    } else {
+      loaded = from_pairs_text(path, options);
+    }
+    return from_later_earlier(loaded.frames, std::move(loaded.pairs));
   } catch (const InvalidArgument& e) {
     throw FileError(path, e.what());
   }
@@ -383,12 +424,15 @@ bool GroundTruth::is_loop(std::size_t query, std::size_t match) const {
 }
 
 bool GroundTruth::has_loop(std::size_t query) const {
-  return query < frames_ && offsets_[query + 1] > offsets_[query];
+  return !earlier_matches(query).empty();
 }
 
 Span<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
   if (query >= frames_) return {};
-  return {earlier_.data() + offsets_[query], offsets_[query + 1] - offsets_[query]};
+  const auto [first, last] =
+      std::equal_range(later_.begin(), later_.end(), static_cast<std::uint32_t>(query));
+  const auto offset = static_cast<std::size_t>(first - later_.begin());
+  return {earlier_.data() + offset, static_cast<std::size_t>(last - first)};
 }
 
 void write_detections_csv(const std::string& path, const std::vector<Detection>& detections) {
@@ -417,6 +461,10 @@ std::vector<Detection> read_detections_csv(const std::string& path) {
                     "query_index,match_index,query_file,match_file,score,inliers");
   ++line;
   std::vector<Detection> detections;
+  // One row per line at most: reserving once avoids the doubling's spare half.
+  detections.reserve(static_cast<std::size_t>(std::count(
+                         text.begin() + static_cast<std::ptrdiff_t>(pos), text.end(), '\n')) +
+                     1);
   while (next_record(text, pos, fields, malformed)) {
     ++line;
     if (fields.size() == 1 && fields[0].empty()) continue;
@@ -437,38 +485,56 @@ std::vector<Detection> read_detections_csv(const std::string& path) {
     d.match_file = fields[3];
     char* end = nullptr;
     d.score = std::strtod(fields[4].c_str(), &end);
-    if (fields[4].empty() || end != fields[4].c_str() + fields[4].size())
-      throw FileError(path, where + "score \"" + fields[4] + "\" is not a number");
+    if (fields[4].empty() || end != fields[4].c_str() + fields[4].size() || !std::isfinite(d.score))
+      throw FileError(path, where + "score \"" + fields[4] + "\" is not a finite number");
     d.inliers = index(fields[5]);
     detections.push_back(std::move(d));
   }
+  detections.shrink_to_fit();
   return detections;
 }
+
+namespace {
+
+void check_inside(const Detection& d, const GroundTruth& truth) {
+  if (d.query >= truth.frames() || d.match >= truth.frames())
+    throw InvalidArgument("detection (" + std::to_string(d.query) + ", " + std::to_string(d.match) +
+                          ") outside the ground truth's " + std::to_string(truth.frames()) +
+                          " frames");
+}
+
+// A true positive that also finds its query: the loop is with an earlier image.
+bool finds_query(const Detection& d, const GroundTruth& truth) {
+  return d.match < d.query && truth.is_loop(d.query, d.match);
+}
+
+void set_ratios(PrecisionRecall& r) {
+  r.precision = r.detections == 0 ? 1.0 : double(r.true_positives) / double(r.detections);
+  r.recall =
+      r.queries_with_loops == 0 ? 0.0 : double(r.queries_found) / double(r.queries_with_loops);
+}
+
+}  // namespace
 
 PrecisionRecall evaluate_detections(const std::vector<Detection>& detections,
                                     const GroundTruth& truth) {
   PrecisionRecall r;
   r.queries_with_loops = truth.queries_with_loops();
-  std::vector<std::uint8_t> found(truth.frames(), 0);
+  std::vector<std::size_t> found;  // queries with a true positive, repeated
   for (const Detection& d : detections) {
-    if (d.query >= truth.frames() || d.match >= truth.frames())
-      throw InvalidArgument("detection (" + std::to_string(d.query) + ", " +
-                            std::to_string(d.match) + ") outside the ground truth's " +
-                            std::to_string(truth.frames()) + " frames");
+    check_inside(d, truth);
     ++r.detections;
     if (truth.is_loop(d.query, d.match)) {
       ++r.true_positives;
-      if (d.match < d.query && !found[d.query]) {
-        found[d.query] = 1;
-        ++r.queries_found;
-      }
+      if (d.match < d.query) found.push_back(d.query);
     } else {
       ++r.false_positives;
     }
   }
-  r.precision = r.detections == 0 ? 1.0 : double(r.true_positives) / double(r.detections);
-  r.recall =
-      r.queries_with_loops == 0 ? 0.0 : double(r.queries_found) / double(r.queries_with_loops);
+  std::sort(found.begin(), found.end());
+  r.queries_found =
+      static_cast<std::size_t>(std::unique(found.begin(), found.end()) - found.begin());
+  set_ratios(r);
   return r;
 }
 
@@ -482,18 +548,44 @@ double recall_at_full_precision(const std::vector<PrCurvePoint>& curve) {
 
 std::vector<PrCurvePoint> pr_curve_by_score(const std::vector<Detection>& detections,
                                             const GroundTruth& truth) {
-  std::vector<double> thresholds;
-  for (const Detection& d : detections) thresholds.push_back(d.score);
-  std::sort(thresholds.begin(), thresholds.end());
-  thresholds.erase(std::unique(thresholds.begin(), thresholds.end()), thresholds.end());
-  std::vector<PrCurvePoint> curve;
-  std::vector<Detection> kept;
-  for (double t : thresholds) {
-    kept.clear();
-    for (const Detection& d : detections)
-      if (d.score >= t) kept.push_back(d);
-    curve.push_back({t, evaluate_detections(kept, truth)});
+  for (const Detection& d : detections) {
+    check_inside(d, truth);
+    if (std::isnan(d.score)) throw InvalidArgument("detection with a NaN score");
   }
+  // Detections by decreasing score: lowering the threshold t adds them in this order.
+  std::vector<const Detection*> order;
+  order.reserve(detections.size());
+  for (const Detection& d : detections) order.push_back(&d);
+  std::sort(order.begin(), order.end(),
+            [](const Detection* a, const Detection* b) { return a->score > b->score; });
+  // A query is found at t once its best-scoring detection that finds it is kept.
+  std::vector<std::pair<std::size_t, double>> finding;  // (query, score)
+  for (const Detection& d : detections)
+    if (finds_query(d, truth)) finding.emplace_back(d.query, d.score);
+  std::sort(finding.begin(), finding.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first < b.first : a.second > b.second;
+  });
+  std::vector<double> found_at;  // per found query, the highest t that finds it; decreasing
+  for (std::size_t i = 0; i < finding.size(); ++i)
+    if (i == 0 || finding[i].first != finding[i - 1].first) found_at.push_back(finding[i].second);
+  std::sort(found_at.begin(), found_at.end(), std::greater<>());
+
+  std::vector<PrCurvePoint> curve;
+  PrecisionRecall r;
+  r.queries_with_loops = truth.queries_with_loops();
+  std::size_t next_found = 0;
+  for (std::size_t i = 0; i < order.size();) {
+    const double t = order[i]->score;
+    for (; i < order.size() && order[i]->score == t; ++i) {
+      ++r.detections;
+      ++(truth.is_loop(order[i]->query, order[i]->match) ? r.true_positives : r.false_positives);
+    }
+    while (next_found < found_at.size() && found_at[next_found] >= t) ++next_found;
+    r.queries_found = next_found;
+    set_ratios(r);
+    curve.push_back({t, r});
+  }
+  std::reverse(curve.begin(), curve.end());
   return curve;
 }
 

@@ -1,7 +1,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <iterator>
 #include <sstream>
@@ -13,13 +12,13 @@
 
 #include "binbow/error.h"
 #include "binbow/vision/loop_detector.h"
+#include "vision/regular_file.h"
+#include "vision/storage_text.h"
 
 namespace binbow::vision {
 namespace {
 
 using Json = nlohmann::json;
-
-constexpr std::uintmax_t kMaxParamsFileBytes = 1 << 20;
 
 std::string normalise_name(std::string name) {
   for (char& c : name)
@@ -39,6 +38,9 @@ Field number_field(const char* key, T LoopDetectorParams::*member) {
   return {key,
           [key, member](LoopDetectorParams& p, const Json& v) {
             if (!v.is_number()) throw std::string("\"") + key + "\" must be a number";
+            // YAML's .inf and .nan arrive here as doubles (JSON cannot spell them).
+            if (!std::isfinite(v.get<double>()))
+              throw std::string("\"") + key + "\" must be a finite number";
             if constexpr (std::is_integral_v<T>) {
               const double x = v.get<double>();
               if (x != std::floor(x) || std::abs(x) > 1e9)
@@ -110,8 +112,8 @@ LoopDetectorParams from_object(const Json& object, const std::string& name) {
   LoopDetectorParams params;
   if (object.contains("frequency")) {
     const Json& f = object["frequency"];
-    if (!f.is_number() || !(f.get<double>() > 0))
-      throw FileError(name, "\"frequency\" must be a positive number");
+    if (!f.is_number() || !(f.get<double>() > 0) || !(f.get<double>() <= kMaxFrequency))
+      throw FileError(name, "\"frequency\" must be a number in (0, 10000]");
     params = LoopDetectorParams::for_frequency(f.get<double>());
   }
   for (const auto& [key, value] : object.items()) {
@@ -188,7 +190,7 @@ const char* to_string(LoopStatus status) {
 }
 
 LoopDetectorParams LoopDetectorParams::for_frequency(double f) {
-  if (!(f > 0) || f > 1e4) throw InvalidArgument("frequency must be in (0, 10000] Hz");
+  if (!(f > 0) || f > kMaxFrequency) throw InvalidArgument("frequency must be in (0, 10000] Hz");
   const auto scaled = [f](double base, int at_least) {
     return std::max(at_least, static_cast<int>(base * f));
   };
@@ -204,30 +206,41 @@ LoopDetectorParams LoopDetectorParams::for_frequency(double f) {
 }
 
 void LoopDetectorParams::validate() const {
-  const auto require = [](bool ok, const char* what) {
-    if (!ok) throw InvalidArgument(std::string("loop detector parameter ") + what);
+  // The ranges documented beside each field in loop_detector.h and in
+  // docs/limits.md. The upper bounds keep hostile parameter files from asking
+  // for unbounded work (RANSAC iterations, verified entries) or memory.
+  const auto in_range = [](const char* name, double value, double low, double high,
+                           bool low_open = false, bool high_open = false) {
+    const bool ok = std::isfinite(value) && (low_open ? value > low : value >= low) &&
+                    (high_open ? value < high : value <= high);
+    if (!ok) {
+      std::ostringstream message;
+      message.precision(15);
+      message << "loop detector parameter " << name << " must be in " << (low_open ? '(' : '[')
+              << low << ", " << high << (high_open ? ')' : ']') << ", got " << value;
+      throw InvalidArgument(message.str());
+    }
   };
-  require(frequency > 0, "frequency must be positive");
-  require(alpha >= 0, "alpha must be ≥ 0");
-  require(min_normalisation_score >= 0, "min_normalisation_score must be ≥ 0");
-  require(dislocal >= 0, "dislocal must be ≥ 0");
-  require(max_db_results >= 1, "max_db_results must be ≥ 1");
-  require(max_intra_island_gap >= 1, "max_intra_island_gap must be ≥ 1");
-  require(min_matches_per_island >= 1, "min_matches_per_island must be ≥ 1");
-  require(k >= 0, "k must be ≥ 0");
-  require(max_distance_between_islands >= 0, "max_distance_between_islands must be ≥ 0");
-  require(max_distance_between_queries >= 1, "max_distance_between_queries must be ≥ 1");
-  require(direct_index_levels >= 0 && direct_index_levels <= 16,
-          "direct_index_levels must be in [0, 16]");
-  require(max_neighbor_ratio > 0 && max_neighbor_ratio <= 1,
-          "max_neighbor_ratio must be in (0, 1]");
-  require(max_verified_entries >= 1, "max_verified_entries must be ≥ 1");
-  require(max_match_distance >= 0 && max_match_distance <= 1,
-          "max_match_distance must be in [0, 1]");
-  require(min_inliers >= 8, "min_inliers must be ≥ 8 (a fundamental matrix needs 8 points)");
-  require(max_reprojection_error > 0, "max_reprojection_error must be positive");
-  require(ransac_confidence > 0 && ransac_confidence < 1, "ransac_confidence must be in (0, 1)");
-  require(max_ransac_iterations >= 1, "max_ransac_iterations must be ≥ 1");
+  in_range("frequency", frequency, 0, kMaxFrequency, true);
+  in_range("alpha", alpha, 0, kMaxScoreThreshold);
+  in_range("min_normalisation_score", min_normalisation_score, 0, kMaxScoreThreshold);
+  in_range("dislocal", dislocal, 0, kMaxFrameDistance);
+  in_range("max_db_results", max_db_results, 1, kMaxFrameDistance);
+  in_range("max_intra_island_gap", max_intra_island_gap, 1, kMaxFrameDistance);
+  in_range("min_matches_per_island", min_matches_per_island, 1, kMaxFrameDistance);
+  in_range("k", k, 0, kMaxConsistentQueries);
+  in_range("max_distance_between_islands", max_distance_between_islands, 0, kMaxFrameDistance);
+  in_range("max_distance_between_queries", max_distance_between_queries, 1, kMaxFrameDistance);
+  in_range("direct_index_levels", direct_index_levels, 0, kMaxDirectIndexLevels);
+  in_range("max_verified_entries", max_verified_entries, 1, kMaxVerifiedEntries);
+  in_range("max_neighbor_ratio", max_neighbor_ratio, 0, 1, true);
+  in_range("max_match_distance", max_match_distance, 0, 1);
+  // A fundamental matrix needs 8 points.
+  in_range("min_inliers", min_inliers, 8, kMaxMinInliers);
+  in_range("max_reprojection_error", max_reprojection_error, kMinReprojectionError,
+           kMaxReprojectionError);
+  in_range("ransac_confidence", ransac_confidence, 0, 1, true, true);
+  in_range("max_ransac_iterations", max_ransac_iterations, 1, kMaxRansacIterations);
 }
 
 LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name) {
@@ -241,15 +254,9 @@ LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const 
 }
 
 LoopDetectorParams LoopDetectorParams::load(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FileError(path, "cannot open loop detector parameters");
-  std::string text;
-  char buffer[4096];
-  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-    text.append(buffer, static_cast<std::size_t>(in.gcount()));
-    if (text.size() > kMaxParamsFileBytes)
-      throw FileError(path, "parameter file larger than 1 MiB");
-  }
+  const std::string text = read_regular_file(path, kMaxLoopParamsFileBytes);
+  // Both parsers recurse per nesting level; parameters are one flat mapping.
+  check_storage_nesting(text, path);
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool json = (first != std::string::npos && text[first] == '{') ||
                     (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0);

@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <filesystem>
-#include <system_error>
 
 #include <opencv2/core.hpp>
 
 #include "binbow/error.h"
+#include "vision/storage_text.h"
 
 namespace binbow::vision {
 
@@ -47,13 +46,11 @@ std::vector<int> read_coordinates(const cv::FileStorage& storage, const char* ke
 }  // namespace
 
 BriefPattern load_brief_pattern(const std::string& path) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) {
-    throw FileError(path, "no such BRIEF pattern file");
-  }
+  const std::string text = read_storage_text(path, kMaxBriefPatternFileBytes);
   BriefPattern pattern;
   try {
-    cv::FileStorage storage(path, cv::FileStorage::READ);
+    cv::FileStorage storage(
+        text, cv::FileStorage::READ | cv::FileStorage::MEMORY | storage_format(text, path));
     if (!storage.isOpened()) throw FileError(path, "cannot open BRIEF pattern");
     pattern.x1 = read_coordinates(storage, "x1", path);
     pattern.y1 = read_coordinates(storage, "y1", path);

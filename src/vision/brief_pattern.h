@@ -1,6 +1,7 @@
 // BRIEF test patterns: the point pairs compared by each descriptor bit.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -21,11 +22,18 @@ struct BriefPattern {
 // absurd patches.
 inline constexpr int kMaxBriefPatternRadius = 64;
 
+// Pattern files are read whole before OpenCV parses them: this bounds the
+// file and its decompressed text (a 256-test pattern takes about 8 KiB).
+inline constexpr std::uint64_t kMaxBriefPatternFileBytes = std::uint64_t{4} << 20;
+
 // DLoopDetector's / VINS' brief_pattern.yml, built in.
 const BriefPattern& default_brief_pattern();
 // Reads an OpenCV FileStorage file (YAML, XML, JSON; optionally .gz) with the
 // integer sequences x1 y1 x2 y2. Throws FileError naming the file for anything
-// missing, unequal, not a multiple of 8, or outside ±kMaxBriefPatternRadius.
+// missing, unequal, not a multiple of 8, or outside ±kMaxBriefPatternRadius,
+// for a file that is not a regular file, larger than
+// kMaxBriefPatternFileBytes (compressed or not) or nested deeper than
+// kMaxStorageNesting.
 BriefPattern load_brief_pattern(const std::string& path);
 
 }  // namespace binbow::vision

@@ -11,16 +11,26 @@ namespace binbow::vision {
 
 struct ImageDimensions {
   std::uint64_t width = 0, height = 0;
+  const char* format = "";  // "png", "jpeg", "tiff", "bmp", "webp", "pnm", ...
+  // PNG and JPEG: the compression ratio is bounded (max_pixels_for_file_size).
+  bool ratio_bounded = false;
 };
 
-// Width and height declared by a PNG (IHDR) or JPEG (first SOF marker)
-// header; nullopt for other formats or a header too short or malformed to
-// say (the decoder then reports the problem).
-std::optional<ImageDimensions> declared_dimensions(const std::vector<std::uint8_t>& bytes);
+// Width and height declared by the header of every still-image format this
+// OpenCV decodes by content: PNG, JPEG, TIFF (classic and BigTIFF, first
+// directory), BMP, WebP (VP8, VP8L, VP8X canvas), PBM/PGM/PPM/PAM, PFM, Sun
+// raster, Radiance HDR, OpenEXR (data window) and JPEG 2000 (.jp2 and raw
+// codestream, from the codestream's SIZ marker, at most 4 components).
+// nullopt for any other content (DICOM, unknown, a header too short or
+// malformed to say): such a file cannot be bounded before decoding.
+std::optional<ImageDimensions> declared_dimensions(const std::uint8_t* data, std::size_t size);
+inline std::optional<ImageDimensions> declared_dimensions(const std::vector<std::uint8_t>& bytes) {
+  return declared_dimensions(bytes.data(), bytes.size());
+}
 
-// The largest pixel count a file of `file_size` bytes may declare: PNG's
-// deflate and JPEG's entropy coding cannot compress 8-bit images by more than
-// about 1:1032, plus slack for tiny files.
+// The largest pixel count a PNG or JPEG file of `file_size` bytes may
+// declare: deflate and JPEG's entropy coding cannot compress 8-bit images by
+// more than about 1:1032, plus slack for tiny files.
 inline std::uint64_t max_pixels_for_file_size(std::size_t file_size) {
   return (std::uint64_t{1} << 22) + 1100 * static_cast<std::uint64_t>(file_size);
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <system_error>
@@ -15,7 +16,9 @@
 
 #include "binbow/error.h"
 #include "vision/image_header.h"
+#include "vision/jpeg_check.h"
 #include "vision/natural_order.h"
+#include "vision/regular_file.h"
 
 namespace binbow::vision {
 namespace fs = std::filesystem;
@@ -52,36 +55,6 @@ bool has_list_extension(const fs::path& path) {
   return is_one_of(lowercase_extension(path), {".txt", ".lst", ".list"});
 }
 
-std::vector<std::uint8_t> read_whole_file(const std::string& path) {
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw FileError(path, "cannot open for reading");
-  stream.seekg(0, std::ios::end);
-  const std::streamoff size = stream.tellg();
-  if (size < 0) throw FileError(path, "cannot determine the file size");
-  stream.seekg(0, std::ios::beg);
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-  if (size > 0 && !stream.read(reinterpret_cast<char*>(bytes.data()), size)) {
-    throw FileError(path, "read error");
-  }
-  return bytes;
-}
-
-// Inside a JPEG's entropy-coded data every 0xFF byte is followed by 0x00 or a
-// restart marker, so the last start-of-scan (FF DA) marker must be followed by
-// an end-of-image (FF D9) marker in a complete file.
-bool jpeg_is_complete(const std::vector<std::uint8_t>& bytes) {
-  std::size_t last_scan = bytes.size(), last_end = bytes.size();
-  for (std::size_t i = bytes.size(); i-- > 1;) {
-    if (bytes[i - 1] != 0xFF) continue;
-    if (bytes[i] == 0xD9 && last_end == bytes.size()) last_end = i;
-    if (bytes[i] == 0xDA) {
-      last_scan = i;
-      break;
-    }
-  }
-  return last_scan < bytes.size() && last_end < bytes.size() && last_end > last_scan;
-}
-
 cv::Mat to_grey(const cv::Mat& image) {
   if (image.channels() == 1) return image;
   cv::Mat grey;
@@ -115,32 +88,66 @@ cv::Mat limit_width(const cv::Mat& image, int max_width) {
   return resized;
 }
 
+const char* special_file_kind(fs::file_type type) {
+  switch (type) {
+    case fs::file_type::fifo:
+      return "a FIFO";
+    case fs::file_type::socket:
+      return "a socket";
+    case fs::file_type::block:
+    case fs::file_type::character:
+      return "a device";
+    default:
+      return "a special file";
+  }
+}
+
+std::string describe_size(std::uint64_t width, std::uint64_t height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
+// Throws FileError naming `path` when `width` x `height` is 0 or above
+// `max_pixels`.
+void check_pixel_count(const std::string& path, const char* what, std::uint64_t width,
+                       std::uint64_t height, std::uint64_t max_pixels) {
+  if (width == 0 || height == 0) {
+    throw FileError(
+        path, std::string(what) + " declares 0 pixels (" + describe_size(width, height) + ")");
+  }
+  if (width > max_pixels / height) {
+    throw FileError(path, std::string(what) + " declares " + describe_size(width, height) +
+                              " pixels, more than the limit of " + std::to_string(max_pixels));
+  }
+}
+
 }  // namespace
 
-cv::Mat read_grey_image(const std::string& path) {
-  std::error_code error;
-  if (fs::is_directory(path, error)) throw FileError(path, "is a directory, not an image");
-  if (!fs::exists(path, error)) throw FileError(path, "no such file");
-  const std::vector<std::uint8_t> bytes = read_whole_file(path);
+cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
+  const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
   if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
-  const bool jpeg = bytes.size() >= 2 && bytes[0] == 0xFF && bytes[1] == 0xD8;
-  if (jpeg && !jpeg_is_complete(bytes)) {
-    throw FileError(path, "truncated JPEG (no end-of-image marker after the last scan)");
+  const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
+  const auto declared = declared_dimensions(data, bytes.size());
+  if (!declared) {
+    throw FileError(path,
+                    "not an image whose size can be read before decoding "
+                    "(unknown format, or a damaged header)");
   }
-  if (const auto declared = declared_dimensions(bytes)) {
-    if (declared->width == 0 || declared->height == 0) {
-      throw FileError(path, "image header declares 0 pixels (" + std::to_string(declared->width) +
-                                "x" + std::to_string(declared->height) + ")");
-    }
-    if (declared->width * declared->height > max_pixels_for_file_size(bytes.size())) {
-      throw FileError(path, "image header declares " + std::to_string(declared->width) + "x" +
-                                std::to_string(declared->height) + " pixels, more than " +
-                                std::to_string(bytes.size()) + " bytes can hold");
-    }
+  check_pixel_count(path, "image header", declared->width, declared->height, max_pixels);
+  if (declared->ratio_bounded &&
+      declared->width * declared->height > max_pixels_for_file_size(bytes.size())) {
+    throw FileError(path,
+                    "image header declares " + describe_size(declared->width, declared->height) +
+                        " pixels, more than " + std::to_string(bytes.size()) + " bytes can hold");
+  }
+  if (std::strcmp(declared->format, "jpeg") == 0) {
+    const std::string problem = jpeg_decoding_problem(data, bytes.size());
+    if (!problem.empty()) throw FileError(path, "damaged JPEG: " + problem);
   }
   cv::Mat image;
   try {
-    image = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+    image = cv::imdecode(
+        cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
+        cv::IMREAD_GRAYSCALE);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot decode image: " + e.msg);
   }
@@ -148,6 +155,9 @@ cv::Mat read_grey_image(const std::string& path) {
     throw FileError(path,
                     "cannot decode image (unknown format, corrupted, truncated or 0x0 pixels)");
   }
+  // The decoder read the same header; a larger result means this reader was misled.
+  check_pixel_count(path, "decoded image", static_cast<std::uint64_t>(image.cols),
+                    static_cast<std::uint64_t>(image.rows), max_pixels);
   return to_grey(image);
 }
 
@@ -166,6 +176,8 @@ struct ImageSource::Impl {
   cv::VideoCapture capture;
   std::string video_path;
   long long video_frame = -1;
+  long long video_declared_frames = 0;  // CAP_PROP_FRAME_COUNT; 0 when unknown
+  std::size_t unreadable_frames = 0;
   double video_step = 1;   // video frames per sampled frame (video_fps)
   double next_sample = 0;  // video frame number of the next sample
 
@@ -178,6 +190,12 @@ struct ImageSource::Impl {
     }
     if (fs::is_directory(status)) {
       add_directory(path);
+    } else if (!fs::is_regular_file(status)) {
+      // A FIFO or a device would block or never end; videos are regular files too.
+      const std::string problem = std::string("is ") + special_file_kind(status.type()) +
+                                  ", not a regular file or a directory";
+      if (list != nullptr) throw FileError(*list, "lists '" + path + "', which " + problem);
+      throw FileError(path, problem);
     } else if (has_image_extension(path)) {
       inputs.push_back({path, false});
     } else if (has_video_extension(path)) {
@@ -244,6 +262,11 @@ struct ImageSource::Impl {
       frame.index = frames_kept++;
       return true;
     }
+    // The backend stops at the first frame it cannot decode: what the
+    // container declared and was not read is reported, not silently lost.
+    if (video_declared_frames > video_frame + 1) {
+      unreadable_frames += static_cast<std::size_t>(video_declared_frames - (video_frame + 1));
+    }
     capture.release();
     return false;
   }
@@ -261,6 +284,15 @@ struct ImageSource::Impl {
       throw FileError(path, "cannot open video: " + e.msg);
     }
     if (!opened) throw FileError(path, "cannot open as an image or a video");
+    const double width = capture.get(cv::CAP_PROP_FRAME_WIDTH);
+    const double height = capture.get(cv::CAP_PROP_FRAME_HEIGHT);
+    if (width >= 0 && height >= 0 && width < 1e12 && height < 1e12) {
+      check_pixel_count(path, "video", static_cast<std::uint64_t>(width),
+                        static_cast<std::uint64_t>(height), options.max_pixels);
+    }
+    const double declared = capture.get(cv::CAP_PROP_FRAME_COUNT);
+    video_declared_frames =
+        std::isfinite(declared) && declared > 0 && declared < 1e15 ? std::llround(declared) : 0;
     const double fps = capture.get(cv::CAP_PROP_FPS);
     video_step = (options.video_fps > 0 && fps > options.video_fps) ? fps / options.video_fps : 1;
   }
@@ -278,7 +310,7 @@ struct ImageSource::Impl {
         continue;
       }
       if (!keep_next()) continue;
-      frame.image = limit_width(read_grey_image(input.path), options.max_width);
+      frame.image = limit_width(read_grey_image(input.path, options.max_pixels), options.max_width);
       frame.name = input.path;
       frame.index = frames_kept++;
       return true;
@@ -291,6 +323,7 @@ ImageSource::ImageSource(const std::vector<std::string>& inputs, ImageSourceOpti
   if (inputs.empty()) throw InvalidArgument("ImageSource: no inputs given");
   if (options.stride == 0) options.stride = 1;
   if (options.max_width < 0) throw InvalidArgument("ImageSource: max_width must be >= 0");
+  if (options.max_pixels == 0) throw InvalidArgument("ImageSource: max_pixels must be >= 1");
   impl_->options = options;
   for (const std::string& input : inputs) impl_->add(input, nullptr);
 }
@@ -301,6 +334,10 @@ ImageSource::~ImageSource() = default;
 
 bool ImageSource::next(Frame& frame) {
   return impl_->next(frame);
+}
+
+std::size_t ImageSource::unreadable_frames() const noexcept {
+  return impl_->unreadable_frames;
 }
 
 long long ImageSource::size() const {

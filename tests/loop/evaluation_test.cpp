@@ -1,10 +1,15 @@
 #include "binbow/vision/evaluation.h"
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <random>
 #include <set>
 #include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "binbow/error.h"
 #include "support/test_support.h"
@@ -167,6 +172,155 @@ TEST(PrecisionRecall, CurveByScoreAndRecallAtFullPrecision) {
   EXPECT_DOUBLE_EQ(curve[0].result.precision, 0.75);
   EXPECT_DOUBLE_EQ(recall_at_full_precision(curve), 0.5);  // thresholds 0.8 and above
   EXPECT_DOUBLE_EQ(recall_at_full_precision({}), 0);
+}
+
+// The curve by score, computed in one pass, equals evaluating the detections
+// kept at every threshold one by one.
+TEST(PrecisionRecall, CurveByScoreEqualsEvaluatingEveryThreshold) {
+  std::mt19937_64 rng(7);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t q = 20; q < 200; ++q)
+    if (rng() % 3 == 0) pairs.emplace_back(q, q - 10 - rng() % 10);
+  const GroundTruth truth(200, pairs);
+  std::vector<Detection> detections;
+  for (int i = 0; i < 300; ++i) {
+    const std::size_t query = 20 + rng() % 180;
+    const std::size_t match = rng() % 2 == 0 ? query - 10 - rng() % 10 : rng() % 200;
+    detections.push_back({query, match, "", "", static_cast<double>(rng() % 40) / 8, 0});
+  }
+  const std::vector<PrCurvePoint> curve = pr_curve_by_score(detections, truth);
+  std::set<double> scores;
+  for (const Detection& d : detections) scores.insert(d.score);
+  ASSERT_EQ(curve.size(), scores.size());
+  std::size_t i = 0;
+  for (double t : scores) {
+    std::vector<Detection> kept;
+    for (const Detection& d : detections)
+      if (d.score >= t) kept.push_back(d);
+    const PrecisionRecall expected = evaluate_detections(kept, truth);
+    const PrecisionRecall& got = curve[i].result;
+    EXPECT_EQ(curve[i].parameter, t);
+    EXPECT_EQ(got.detections, expected.detections);
+    EXPECT_EQ(got.true_positives, expected.true_positives);
+    EXPECT_EQ(got.false_positives, expected.false_positives);
+    EXPECT_EQ(got.queries_with_loops, expected.queries_with_loops);
+    EXPECT_EQ(got.queries_found, expected.queries_found) << t;
+    EXPECT_DOUBLE_EQ(got.precision, expected.precision);
+    EXPECT_DOUBLE_EQ(got.recall, expected.recall);
+    ++i;
+  }
+}
+
+// A pair index far beyond any run ("49999999 0") costs what a small one does:
+// before, 20,000 detections swept by score allocated and cleared a 50 MB
+// vector per threshold (past 300 s); this finishes at once.
+TEST(GroundTruth, FarIndicesAreStoredSparsely) {
+  TempDir dir;
+  write_text(dir.file("gt.txt"), "# 0-based\n49999999 0\n5 1\n");
+  const GroundTruth truth = GroundTruth::load(dir.file("gt.txt"));
+  EXPECT_EQ(truth.frames(), 50'000'000u);
+  EXPECT_EQ(truth.pair_count(), 2u);
+  EXPECT_TRUE(truth.is_loop(0, 49'999'999));
+  EXPECT_TRUE(truth.has_loop(5));
+  EXPECT_FALSE(truth.has_loop(49'999'998));
+  EXPECT_EQ(truth.queries_with_loops(), 2u);
+  std::vector<Detection> detections;
+  for (std::size_t q = 0; q < 20'000; ++q)
+    detections.push_back({q + 10, q, "", "", static_cast<double>(q), 12});
+  detections.push_back({5, 1, "", "", 0.5, 12});
+  const std::vector<PrCurvePoint> curve = pr_curve_by_score(detections, truth);
+  ASSERT_EQ(curve.size(), detections.size());
+  EXPECT_EQ(curve.front().result.true_positives, 1u);
+  EXPECT_DOUBLE_EQ(curve.front().result.recall, 0.5);
+}
+
+// With the run's frame count, the ground truth is cut to it: pairs beyond are
+// ignored, text pairs describe exactly that many frames, images and .mat
+// matrices are read only that far.
+TEST(GroundTruth, RunFramesCutTheGroundTruth) {
+  TempDir dir;
+  write_text(dir.file("gt.txt"), "# 0-based\n49999999 0\n5 1\n");
+  GroundTruthOptions options;
+  options.frames = 84;
+  const GroundTruth text = GroundTruth::load(dir.file("gt.txt"), options);
+  EXPECT_EQ(text.frames(), 84u);
+  EXPECT_EQ(text.pair_count(), 1u);
+
+  const GroundTruth full = GroundTruth::load(shared_data("rtabmap-samples/samples_GT.bmp"));
+  options.frames = 40;
+  const GroundTruth cut = GroundTruth::load(shared_data("rtabmap-samples/samples_GT.bmp"), options);
+  EXPECT_EQ(cut.frames(), 40u);
+  std::set<std::pair<std::size_t, std::size_t>> expected;
+  for (const auto& [q, m] : loops_of(full))
+    if (q < 40) expected.emplace(q, m);
+  EXPECT_EQ(loops_of(cut), expected);
+
+  const std::string mat = shared_data("lcd-groundtruth-knzhang/Lip6IndoorGroundTruth.mat");
+  const GroundTruth mat_full = GroundTruth::load(mat);
+  options.frames = 300;
+  const GroundTruth mat_cut = GroundTruth::load(mat, options);
+  EXPECT_EQ(mat_cut.frames(), 300u);
+  expected.clear();
+  for (const auto& [q, m] : loops_of(mat_full))
+    if (q < 300) expected.emplace(q, m);
+  EXPECT_EQ(loops_of(mat_cut), expected);
+  EXPECT_FALSE(expected.empty());
+}
+
+TEST(GroundTruth, ImagesMustBeSquareAndWithinThePixelLimit) {
+  TempDir dir;
+  const std::string photo = shared_data("rtabmap-samples/samples/1.jpg");
+  try {
+    GroundTruth::load(photo);
+    ADD_FAILURE() << "a 512x384 photograph accepted as ground truth";
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), photo);
+    EXPECT_NE(std::string(e.what()).find("512x384"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("square"), std::string::npos) << e.what();
+  }
+
+  // An all-white PNG whose header says 20000x20000: refused before decoding
+  // (it took more than 10 GB).
+  ASSERT_TRUE(cv::imwrite(dir.file("white.png"), cv::Mat(64, 64, CV_8UC1, cv::Scalar(255))));
+  std::vector<std::uint8_t> png = test::read_file(dir.file("white.png"));
+  const std::uint8_t size[8] = {0, 0, 0x4E, 0x20, 0, 0, 0x4E, 0x20};
+  std::copy(size, size + 8, png.begin() + 16);
+  png.resize(434'000, 0);
+  test::write_file(dir.file("white.png"), png);
+  try {
+    GroundTruth::load(dir.file("white.png"));
+    ADD_FAILURE() << "decoded a 20000x20000 ground truth";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 20000x20000 pixels, more than the limit"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(GroundTruth, SpecialFilesAreRefusedWithoutBlocking) {
+  TempDir dir;
+  for (const char* name : {"gt.txt", "gt.mat", "gt.png", "loops.csv"})
+    ASSERT_EQ(mkfifo(dir.file(name).c_str(), 0600), 0);
+  for (const char* name : {"gt.txt", "gt.mat", "gt.png"}) {
+    try {
+      GroundTruth::load(dir.file(name));
+      ADD_FAILURE() << "read a FIFO";
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find("is a FIFO"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(read_detections_csv(dir.file("loops.csv")), FileError);
+}
+
+TEST(Detections, NonFiniteScoresAreRefused) {
+  TempDir dir;
+  for (const char* score : {"nan", "inf", "-inf", "1e999"}) {
+    write_text(dir.file("a.csv"),
+               std::string("query_index,match_index,query_file,match_file,score,inliers\n"
+                           "1,0,a,b,") +
+                   score + ",12\n");
+    EXPECT_THROW(read_detections_csv(dir.file("a.csv")), FileError) << score;
+  }
 }
 
 }  // namespace

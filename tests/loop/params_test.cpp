@@ -1,6 +1,11 @@
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
 
 #include "binbow/error.h"
 #include "binbow/vision/loop_detector.h"
@@ -90,6 +95,100 @@ TEST(LoopDetectorParams, UnknownKeysAndBadValuesAreNamed) {
   expect_error_mentions(dir.file("g.json"), R"({"alpha": )", "JSON");
   expect_error_mentions(dir.file("h.json"), R"([1, 2])", "object");
   EXPECT_THROW(LoopDetectorParams::load(dir.file("missing.json")), FileError);
+}
+
+// 50,000 levels in 100 KB crashed OpenCV's YAML parser (stack overflow);
+// both formats are refused before any parser sees them.
+TEST(LoopDetectorParams, DeeplyNestedFilesAreRefusedBeforeParsing) {
+  test::TempDir dir;
+  std::string sequences = "%YAML:1.0\nalpha:\n";
+  for (int i = 0; i < 50'000; ++i) sequences += "- ";
+  expect_error_mentions(dir.file("deep.yml"), sequences + "1\n", "nested");
+  expect_error_mentions(dir.file("flow.yml"), "%YAML:1.0\nalpha: " + std::string(50'000, '['),
+                        "nested");
+  expect_error_mentions(dir.file("deep.json"), "{\"alpha\": " + std::string(50'000, '['), "nested");
+  std::string indented = "%YAML:1.0\n";
+  for (int i = 0; i < 100; ++i) indented += std::string(static_cast<std::size_t>(i), ' ') + "a:\n";
+  expect_error_mentions(dir.file("indented.yml"), indented, "nested");
+}
+
+// JSON cannot spell infinity (1e999 is a parse error); YAML's .inf and .nan
+// go through the same check.
+TEST(LoopDetectorParams, NonFiniteNumbersAreRefusedInYamlAsInJson) {
+  test::TempDir dir;
+  expect_error_mentions(dir.file("inf.yml"), "%YAML:1.0\nalpha: .inf\n", "\"alpha\"");
+  expect_error_mentions(dir.file("nan.yml"), "%YAML:1.0\nmax_reprojection_error: .nan\n",
+                        "max_reprojection_error");
+  expect_error_mentions(dir.file("inf.json"), R"({"alpha": 1e999})", "JSON");
+  LoopDetectorParams p;
+  p.alpha = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(p.validate(), InvalidArgument);
+}
+
+// Every parameter has a documented range; the upper bounds keep a parameter
+// file from asking for unbounded work (the issue's 1,000,000 RANSAC
+// iterations at 1e-9 px ran past 120 s on 84 frames).
+TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
+  test::TempDir dir;
+  expect_error_mentions(dir.file("a.json"),
+                        R"({"max_ransac_iterations": 1000000, "max_reprojection_error": 1e-9})",
+                        "max_reprojection_error must be in [0.1, 100], got 1e-09");
+  expect_error_mentions(dir.file("b.json"), R"({"max_ransac_iterations": 1000000})",
+                        "max_ransac_iterations must be in [1, 5000], got 1000000");
+  expect_error_mentions(dir.file("c.yml"), "%YAML:1.0\nmax_ransac_iterations: 1000000\n",
+                        "max_ransac_iterations");
+  expect_error_mentions(dir.file("d.json"), R"({"frequency": 1e6})", "frequency");
+
+  struct Bound {
+    const char* key;
+    double inside, outside;
+  };
+  for (const Bound& b :
+       {Bound{"frequency", kMaxFrequency, kMaxFrequency * 2},
+        Bound{"alpha", kMaxScoreThreshold, kMaxScoreThreshold * 2},
+        Bound{"min_normalisation_score", 0, -1},
+        Bound{"dislocal", kMaxFrameDistance, kMaxFrameDistance + 1.0},
+        Bound{"max_db_results", kMaxFrameDistance, kMaxFrameDistance + 1.0},
+        Bound{"max_intra_island_gap", 1, 0},
+        Bound{"min_matches_per_island", kMaxFrameDistance, kMaxFrameDistance + 1.0},
+        Bound{"k", kMaxConsistentQueries, kMaxConsistentQueries + 1.0},
+        Bound{"max_distance_between_islands", 0, -1}, Bound{"max_distance_between_queries", 1, 0},
+        Bound{"direct_index_levels", kMaxDirectIndexLevels, kMaxDirectIndexLevels + 1.0},
+        Bound{"max_verified_entries", kMaxVerifiedEntries, kMaxVerifiedEntries + 1.0},
+        Bound{"max_neighbor_ratio", 1, 0}, Bound{"max_match_distance", 1, 1.5},
+        Bound{"min_inliers", kMaxMinInliers, kMaxMinInliers + 1.0},
+        Bound{"max_reprojection_error", kMinReprojectionError, 0.05},
+        Bound{"max_reprojection_error", kMaxReprojectionError, 101},
+        Bound{"ransac_confidence", 0.5, 1},
+        Bound{"max_ransac_iterations", kMaxRansacIterations, kMaxRansacIterations + 1.0}}) {
+    SCOPED_TRACE(b.key);
+    const auto json = [&](double value) {
+      std::ostringstream text;
+      text.precision(17);
+      text << "{\"" << b.key << "\": " << value << "}";
+      return text.str();
+    };
+    EXPECT_NO_THROW(LoopDetectorParams::from_json(json(b.inside)));
+    try {
+      LoopDetectorParams::from_json(json(b.outside));
+      ADD_FAILURE() << "accepted " << json(b.outside);
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find(b.key), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(LoopDetectorParams, SpecialFilesAreRefusedWithoutBlocking) {
+  test::TempDir dir;
+  ASSERT_EQ(mkfifo(dir.file("params.json").c_str(), 0600), 0);
+  try {
+    LoopDetectorParams::load(dir.file("params.json"));
+    ADD_FAILURE() << "read a FIFO";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a FIFO"), std::string::npos) << e.what();
+  }
+  expect_error_mentions(dir.file("big.json"), "{\"alpha\": 0.3" + std::string(2 << 20, ' ') + "}",
+                        "limit of 1048576 bytes");
 }
 
 TEST(LoopStatus, Names) {

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -199,6 +201,139 @@ TEST(ReadGreyImage, RefusesHeadersDeclaringMorePixelsThanTheFileCanHold) {
   }
 }
 
+// Every format OpenCV reads by content: the header reader sees the size the
+// decoder produces, and the pixel limit refuses the image before decoding.
+TEST(ReadGreyImage, PixelLimitAppliesToEveryFormatFromItsHeader) {
+  TempDir dir;
+  const cv::Mat colour = colour_image(2, 96, 64);
+  cv::Mat grey, real;
+  cv::cvtColor(colour, grey, cv::COLOR_BGR2GRAY);
+  colour.convertTo(real, CV_32FC3, 1.0 / 255);
+  struct Case {
+    const char* name;
+    const cv::Mat* image;
+  };
+  for (const Case& c : {Case{"a.png", &colour}, Case{"a.jpg", &colour}, Case{"a.tif", &colour},
+                        Case{"a.bmp", &colour}, Case{"a.webp", &colour}, Case{"a.pgm", &grey},
+                        Case{"a.ppm", &colour}, Case{"a.pam", &colour}, Case{"a.pfm", &real},
+                        Case{"a.sr", &colour}, Case{"a.hdr", &real}, Case{"a.jp2", &colour}}) {
+    SCOPED_TRACE(c.name);
+    const std::string path = dir.file(c.name);
+    ASSERT_TRUE(cv::imwrite(path, *c.image));
+    const auto declared = declared_dimensions(test::read_file(path));
+    ASSERT_TRUE(declared.has_value());
+    EXPECT_EQ(declared->width, 96u);
+    EXPECT_EQ(declared->height, 64u);
+    EXPECT_EQ(read_grey_image(path, 96 * 64).size(), cv::Size(96, 64));
+    try {
+      read_grey_image(path, 96 * 64 - 1);
+      ADD_FAILURE() << "no pixel limit";
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find("declares 96x64 pixels, more than the limit of 6143"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+// The bombs, crafted: small files declaring 32768x32767 (PNG) and
+// 30000x30000 (TIFF) pixels are refused by the default limit in no time.
+TEST(ReadGreyImage, DefaultPixelLimitRefusesSmallFilesDeclaringHugeImages) {
+  TempDir dir;
+  std::vector<std::uint8_t> png = test::read_file(test::shared_data("opencv-doc-samples/box.png"));
+  ASSERT_GT(png.size(), 24u);
+  // IHDR width 32768, height 32767; the file is padded to 1 MB so that the
+  // compression-ratio check alone would let it through.
+  const std::uint8_t size[8] = {0, 0, 0x80, 0x00, 0, 0, 0x7F, 0xFF};
+  std::copy(size, size + 8, png.begin() + 16);
+  png.resize(1'000'000, 0);
+  ASSERT_LE(32768ull * 32767ull, max_pixels_for_file_size(png.size()));
+  test::write_file(dir.file("bomb.png"), png);
+  expect_file_error_naming(dir.file("bomb.png"), [&] { read_grey_image(dir.file("bomb.png")); });
+
+  // Little-endian TIFF, one directory: ImageWidth and ImageLength 30000 (LONG).
+  std::vector<std::uint8_t> tiff = {
+      'I', 'I', 42, 0, 8, 0, 0, 0,                    // header, directory at 8
+      2,   0,                                         // two entries
+      0,   1,   4,  0, 1, 0, 0, 0, 0x30, 0x75, 0, 0,  // 256 ImageWidth LONG 30000
+      1,   1,   4,  0, 1, 0, 0, 0, 0x30, 0x75, 0, 0,  // 257 ImageLength LONG 30000
+  };
+  tiff.resize(tiff.size() + 4 + 1000, 0);
+  test::write_file(dir.file("bomb.tif"), tiff);
+  try {
+    read_grey_image(dir.file("bomb.tif"));
+    ADD_FAILURE() << "decoded a 30000x30000 TIFF";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 30000x30000 pixels, more than the limit of " +
+                                         std::to_string(kDefaultMaxImagePixels)),
+              std::string::npos)
+        << e.what();
+  }
+
+  // The limit applies through ImageSource too.
+  ASSERT_TRUE(cv::imwrite(dir.file("small.png"), colour_image(1, 40, 30)));
+  ImageSourceOptions options;
+  options.max_pixels = 1000;
+  ImageSource source({dir.file("small.png")}, options);
+  Frame frame;
+  expect_file_error_naming(dir.file("small.png"), [&] { source.next(frame); });
+}
+
+TEST(ReadGreyImage, FormatsWhoseSizeCannotBeReadAreRefused) {
+  TempDir dir;
+  std::vector<std::uint8_t> dicom(132, 0);
+  std::copy_n("DICM", 4, dicom.begin() + 128);
+  test::write_file(dir.file("scan.dcm"), dicom);
+  expect_file_error_naming(dir.file("scan.dcm"), [&] { read_grey_image(dir.file("scan.dcm")); });
+}
+
+// libjpeg warns "Premature end of JPEG file" and OpenCV returns the image with
+// its lower half grey: a JPEG cut short is an error even when an end-of-image
+// marker is appended to hide the cut.
+TEST(ReadGreyImage, JpegCutShortWithAnEndMarkerIsAnError) {
+  TempDir dir;
+  std::vector<std::uint8_t> jpeg =
+      test::read_file(test::shared_data("rtabmap-samples/samples/1.jpg"));
+  ASSERT_GT(jpeg.size(), 1000u);
+  jpeg.resize(jpeg.size() / 2);
+  jpeg.push_back(0xFF);
+  jpeg.push_back(0xD9);
+  test::write_file(dir.file("cut.jpg"), jpeg);
+  try {
+    read_grey_image(dir.file("cut.jpg"));
+    ADD_FAILURE() << "decoded a JPEG cut in half";
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), dir.file("cut.jpg"));
+    EXPECT_NE(std::string(e.what()).find("damaged JPEG"), std::string::npos) << e.what();
+  }
+}
+
+// A FIFO would block the reader forever: refused from its type, wherever it
+// appears (the test would hang without the check).
+TEST(ImageSource, FifosAreRefusedWithoutBlocking) {
+  TempDir dir;
+  ASSERT_EQ(mkfifo(dir.file("pipe.png").c_str(), 0600), 0);
+  ASSERT_EQ(mkfifo(dir.file("pipe.avi").c_str(), 0600), 0);
+  for (const char* name : {"pipe.png", "pipe.avi"}) {
+    try {
+      ImageSource source({dir.file(name)});
+      ADD_FAILURE() << "accepted a FIFO";
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), dir.file(name));
+      EXPECT_NE(std::string(e.what()).find("is a FIFO"), std::string::npos) << e.what();
+    }
+  }
+  write_text(dir.file("list.txt"), "pipe.png\n");
+  expect_file_error_naming(dir.file("list.txt"),
+                           [&] { ImageSource source({dir.file("list.txt")}); });
+  try {
+    read_grey_image(dir.file("pipe.png"));
+    ADD_FAILURE() << "read a FIFO";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a FIFO"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ImageSource, DirectoryInNaturalOrderSkippingOtherFiles) {
   TempDir dir;
   for (const char* name : {"10.png", "2.png", "1.png", ".hidden.png"}) {
@@ -358,6 +493,36 @@ TEST(ImageSource, VideoAmongImagesFromAList) {
   EXPECT_EQ(filename(names[1]), "clip.avi#0");
   EXPECT_EQ(filename(names[3]), "clip.avi#2");
   EXPECT_EQ(filename(names[4]), "still.png");
+}
+
+// A damaged video ends early without an error from OpenCV: the frames its
+// container declared but the backend could not decode are counted.
+TEST(ImageSource, FramesOfADamagedVideoAreCountedAsUnreadable) {
+  TempDir dir;
+  const std::string video = write_video(dir, 30, 10);
+  {
+    ImageSource source({video});
+    EXPECT_EQ(read_all_names(source).size(), 30u);
+    EXPECT_EQ(source.unreadable_frames(), 0u);
+  }
+  std::vector<std::uint8_t> bytes = test::read_file(video);
+  bytes.resize(bytes.size() / 2);
+  test::write_file(dir.file("cut.avi"), bytes);
+  ImageSource source({dir.file("cut.avi")});
+  const std::size_t read = read_all_names(source).size();
+  EXPECT_GT(read, 0u);
+  EXPECT_LT(read, 30u);
+  EXPECT_EQ(source.unreadable_frames(), 30u - read);
+}
+
+TEST(ImageSource, VideoFramesAboveThePixelLimitAreRefused) {
+  TempDir dir;
+  const std::string video = write_video(dir, 3, 10);
+  ImageSourceOptions options;
+  options.max_pixels = 64 * 48 - 1;
+  ImageSource source({video}, options);
+  Frame frame;
+  expect_file_error_naming(video, [&] { source.next(frame); });
 }
 
 TEST(ImageSource, UnreadableVideoGivesFileError) {

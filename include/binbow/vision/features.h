@@ -84,8 +84,10 @@ struct BriefOptions {
   int fast_threshold = 10;
   bool non_max_suppression = true;
   // OpenCV YAML/XML with integer sequences x1 y1 x2 y2 (one test each, a
-  // multiple of 8 tests, offsets within ±64 pixels); empty: the built-in
-  // pattern, which is DLoopDetector's/VINS' brief_pattern.yml (256 tests, 48×48).
+  // multiple of 8 tests, offsets within ±64 pixels; a regular file, gzip
+  // allowed, at most 4 MiB before and after decompression, nested at most 64
+  // levels); empty: the built-in pattern, which is DLoopDetector's/VINS'
+  // brief_pattern.yml (256 tests, 48×48).
   std::string pattern_file;
 };
 

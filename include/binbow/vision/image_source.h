@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,6 +17,12 @@ struct Frame {
   std::size_t index = 0;  // 0-based position in the sequence (after stride)
 };
 
+// The default largest image (or video frame) decoded, in pixels: a 10000 ×
+// 10000 image. Decoding allocates at least a byte per pixel, often more.
+inline constexpr std::uint64_t kDefaultMaxImagePixels = 100'000'000;
+// Image files are read whole before decoding; larger files are refused.
+inline constexpr std::uint64_t kMaxImageFileBytes = std::uint64_t{2} << 30;
+
 struct ImageSourceOptions {
   std::size_t stride =
       1;              // keep every stride-th frame (counted over the whole sequence); 0 acts as 1
@@ -24,6 +31,9 @@ struct ImageSourceOptions {
   // before the stride applies; 0 keeps every frame. Ignored when the video
   // does not report its frame rate.
   double video_fps = 0;
+  // Images and video frames with more pixels are refused (FileError) from
+  // their header, before anything is decoded. Must be ≥ 1.
+  std::uint64_t max_pixels = kDefaultMaxImagePixels;
 };
 
 // A sequence of frames from several inputs, in order. Each input is an image
@@ -34,8 +44,9 @@ struct ImageSourceOptions {
 // list; blank lines and lines starting with '#' are skipped; lists do not nest).
 // Frames are converted to 8-bit grey and resized as the options ask.
 // The constructor expands directories and lists, throwing FileError naming
-// the path for anything missing, unreadable, or a directory without images;
-// InvalidArgument for an empty input list.
+// the path for anything missing, unreadable, neither a regular file nor a
+// directory (a FIFO, a socket, a device: they could block forever), or a
+// directory without images; InvalidArgument for an empty input list.
 class ImageSource {
  public:
   explicit ImageSource(const std::vector<std::string>& inputs, ImageSourceOptions options = {});
@@ -49,6 +60,11 @@ class ImageSource {
   bool next(Frame& frame);
   // Number of frames, when known before reading (-1 otherwise).
   long long size() const;
+  // Video frames the containers declared (CAP_PROP_FRAME_COUNT) but the
+  // backend could not decode: a damaged video ends early without an error
+  // from OpenCV. Counted when a video ends; an estimate for containers that
+  // do not store their frame count.
+  std::size_t unreadable_frames() const noexcept;
 
  private:
   struct Impl;
@@ -56,10 +72,13 @@ class ImageSource {
 };
 
 // Reads one image file as 8-bit grey. Throws FileError naming the file when it
-// is missing, a directory, empty (0 bytes), a truncated JPEG (no end-of-image
-// marker after its last scan: libjpeg would silently fill the rest grey), a
-// PNG/JPEG whose header declares 0 pixels or more than ~1100 per byte of file
-// (a decompression bomb), not decodable by OpenCV, or decodes to 0×0 pixels.
-cv::Mat read_grey_image(const std::string& path);
+// is missing, not a regular file (a directory, a FIFO, a device), empty (0
+// bytes), larger than kMaxImageFileBytes, of a format whose size cannot be
+// read from its header (see docs/limits.md), declares 0 pixels or more than
+// `max_pixels` (checked before decoding), is a PNG/JPEG declaring more than
+// ~1100 pixels per byte of file (a decompression bomb), is a JPEG libjpeg
+// warns about (truncated, corrupt data: OpenCV would fill the rest grey),
+// cannot be decoded by OpenCV, or decodes to 0×0 pixels.
+cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels = kDefaultMaxImagePixels);
 
 }  // namespace binbow::vision

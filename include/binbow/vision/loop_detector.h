@@ -40,37 +40,58 @@ const char* to_string(GeometricCheck check);
 // Accepts the names above ('_' for '-' too); throws InvalidArgument listing them.
 GeometricCheck parse_geometric_check(const std::string& name);
 
-// Every parameter of the detector. The defaults are the paper's (and
-// DLoopDetector's) at a frequency of 1 Hz; for_frequency() scales the
-// frame-count parameters to another image rate as DLoopDetector does.
+// Limits of LoopDetectorParams, checked by validate() (and so by load(),
+// from_json() and the LoopDetector constructor). The upper bounds bound the
+// work a parameter file can ask for: per frame, at most 2 ×
+// max_verified_entries RANSAC runs (the direct index, then the exhaustive
+// fallback) of at most max_ransac_iterations iterations each. See also
+// docs/limits.md.
+inline constexpr double kMaxFrequency = 10000;        // Hz
+inline constexpr double kMaxScoreThreshold = 1000;    // alpha, min_normalisation_score
+inline constexpr int kMaxFrameDistance = 1'000'000;   // every frame-count parameter
+inline constexpr int kMaxConsistentQueries = 1000;    // k
+inline constexpr int kMaxDirectIndexLevels = 16;      // direct_index_levels
+inline constexpr int kMaxVerifiedEntries = 10;        // max_verified_entries
+inline constexpr int kMaxMinInliers = 10'000;         // min_inliers
+inline constexpr double kMinReprojectionError = 0.1;  // pixels
+inline constexpr double kMaxReprojectionError = 100;  // pixels
+inline constexpr int kMaxRansacIterations = 5000;     // max_ransac_iterations
+inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  // load()
+
+// Every parameter of the detector, with its valid range in brackets. The
+// defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz;
+// for_frequency() scales the frame-count parameters to another image rate as
+// DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
   // Images per second the parameters below were derived for (informative).
+  // (0, 10000]
   double frequency = 1;
 
   // --- Normalised similarity score (paper Section V-A)
   bool use_normalised_score = true;  // η instead of the raw score
-  double alpha = 0.3;                // α: minimum η (or raw score) of a candidate
+  double alpha = 0.3;                // α: minimum η (or raw score) of a candidate [0, 1000]
   // Frames with s(v_t, v_{t−Δt}) below this are skipped (status
-  // kLowNormalisationScore): η would divide by a meaningless score.
+  // kLowNormalisationScore): η would divide by a meaningless score. [0, 1000]
   double min_normalisation_score = 0.005;
 
   // --- Database query
-  int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f)
-  int max_db_results = 50;  // candidates taken from each query (50 f)
+  int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f) [0, 1e6]
+  int max_db_results = 50;  // candidates taken from each query (50 f) [1, 1e6]
 
   // --- Islands (Section V-B)
-  int max_intra_island_gap = 3;    // entries j < j' join the same island when j' − j < gap (3 f)
-  int min_matches_per_island = 1;  // minimum island length, last − first + 1 (f)
+  // Entries j < j' join the same island when j' − j < gap (3 f). [1, 1e6]
+  int max_intra_island_gap = 3;
+  int min_matches_per_island = 1;  // minimum island length, last − first + 1 (f) [1, 1e6]
 
   // --- Temporal consistency (Section V-C)
-  int k = 3;  // consistent previous queries needed
-  int max_distance_between_islands =
-      3;  // islands of consecutive queries this far apart still agree (3 f)
-  int max_distance_between_queries = 2;  // queries further apart break the chain (2 f)
+  int k = 3;  // consistent previous queries needed [0, 1000]
+  // Islands of consecutive queries this far apart still agree (3 f). [0, 1e6]
+  int max_distance_between_islands = 3;
+  int max_distance_between_queries = 2;  // queries further apart break the chain (2 f) [1, 1e6]
 
   // --- Geometric check (Section V-D)
   GeometricCheck geometric_check = GeometricCheck::kDirectIndex;
-  int direct_index_levels = 2;  // l: direct index this many levels above the words
+  int direct_index_levels = 2;  // l: direct index this many levels above the words [0, 16]
   // binbow's addition, on by default: when the direct index yields no
   // consistent fundamental matrix, retry once with exhaustive matching. The
   // direct index is an accelerator whose recall depends on how well the
@@ -81,19 +102,21 @@ struct LoopDetectorParams {
   bool exhaustive_fallback = true;
   // Entries of the best island checked, best η first, until one is
   // geometrically consistent. 1 (the paper): only the island's best entry.
+  // [1, 10]
   int max_verified_entries = 1;
-  double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences
+  double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences (0, 1]
   // Largest Hamming distance of a correspondence, as a fraction of the
   // descriptor's bits. binbow's addition (see exhaustive_fallback's note).
+  // [0, 1]
   double max_match_distance = 1.0;
   // Accept a correspondence whose feature has a single candidate under its
   // direct-index node (no second neighbour for the ratio test), as
   // DLoopDetector does. Off by default: see MatchOptions.
   bool accept_single_candidate = false;
-  int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix
-  double max_reprojection_error = 2.0;  // pixels, RANSAC threshold
-  double ransac_confidence = 0.99;
-  int max_ransac_iterations = 500;
+  int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix [8, 1e4]
+  double max_reprojection_error = 2.0;  // pixels, RANSAC threshold [0.1, 100]
+  double ransac_confidence = 0.99;      // (0, 1)
+  int max_ransac_iterations = 500;      // [1, 5000]
 
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
@@ -101,18 +124,22 @@ struct LoopDetectorParams {
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
-  // file (OpenCV FileStorage). Keys are the field names above; a "frequency"
-  // key first derives the frame-count defaults from it (for_frequency), the
-  // other keys then override. geometric_check takes the to_string() names.
-  // Unknown keys, wrong types and invalid values are FileErrors naming the
-  // file and the key.
+  // file (OpenCV FileStorage), at most kMaxLoopParamsFileBytes and nested at
+  // most 64 levels (both parsers recurse). Keys are the field names above; a
+  // "frequency" key first derives the frame-count defaults from it
+  // (for_frequency), the other keys then override. geometric_check takes the
+  // to_string() names. JSON and YAML values go through one validation:
+  // unknown keys, wrong types, non-finite numbers (YAML's .inf, .nan) and
+  // values out of range are FileErrors naming the file and the key. Anything
+  // but a regular file (a FIFO, a device) is refused before reading.
   static LoopDetectorParams load(const std::string& path);
   // Same from JSON text; `name` is used in error messages.
   static LoopDetectorParams from_json(const std::string& text, const std::string& name = "<json>");
   // Every field as a JSON object (the format load() reads), pretty-printed.
   std::string to_json() const;
 
-  // Throws InvalidArgument naming the first field out of range.
+  // Throws InvalidArgument naming the first field that is not finite or out
+  // of its range.
   void validate() const;
 };
 
