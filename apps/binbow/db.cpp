@@ -94,11 +94,11 @@ void run_db_query(const DbQueryArguments& arguments) {
 
 }  // namespace
 
-bool print_database_info(const std::string& path) {
+bool print_database_info(const std::string& path, bool verify) {
   char magic[8] = {};
   std::ifstream file(path, std::ios::binary);
   if (!file.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWDB", 8) != 0) return false;
-  const DatabaseFileInfo info = Database::inspect(path);
+  const DatabaseFileInfo info = Database::inspect(path, verify);
   std::printf("kind: database\n");
   std::printf("entries: %zu\n", info.entries);
   std::printf("next_entry_id: %u\n", info.next_entry_id);
