@@ -42,10 +42,11 @@ struct DbQueryArguments {
 
 std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
                                                         const std::string& vocabulary_name,
-                                                        const std::string& descriptor,
-                                                        int features) {
+                                                        const std::string& descriptor, int features,
+                                                        bool embedded_in_database = false) {
   auto extractor = vision::make_extractor(descriptor, features);
-  check_vocabulary_fits(vocabulary, vocabulary_name, descriptor, extractor->code_size());
+  check_vocabulary_fits(vocabulary, vocabulary_name, descriptor, extractor->code_size(),
+                        embedded_in_database);
   return extractor;
 }
 
@@ -78,8 +79,10 @@ void run_db_query(const DbQueryArguments& arguments) {
       arguments.vocabulary.empty()
           ? Database::load(arguments.database)
           : Database::load(arguments.database, load_vocabulary(arguments.vocabulary));
-  const auto extractor = extractor_for(database.vocabulary(), arguments.database,
-                                       arguments.descriptor, arguments.features);
+  const bool embedded = arguments.vocabulary.empty();
+  const auto extractor =
+      extractor_for(database.vocabulary(), embedded ? arguments.database : arguments.vocabulary,
+                    arguments.descriptor, arguments.features, embedded);
   const vision::Features features = extractor->extract(vision::read_grey_image(arguments.image));
   BowVector bow;
   database.vocabulary().transform(features.descriptors.view(), bow);

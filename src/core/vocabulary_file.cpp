@@ -287,6 +287,21 @@ std::vector<std::uint8_t> Vocabulary::serialize() const {
   return out;
 }
 
+Vocabulary Vocabulary::with_descriptor(const std::string& descriptor) const {
+  if (!detail::valid_descriptor_name(descriptor))
+    throw InvalidArgument("descriptor name \"" + descriptor + "\" is not " +
+                          detail::kDescriptorNameRule);
+  auto block = std::make_shared<detail::VocabularyBlock>();
+  block->owned = serialize();
+  std::uint8_t* header = block->owned.data();
+  std::uint8_t* name_field = header + detail::bbw::kDescriptorNameOffset;
+  std::fill_n(name_field, detail::bbw::kMaxDescriptorName, std::uint8_t{0});
+  std::copy(descriptor.begin(), descriptor.end(), name_field);
+  detail::store_le<std::uint32_t>(header + 60, detail::crc32c(header, 60));
+  detail::parse_block(*block, "vocabulary", LoadOptions{false});
+  return Vocabulary(std::move(block));
+}
+
 void Vocabulary::save(const std::string& path) const {
   const std::vector<std::uint8_t> bytes = serialize();
   detail::write_file_atomically(path, bytes.data(), bytes.size());

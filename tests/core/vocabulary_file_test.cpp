@@ -176,6 +176,22 @@ TEST(VocabularyFile, NonFiniteWeightsAreRejectedWithValidChecksums) {
   EXPECT_THROW(Vocabulary::from_tree(broken), InvalidArgument);
 }
 
+TEST(VocabularyFile, WithDescriptorRecordsAnExtractorAndKeepsTheWords) {
+  test::TempDir dir;
+  const Vocabulary unnamed = sample_vocabulary();
+  const Vocabulary named = unnamed.with_scoring(Scoring::kL2).with_descriptor("brief");
+  EXPECT_EQ(named.descriptor(), "brief");
+  EXPECT_EQ(named.scoring(), Scoring::kL2);
+  EXPECT_EQ(named.checksum(), unnamed.with_scoring(Scoring::kL2).checksum());
+  named.save(dir.file("named.bbw"));
+  EXPECT_EQ(Vocabulary::load(dir.file("named.bbw")).descriptor(), "brief");
+  EXPECT_EQ(named.with_descriptor("orb").descriptor(), "orb");
+  EXPECT_EQ(named.with_descriptor("").descriptor(), "");
+  EXPECT_THROW(unnamed.with_descriptor("BRIEF"), InvalidArgument);
+  EXPECT_THROW(unnamed.with_descriptor("toolongname"), InvalidArgument);
+  EXPECT_THROW(Vocabulary().with_descriptor("orb"), InvalidArgument);
+}
+
 TEST(VocabularyFile, StructuralChecksCatchForgedTreesEvenWithoutChecksums) {
   // Forge a links section pointing backwards (a cycle) and skip checksum checks:
   // the structural validation must still refuse it.
