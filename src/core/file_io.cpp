@@ -153,7 +153,7 @@ void sync_directory(const std::string& directory, const std::string& path) {
   if (!synced) throw FileError(path, "cannot flush its directory to disk: " + why);
 }
 
-// A locked temporary beside a destination; removed unless committed.
+// A locked temporary beside a destination; removed unless renamed over it.
 class TemporaryFile {
  public:
   TemporaryFile(const std::string& path, std::string destination)
@@ -188,6 +188,7 @@ class TemporaryFile {
 
   std::FILE* file() const { return file_; }
   const std::string& path() const { return path_; }
+  const std::string& destination() const { return destination_; }
 
   // All bytes on disk, with the final permissions.
   void flush() const {
@@ -200,7 +201,6 @@ class TemporaryFile {
     if (std::rename(temporary_.c_str(), destination_.c_str()) != 0)
       throw FileError(path_, "cannot replace the file: " + errno_text());
     renamed_ = true;
-    sync_directory(directory_of(destination_), path_);
   }
 
  private:
@@ -238,6 +238,9 @@ void write_files_atomically(const std::vector<FileToWrite>& files) {
     }
     replaced += " " + temporary->path();
   }
+  // The renames reach the disk with their directories.
+  for (const auto& temporary : temporaries)
+    sync_directory(directory_of(temporary->destination()), temporary->path());
 }
 
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
