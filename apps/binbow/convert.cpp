@@ -1,5 +1,6 @@
-// `binbow convert IN OUT [--from F] [--to F]`: a vocabulary from any readable
-// format to any writable one (formats and extensions: docs/formats.md).
+// `binbow convert IN OUT [--from F] [--to F] [--descriptor NAME]`: a vocabulary
+// from any readable format to any writable one (formats and extensions:
+// docs/formats.md), optionally recording the extractor it was trained on.
 #include <sys/stat.h>
 #include <chrono>
 #include <cstdio>
@@ -8,6 +9,7 @@
 
 #include "binbow/error.h"
 #include "binbow/formats.h"
+#include "binbow/vision/features.h"
 #include "commands.h"
 #include "formats/loader.h"
 
@@ -17,6 +19,7 @@ namespace {
 
 struct ConvertArguments {
   std::string input, output, from = "auto", to = "auto", descriptors = "auto";
+  std::string descriptor;  // extractor to record, "" to keep the input's
 };
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -27,9 +30,12 @@ void run_convert(const ConvertArguments& args) {
   const VocabularyFormat from = parse_vocabulary_format(args.from);
   VocabularyFormat to = parse_vocabulary_format(args.to);
   if (to == VocabularyFormat::kAuto) to = format_for_output(args.output);
+  if (!args.descriptor.empty() && to != VocabularyFormat::kBinbow)
+    throw InvalidArgument("--descriptor: only .bbw files record the extractor, not " +
+                          std::string(to_string(to)) + " files");
 
   const auto start = std::chrono::steady_clock::now();
-  const detail::LoadedVocabulary loaded = detail::load_vocabulary_with_details(args.input, from);
+  detail::LoadedVocabulary loaded = detail::load_vocabulary_with_details(args.input, from);
   std::printf("read %s: %s%s, %s (%.3f s)\n", args.input.c_str(), to_string(loaded.format),
               loaded.compressed ? " (gzip)" : "", loaded.vocabulary.description().c_str(),
               seconds_since(start));
@@ -51,6 +57,17 @@ void run_convert(const ConvertArguments& args) {
     std::printf(
         "note: fbow files store no weighting or scoring type; they read back as tf-idf, "
         "l1\n");
+
+  if (!args.descriptor.empty()) {
+    const std::size_t code_size = vision::make_extractor(args.descriptor)->code_size();
+    if (code_size != loaded.vocabulary.code_size())
+      throw InvalidArgument("--descriptor " + args.descriptor + ": " + args.descriptor + " gives " +
+                            std::to_string(code_size * 8) +
+                            "-bit descriptors, the vocabulary has " +
+                            std::to_string(loaded.vocabulary.code_size() * 8) + "-bit ones");
+    loaded.vocabulary = loaded.vocabulary.with_descriptor(args.descriptor);
+    std::printf("descriptor: %s (recorded)\n", args.descriptor.c_str());
+  }
 
   const auto write_start = std::chrono::steady_clock::now();
   detail::save_vocabulary_as(loaded.vocabulary, args.output, to, text);
@@ -87,6 +104,9 @@ void add_convert_command(CLI::App& app) {
                   "DBoW2 YAML output: bits (FBrief 0/1 strings, DLoopDetector/VINS), bytes "
                   "(FORB decimal bytes) or auto (as the input file, else bytes)")
       ->capture_default_str();
+  cmd->add_option("--descriptor", args->descriptor,
+                  "Record the extractor the vocabulary was trained on (orb, brief, akaze, "
+                  "brisk) in the output .bbw, for files that do not say");
   cmd->callback([args] { run_convert(*args); });
 }
 

@@ -42,10 +42,11 @@ struct DbQueryArguments {
 
 std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
                                                         const std::string& vocabulary_name,
-                                                        const std::string& descriptor,
-                                                        int features) {
+                                                        const std::string& descriptor, int features,
+                                                        bool embedded_in_database = false) {
   auto extractor = vision::make_extractor(descriptor, features);
-  check_vocabulary_fits(vocabulary, vocabulary_name, descriptor, extractor->code_size());
+  check_vocabulary_fits(vocabulary, vocabulary_name, descriptor, extractor->code_size(),
+                        embedded_in_database);
   return extractor;
 }
 
@@ -78,8 +79,10 @@ void run_db_query(const DbQueryArguments& arguments) {
       arguments.vocabulary.empty()
           ? Database::load(arguments.database)
           : Database::load(arguments.database, load_vocabulary(arguments.vocabulary));
-  const auto extractor = extractor_for(database.vocabulary(), arguments.database,
-                                       arguments.descriptor, arguments.features);
+  const bool embedded = arguments.vocabulary.empty();
+  const auto extractor =
+      extractor_for(database.vocabulary(), embedded ? arguments.database : arguments.vocabulary,
+                    arguments.descriptor, arguments.features, embedded);
   const vision::Features features = extractor->extract(vision::read_grey_image(arguments.image));
   BowVector bow;
   database.vocabulary().transform(features.descriptors.view(), bow);
@@ -94,11 +97,11 @@ void run_db_query(const DbQueryArguments& arguments) {
 
 }  // namespace
 
-bool print_database_info(const std::string& path) {
+bool print_database_info(const std::string& path, bool verify) {
   char magic[8] = {};
   std::ifstream file(path, std::ios::binary);
   if (!file.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWDB", 8) != 0) return false;
-  const DatabaseFileInfo info = Database::inspect(path);
+  const DatabaseFileInfo info = Database::inspect(path, verify);
   std::printf("kind: database\n");
   std::printf("entries: %zu\n", info.entries);
   std::printf("next_entry_id: %u\n", info.next_entry_id);

@@ -1,5 +1,6 @@
 #include "default_vocabulary.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
@@ -63,17 +64,26 @@ std::string default_vocabulary_path(const std::string& descriptor) {
 }
 
 void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,
-                           const std::string& descriptor, std::size_t code_size) {
+                           const std::string& descriptor, std::size_t code_size,
+                           bool embedded_in_database) {
   if (vocabulary.code_size() != code_size)
     throw InvalidArgument(vocabulary_name + ": vocabulary of " +
                           std::to_string(vocabulary.code_size() * 8) + "-bit descriptors, but " +
                           descriptor + " gives " + std::to_string(code_size * 8) +
                           "-bit descriptors (--descriptor)");
-  if (!vocabulary.descriptor().empty() && vocabulary.descriptor() != descriptor)
+  if (vocabulary.descriptor().empty()) {
+    if (embedded_in_database) return;
+    std::fprintf(stderr,
+                 "binbow: warning: %s: the vocabulary does not record its extractor; using %s. "
+                 "If it was trained on another one, record it with 'binbow convert "
+                 "--descriptor NAME %s OUT.bbw'\n",
+                 vocabulary_name.c_str(), descriptor.c_str(), vocabulary_name.c_str());
+  } else if (vocabulary.descriptor() != descriptor) {
     throw InvalidArgument(vocabulary_name + ": the vocabulary was trained on " +
                           vocabulary.descriptor() + " descriptors, not " + descriptor +
                           ": pass --descriptor " + vocabulary.descriptor() +
                           " or a vocabulary trained on " + descriptor);
+  }
 }
 
 }  // namespace binbow::cli

@@ -34,8 +34,11 @@ std::string default_vocabulary_path(const std::string& descriptor);
 // Throws InvalidArgument, naming `vocabulary_name` and saying what to pass
 // instead, unless the vocabulary fits descriptors of extractor `descriptor`
 // with `code_size` bytes: same length, and trained on that extractor when
-// the vocabulary records one.
+// the vocabulary records one. When it records none, prints a warning naming
+// `descriptor` and how to record the right extractor, unless the vocabulary
+// is `embedded_in_database` (db build warned when it read the file).
 void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,
-                           const std::string& descriptor, std::size_t code_size);
+                           const std::string& descriptor, std::size_t code_size,
+                           bool embedded_in_database = false);
 
 }  // namespace binbow::cli

@@ -29,10 +29,13 @@ void print_vocabulary(const Vocabulary& v) {
 void add_info_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("info", "Describe a vocabulary or database file");
   auto path = std::make_shared<std::string>();
+  auto header_only = std::make_shared<bool>(false);
   cmd->add_option("FILE", *path, "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database")
       ->required();
-  cmd->callback([path] {
-    if (print_database_info(*path)) return;
+  cmd->add_flag("--header-only", *header_only,
+                "Database: read the header only, without checking the whole file");
+  cmd->callback([path, header_only] {
+    if (print_database_info(*path, !*header_only)) return;
     const VocabularyFormat format = detect_vocabulary_format(*path);
     const Vocabulary vocabulary = load_vocabulary(*path, format);
     std::printf("format: %s\n", to_string(format));

@@ -61,7 +61,7 @@ struct DatabaseOptions {
 
 inline constexpr EntryId kAllEntries = std::numeric_limits<EntryId>::max();
 
-// What the header of a .bbdb file says, read without loading the index.
+// What the header of a .bbdb file says (Database::inspect).
 struct DatabaseFileInfo {
   std::uint32_t version = 0;
   std::size_t entries = 0;  // live entries
@@ -138,8 +138,12 @@ class Database {
   static Database deserialize(const std::uint8_t* data, std::size_t size, const std::string& name);
   static Database deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
                               Vocabulary vocabulary);
-  // Reads and checks only the header of a .bbdb file. Throws FileError.
-  static DatabaseFileInfo inspect(const std::string& path);
+  // What the header of a .bbdb file says. With `verify` (the default), first
+  // checks the whole file: everything load() checks when the file includes
+  // its vocabulary (the index is loaded then dropped), every section's CRC
+  // otherwise; without it only the header and the description are read.
+  // Throws FileError.
+  static DatabaseFileInfo inspect(const std::string& path, bool verify = true);
 
  private:
   struct Impl;

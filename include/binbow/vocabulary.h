@@ -162,6 +162,11 @@ class Vocabulary {
 
   // A copy that scores (and normalises) with another type; shares the tree.
   Vocabulary with_scoring(Scoring scoring) const;
+  // A copy that records another extractor (see VocabularyTree::descriptor;
+  // "" for unknown), e.g. for a vocabulary read from a format that cannot
+  // record it. Same checksum. Throws InvalidArgument for a name that breaks
+  // the rule of VocabularyTree::descriptor, or on an empty vocabulary.
+  Vocabulary with_descriptor(const std::string& descriptor) const;
 
  private:
   explicit Vocabulary(std::shared_ptr<const detail::VocabularyBlock> block);

@@ -81,7 +81,8 @@ struct SectionView {
 };
 
 // Header, table and section bounds of a .bbdb image, all checked. Section
-// CRCs are checked for `verified` sections only (inspect() reads a few).
+// CRCs are checked for every section with `verify_all`, else only for those
+// verified explicitly (inspect() without verification reads a few).
 class Layout {
  public:
   Layout(const std::uint8_t* data, std::size_t size, const std::string& name, bool verify_all)
@@ -473,9 +474,11 @@ Database Database::load(const std::string& path, Vocabulary vocabulary) {
   return deserialize(file.data(), file.size(), path, std::move(vocabulary));
 }
 
-DatabaseFileInfo Database::inspect(const std::string& path) {
+DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {
   const detail::MappedFile file(path);
-  const Layout layout(file.data(), file.size(), path, false);
+  const Layout layout(file.data(), file.size(), path, verify);
+  if (verify && (layout.header().flags & kFlagVocabulary) != 0)
+    deserialize(file.data(), file.size(), path);
   layout.verify(kDescription);
   const Header& header = layout.header();
   DatabaseFileInfo info;

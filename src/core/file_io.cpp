@@ -1,13 +1,19 @@
 #include "core/file_io.h"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <memory>
 
 #include "binbow/error.h"
 
@@ -70,37 +76,175 @@ void write_all(std::FILE* file, const void* data, std::size_t size, const std::s
     throw FileError(path, "cannot write: " + errno_text());
 }
 
-void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
-  std::string temp = path + ".tmp-XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) throw FileError(path, "cannot create a temporary file beside it: " + errno_text());
-  std::FILE* file = ::fdopen(fd, "wb");
-  if (file == nullptr) {
+namespace {
+
+constexpr char kTemporaryInfix[] = ".tmp-";
+constexpr std::size_t kTemporarySuffixLength = 6;  // mkstemp's XXXXXX
+constexpr int kMaxSymlinkHops = 40;                // as the kernel's ELOOP limit
+
+std::string directory_of(const std::string& path) {
+  const std::string parent = std::filesystem::path(path).parent_path().string();
+  return parent.empty() ? "." : parent;
+}
+
+// The file `path` finally names, following symbolic links (the last may
+// dangle: the file is then created where it points).
+std::string resolve_symlinks(const std::string& path) {
+  std::string current = path;
+  for (int hop = 0; hop < kMaxSymlinkHops; ++hop) {
+    struct stat st {};
+    if (::lstat(current.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return current;
+    std::error_code error;
+    const std::filesystem::path target = std::filesystem::read_symlink(current, error);
+    if (error)
+      throw FileError(path, "cannot read the symbolic link " + current + ": " + error.message());
+    current = target.is_absolute()
+                  ? target.string()
+                  : (std::filesystem::path(current).parent_path() / target).string();
+  }
+  throw FileError(path, "too many levels of symbolic links");
+}
+
+bool is_temporary_of(const std::string& name, const std::string& prefix) {
+  if (name.size() != prefix.size() + kTemporarySuffixLength ||
+      name.compare(0, prefix.size(), prefix))
+    return false;
+  return std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()), name.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; });
+}
+
+// Removes the temporaries of `target` that no live writer holds: a writer
+// keeps an exclusive flock on its temporary until it has renamed it, so one
+// that can be locked was left by a writer that died (kill -9, power loss).
+// A file that cannot be opened or locked (another user's, a file system
+// without locks) is left alone.
+void remove_stale_temporaries(const std::string& target) {
+  const std::string directory = directory_of(target);
+  const std::string prefix = std::filesystem::path(target).filename().string() + kTemporaryInfix;
+  DIR* dir = ::opendir(directory.c_str());
+  if (dir == nullptr) return;
+  while (const dirent* entry = ::readdir(dir)) {
+    if (!is_temporary_of(entry->d_name, prefix)) continue;
+    const std::string path = directory + "/" + entry->d_name;
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+    if (fd < 0) continue;
+    struct stat st {};
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && ::flock(fd, LOCK_EX | LOCK_NB) == 0)
+      ::unlink(path.c_str());
     ::close(fd);
-    ::unlink(temp.c_str());
-    throw FileError(path, "cannot open a temporary file: " + errno_text());
   }
-  try {
-    write(file);
-    if (std::fflush(file) != 0) throw FileError(path, "cannot write: " + errno_text());
-  } catch (...) {
-    std::fclose(file);
-    ::unlink(temp.c_str());
-    throw;
-  }
-  // mkstemp creates 0600; give the file the permissions the user's umask asks for.
+  ::closedir(dir);
+}
+
+mode_t new_file_mode() {
+  // mkstemp creates 0600; files get the permissions the user's umask asks for.
   const mode_t mask = ::umask(0);
   ::umask(mask);
-  ::fchmod(fd, 0666 & ~mask);
-  if (std::fclose(file) != 0) {
-    ::unlink(temp.c_str());
-    throw FileError(path, "cannot write: " + errno_text());
+  return 0666 & ~mask;
+}
+
+void sync_directory(const std::string& directory, const std::string& path) {
+  const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw FileError(path, "cannot open its directory to flush it: " + errno_text());
+  // Some file systems cannot sync a directory (EINVAL); the rename stands.
+  const bool synced = ::fsync(fd) == 0 || errno == EINVAL;
+  const std::string why = errno_text();
+  ::close(fd);
+  if (!synced) throw FileError(path, "cannot flush its directory to disk: " + why);
+}
+
+// A locked temporary beside a destination; removed unless renamed over it.
+class TemporaryFile {
+ public:
+  TemporaryFile(const std::string& path, std::string destination)
+      : path_(path), destination_(std::move(destination)) {
+    remove_stale_temporaries(destination_);
+    for (int attempt = 0;; ++attempt) {
+      temporary_ = destination_ + kTemporaryInfix + std::string(kTemporarySuffixLength, 'X');
+      const int fd = ::mkstemp(temporary_.data());
+      if (fd < 0)
+        throw FileError(path_, "cannot create a temporary file beside it: " + errno_text());
+      if (owns(fd)) {
+        file_ = ::fdopen(fd, "wb");
+        if (file_ == nullptr) {
+          const std::string why = errno_text();
+          ::close(fd);
+          ::unlink(temporary_.c_str());
+          throw FileError(path_, "cannot open a temporary file: " + why);
+        }
+        return;
+      }
+      // Another save took it for stale between mkstemp and flock and removes it.
+      ::close(fd);
+      if (attempt == 10) throw FileError(path_, "cannot keep a temporary file beside it");
+    }
   }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const std::string why = errno_text();
-    ::unlink(temp.c_str());
-    throw FileError(path, "cannot replace the file: " + why);
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  ~TemporaryFile() {
+    if (file_ != nullptr) std::fclose(file_);
+    if (!renamed_) ::unlink(temporary_.c_str());
   }
+
+  std::FILE* file() const { return file_; }
+  const std::string& path() const { return path_; }
+  const std::string& destination() const { return destination_; }
+
+  // All bytes on disk, with the final permissions.
+  void flush() const {
+    if (std::fflush(file_) != 0 || ::fsync(::fileno(file_)) != 0)
+      throw FileError(path_, "cannot write: " + errno_text());
+    ::fchmod(::fileno(file_), new_file_mode());
+  }
+  // Renamed while still open, so the lock covers the temporary until it is gone.
+  void rename() {
+    if (std::rename(temporary_.c_str(), destination_.c_str()) != 0)
+      throw FileError(path_, "cannot replace the file: " + errno_text());
+    renamed_ = true;
+  }
+
+ private:
+  // Whether this save holds `fd`'s temporary: locked, and not removed by a
+  // concurrent stale-temporary sweep in the meantime.
+  static bool owns(int fd) {
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) return errno != EWOULDBLOCK;  // no locks here: go on
+    struct stat st {};
+    return ::fstat(fd, &st) == 0 && st.st_nlink > 0;
+  }
+
+  std::string path_;         // as the caller named it, for errors
+  std::string destination_;  // symbolic links resolved
+  std::string temporary_;
+  std::FILE* file_ = nullptr;
+  bool renamed_ = false;
+};
+
+}  // namespace
+
+void write_files_atomically(const std::vector<FileToWrite>& files) {
+  std::vector<std::unique_ptr<TemporaryFile>> temporaries;
+  for (const FileToWrite& file : files) {
+    temporaries.push_back(std::make_unique<TemporaryFile>(file.path, resolve_symlinks(file.path)));
+    file.write(temporaries.back()->file());
+    temporaries.back()->flush();
+  }
+  std::string replaced;
+  for (const auto& temporary : temporaries) {
+    try {
+      temporary->rename();
+    } catch (const FileError& e) {
+      if (replaced.empty()) throw;
+      throw FileError(temporary->path(), e.problem() + " (already replaced:" + replaced + ")");
+    }
+    replaced += " " + temporary->path();
+  }
+  // The renames reach the disk with their directories.
+  for (const auto& temporary : temporaries)
+    sync_directory(directory_of(temporary->destination()), temporary->path());
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+  write_files_atomically({{path, write}});
 }
 
 void write_file_atomically(const std::string& path, const void* data, std::size_t size) {

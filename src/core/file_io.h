@@ -4,8 +4,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace binbow::detail {
 
@@ -32,10 +34,32 @@ class MappedFile {
 };
 
 // Writes through `write` (called with a FILE* opened on a temporary file in the
-// destination's directory), flushes, then renames over `path`: readers never
-// see a half-written file. Throws FileError naming `path`.
+// destination's directory), flushes it to disk (fsync), then renames it over
+// `path` and flushes the directory: readers never see a half-written file,
+// and after a power loss the name holds the old or the new content. A
+// symbolic link at `path` is written through: the file it points to is
+// replaced, the link stays. Throws FileError naming `path`.
+//
+// The temporary is "<destination>.tmp-XXXXXX", flock()ed while its writer
+// lives; every save first removes the unlocked temporaries of its
+// destination, which writers killed before their rename left behind.
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
 void write_file_atomically(const std::string& path, const void* data, std::size_t size);
+
+// One file of a group for write_files_atomically.
+struct FileToWrite {
+  std::string path;
+  std::function<void(std::FILE*)> write;
+};
+
+// write_file_atomically for files that belong together (a result and its
+// description): every temporary is written and flushed to disk before the
+// first rename, so a failure while writing (an exception from a `write`, a
+// full disk) leaves every destination as it was and removes all the
+// temporaries. The renames themselves come last and in order; only they can
+// still fail (the destination directory changed meanwhile), and the error
+// then says which files were replaced.
+void write_files_atomically(const std::vector<FileToWrite>& files);
 
 // Writes all bytes or throws FileError naming `path`.
 void write_all(std::FILE* file, const void* data, std::size_t size, const std::string& path);

@@ -136,6 +136,9 @@ Vocabulary Vocabulary::from_tree(const VocabularyTree& tree) {
                 descriptors.data() + i * tree.code_size);
     counts[i] = static_cast<std::uint8_t>(child_count(old));
     if (counts[i] == 0) {
+      if (!std::isfinite(tree.weights[old]))
+        throw InvalidArgument("invalid vocabulary tree: the weight of leaf node " +
+                              std::to_string(old) + " is not a finite number");
       links[i] = static_cast<std::uint32_t>(word_weights.size()) | detail::kLeafBit;
       word_weights.push_back(tree.weights[old]);
     } else {

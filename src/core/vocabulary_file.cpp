@@ -1,6 +1,7 @@
 // binbow's vocabulary format (.bbw): header, section table, aligned sections,
 // every part protected by a CRC32C, explicit little-endian, mapped in place.
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -154,6 +155,9 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   const char* const names[bbw::kSectionCount] = {"descriptors", "links", "child counts",
                                                  "word weights"};
   const std::uint8_t* section_data[bbw::kSectionCount];
+  // Sections lie where the writer puts them, and the padding before each is
+  // zero: with the CRCs, every byte of the file is checked.
+  std::size_t previous_end = bbw::kHeaderSize + table_size + 4;
   for (std::size_t i = 0; i < bbw::kSectionCount; ++i) {
     const std::uint8_t* e = table + i * bbw::kSectionEntrySize;
     const auto id = load_le<std::uint32_t>(e);
@@ -166,6 +170,11 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
            describe_size(expected_sizes[i]));
     if (offset % bbw::kAlignment != 0 || offset > size || length > size - offset)
       fail(std::string("section '") + names[i] + "' lies outside the file (truncated?)");
+    if (offset != align_up(previous_end))
+      fail(std::string("section '") + names[i] + "' is not where the layout puts it");
+    if (std::any_of(data + previous_end, data + offset, [](std::uint8_t b) { return b != 0; }))
+      fail(std::string("nonzero padding before section '") + names[i] + "': the file is corrupted");
+    previous_end = offset + length;
     if (options.verify_checksums && crc32c(data + offset, length) != crc)
       fail(std::string("checksum mismatch in section '") + names[i] + "': the file is corrupted");
     block.section_crcs[i] = crc;
@@ -189,6 +198,9 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   block.tree.child_counts = section_data[2];
   block.tree.code_size = code_size;
   block.word_weights = reinterpret_cast<const float*>(section_data[3]);
+  for (std::size_t word = 0; word < word_count; ++word)
+    if (!std::isfinite(load_le<float>(section_data[3] + word * sizeof(float))))
+      fail("the weight of word " + std::to_string(word) + " is not a finite number");
 
   // Structure: every link stays inside the tree and points forward (so no
   // cycle), every node but the root has exactly one parent, depth ≤ levels,
@@ -273,6 +285,21 @@ std::vector<std::uint8_t> Vocabulary::serialize() const {
     detail::store_le<std::uint32_t>(out.data() + 60, detail::crc32c(out.data(), 60));
   }
   return out;
+}
+
+Vocabulary Vocabulary::with_descriptor(const std::string& descriptor) const {
+  if (!detail::valid_descriptor_name(descriptor))
+    throw InvalidArgument("descriptor name \"" + descriptor + "\" is not " +
+                          detail::kDescriptorNameRule);
+  auto block = std::make_shared<detail::VocabularyBlock>();
+  block->owned = serialize();
+  std::uint8_t* header = block->owned.data();
+  std::uint8_t* name_field = header + detail::bbw::kDescriptorNameOffset;
+  std::fill_n(name_field, detail::bbw::kMaxDescriptorName, std::uint8_t{0});
+  std::copy(descriptor.begin(), descriptor.end(), name_field);
+  detail::store_le<std::uint32_t>(header + 60, detail::crc32c(header, 60));
+  detail::parse_block(*block, "vocabulary", LoadOptions{false});
+  return Vocabulary(std::move(block));
 }
 
 void Vocabulary::save(const std::string& path) const {

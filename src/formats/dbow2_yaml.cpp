@@ -1,5 +1,6 @@
 // DBoW2 YAML vocabularies, the files TemplatedVocabulary::save writes through
-// OpenCV's FileStorage (and DBoW3's YAML, whose descriptors read "dbw3 0 32 ...").
+// OpenCV's FileStorage (and DBoW3's YAML, whose descriptors read "dbw3 0 32 ...",
+// or "0 32 ..." without the "dbw3" in files of early DBoW3 versions).
 //
 //   %YAML:1.0
 //   ---
@@ -139,12 +140,28 @@ struct NodeEntry {
 
 enum class DescriptorKind { kUnknown, kBits, kBytes, kDbow3 };
 
+// OpenCV's depth codes: only CV_8U (0) holds binary descriptors.
+std::string unsupported_opencv_type(int type) {
+  const bool floating = type == 5 || type == 6 || type == 7;  // CV_32F, CV_64F, CV_16F
+  return std::string(floating ? "float descriptors" : "descriptors") + " (OpenCV type " +
+         std::to_string(type) +
+         ") are not supported: binbow handles binary descriptors (CV_8U, type 0) only";
+}
+
 class DescriptorDecoder {
  public:
   explicit DescriptorDecoder(Scanner& scanner) : scanner_(scanner) {}
 
   std::size_t code_size() const { return code_size_; }
   DescriptorKind kind() const { return kind_; }
+
+  // Early DBoW3 versions wrote "<OpenCV type> <cols> v0 ... v{cols-1}" with
+  // no "dbw3": read as bytes, every descriptor then starts with the same
+  // "0 <code_size - 2>". True when every decoded descriptor did (a chance
+  // match of the first two bytes of every node of a DBoW2 file is negligible).
+  bool opencv_header_everywhere() const {
+    return kind_ == DescriptorKind::kBytes && code_size_ > 2 && every_opencv_header_;
+  }
 
   // Appends the decoded bytes of one descriptor string to `out`.
   void decode(std::string_view text, std::vector<std::uint8_t>& out) {
@@ -180,9 +197,7 @@ class DescriptorDecoder {
       std::size_t cols = 0;
       if (!parse_token(p, end, type) || !parse_token(p, end, cols))
         scanner_.fail("malformed DBoW3 descriptor header (expected `dbw3 type cols`)");
-      if (type != 0)
-        scanner_.fail("DBoW3 descriptor of OpenCV type " + std::to_string(type) +
-                      ": only binary (CV_8U, type 0) descriptors are supported");
+      if (type != 0) scanner_.fail(unsupported_opencv_type(type));
       if (cols == 0 || cols > kMaxCodeSize)
         scanner_.fail("DBoW3 descriptor of " + std::to_string(cols) + " bytes");
       set_code_size(cols);
@@ -190,8 +205,10 @@ class DescriptorDecoder {
     out.resize(at + (code_size_ ? code_size_ : 0));
     for (p = skip_blanks(p, end); p < end; p = skip_blanks(p, end)) {
       unsigned byte = 0;
-      if (!parse_token(p, end, byte) || byte > 255)
+      if (!parse_token(p, end, byte) || byte > 255) {
+        if (kind == DescriptorKind::kBytes && count >= 2) report_opencv_type(text);
         scanner_.fail("descriptor byte " + std::to_string(count) + " is not an integer in 0..255");
+      }
       if (code_size_ != 0 && count >= code_size_)
         scanner_.fail("descriptor has more than " + std::to_string(code_size_) + " bytes");
       if (code_size_ == 0) out.push_back(0);
@@ -201,6 +218,9 @@ class DescriptorDecoder {
     }
     if (count == 0) scanner_.fail("empty descriptor");
     set_code_size(count);
+    if (kind == DescriptorKind::kBytes)
+      every_opencv_header_ =
+          every_opencv_header_ && count > 2 && out[at] == 0 && out[at + 1] + 2u == count;
   }
 
  private:
@@ -212,6 +232,19 @@ class DescriptorDecoder {
     for (std::size_t k = 0; k < std::min<std::size_t>(text.size(), 9); ++k)
       if (text[k] != '0' && text[k] != '1') return DescriptorKind::kBytes;
     return DescriptorKind::kBits;
+  }
+  // A descriptor that is not all bytes but starts like an early DBoW3 one,
+  // "<type> <cols>" then exactly cols values, is of another OpenCV type.
+  void report_opencv_type(std::string_view text) const {
+    const char* p = text.data();
+    const char* end = p + text.size();
+    int type = 0;
+    std::size_t cols = 0;
+    if (!parse_token(p, end, type) || !parse_token(p, end, cols) || type < 1 || type > 7) return;
+    std::size_t values = 0;
+    for (p = skip_blanks(p, end); p < end; p = skip_blanks(p, end), ++values)
+      while (p < end && !is_blank(*p)) ++p;
+    if (values == cols) scanner_.fail(unsupported_opencv_type(type));
   }
   void set_code_size(std::size_t size) {
     if (size > kMaxCodeSize)
@@ -226,7 +259,20 @@ class DescriptorDecoder {
   Scanner& scanner_;
   DescriptorKind kind_ = DescriptorKind::kUnknown;
   std::size_t code_size_ = 0;
+  bool every_opencv_header_ = true;
 };
+
+// Drops the leading "<type> <cols>" bytes of every descriptor of an early
+// DBoW3 file; returns the real descriptor size.
+std::size_t strip_opencv_headers(std::vector<std::uint8_t>& descriptors, std::size_t code_size) {
+  const std::size_t real_size = code_size - 2;
+  const std::size_t count = descriptors.size() / code_size;
+  for (std::size_t i = 0; i < count; ++i)
+    std::memmove(descriptors.data() + i * real_size, descriptors.data() + i * code_size + 2,
+                 real_size);
+  descriptors.resize(count * real_size);
+  return real_size;
+}
 
 // Calls `entry` for each item of a block sequence of flow maps
 // ("- { key:value, ... }"), or of an empty flow sequence "[]".
@@ -346,7 +392,9 @@ ParsedVocabulary parse_dbow2_yaml(const std::uint8_t* data, std::size_t size,
   parsed.descriptor_text =
       decoder.kind() == DescriptorKind::kBits ? DescriptorText::kBits : DescriptorText::kBytes;
   VocabularyTree& tree = parsed.tree;
-  const std::size_t code_size = decoder.code_size();
+  const std::size_t code_size = decoder.opencv_header_everywhere()
+                                    ? strip_opencv_headers(descriptors, decoder.code_size())
+                                    : decoder.code_size();
   const std::size_t node_count = nodes.size() + 1;
   tree.code_size = code_size;
   tree.branching = static_cast<std::uint32_t>(branching);

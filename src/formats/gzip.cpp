@@ -4,54 +4,69 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstring>
+#include <memory>
 
 #include "binbow/error.h"
 
 namespace binbow::detail {
 
 std::size_t gunzip_limit(std::size_t compressed_size) {
-  constexpr std::size_t kMaxRatio = 1032;
-  constexpr std::size_t kAbsoluteLimit = std::size_t{4} << 30;
-  if (compressed_size > kAbsoluteLimit / kMaxRatio) return kAbsoluteLimit;
-  return compressed_size * kMaxRatio + 4096;
+  if (compressed_size > kGunzipMaxLimit / kGunzipMaxRatio) return kGunzipMaxLimit;
+  return std::max(kGunzipMinLimit, compressed_size * kGunzipMaxRatio);
 }
+
+namespace {
+
+// Output chunks start at 1 MiB and then double the output so far: few chunks,
+// and pages the data never reaches are never touched (new[] does not clear).
+constexpr std::size_t kFirstChunk = std::size_t{1} << 20;
+
+struct Chunk {
+  std::unique_ptr<std::uint8_t[]> bytes;
+  std::size_t capacity = 0;
+  std::size_t used = 0;
+};
+
+}  // namespace
 
 std::vector<std::uint8_t> gunzip(const std::uint8_t* data, std::size_t size,
                                  const std::string& name, std::size_t limit) {
   z_stream stream{};
   if (inflateInit2(&stream, 15 + 16) != Z_OK)  // 15 + 16: gzip wrapper, 32 KiB window
     throw FileError(name, "cannot initialise zlib");
-  std::vector<std::uint8_t> out;
-  // The trailer's ISIZE (size mod 4 GiB of the last member) is a good first
-  // guess; the buffer still grows, up to `limit`, if it is wrong.
-  std::size_t guess = size * 4;
-  if (size >= 18)
-    guess =
-        std::max<std::size_t>(guess, data[size - 4] | data[size - 3] << 8 | data[size - 2] << 16 |
-                                         std::size_t{data[size - 1]} << 24);
-  out.resize(std::min(limit, std::max<std::size_t>(guess + 1, 1 << 16)));
+  std::vector<Chunk> chunks;
   std::size_t produced = 0;
   std::size_t consumed = 0;
   const auto fail = [&](const std::string& problem) {
     inflateEnd(&stream);
     throw FileError(name, problem);
   };
+  const auto fail_too_large = [&] {
+    fail("gzip data expands beyond " + std::to_string(limit) +
+         " bytes, more than any real vocabulary of this compressed size (corrupt or hostile "
+         "file; if it is genuine, decompress it with gunzip and load the plain file)");
+  };
   for (;;) {
-    if (produced == out.size()) {
-      if (out.size() >= limit)
-        fail("gzip data expands beyond " + std::to_string(limit) +
-             " bytes, more than a valid file of this size can (corrupt or hostile file)");
-      out.resize(std::min(limit, out.size() * 2));
+    if (chunks.empty() || chunks.back().used == chunks.back().capacity) {
+      // One byte beyond the limit tells a stream that ends exactly at it from
+      // one that goes on.
+      const std::size_t room = limit + 1 - produced;
+      const std::size_t capacity = std::min(room, std::max(kFirstChunk, produced));
+      chunks.push_back({std::unique_ptr<std::uint8_t[]>(new std::uint8_t[capacity]), capacity, 0});
     }
+    Chunk& chunk = chunks.back();
     const std::size_t input = std::min<std::size_t>(size - consumed, UINT_MAX);
-    const std::size_t room = std::min<std::size_t>(out.size() - produced, UINT_MAX);
+    const std::size_t room = std::min<std::size_t>(chunk.capacity - chunk.used, UINT_MAX);
     stream.next_in = const_cast<Bytef*>(data + consumed);
     stream.avail_in = static_cast<uInt>(input);
-    stream.next_out = out.data() + produced;
+    stream.next_out = chunk.bytes.get() + chunk.used;
     stream.avail_out = static_cast<uInt>(room);
     const int status = inflate(&stream, Z_NO_FLUSH);
     consumed += input - stream.avail_in;
+    chunk.used += room - stream.avail_out;
     produced += room - stream.avail_out;
+    if (produced > limit) fail_too_large();
     if (status == Z_STREAM_END) {
       // Concatenated members (as `cat a.gz b.gz`) form one gzip file; trailing
       // zero padding is tolerated as gzip(1) does.
@@ -61,13 +76,19 @@ std::vector<std::uint8_t> gunzip(const std::uint8_t* data, std::size_t size,
       if (inflateReset(&stream) != Z_OK) fail("cannot reset zlib");
       continue;
     }
-    if (status == Z_BUF_ERROR && consumed == size) fail("gzip data is truncated");
     if (status != Z_OK && status != Z_BUF_ERROR)
       fail(std::string("gzip data is corrupt (") + (stream.msg ? stream.msg : "zlib error") + ")");
+    // Output room left, so inflate stopped for want of input.
     if (consumed == size && stream.avail_out != 0) fail("gzip data is truncated");
   }
   inflateEnd(&stream);
-  out.resize(produced);
+  std::vector<std::uint8_t> out(produced);
+  std::size_t at = 0;
+  for (Chunk& chunk : chunks) {
+    if (chunk.used > 0) std::memcpy(out.data() + at, chunk.bytes.get(), chunk.used);
+    at += chunk.used;
+    chunk.bytes.reset();
+  }
   return out;
 }
 

@@ -109,6 +109,65 @@ TEST(CliConvert, DamagedInputsExitWithOneAndNameTheFile) {
   EXPECT_TRUE(read_file(dir.file("o.bbw")).empty());  // nothing half-written
 }
 
+// Formats other than .bbw record no extractor: `convert --descriptor` records
+// it, and commands warn when a vocabulary does not say.
+TEST(CliConvert, DescriptorRecordsTheExtractorAndCommandsWarnWithoutOne) {
+  TempDir dir;
+  save_vocabulary(small_vocabulary(), dir.file("v.yml"));
+  std::string output;
+  ASSERT_EQ(run_cli("convert --descriptor brief '" + dir.file("v.yml") + "' '" +
+                        dir.file("brief.bbw") + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("descriptor: brief (recorded)"), std::string::npos) << output;
+  ASSERT_EQ(run_cli("info '" + dir.file("brief.bbw") + "'", &output), 0) << output;
+  EXPECT_NE(output.find("descriptor: brief\n"), std::string::npos) << output;
+
+  const struct {
+    std::string arguments;
+    const char* problem;
+  } refused[] = {
+      {"--descriptor sift", "unknown feature type 'sift'"},
+      {"--descriptor akaze", "akaze gives 488-bit descriptors, the vocabulary has 256-bit ones"},
+      {"--descriptor BRIEF", "unknown feature type 'BRIEF'"},
+  };
+  for (const auto& c : refused) {
+    EXPECT_EQ(run_cli("convert " + c.arguments + " '" + dir.file("v.yml") + "' '" +
+                          dir.file("refused.bbw") + "'",
+                      &output),
+              1)
+        << output;
+    EXPECT_NE(output.find(c.problem), std::string::npos) << output;
+  }
+  EXPECT_EQ(
+      run_cli("convert --descriptor orb '" + dir.file("v.yml") + "' '" + dir.file("v.txt") + "'",
+              &output),
+      1);
+  EXPECT_NE(output.find("only .bbw files record the extractor"), std::string::npos) << output;
+  EXPECT_TRUE(read_file(dir.file("refused.bbw")).empty());
+
+  const std::string image = test::source_path("data/samples/rtabmap/samples/1.jpg");
+  ASSERT_EQ(run_cli("db build --descriptor brief --vocab '" + dir.file("v.yml") + "' -o '" +
+                        dir.file("d.bbdb") + "' '" + image + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("binbow: warning: " + dir.file("v.yml") +
+                        ": the vocabulary does not record its extractor; using brief. "
+                        "If it was trained on another one, record it with 'binbow convert "
+                        "--descriptor NAME " +
+                        dir.file("v.yml") + " OUT.bbw'"),
+            std::string::npos)
+      << output;
+  ASSERT_EQ(run_cli("db build --descriptor brief --vocab '" + dir.file("brief.bbw") + "' -o '" +
+                        dir.file("d.bbdb") + "' '" + image + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_EQ(output.find("warning"), std::string::npos) << output;
+}
+
 // DBoW2 users must be able to go back: read our DBoW2 YAML (plain, gzip,
 // bytes and bits) through OpenCV's FileStorage exactly as DBoW2's
 // TemplatedVocabulary::load does, and compare with the vocabulary.

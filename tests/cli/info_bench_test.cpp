@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "binbow/database.h"
 #include "binbow/vocabulary.h"
 #include "support/test_support.h"
 
@@ -79,6 +80,30 @@ TEST(CliInfo, ReadsRealDbow2Vocabulary) {
   EXPECT_NE(out.find("branching: 10\n"), std::string::npos) << out;
 }
 
+// The gzip trailer's size is never trusted for an allocation: brief_lite.voc.gz
+// cut by one byte ends in four bytes of deflate data that claim gigabytes.
+// Memory is capped so that such a reservation would fail.
+TEST(CliInfo, CutGzipFailsAsTruncatedWithinLittleMemory) {
+  test::TempDir dir;
+  std::vector<std::uint8_t> bytes =
+      test::read_file(test::shared_data("vins-lite-brief-vocab/brief_lite.voc.gz"));
+  bytes.pop_back();
+  test::write_file(dir.file("cut.voc.gz"), bytes);
+#if defined(__SANITIZE_ADDRESS__)
+  // ASan reserves terabytes of shadow memory, so ulimit -v cannot apply.
+  const std::string limited = "ASAN_OPTIONS=\"$ASAN_OPTIONS:max_allocation_size_mb=1000\" ";
+#else
+  const std::string limited = "ulimit -v 1000000 && ";
+#endif
+  std::string out;
+  EXPECT_EQ(test::run_command(
+                limited + "'" + test::cli_path() + "' info '" + dir.file("cut.voc.gz") + "'", &out),
+            1);
+  EXPECT_NE(out.find("binbow: error: " + dir.file("cut.voc.gz") + ": gzip data is truncated"),
+            std::string::npos)
+      << out;
+}
+
 TEST(CliInfo, BadFilesExitOneWithTheFileNamed) {
   test::TempDir dir;
   test::write_file(dir.file("junk.bbw"), {'B', 'B', 'W', 'V', 'O', 'C', 'A', 'B', 1, 2});
@@ -89,6 +114,27 @@ TEST(CliInfo, BadFilesExitOneWithTheFileNamed) {
   out = run("info " + dir.file("missing.bbw"), &status);
   EXPECT_EQ(status, 1);
   EXPECT_NE(out.find("missing.bbw"), std::string::npos) << out;
+}
+
+TEST(CliInfo, ChecksTheWholeDatabaseUnlessHeaderOnly) {
+  test::TempDir dir;
+  Database database(small_vocabulary());
+  std::mt19937_64 rng(2);
+  for (int i = 0; i < 5; ++i) database.add(test::random_descriptors(50, 32, rng).view());
+  const std::string path = dir.file("d.bbdb");
+  database.save(path);
+  int status = -1;
+  std::string out = run("info " + path, &status);
+  ASSERT_EQ(status, 0) << out;
+  std::vector<std::uint8_t> bytes = test::read_file(path);
+  bytes[bytes.size() - 100] ^= 0x04;  // in the body, far from the header
+  test::write_file(path, bytes);
+  out = run("info " + path, &status);
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_NE(out.find("binbow: error: " + path + ": "), std::string::npos) << out;
+  out = run("info --header-only " + path, &status);
+  EXPECT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("entries: 5\n"), std::string::npos) << out;
 }
 
 TEST(CliBench, TimesEveryStageOnRealFrames) {

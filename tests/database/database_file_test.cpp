@@ -171,6 +171,24 @@ TEST(DatabaseFile, DamagedFilesAreRejected) {
   EXPECT_THROW(load(vocabulary_bytes), FileError);
 }
 
+// A damaged body (here: a weight turned NaN, CRCs recomputed; or a byte
+// flipped) passes the header, so inspect checks the whole file unless told not to.
+TEST(DatabaseFile, InspectVerifiesTheWholeFileByDefault) {
+  const Fixture fixture(12);
+  test::TempDir dir;
+  for (const bool include_vocabulary : {true, false}) {
+    SCOPED_TRACE(include_vocabulary ? "with its vocabulary" : "without its vocabulary");
+    const std::string path = dir.file("db.bbdb");
+    fixture.database.save(path, include_vocabulary);
+    EXPECT_EQ(Database::inspect(path).entries, fixture.database.size());
+    std::vector<std::uint8_t> bytes = test::read_file(path);
+    bytes[bytes.size() - 1] ^= 0x10;  // in the last section (labels)
+    test::write_file(path, bytes);
+    EXPECT_THROW(Database::inspect(path), FileError);
+    EXPECT_EQ(Database::inspect(path, false).entries, fixture.database.size());
+  }
+}
+
 TEST(DatabaseFile, ErrorsNameTheFile) {
   test::TempDir dir;
   const std::string missing = dir.file("missing.bbdb");

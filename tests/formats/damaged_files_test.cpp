@@ -2,6 +2,7 @@
 // names the file and the problem, and never allocates by a header's word.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
 #include <string>
@@ -245,17 +246,62 @@ TEST_F(DamagedFiles, CompressedDbow3IsRefusedWithAdvice) {
 }
 
 TEST_F(DamagedFiles, GzipBombsAreCapped) {
-  EXPECT_EQ(detail::gunzip_limit(1000), 1000u * 1032 + 4096);
+  EXPECT_EQ(detail::gunzip_limit(1000), std::size_t{16} << 20);
+  EXPECT_EQ(detail::gunzip_limit(std::size_t{1} << 20), std::size_t{64} << 20);
   EXPECT_EQ(detail::gunzip_limit(std::size_t{1} << 40), std::size_t{4} << 30);
   const std::vector<std::uint8_t> zeros(4 << 20, 0);
   const std::vector<std::uint8_t> bomb = detail::gzip(zeros);
-  EXPECT_THROW(detail::gunzip(bomb.data(), bomb.size(), "bomb.gz", 1 << 20), FileError);
-  EXPECT_EQ(detail::gunzip(bomb.data(), bomb.size(), "bomb.gz", 8 << 20), zeros);
+  EXPECT_THROW(detail::gunzip(bomb.data(), bomb.size(), "bomb.gz", zeros.size() - 1), FileError);
+  EXPECT_EQ(detail::gunzip(bomb.data(), bomb.size(), "bomb.gz", zeros.size()), zeros);
   // A gzip member whose content is not YAML, and gzip garbage.
   EXPECT_FALSE(rejection(dir_, "zeros.yml.gz", bomb).empty());
   std::vector<std::uint8_t> garbage = valid_[4];
   for (std::size_t i = 20; i < garbage.size(); i += 7) garbage[i] ^= 0xFF;
   EXPECT_NE(rejection(dir_, "garbage.yml.gz", garbage).find("gzip"), std::string::npos);
+}
+
+// The cap is what a real vocabulary of that compressed size could need (16
+// MiB for these): 50 MB of blanks, as one member, as 2,000 small members, or
+// inside a tar archive, stop there.
+TEST_F(DamagedFiles, GzipExpansionIsCappedWhateverTheContainer) {
+  const std::string cap = "expands beyond " + std::to_string(16 << 20) + " bytes";
+  const std::vector<std::uint8_t> blanks(50 << 20, ' ');
+  const std::vector<std::uint8_t> one_member = detail::gzip(blanks);
+  ASSERT_LT(one_member.size(), 100u << 10);
+  EXPECT_NE(rejection(dir_, "blanks.yml.gz", one_member).find(cap), std::string::npos);
+
+  const std::vector<std::uint8_t> member = detail::gzip(std::vector<std::uint8_t>(25 << 10, ' '));
+  std::vector<std::uint8_t> members;
+  for (int i = 0; i < 2000; ++i) members.insert(members.end(), member.begin(), member.end());
+  EXPECT_NE(rejection(dir_, "members.yml.gz", members).find(cap), std::string::npos);
+
+  std::vector<std::uint8_t> tar(512 + blanks.size(), ' ');
+  std::fill_n(tar.begin(), 512, 0);
+  std::memcpy(tar.data(), "ORBvoc.txt", 10);
+  std::memcpy(tar.data() + 257, "ustar", 5);
+  std::memcpy(tar.data() + 124, "00310000000", 11);  // 50 MiB in octal
+  tar[156] = '0';
+  EXPECT_NE(rejection(dir_, "blanks.txt.tar.gz", detail::gzip(tar)).find(cap), std::string::npos);
+
+  // Concatenated members of a real file still load: the cap is on their total.
+  const std::vector<std::uint8_t> yaml = valid_[3];
+  const std::size_t half = yaml.size() / 2;
+  std::vector<std::uint8_t> two = detail::gzip({yaml.begin(), yaml.begin() + half});
+  const std::vector<std::uint8_t> second = detail::gzip({yaml.begin() + half, yaml.end()});
+  two.insert(two.end(), second.begin(), second.end());
+  write_file(dir_.file("two.yml.gz"), two);
+  EXPECT_EQ(load_vocabulary(dir_.file("two.yml.gz")).checksum(), vocabulary_.checksum());
+}
+
+// The trailer's size field is never trusted: a forged one is found false
+// (zlib checks it), and a cut file fails as truncated.
+TEST_F(DamagedFiles, GzipTrailerIsNotTrusted) {
+  std::vector<std::uint8_t> forged = valid_[4];
+  detail::store_le<std::uint32_t>(forged.data() + forged.size() - 4, 0xFFFFFFFFu);
+  EXPECT_NE(rejection(dir_, "forged.yml.gz", forged).find("gzip data is corrupt"),
+            std::string::npos);
+  const std::vector<std::uint8_t> cut(valid_[4].begin(), valid_[4].end() - 1);
+  EXPECT_NE(rejection(dir_, "cut.yml.gz", cut).find("truncated"), std::string::npos);
 }
 
 TEST_F(DamagedFiles, MalformedTarArchivesAreRejected) {

@@ -218,6 +218,57 @@ TEST(FormatsRoundTrip, Dbow3YamlDescriptorsAreRead) {
   EXPECT_EQ(parsed.tree.descriptors[2 * 3 + 2], 6);
 }
 
+// Early DBoW3 versions wrote "<OpenCV type> <cols> v0 ..." without "dbw3".
+std::string early_dbow3_yaml(const std::string& first, const std::string& second) {
+  return "%YAML:1.0\n---\nvocabulary:\n   k: 2\n   L: 1\n   scoringType: 0\n   weightingType: 0\n"
+         "   nodes:\n      - { nodeId:1, parentId:0, weight:1.5, descriptor:\"" +
+         first + "\" }\n      - { nodeId:2, parentId:0, weight:2.5, descriptor:\"" + second +
+         "\" }\n   words:\n      - { wordId:0, nodeId:1 }\n      - { wordId:1, nodeId:2 }\n";
+}
+
+detail::ParsedVocabulary parse_yaml(const std::string& yaml) {
+  return detail::parse_dbow2_yaml(reinterpret_cast<const std::uint8_t*>(yaml.data()), yaml.size(),
+                                  "early.yml");
+}
+
+TEST(FormatsRoundTrip, EarlyDbow3YamlDescriptorsWithoutMagicAreRead) {
+  // ORB: 32 bytes, "0 32" in front of each.
+  std::string first = "0 32 ", second = "0 32 ";
+  for (int i = 0; i < 32; ++i) {
+    first += std::to_string(i * 7) + " ";
+    second += std::to_string(255 - i) + " ";
+  }
+  TempDir dir;
+  write_file(dir.file("early.yml"), [&] {
+    const std::string yaml = early_dbow3_yaml(first, second);
+    return std::vector<std::uint8_t>(yaml.begin(), yaml.end());
+  }());
+  const Vocabulary vocabulary = load_vocabulary(dir.file("early.yml"));
+  EXPECT_EQ(vocabulary.code_size(), 32u);
+  EXPECT_EQ(vocabulary.node_descriptor(1)[0], 0);
+  EXPECT_EQ(vocabulary.node_descriptor(1)[31], 31 * 7);
+  EXPECT_EQ(vocabulary.node_descriptor(2)[0], 255);
+
+  // Only when every node has the layout: otherwise the values are DBoW2 bytes.
+  const auto mixed = parse_yaml(early_dbow3_yaml("0 3 1 2 3 ", "7 3 4 5 6 "));
+  EXPECT_EQ(mixed.tree.code_size, 5u);
+  EXPECT_EQ(mixed.tree.descriptors[1 * 5 + 1], 3);
+  const auto counted = parse_yaml(early_dbow3_yaml("0 3 1 2 3 ", "0 3 4 5 6 "));
+  EXPECT_EQ(counted.tree.code_size, 3u);
+  EXPECT_EQ(counted.tree.descriptors[2 * 3 + 2], 6);
+
+  // Float descriptors of that layout are named as such.
+  try {
+    parse_yaml(early_dbow3_yaml("5 3 0.5 0.25 1 ", "5 3 0.125 2 3 "));
+    ADD_FAILURE() << "float descriptors accepted";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("float descriptors (OpenCV type 5) are not supported"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(parse_yaml(early_dbow3_yaml("dbw3 5 2 0.5 0.25 ", "dbw3 5 2 1.5 2 ")), FileError);
+}
+
 TEST(Formats, NamesExtensionsAndDetection) {
   for (const VocabularyFormat format :
        {VocabularyFormat::kAuto, VocabularyFormat::kBinbow, VocabularyFormat::kDbow2Yaml,
