@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "loop_report.h"
 #include "loop_run.h"
+#include "output_options.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -82,6 +83,7 @@ std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
 }
 
 void run_evaluate(const EvaluateArguments& arguments) {
+  if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
   vision::GroundTruthOptions options;
   options.pairs_index_base = arguments.ground_truth_base;
   const vision::GroundTruth truth = vision::GroundTruth::load(arguments.ground_truth, options);
