@@ -53,11 +53,6 @@ std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabu
 void run_db_build(const DbBuildArguments& arguments) {
   prepare_output_file("-o", arguments.output);
   const Vocabulary vocabulary = load_vocabulary(arguments.vocabulary);
-  if (arguments.levels_up > vocabulary.levels())
-    throw CLI::ValidationError("--direct-index-levels-up", std::to_string(arguments.levels_up) +
-                                                               " is more than the " +
-                                                               std::to_string(vocabulary.levels()) +
-                                                               " levels of the vocabulary");
   const auto extractor =
       extractor_for(vocabulary, arguments.vocabulary, arguments.descriptor, arguments.features);
   Database database(vocabulary, {!arguments.no_direct_index, arguments.levels_up});
@@ -132,7 +127,9 @@ void add_db_command(CLI::App& app) {
   add_extractor_options(build_command, build->descriptor, build->features);
   build_command
       ->add_option("--direct-index-levels-up", build->levels_up,
-                   "Direct index nodes this many levels above the words")
+                   "Direct index nodes this many levels above the words (the root when more "
+                   "than the vocabulary's depth)")
+      ->check(CLI::Range(0, 255))  // what a .bbdb file holds
       ->capture_default_str();
   build_command->add_flag("--no-direct-index", build->no_direct_index,
                           "Do not keep the direct index (smaller file)");

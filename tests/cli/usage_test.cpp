@@ -61,11 +61,12 @@ TEST(CliUsage, EveryUsageErrorExitsOneAndSaysWhereTheUsageIs) {
   expect_usage_error("info " + image + " extra", "binbow info", "extra");
   expect_usage_error("db", "binbow db", "A subcommand is required");
   expect_usage_error("db query --top 0 x.bbdb " + image, "binbow db query", "--top");
-  // A database file holds at most 255; the check against the vocabulary's depth comes first.
+  // A database file holds at most 255: more used to write a file no one could load.
   expect_usage_error("db build --direct-index-levels-up 300 --vocab " +
                          quoted(test::source_path("data/vocab/orb_default.bbw")) + " -o " +
                          quoted(dir.file("x.bbdb")) + " " + folder,
-                     "binbow db build", "--direct-index-levels-up: 300 is more than the 4 levels");
+                     "binbow db build",
+                     "--direct-index-levels-up: Value 300 not in range 0 to 255");
   expect_usage_error("detect-loops --features abc -o " + out + " " + folder, "binbow detect-loops",
                      "--features");
   expect_usage_error("detect-loops --features -5 -o " + out + " " + folder, "binbow detect-loops",
