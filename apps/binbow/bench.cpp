@@ -15,6 +15,7 @@
 #include "binbow/vision/image_source.h"
 #include "binbow/vision/loop_detector.h"
 #include "commands.h"
+#include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
 #include "loop_run.h"
@@ -33,7 +34,7 @@ double elapsed_ms(Clock::time_point start) {
 struct BenchArguments {
   std::vector<std::string> inputs;
   std::string vocabulary;
-  std::string descriptor = "orb";
+  std::string descriptor = kDefaultDescriptor;
   int features = 0;
   std::size_t database_size = 10000;
   int load_repeats = 5;
@@ -45,6 +46,7 @@ struct Frame {
 };
 
 void run_bench(const BenchArguments& args) {
+  check_vocabulary_given(args.vocabulary, args.descriptor);
   const auto extractor = vision::make_extractor(args.descriptor, args.features);
   Vocabulary vocabulary;
   const std::string vocabulary_path =
@@ -143,7 +145,8 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("inputs", args->inputs, "Image directory, video or text list of images")
       ->required();
   cmd->add_option("--vocab", args->vocabulary,
-                  "Vocabulary (any supported format); default: the bundled one for --descriptor");
+                  "Vocabulary (any supported format); default: the bundled one for --descriptor "
+                  "(orb and brief only)");
   add_extractor_options(cmd, args->descriptor, args->features);
   cmd->add_option("--database-size", args->database_size,
                   "Entries in the database for the add and query timings")

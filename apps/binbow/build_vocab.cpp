@@ -16,14 +16,17 @@
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "core/parallel_for.h"
+#include "extractor_options.h"
 #include "image_source_options.h"
+#include "output_options.h"
 #include "progress.h"
+#include "validators.h"
 
 namespace binbow::cli {
 namespace {
 
 struct BuildVocabArguments {
-  std::string descriptor = "orb";
+  std::string descriptor = kDefaultDescriptor;
   std::uint32_t branching = 10;
   std::uint32_t levels = 6;
   std::string weighting = "tf-idf";
@@ -130,14 +133,8 @@ void run_build_vocab(const BuildVocabArguments& arguments) {
   options.threads = arguments.threads;
   options.seed = arguments.seed;
   // Checked before reading any image: a typo should not cost a long extraction.
-  if (options.branching < 2 || options.branching > 255) {
-    throw InvalidArgument("--branching must be in 2..255, got " +
-                          std::to_string(options.branching));
-  }
-  if (options.levels < 1 || options.levels > 16) {
-    throw InvalidArgument("--levels must be in 1..16, got " + std::to_string(options.levels));
-  }
   format_for_output(arguments.output);
+  prepare_output_file("-o", arguments.output);
 
   const auto start = std::chrono::steady_clock::now();
   const TrainingSet set =
@@ -170,21 +167,24 @@ void add_build_vocab_command(CLI::App& app) {
   auto arguments = std::make_shared<BuildVocabArguments>();
   CLI::App* command = app.add_subcommand(
       "build-vocab", "Train a vocabulary tree (hierarchical k-medians) from images");
-  command->add_option("--descriptor", arguments->descriptor, "Binary descriptor: orb or brief")
-      ->check(CLI::IsMember({"orb", "brief"}))
-      ->capture_default_str();
+  add_descriptor_option(command, arguments->descriptor);
   command->add_option("--branching", arguments->branching, "Children per node, k (2..255)")
+      ->check(CLI::Range(2, 255))
       ->capture_default_str();
   command->add_option("--levels", arguments->levels, "Depth of the tree, L (1..16)")
+      ->check(CLI::Range(1, 16))
       ->capture_default_str();
   command
       ->add_option("--weighting", arguments->weighting, "Word weighting: tf-idf, tf, idf, binary")
+      ->check(parsed_by(parse_weighting))
       ->capture_default_str();
   command
       ->add_option("--scoring", arguments->scoring,
                    "Scoring: l1, l2, chi-square, kl, bhattacharyya, dot-product")
+      ->check(parsed_by(parse_scoring))
       ->capture_default_str();
   command->add_option("--threads", arguments->threads, "Worker threads (0: all cores)")
+      ->check(CLI::Range(0, 4096))
       ->capture_default_str();
   add_image_source_options(command, arguments->source);
   command
@@ -193,8 +193,7 @@ void add_build_vocab_command(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--max-descriptors", arguments->max_descriptors,
                       "Train on a seeded random subset of at most N descriptors (0: all)");
-  command->add_option("--features-per-image", arguments->features_per_image,
-                      "Features extracted per image (0: the extractor's default)");
+  add_features_option(command, arguments->features_per_image, "--features-per-image,--features");
   command->add_option("-o,--output", arguments->output, "Output vocabulary (.bbw, .yml.gz, ...)")
       ->required();
   command

@@ -12,6 +12,8 @@
 #include "binbow/vision/features.h"
 #include "commands.h"
 #include "formats/loader.h"
+#include "output_options.h"
+#include "validators.h"
 
 namespace binbow::cli {
 
@@ -30,6 +32,7 @@ void run_convert(const ConvertArguments& args) {
   const VocabularyFormat from = parse_vocabulary_format(args.from);
   VocabularyFormat to = parse_vocabulary_format(args.to);
   if (to == VocabularyFormat::kAuto) to = format_for_output(args.output);
+  prepare_output_file("OUT", args.output);
   if (!args.descriptor.empty() && to != VocabularyFormat::kBinbow)
     throw InvalidArgument("--descriptor: only .bbw files record the extractor, not " +
                           std::string(to_string(to)) + " files");
@@ -49,9 +52,6 @@ void run_convert(const ConvertArguments& args) {
     text = detail::DescriptorText::kBits;
   else if (args.descriptors == "bytes")
     text = detail::DescriptorText::kBytes;
-  else if (args.descriptors != "auto")
-    throw InvalidArgument("--descriptors must be auto, bits or bytes, not '" + args.descriptors +
-                          "'");
   if (to == VocabularyFormat::kFbow && (loaded.vocabulary.weighting() != Weighting::kTfIdf ||
                                         loaded.vocabulary.scoring() != Scoring::kL1))
     std::printf(
@@ -97,12 +97,15 @@ void add_convert_command(CLI::App& app) {
       ->required();
   cmd->add_option("--from", args->from,
                   "Input format: auto, bbw, dbow2, orbslam-text, orbslam-binary, dbow3, fbow")
+      ->check(parsed_by(parse_vocabulary_format))
       ->capture_default_str();
   cmd->add_option("--to", args->to, "Output format (same names; auto: by OUT's extension)")
+      ->check(parsed_by(parse_vocabulary_format))
       ->capture_default_str();
   cmd->add_option("--descriptors", args->descriptors,
                   "DBoW2 YAML output: bits (FBrief 0/1 strings, DLoopDetector/VINS), bytes "
                   "(FORB decimal bytes) or auto (as the input file, else bytes)")
+      ->check(CLI::IsMember({"auto", "bits", "bytes"}))
       ->capture_default_str();
   cmd->add_option("--descriptor", args->descriptor,
                   "Record the extractor the vocabulary was trained on (orb, brief, akaze, "

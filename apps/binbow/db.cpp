@@ -15,6 +15,7 @@
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
+#include "output_options.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -24,7 +25,7 @@ struct DbBuildArguments {
   std::string vocabulary;
   std::string output;
   std::vector<std::string> inputs;
-  std::string descriptor = "orb";
+  std::string descriptor = kDefaultDescriptor;
   int features = 0;
   unsigned levels_up = 4;
   bool no_direct_index = false;
@@ -35,7 +36,7 @@ struct DbQueryArguments {
   std::string database;
   std::string image;
   std::size_t top = 10;
-  std::string descriptor = "orb";
+  std::string descriptor = kDefaultDescriptor;
   int features = 0;
   std::string vocabulary;
 };
@@ -51,6 +52,7 @@ std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabu
 }
 
 void run_db_build(const DbBuildArguments& arguments) {
+  prepare_output_file("-o", arguments.output);
   const Vocabulary vocabulary = load_vocabulary(arguments.vocabulary);
   const auto extractor =
       extractor_for(vocabulary, arguments.vocabulary, arguments.descriptor, arguments.features);
@@ -128,7 +130,9 @@ void add_db_command(CLI::App& app) {
   add_extractor_options(build_command, build->descriptor, build->features);
   build_command
       ->add_option("--direct-index-levels-up", build->levels_up,
-                   "Direct index nodes this many levels above the words")
+                   "Direct index nodes this many levels above the words (the root when more "
+                   "than the vocabulary's depth)")
+      ->check(CLI::Range(0, 255))  // what a .bbdb file holds
       ->capture_default_str();
   build_command->add_flag("--no-direct-index", build->no_direct_index,
                           "Do not keep the direct index (smaller file)");
@@ -145,7 +149,9 @@ void add_db_command(CLI::App& app) {
       db->add_subcommand("query", "The database entries most similar to an image");
   query_command->add_option("DB", query->database, "Database (.bbdb)")->required();
   query_command->add_option("IMAGE", query->image, "Query image")->required();
-  query_command->add_option("--top", query->top, "Number of results")->capture_default_str();
+  query_command->add_option("--top", query->top, "Number of results")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
   add_extractor_options(query_command, query->descriptor, query->features,
                         "as used to build the database");
   query_command->add_option("--vocab", query->vocabulary,

@@ -5,14 +5,33 @@
 #include <filesystem>
 #include <system_error>
 
+#include <CLI/CLI.hpp>
+
 #include "binbow/error.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
 
+namespace {
+std::string no_default_vocabulary(const std::string& descriptor) {
+  return "binbow bundles default vocabularies for orb and brief only; pass a vocabulary of " +
+         descriptor + " descriptors with --vocab FILE (build-vocab --descriptor " + descriptor +
+         " trains one)";
+}
+}  // namespace
+
+bool has_default_vocabulary(const std::string& descriptor) {
+  return descriptor == "orb" || descriptor == "brief";
+}
+
 std::string default_vocabulary_name(const std::string& descriptor) {
-  if (descriptor == "orb" || descriptor == "brief") return descriptor + "_default.bbw";
-  throw InvalidArgument("no default vocabulary for descriptor \"" + descriptor + "\"");
+  if (has_default_vocabulary(descriptor)) return descriptor + "_default.bbw";
+  throw InvalidArgument(no_default_vocabulary(descriptor));
+}
+
+void check_vocabulary_given(const std::string& vocab_argument, const std::string& descriptor) {
+  if (vocab_argument.empty() && !has_default_vocabulary(descriptor))
+    throw CLI::ValidationError(no_default_vocabulary(descriptor));
 }
 
 std::vector<std::string> data_directories() {

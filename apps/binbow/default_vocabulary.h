@@ -9,9 +9,15 @@
 
 namespace binbow::cli {
 
+// Whether binbow bundles a default vocabulary for this descriptor (orb, brief).
+bool has_default_vocabulary(const std::string& descriptor);
 // File name of the default vocabulary of a descriptor: "orb_default.bbw" or
-// "brief_default.bbw". Throws InvalidArgument for other descriptors.
+// "brief_default.bbw". Throws InvalidArgument, saying to pass --vocab, for
+// other descriptors.
 std::string default_vocabulary_name(const std::string& descriptor);
+// A usage error (CLI::ValidationError) saying to pass --vocab when it is
+// empty and `descriptor` has no default vocabulary: checked before any work.
+void check_vocabulary_given(const std::string& vocab_argument, const std::string& descriptor);
 
 // The places searched for it: vocab/ in each of data_directories().
 std::vector<std::string> default_vocabulary_candidates(const std::string& descriptor);

@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "loop_run.h"
+#include "output_options.h"
 
 namespace binbow::cli {
 
@@ -43,7 +44,7 @@ void run_demo(const std::string& out_dir) {
   const std::string sample = find_bundled_data("samples/rtabmap", "the bundled sample sequence");
   const std::string frames = (fs::path(sample) / "samples").string();
   const std::string truth = (fs::path(sample) / "samples_GT.bmp").string();
-  fs::create_directories(out_dir);
+  prepare_output_directory("--out", out_dir);
   const std::string loops = (fs::path(out_dir) / "loops.csv").string();
 
   std::printf("== binbow demo: loop closures in a real corridor sequence walked twice\n");

@@ -14,9 +14,11 @@
 #include "binbow/vision/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "loop_report.h"
 #include "loop_run.h"
+#include "output_options.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -24,7 +26,7 @@ namespace {
 
 struct DetectLoopsArguments {
   std::string vocab;
-  std::string descriptor = "orb";
+  std::string descriptor = kDefaultDescriptor;
   int max_features = 0;
   std::string params;
   std::string report;
@@ -40,6 +42,10 @@ std::string absolute(const std::string& path) {
 }
 
 void run_detect_loops(const DetectLoopsArguments& arguments) {
+  // Everything that can be checked is checked before the sequence is read.
+  check_vocabulary_given(arguments.vocab, arguments.descriptor);
+  prepare_output_file("-o", arguments.output);
+  if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
   const vision::LoopDetectorParams params =
       arguments.params.empty() ? vision::LoopDetectorParams{}
                                : vision::LoopDetectorParams::load(arguments.params);
@@ -126,7 +132,7 @@ void add_detect_loops_command(CLI::App& app) {
       "Detect loop closures in an image sequence (Galvez-Lopez & Tardos 2012, Section V)");
   command->add_option("--vocab", arguments->vocab,
                       "Vocabulary file (any supported format); default: the bundled "
-                      "data/vocab/<descriptor>_default.bbw");
+                      "data/vocab/<descriptor>_default.bbw (orb and brief only)");
   add_extractor_options(command, arguments->descriptor, arguments->max_features);
   command->add_option("--params", arguments->params,
                       "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams)");

@@ -16,6 +16,7 @@
 #include "commands.h"
 #include "loop_report.h"
 #include "loop_run.h"
+#include "output_options.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -84,6 +85,8 @@ std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
 }
 
 void run_evaluate(const EvaluateArguments& arguments) {
+  if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
+
   const std::string run_path = LoopRun::path_for(arguments.detections);
   std::unique_ptr<LoopRun> run;
   if (std::filesystem::exists(run_path)) run = std::make_unique<LoopRun>(LoopRun::load(run_path));

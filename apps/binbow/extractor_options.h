@@ -1,26 +1,48 @@
-// The extractor flags shared by the commands that extract features and look
-// them up in a vocabulary (--descriptor, --features), so they read the same
-// everywhere.
+// The extractor flags of every command that extracts features (--descriptor,
+// --features), so they offer the same choices and default everywhere.
 #pragma once
 
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "binbow/vision/features.h"
+
 namespace binbow::cli {
 
-// `descriptor_note` is added to the help of --descriptor, e.g. why it must
-// match something.
-inline void add_extractor_options(CLI::App* command, std::string& descriptor, int& features,
-                                  const std::string& descriptor_note = "") {
+// The descriptor of every command when --descriptor is not given.
+inline constexpr const char* kDefaultDescriptor = "orb";
+// Far above any useful count; it only keeps absurd values away from OpenCV.
+inline constexpr int kMaxFeatures = 1000000;
+
+// --descriptor with every extractor binbow has; `note` is added to the help,
+// e.g. why it must match something.
+inline void add_descriptor_option(CLI::App* command, std::string& descriptor,
+                                  const std::string& note = "") {
+  std::string names;
+  for (const std::string& name : vision::extractor_names())
+    names += (names.empty() ? "" : ", ") + name;
   command
       ->add_option("--descriptor", descriptor,
-                   "Binary descriptor: orb or brief" +
-                       (descriptor_note.empty() ? "" : " (" + descriptor_note + ")"))
-      ->check(CLI::IsMember({"orb", "brief"}))
+                   "Binary descriptor: " + names + (note.empty() ? "" : " (" + note + ")"))
+      ->check(CLI::IsMember(vision::extractor_names()))
       ->capture_default_str();
-  command->add_option("--features", features,
-                      "Features per image (0: the extractor's default, ORB 1000, BRIEF 300)");
+}
+
+// The number of features per image under the option names `names`.
+inline void add_features_option(CLI::App* command, int& features,
+                                const std::string& names = "--features") {
+  command
+      ->add_option(names, features,
+                   "Features per image (0: the extractor's default, ORB 1000, BRIEF 300, AKAZE "
+                   "and BRISK every keypoint found)")
+      ->check(CLI::Range(0, kMaxFeatures));
+}
+
+inline void add_extractor_options(CLI::App* command, std::string& descriptor, int& features,
+                                  const std::string& descriptor_note = "") {
+  add_descriptor_option(command, descriptor, descriptor_note);
+  add_features_option(command, features);
 }
 
 }  // namespace binbow::cli

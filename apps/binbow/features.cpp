@@ -14,19 +14,30 @@
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
 #include "commands.h"
+#include "extractor_options.h"
+#include "output_options.h"
 
 namespace binbow::cli {
 namespace {
 
 struct FeaturesArguments {
   std::string image;
-  std::string descriptor = "brief";
+  std::string descriptor = kDefaultDescriptor;
   int max_features = 0;
   int fast_threshold = -1;
   std::string pattern;
   std::string draw;
   int repeat = 5;
 };
+
+// Options that do not apply to the chosen descriptor are usage errors.
+void check_options_apply(const FeaturesArguments& arguments) {
+  if (!arguments.pattern.empty() && arguments.descriptor != "brief")
+    throw CLI::ValidationError("--pattern", "applies to --descriptor brief only");
+  if (arguments.fast_threshold >= 0 && arguments.descriptor != "brief" &&
+      arguments.descriptor != "orb")
+    throw CLI::ValidationError("--fast-threshold", "applies to --descriptor brief and orb only");
+}
 
 std::unique_ptr<vision::FeatureExtractor> make_configured_extractor(
     const FeaturesArguments& arguments) {
@@ -37,15 +48,11 @@ std::unique_ptr<vision::FeatureExtractor> make_configured_extractor(
     options.pattern_file = arguments.pattern;
     return vision::make_brief_extractor(options);
   }
-  if (!arguments.pattern.empty()) throw InvalidArgument("--pattern applies to brief only");
   if (arguments.descriptor == "orb") {
     vision::OrbOptions options;
     if (arguments.max_features > 0) options.max_features = arguments.max_features;
     if (arguments.fast_threshold >= 0) options.fast_threshold = arguments.fast_threshold;
     return vision::make_orb_extractor(options);
-  }
-  if (arguments.fast_threshold >= 0) {
-    throw InvalidArgument("--fast-threshold applies to brief and orb only");
   }
   return vision::make_extractor(arguments.descriptor, arguments.max_features);
 }
@@ -65,9 +72,14 @@ void draw_features(const cv::Mat& image, const vision::Features& features,
 }
 
 void run_features(const FeaturesArguments& arguments) {
-  if (!arguments.draw.empty() && !cv::haveImageWriter(arguments.draw)) {
-    throw InvalidArgument("--draw " + arguments.draw +
-                          ": OpenCV has no image writer for this extension (use .png or .jpg)");
+  check_options_apply(arguments);
+  if (!arguments.draw.empty()) {
+    if (!cv::haveImageWriter(arguments.draw)) {
+      throw CLI::ValidationError(
+          "--draw",
+          arguments.draw + ": OpenCV has no image writer for this extension (use .png or .jpg)");
+    }
+    prepare_output_file("--draw", arguments.draw);
   }
   const auto extractor = make_configured_extractor(arguments);
   const cv::Mat image = vision::read_grey_image(arguments.image);
@@ -103,12 +115,12 @@ void add_features_command(CLI::App& app) {
       "and the extraction time");
   command->add_option("image", arguments->image, "Image file (any format OpenCV reads)")
       ->required();
-  command->add_option("--descriptor", arguments->descriptor, "brief, orb, akaze or brisk")
-      ->capture_default_str();
-  command->add_option("-n,--features", arguments->max_features,
-                      "Keep at most this many keypoints (default: brief 300, orb 1000)");
-  command->add_option("--fast-threshold", arguments->fast_threshold,
-                      "FAST threshold for brief (default 10) and orb (default 20)");
+  add_descriptor_option(command, arguments->descriptor);
+  add_features_option(command, arguments->max_features, "-n,--features");
+  command
+      ->add_option("--fast-threshold", arguments->fast_threshold,
+                   "FAST threshold for brief (default 10) and orb (default 20)")
+      ->check(CLI::Range(0, 255));
   command->add_option("--pattern", arguments->pattern,
                       "BRIEF test pattern file (OpenCV YAML with x1 y1 x2 y2; default built in)");
   command

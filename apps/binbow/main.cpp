@@ -1,9 +1,34 @@
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <new>
+#include <string>
 
 #include "binbow/error.h"
 #include "commands.h"
 
+namespace {
+
+// The command the user was typing, e.g. "binbow db query", for the usage hint.
+std::string command_path(const CLI::App& app) {
+  std::string path = "binbow";
+  for (const CLI::App* command = &app; !command->get_subcommands().empty();) {
+    command = command->get_subcommands().front();
+    path += " " + command->get_name();
+  }
+  return path;
+}
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "binbow: error: %s\n", message.c_str());
+  return 1;
+}
+
+}  // namespace
+
+// Every failure ends the same way, so scripts can rely on it: one
+// "binbow: error: ..." line on stderr and exit status 1; a usage error adds
+// where to read the usage. --help and --version print to stdout and exit 0.
 int main(int argc, char** argv) {
   CLI::App app{"binbow: fast place recognition and loop closure with bags of binary words"};
   app.require_subcommand(1);
@@ -20,13 +45,19 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    fail(e.what());
+    std::fprintf(stderr, "Run '%s --help' for usage.\n", command_path(app).c_str());
+    return 1;
   } catch (const binbow::Error& e) {
-    std::fprintf(stderr, "binbow: error: %s\n", e.what());
-    return 1;
+    return fail(e.what());
+  } catch (const std::filesystem::filesystem_error& e) {
+    const std::string path = e.path1().string();
+    return fail((path.empty() ? "" : path + ": ") + e.code().message());
+  } catch (const std::bad_alloc&) {
+    return fail("out of memory; try fewer or smaller inputs");
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "binbow: unexpected error: %s\n", e.what());
-    return 1;
+    return fail(e.what());
   }
   return 0;
 }

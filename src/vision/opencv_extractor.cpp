@@ -124,7 +124,14 @@ std::unique_ptr<FeatureExtractor> make_extractor(const std::string& name, int ma
   }
   if (name == "akaze") return make_opencv_extractor(cv::AKAZE::create(), "akaze", max_features);
   if (name == "brisk") return make_opencv_extractor(cv::BRISK::create(), "brisk", max_features);
-  throw InvalidArgument("unknown feature type '" + name + "'; expected orb, brief, akaze or brisk");
+  std::string expected;
+  for (const std::string& known : extractor_names())
+    expected += (expected.empty() ? "" : ", ") + known;
+  throw InvalidArgument("unknown feature type '" + name + "'; expected one of " + expected);
+}
+
+std::vector<std::string> extractor_names() {
+  return {"orb", "brief", "akaze", "brisk"};
 }
 
 }  // namespace binbow::vision

@@ -70,12 +70,13 @@ TEST(CliBuildVocab, RejectsBadArgumentsClearly) {
   EXPECT_EQ(
       run_cli("build-vocab --branching 1 -o '" + dir.file("v.bbw") + "' '" + images + "'", &output),
       1);
-  EXPECT_NE(output.find("binbow: error: --branching must be in 2..255"), std::string::npos)
+  EXPECT_NE(output.find("binbow: error: --branching: Value 1 not in range 2 to 255"),
+            std::string::npos)
       << output;
   EXPECT_EQ(
       run_cli("build-vocab --levels 17 -o '" + dir.file("v.bbw") + "' '" + images + "'", &output),
       1);
-  EXPECT_NE(output.find("--levels must be in 1..16"), std::string::npos) << output;
+  EXPECT_NE(output.find("--levels: Value 17 not in range 1 to 16"), std::string::npos) << output;
   EXPECT_EQ(
       run_cli("build-vocab -o '" + dir.file("v.bbw") + "' '" + dir.file("missing") + "'", &output),
       1);

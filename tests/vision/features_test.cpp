@@ -188,6 +188,21 @@ TEST(Extractors, EmptyAndFlatImagesGiveEmptyFeatures) {
   EXPECT_THROW(make_extractor("sift"), InvalidArgument);
 }
 
+// The list tools offer as choices is exactly what make_extractor() builds.
+TEST(Extractors, NamesListEveryExtractorOrbFirst) {
+  const std::vector<std::string> names = extractor_names();
+  EXPECT_EQ(names, (std::vector<std::string>{"orb", "brief", "akaze", "brisk"}));
+  for (const std::string& name : names) EXPECT_EQ(make_extractor(name)->name(), name);
+  try {
+    make_extractor("sift");
+    ADD_FAILURE() << "sift accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("expected one of orb, brief, akaze, brisk"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Extractors, CodeSizesAndCounts) {
   const cv::Mat image = grey("dbow2-demo-images/image1.png");
   struct Case {

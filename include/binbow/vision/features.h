@@ -106,6 +106,9 @@ std::unique_ptr<FeatureExtractor> make_opencv_extractor(cv::Ptr<cv::Feature2D> d
 // of features (≤ 0: the extractor's default; AKAZE and BRISK keep the
 // strongest `max_features` when > 0). Throws InvalidArgument for other names.
 std::unique_ptr<FeatureExtractor> make_extractor(const std::string& name, int max_features = 0);
+// The names make_extractor() accepts, ORB first: the one list that tools
+// offer as choices.
+std::vector<std::string> extractor_names();
 
 // Conversions from and to OpenCV's keypoints; `descriptors` must be CV_8U with
 // one row per keypoint (throws InvalidArgument otherwise); an empty Mat gives

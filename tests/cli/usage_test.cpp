@@ -1,0 +1,221 @@
+// The command-line contract: every usage error prints "binbow: error: ..."
+// and where to read the usage, and exits 1; outputs are made ready (folders
+// created, blocked paths refused) before any work; every command offers the
+// same extractors with the same default.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+namespace fs = std::filesystem;
+using test::run_cli;
+using test::shared_data;
+using test::TempDir;
+
+std::string quoted(const std::string& path) {
+  return "'" + path + "'";
+}
+
+std::string samples_folder() {
+  const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
+  return first.substr(0, first.rfind('/'));
+}
+
+// A text list of the first `count` corridor frames: a short real sequence.
+std::string short_sequence(const TempDir& dir, int count) {
+  std::string list;
+  for (int i = 1; i <= count; ++i) list += samples_folder() + "/" + std::to_string(i) + ".jpg\n";
+  test::write_file(dir.file("frames.txt"), {list.begin(), list.end()});
+  return dir.file("frames.txt");
+}
+
+// Runs `arguments`, which must fail as a usage error of `command` (e.g.
+// "binbow db query") with a message containing `what`.
+void expect_usage_error(const std::string& arguments, const std::string& command,
+                        const std::string& what) {
+  SCOPED_TRACE("binbow " + arguments);
+  std::string output;
+  EXPECT_EQ(run_cli(arguments, &output), 1) << output;
+  EXPECT_EQ(output.rfind("binbow: error: ", 0), 0u) << output;
+  EXPECT_NE(output.find(what), std::string::npos) << output;
+  EXPECT_NE(output.find("\nRun '" + command + " --help' for usage.\n"), std::string::npos)
+      << output;
+}
+
+TEST(CliUsage, EveryUsageErrorExitsOneAndSaysWhereTheUsageIs) {
+  TempDir dir;
+  const std::string image = quoted(shared_data("rtabmap-samples/samples/1.jpg"));
+  const std::string folder = quoted(samples_folder());
+  const std::string out = quoted(dir.file("out.csv"));
+  test::write_file(dir.file("afile"), {'x'});
+
+  expect_usage_error("", "binbow", "A subcommand is required");
+  expect_usage_error("info", "binbow info", "FILE is required");
+  expect_usage_error("info --no-such-flag " + image, "binbow info", "--no-such-flag");
+  expect_usage_error("info " + image + " extra", "binbow info", "extra");
+  expect_usage_error("db", "binbow db", "A subcommand is required");
+  expect_usage_error("db query --top 0 x.bbdb " + image, "binbow db query", "--top");
+  // A database file holds at most 255: more used to write a file no one could load.
+  expect_usage_error("db build --direct-index-levels-up 300 --vocab " +
+                         quoted(test::source_path("data/vocab/orb_default.bbw")) + " -o " +
+                         quoted(dir.file("x.bbdb")) + " " + folder,
+                     "binbow db build",
+                     "--direct-index-levels-up: Value 300 not in range 0 to 255");
+  expect_usage_error("detect-loops --features abc -o " + out + " " + folder, "binbow detect-loops",
+                     "--features");
+  expect_usage_error("detect-loops --features -5 -o " + out + " " + folder, "binbow detect-loops",
+                     "--features");
+  expect_usage_error("detect-loops --descriptor sift -o " + out + " " + folder,
+                     "binbow detect-loops", "--descriptor");
+  expect_usage_error("features --features -5 " + image, "binbow features", "--features");
+  expect_usage_error("features --fast-threshold 300 " + image, "binbow features",
+                     "--fast-threshold");
+  expect_usage_error("features --descriptor orb --pattern p.yml " + image, "binbow features",
+                     "--pattern");
+  expect_usage_error("features --draw " + quoted(dir.file("x.unknown")) + " " + image,
+                     "binbow features", "--draw");
+  expect_usage_error("build-vocab --threads -1 -o " + quoted(dir.file("v.bbw")) + " " + folder,
+                     "binbow build-vocab", "--threads");
+  expect_usage_error("build-vocab --weighting often -o " + quoted(dir.file("v.bbw")) + " " + folder,
+                     "binbow build-vocab", "unknown weighting 'often'");
+  expect_usage_error("convert a.bbw b.bbw --from morse", "binbow convert",
+                     "unknown vocabulary format 'morse'");
+  expect_usage_error("convert a.bbw b.yml --descriptors hex", "binbow convert", "--descriptors");
+  expect_usage_error("evaluate --gt-base 2 --gt gt.txt loops.csv", "binbow evaluate", "--gt-base");
+  expect_usage_error("demo --out " + quoted(dir.file("afile")), "binbow demo",
+                     dir.file("afile") + ": exists and is not a folder");
+  EXPECT_FALSE(fs::exists(dir.file("out.csv")));
+  EXPECT_FALSE(fs::exists(dir.file("v.bbw")));
+  EXPECT_FALSE(fs::exists(dir.file("x.bbdb")));
+}
+
+TEST(CliUsage, HelpAndVersionStillExitZero) {
+  for (const std::string arguments : {"--help", "db query --help", "detect-loops --help"}) {
+    std::string output;
+    EXPECT_EQ(run_cli(arguments, &output), 0) << output;
+    EXPECT_NE(output.find("Usage:"), std::string::npos) << output;
+    EXPECT_EQ(output.find("error"), std::string::npos) << output;
+  }
+  std::string output;
+  EXPECT_EQ(run_cli("--version", &output), 0) << output;
+  EXPECT_EQ(output.rfind("binbow ", 0), 0u) << output;
+}
+
+TEST(CliOutputs, MissingFoldersOfEveryOutputAreCreated) {
+  TempDir dir;
+  const std::string frames = quoted(short_sequence(dir, 6));
+  std::string output;
+  ASSERT_EQ(run_cli("detect-loops -o " + quoted(dir.file("r1/loops.csv")) + " --report " +
+                        quoted(dir.file("reports/r1")) + " " + frames,
+                    &output),
+            0)
+      << output;
+  EXPECT_TRUE(fs::exists(dir.file("r1/loops.csv")));
+  EXPECT_TRUE(fs::exists(dir.file("r1/loops.csv.run.json")));
+  EXPECT_TRUE(fs::exists(dir.file("reports/r1/index.html")));
+
+  ASSERT_EQ(run_cli("evaluate --gt " + quoted(shared_data("rtabmap-samples/samples_GT.bmp")) +
+                        " --report " + quoted(dir.file("reports/eval")) + " " +
+                        quoted(dir.file("r1/loops.csv")),
+                    &output),
+            0)
+      << output;
+  EXPECT_TRUE(fs::exists(dir.file("reports/eval/index.html")));
+
+  ASSERT_EQ(run_cli("build-vocab --branching 4 --levels 2 -o " + quoted(dir.file("nodir/x.bbw")) +
+                        " " + frames,
+                    &output),
+            0)
+      << output;
+  EXPECT_TRUE(fs::exists(dir.file("nodir/x.bbw")));
+
+  ASSERT_EQ(run_cli("convert " + quoted(dir.file("nodir/x.bbw")) + " " +
+                        quoted(dir.file("converted/x.txt")),
+                    &output),
+            0)
+      << output;
+  EXPECT_TRUE(fs::exists(dir.file("converted/x.txt")));
+
+  ASSERT_EQ(run_cli("db build --vocab " + quoted(dir.file("nodir/x.bbw")) + " -o " +
+                        quoted(dir.file("dbs/a/x.bbdb")) + " " + frames,
+                    &output),
+            0)
+      << output;
+  EXPECT_TRUE(fs::exists(dir.file("dbs/a/x.bbdb")));
+
+  ASSERT_EQ(run_cli("features --repeat 1 --draw " + quoted(dir.file("drawn/1.png")) + " " +
+                        quoted(shared_data("rtabmap-samples/samples/1.jpg")),
+                    &output),
+            0)
+      << output;
+  EXPECT_TRUE(fs::exists(dir.file("drawn/1.png")));
+}
+
+// An output under a regular file cannot be written: the command must say so
+// before reading anything else. Each command is given an input it would
+// reject first if it read it, so only the output check can produce the error.
+TEST(CliOutputs, ABlockedOutputFailsBeforeAnyWork) {
+  TempDir dir;
+  test::write_file(dir.file("afile"), {'x'});
+  const std::string blocked = dir.file("afile/out");
+  const std::string folder = quoted(samples_folder());
+  const std::string missing = quoted(dir.file("missing"));
+  struct Case {
+    std::string arguments, command, option;
+  };
+  const std::vector<Case> cases = {
+      {"detect-loops --vocab " + missing + " -o " + quoted(blocked) + " " + folder,
+       "binbow detect-loops", "-o"},
+      {"detect-loops --vocab " + missing + " -o " + quoted(dir.file("ok.csv")) + " --report " +
+           quoted(blocked) + " " + folder,
+       "binbow detect-loops", "--report"},
+      {"build-vocab -o " + quoted(blocked + ".bbw") + " " + missing, "binbow build-vocab", "-o"},
+      {"db build --vocab " + missing + " -o " + quoted(blocked) + " " + folder, "binbow db build",
+       "-o"},
+      {"convert " + missing + " " + quoted(blocked + ".bbw"), "binbow convert", "OUT"},
+      {"evaluate --gt " + missing + " --report " + quoted(blocked) + " " + missing,
+       "binbow evaluate", "--report"},
+      {"features --draw " + quoted(blocked + ".png") + " " + missing, "binbow features", "--draw"},
+  };
+  for (const Case& c : cases) {
+    expect_usage_error(c.arguments, c.command, c.option + " " + dir.file("afile") + "/out");
+  }
+  std::string output;
+  EXPECT_EQ(run_cli("detect-loops -o " + quoted(dir.path()) + " " + folder, &output), 1);
+  EXPECT_NE(output.find("is a folder, not a file"), std::string::npos) << output;
+}
+
+TEST(CliDescriptors, OrbByDefaultAndEveryExtractorEverywhere) {
+  std::string output;
+  ASSERT_EQ(run_cli("features --repeat 1 " + quoted(shared_data("rtabmap-samples/samples/1.jpg")),
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("descriptor: orb (32 bytes)\n"), std::string::npos) << output;
+
+  for (const std::string command :
+       {"features", "detect-loops", "build-vocab", "db build", "db query", "bench"}) {
+    SCOPED_TRACE(command);
+    ASSERT_EQ(run_cli(command + " --help", &output), 0) << output;
+    EXPECT_NE(output.find("--descriptor TEXT:{orb,brief,akaze,brisk}=orb"), std::string::npos)
+        << output;
+  }
+
+  // No bundled vocabulary for AKAZE or BRISK: the error says to pass one.
+  TempDir dir;
+  for (const std::string& command :
+       std::vector<std::string>{"detect-loops -o " + quoted(dir.file("l.csv")), "bench"}) {
+    expect_usage_error(command + " --descriptor brisk " + quoted(samples_folder()),
+                       "binbow " + command.substr(0, command.find(' ')),
+                       "pass a vocabulary of brisk descriptors with --vocab FILE");
+  }
+}
+
+}  // namespace
+}  // namespace binbow
