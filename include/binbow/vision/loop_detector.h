@@ -101,13 +101,16 @@ struct LoopDetectorParams {
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
-  // file (OpenCV FileStorage). Keys are the field names above; a "frequency"
-  // key first derives the frame-count defaults from it (for_frequency), the
-  // other keys then override. geometric_check takes the to_string() names.
-  // Unknown keys, wrong types and invalid values are FileErrors naming the
-  // file and the key.
-  static LoopDetectorParams load(const std::string& path);
+  // file (OpenCV FileStorage). Keys are the field names above; keys absent
+  // keep their value in `defaults`. A "frequency" key first scales the
+  // frame-count parameters to it (as for_frequency), the other keys then
+  // override. geometric_check takes the to_string() names. Unknown keys,
+  // wrong types and invalid values are FileErrors naming the file and the key.
+  static LoopDetectorParams load(const std::string& path, const LoopDetectorParams& defaults);
+  static LoopDetectorParams load(const std::string& path);  // defaults: the paper's
   // Same from JSON text; `name` is used in error messages.
+  static LoopDetectorParams from_json(const std::string& text, const std::string& name,
+                                      const LoopDetectorParams& defaults);
   static LoopDetectorParams from_json(const std::string& text, const std::string& name = "<json>");
   // Every field as a JSON object (the format load() reads), pretty-printed.
   std::string to_json() const;
