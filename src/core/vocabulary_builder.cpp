@@ -335,7 +335,7 @@ Vocabulary Vocabulary::build(const std::vector<DescriptorView>& images,
     throw InvalidArgument(std::string("Vocabulary::build: ") + to_string(options.weighting) +
                           " weighting needs at least two training images that differ: with one "
                           "image every word's IDF, log(N / N_i), is 0, so every BoW vector would "
-                          "be empty");
+                          "be empty; train on more images or use tf weighting");
   }
   VocabularyTree tree = TreeBuilder(images, code_size, options).build();
 
@@ -372,7 +372,8 @@ Vocabulary Vocabulary::build(const std::vector<DescriptorView>& images,
                             "word appears in all " +
                             std::to_string(images.size()) +
                             " training images, so every word's IDF, log(N / N_i), is 0 and "
-                            "every BoW vector would be empty");
+                            "every BoW vector would be empty; train on more images or use tf "
+                            "weighting");
     }
     char fraction[32];
     std::snprintf(fraction, sizeof fraction, "%g", options.stop_word_fraction);
