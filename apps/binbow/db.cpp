@@ -1,10 +1,11 @@
-// `binbow db build` and `binbow db query`: an image database on disk (.bbdb),
-// and the `binbow info` lines for such a file.
+// `binbow db build`, `query`, `add` and `remove`: an image database on disk
+// (.bbdb), and the `binbow info` lines for such a file.
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "binbow/database.h"
@@ -15,6 +16,8 @@
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
+#include "image_source_options.h"
+#include "loop_run.h"
 #include "output_options.h"
 #include "progress.h"
 
@@ -30,14 +33,26 @@ struct DbBuildArguments {
   unsigned levels_up = 4;
   bool no_direct_index = false;
   bool external_vocabulary = false;
+  vision::ImageSourceOptions source;
 };
 
-struct DbQueryArguments {
+// What db query and db add need to read a database and describe images for it.
+struct DbArguments {
   std::string database;
-  std::string image;
-  std::size_t top = 10;
   std::string descriptor = kDefaultDescriptor;
   int features = 0;
+  std::string vocabulary;
+  std::vector<std::string> inputs;
+  vision::ImageSourceOptions source;
+};
+
+struct DbQueryArguments : DbArguments {
+  std::size_t top = 10;
+};
+
+struct DbRemoveArguments {
+  std::string database;
+  std::vector<EntryId> entries;
   std::string vocabulary;
 };
 
@@ -51,50 +66,121 @@ std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabu
   return extractor;
 }
 
-void run_db_build(const DbBuildArguments& arguments) {
-  prepare_output_file("-o", arguments.output);
-  const Vocabulary vocabulary = load_vocabulary(arguments.vocabulary);
-  const auto extractor =
-      extractor_for(vocabulary, arguments.vocabulary, arguments.descriptor, arguments.features);
-  Database database(vocabulary, {!arguments.no_direct_index, arguments.levels_up});
-  vision::ImageSource source(arguments.inputs);
+// The database, with the --vocab given for one built with --external-vocab.
+Database load_database(const std::string& path, const std::string& vocabulary) {
+  return vocabulary.empty() ? Database::load(path)
+                            : Database::load(path, load_vocabulary(vocabulary));
+}
+
+// The extractor of --descriptor, checked against the database's vocabulary:
+// its own (embedded) or the --vocab given.
+std::unique_ptr<vision::FeatureExtractor> database_extractor(const Database& database,
+                                                             const DbArguments& arguments) {
+  const bool embedded = arguments.vocabulary.empty();
+  return extractor_for(database.vocabulary(), embedded ? arguments.database : arguments.vocabulary,
+                       arguments.descriptor, arguments.features, embedded);
+}
+
+// Adds every frame of the inputs, labelled with its name; returns the entries
+// added with their labels.
+std::vector<std::pair<EntryId, std::string>> add_images(Database& database,
+                                                        const vision::FeatureExtractor& extractor,
+                                                        const std::vector<std::string>& inputs,
+                                                        const vision::ImageSourceOptions& options,
+                                                        std::size_t* features) {
+  vision::ImageSource source(inputs, options);
   const long long known = source.size();
   Progress progress("adding images", known > 0 ? static_cast<std::size_t>(known) : 0);
+  std::vector<std::pair<EntryId, std::string>> added;
   vision::Frame frame;
-  std::size_t features = 0;
   while (source.next(frame)) {
-    const vision::Features extracted = extractor->extract(frame.image);
-    features += extracted.descriptors.rows();
+    const vision::Features extracted = extractor.extract(frame.image);
+    if (features != nullptr) *features += extracted.descriptors.rows();
     const EntryId entry = database.add(extracted.descriptors.view());
     database.set_label(entry, frame.name);
-    progress.update(database.size());
+    added.emplace_back(entry, frame.name);
+    progress.update(added.size());
   }
   progress.finish();
+  return added;
+}
+
+void run_db_build(const DbBuildArguments& arguments) {
+  check_vocabulary_given(arguments.vocabulary, arguments.descriptor);
+  prepare_output_file("-o", arguments.output);
+  const auto extractor = vision::make_extractor(arguments.descriptor, arguments.features);
+  Vocabulary vocabulary;
+  const std::string vocabulary_path = load_loop_vocabulary(
+      arguments.vocabulary, arguments.descriptor, extractor->code_size(), vocabulary);
+  Database database(vocabulary, {!arguments.no_direct_index, arguments.levels_up});
+  std::size_t features = 0;
+  add_images(database, *extractor, arguments.inputs, arguments.source, &features);
   if (database.size() == 0) throw InvalidArgument("db build: no images found in the inputs");
   database.save(arguments.output, !arguments.external_vocabulary);
-  std::printf("%s: %zu entries, %zu features, vocabulary %s\n", arguments.output.c_str(),
-              database.size(), features, vocabulary.description().c_str());
+  std::printf("%s: %zu entries, %zu features, vocabulary %s (%s)\n", arguments.output.c_str(),
+              database.size(), features, vocabulary.description().c_str(), vocabulary_path.c_str());
 }
 
 void run_db_query(const DbQueryArguments& arguments) {
-  const Database database =
-      arguments.vocabulary.empty()
-          ? Database::load(arguments.database)
-          : Database::load(arguments.database, load_vocabulary(arguments.vocabulary));
-  const bool embedded = arguments.vocabulary.empty();
-  const auto extractor =
-      extractor_for(database.vocabulary(), embedded ? arguments.database : arguments.vocabulary,
-                    arguments.descriptor, arguments.features, embedded);
-  const vision::Features features = extractor->extract(vision::read_grey_image(arguments.image));
+  const Database database = load_database(arguments.database, arguments.vocabulary);
+  const auto extractor = database_extractor(database, arguments);
+  vision::ImageSource source(arguments.inputs, arguments.source);
+  vision::Frame frame;
   BowVector bow;
-  database.vocabulary().transform(features.descriptors.view(), bow);
-  const auto results = database.query(bow, arguments.top);
-  std::printf("rank\tentry\tfile\tscore\n");
-  for (std::size_t rank = 0; rank < results.size(); ++rank) {
-    const QueryResult& result = results[rank];
-    std::printf("%zu\t%u\t%s\t%.6f\n", rank + 1, result.entry, database.label(result.entry).c_str(),
-                result.score);
+  for (std::size_t queries = 0; source.next(frame); ++queries) {
+    const vision::Features features = extractor->extract(frame.image);
+    database.vocabulary().transform(features.descriptors.view(), bow);
+    const auto results = database.query(bow, arguments.top);
+    std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",
+                frame.name.c_str());
+    for (std::size_t rank = 0; rank < results.size(); ++rank) {
+      const QueryResult& result = results[rank];
+      std::printf("%zu\t%u\t%s\t%.6f\n", rank + 1, result.entry,
+                  database.label(result.entry).c_str(), result.score);
+    }
+    std::fflush(stdout);
   }
+}
+
+void run_db_add(const DbArguments& arguments) {
+  const bool vocabulary_included = Database::inspect(arguments.database).vocabulary_included;
+  Database database = load_database(arguments.database, arguments.vocabulary);
+  const auto extractor = database_extractor(database, arguments);
+  const auto added = add_images(database, *extractor, arguments.inputs, arguments.source, nullptr);
+  database.save(arguments.database, vocabulary_included);
+  for (const auto& [entry, label] : added) std::printf("added %u\t%s\n", entry, label.c_str());
+  std::printf("%s: %zu entries added, %zu entries\n", arguments.database.c_str(), added.size(),
+              database.size());
+}
+
+void run_db_remove(const DbRemoveArguments& arguments) {
+  const bool vocabulary_included = Database::inspect(arguments.database).vocabulary_included;
+  Database database = load_database(arguments.database, arguments.vocabulary);
+  std::vector<std::pair<EntryId, std::string>> removed;
+  for (const EntryId entry : arguments.entries) {
+    if (!database.contains(entry)) {
+      throw InvalidArgument(arguments.database + ": no entry " + std::to_string(entry) +
+                            " (never added, or removed); nothing was removed");
+    }
+    removed.emplace_back(entry, database.label(entry));
+    database.remove(entry);
+  }
+  database.save(arguments.database, vocabulary_included);
+  for (const auto& [entry, label] : removed) std::printf("removed %u\t%s\n", entry, label.c_str());
+  std::printf("%s: %zu entries removed, %zu entries\n", arguments.database.c_str(), removed.size(),
+              database.size());
+}
+
+// The options db query and db add share.
+void add_database_options(CLI::App* command, DbArguments& arguments,
+                          const std::string& images_help) {
+  command->add_option("DB", arguments.database, "Database (.bbdb)")->required();
+  command->add_option("IMAGES", arguments.inputs, images_help)->required();
+  add_extractor_options(command, arguments.descriptor, arguments.features,
+                        "as used to build the database");
+  command->add_option("--vocab", arguments.vocabulary,
+                      "Vocabulary, for databases built with --external-vocab");
+  add_image_source_options(command, arguments.source);
 }
 
 }  // namespace
@@ -118,14 +204,15 @@ bool print_database_info(const std::string& path, bool verify) {
 }
 
 void add_db_command(CLI::App& app) {
-  CLI::App* db = app.add_subcommand("db", "Build and query image databases (.bbdb)");
+  CLI::App* db = app.add_subcommand("db", "Build, query and edit image databases (.bbdb)");
   db->require_subcommand(1);
 
   auto build = std::make_shared<DbBuildArguments>();
   CLI::App* build_command =
       db->add_subcommand("build", "Add images to a new database and save it (.bbdb)");
-  build_command->add_option("--vocab", build->vocabulary, "Vocabulary (any format binbow reads)")
-      ->required();
+  build_command->add_option("--vocab", build->vocabulary,
+                            "Vocabulary (any format binbow reads); default: the bundled "
+                            "data/vocab/<descriptor>_default.bbw");
   build_command->add_option("-o,--output", build->output, "Output database (.bbdb)")->required();
   add_extractor_options(build_command, build->descriptor, build->features);
   build_command
@@ -140,23 +227,42 @@ void add_db_command(CLI::App& app) {
                           "Store only the vocabulary's checksum, not the vocabulary");
   build_command
       ->add_option("inputs", build->inputs,
-                   "Image files, directories, videos or text lists of images")
+                   "Image files, directories, videos or text lists of images; entries are "
+                   "labelled with the frame names")
       ->required();
+  add_image_source_options(build_command, build->source);
   build_command->callback([build] { run_db_build(*build); });
 
   auto query = std::make_shared<DbQueryArguments>();
-  CLI::App* query_command =
-      db->add_subcommand("query", "The database entries most similar to an image");
-  query_command->add_option("DB", query->database, "Database (.bbdb)")->required();
-  query_command->add_option("IMAGE", query->image, "Query image")->required();
-  query_command->add_option("--top", query->top, "Number of results")
+  CLI::App* query_command = db->add_subcommand(
+      "query", "The database entries most similar to each image: one table per query image");
+  add_database_options(query_command, *query,
+                       "Query images: files, directories, videos or text lists of images");
+  query_command->add_option("--top", query->top, "Number of results per query")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  add_extractor_options(query_command, query->descriptor, query->features,
-                        "as used to build the database");
-  query_command->add_option("--vocab", query->vocabulary,
-                            "Vocabulary, for databases built with --external-vocab");
   query_command->callback([query] { run_db_query(*query); });
+
+  auto add = std::make_shared<DbArguments>();
+  CLI::App* add_command = db->add_subcommand(
+      "add", "Add images to an existing database; it is saved in place, atomically");
+  add_database_options(add_command, *add,
+                       "Image files, directories, videos or text lists of images; entries are "
+                       "labelled with the frame names");
+  add_command->callback([add] { run_db_add(*add); });
+
+  auto remove = std::make_shared<DbRemoveArguments>();
+  CLI::App* remove_command = db->add_subcommand(
+      "remove",
+      "Remove entries from a database by id; it is saved in place, atomically (ids are not "
+      "reused)");
+  remove_command->add_option("DB", remove->database, "Database (.bbdb)")->required();
+  remove_command
+      ->add_option("ENTRY", remove->entries, "Entry ids, as db query and db add print them")
+      ->required();
+  remove_command->add_option("--vocab", remove->vocabulary,
+                             "Vocabulary, for databases built with --external-vocab");
+  remove_command->callback([remove] { run_db_remove(*remove); });
 }
 
 }  // namespace binbow::cli

@@ -1,4 +1,5 @@
 // binbow detect-loops: run the paper's loop detector over an image sequence.
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
+#include "image_source_options.h"
 #include "loop_report.h"
 #include "loop_run.h"
 #include "output_options.h"
@@ -33,6 +35,7 @@ struct DetectLoopsArguments {
   bool timing = false;
   std::string output;
   std::vector<std::string> inputs;
+  vision::ImageSourceOptions source;
 };
 
 std::string absolute(const std::string& path) {
@@ -41,14 +44,58 @@ std::string absolute(const std::string& path) {
   return error ? path : p.lexically_normal().string();
 }
 
+std::string hertz(double frequency) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g Hz", frequency);
+  return text;
+}
+
+// Why the detector runs at params.frequency, for the summary.
+std::string frequency_origin(const vision::LoopDetectorParams& params,
+                             const vision::LoopDetectorParams& defaults, double frame_rate) {
+  if (params.frequency != defaults.frequency) return "--params";
+  if (frame_rate > 0) return "video frames processed per second";
+  return "the paper's default; images have no frame rate";
+}
+
+// Loop candidates of frame t are frames j < t - dislocal, so a sequence not
+// longer than dislocal + 1 frames cannot close a loop whatever it shows.
+void warn_if_no_frame_can_have_a_candidate(const vision::LoopDetectorParams& params,
+                                           std::size_t frames) {
+  if (static_cast<std::size_t>(params.dislocal) + 1 < frames) return;
+  std::fprintf(stderr,
+               "binbow: warning: no frame can have a loop candidate: candidates must be more "
+               "than dislocal = %d frames older than the query, and the sequence has only %zu "
+               "frames; set a smaller \"dislocal\" with --params (a JSON file such as "
+               "{\"dislocal\": 5})\n",
+               params.dislocal, frames);
+}
+
+// Frames per LoopStatus, indexed by its value (consecutive from kLoopDetected).
+using StatusCounts =
+    std::array<std::size_t,
+               static_cast<std::size_t>(vision::LoopStatus::kNoGeometricConsistency) + 1>;
+
+void print_status_counts(const StatusCounts& counts) {
+  std::fprintf(stderr, "frames by status:\n");
+  for (std::size_t value = 0; value < counts.size(); ++value)
+    std::fprintf(stderr, "  %s: %zu\n", vision::to_string(static_cast<vision::LoopStatus>(value)),
+                 counts[value]);
+}
+
 void run_detect_loops(const DetectLoopsArguments& arguments) {
   // Everything that can be checked is checked before the sequence is read.
   check_vocabulary_given(arguments.vocab, arguments.descriptor);
   prepare_output_file("-o", arguments.output);
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
+  vision::ImageSource source(arguments.inputs, arguments.source);
+  const double frame_rate = source.frame_rate();
+  const vision::LoopDetectorParams defaults =
+      frame_rate > 0 ? vision::LoopDetectorParams::for_frequency(frame_rate)
+                     : vision::LoopDetectorParams{};
   const vision::LoopDetectorParams params =
-      arguments.params.empty() ? vision::LoopDetectorParams{}
-                               : vision::LoopDetectorParams::load(arguments.params);
+      arguments.params.empty() ? defaults
+                               : vision::LoopDetectorParams::load(arguments.params, defaults);
   const auto extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
   Vocabulary vocabulary;
   LoopRun run;
@@ -57,15 +104,17 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   run.descriptor = arguments.descriptor;
   run.max_features = arguments.max_features;
   run.params_json = params.to_json();
+  run.source = arguments.source;
   for (const std::string& input : arguments.inputs) run.inputs.push_back(absolute(input));
 
   vision::LoopDetector detector(std::move(vocabulary), params);
-  vision::ImageSource source(arguments.inputs);
   const long long known = source.size();
   Progress progress("detecting loops", known > 0 ? static_cast<std::size_t>(known) : 0);
   run.timing = {{"features", {}}, {"transform", {}},    {"query", {}},
                 {"islands", {}},  {"verification", {}}, {"insertion", {}}};
   std::vector<vision::Detection> detections;
+  StatusCounts status_counts{};
+  std::vector<double> scales;  // Frame::scale of every frame, to record inliers in file pixels
   vision::Frame frame;
   while (source.next(frame)) {
     const auto start = std::chrono::steady_clock::now();
@@ -79,6 +128,8 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
     run.timing[3].ms.push_back(result.times.islands_ms);
     run.timing[4].ms.push_back(result.times.verification_ms);
     run.timing[5].ms.push_back(result.times.insertion_ms);
+    scales.push_back(frame.scale);
+    ++status_counts[static_cast<std::size_t>(result.status)];
     run.frames.push_back({frame.name, vision::to_string(result.status),
                           result.has_candidate ? static_cast<long long>(result.match) : -1,
                           result.score, result.normalised_score, result.inliers.size()});
@@ -87,10 +138,12 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
                             result.normalised_score, result.inliers.size()});
       LoopRecord loop{result.query, result.match, {}};
       const Span<vision::Keypoint> match_points = detector.keypoints(result.match);
+      const auto qs = static_cast<float>(frame.scale);
+      const auto ms = static_cast<float>(scales[result.match]);
       for (const vision::Correspondence& c : result.inliers) {
         const vision::Keypoint& q = features.keypoints[c.first];
         const vision::Keypoint& m = match_points[c.second];
-        loop.inliers.push_back({q.x, q.y, m.x, m.y});
+        loop.inliers.push_back({q.x / qs, q.y / qs, m.x / ms, m.y / ms});
       }
       run.loops.push_back(std::move(loop));
     }
@@ -105,6 +158,10 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
                arguments.output.c_str());
   if (source.unreadable_frames() > 0)
     std::fprintf(stderr, "frames unreadable: %zu\n", source.unreadable_frames());
+  std::fprintf(stderr, "frequency: %s (%s)\n", hertz(params.frequency).c_str(),
+               frequency_origin(params, defaults, frame_rate).c_str());
+  print_status_counts(status_counts);
+  warn_if_no_frame_can_have_a_candidate(params, run.frames.size());
   if (arguments.timing) std::cout << format_timing_table(run.timing) << std::flush;
   if (!arguments.report.empty()) {
     LoopReport report;
@@ -112,6 +169,7 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
     report.facts = {{"inputs", run.inputs.front() + (run.inputs.size() > 1 ? " ..." : "")},
                     {"frames", std::to_string(run.frames.size())},
                     {"loops", std::to_string(detections.size())},
+                    {"frequency", hertz(params.frequency)},
                     {"vocabulary", run.vocabulary},
                     {"descriptor", run.descriptor}};
     report.params_json = run.params_json;
@@ -135,7 +193,9 @@ void add_detect_loops_command(CLI::App& app) {
                       "data/vocab/<descriptor>_default.bbw (orb and brief only)");
   add_extractor_options(command, arguments->descriptor, arguments->max_features);
   command->add_option("--params", arguments->params,
-                      "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams)");
+                      "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams); "
+                      "keys it omits keep their defaults, whose frame counts (dislocal, ...) "
+                      "follow the frames processed per second of a video");
   command->add_option("--report", arguments->report, "Write an HTML report into this directory");
   command->add_flag("--timing", arguments->timing,
                     "Print mean, median and max milliseconds per frame of each stage");
@@ -144,8 +204,11 @@ void add_detect_loops_command(CLI::App& app) {
                    "Detected loops, CSV: query_index,match_index,query_file,match_file,score,"
                    "inliers (a run record <output>.run.json is written beside it)")
       ->required();
-  command->add_option("inputs", arguments->inputs, "Image directory, video or text list of images")
+  command
+      ->add_option("inputs", arguments->inputs,
+                   "Image files, directories, videos or text lists of images")
       ->required();
+  add_image_source_options(command, arguments->source);
   command->callback([arguments] { run_detect_loops(*arguments); });
 }
 

@@ -47,7 +47,7 @@ std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
   load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), vocabulary);
   const vision::LoopDetectorParams base = vision::LoopDetectorParams::from_json(run.params_json);
 
-  vision::ImageSource source(run.inputs);
+  vision::ImageSource source(run.inputs, run.source);
   std::vector<vision::Features> features;
   std::vector<std::string> names;
   {

@@ -1,4 +1,5 @@
-// binbow features: detect and describe keypoints in one image.
+// binbow features: detect and describe keypoints in one image (the first
+// frame of a video, directory or list).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include "binbow/vision/image_source.h"
 #include "commands.h"
 #include "extractor_options.h"
+#include "image_source_options.h"
 #include "output_options.h"
 
 namespace binbow::cli {
@@ -28,6 +30,7 @@ struct FeaturesArguments {
   std::string pattern;
   std::string draw;
   int repeat = 5;
+  vision::ImageSourceOptions source;
 };
 
 // Options that do not apply to the chosen descriptor are usage errors.
@@ -82,7 +85,10 @@ void run_features(const FeaturesArguments& arguments) {
     prepare_output_file("--draw", arguments.draw);
   }
   const auto extractor = make_configured_extractor(arguments);
-  const cv::Mat image = vision::read_grey_image(arguments.image);
+  vision::ImageSource source({arguments.image}, arguments.source);
+  vision::Frame frame;
+  if (!source.next(frame)) throw FileError(arguments.image, "has no frames");
+  const cv::Mat& image = frame.image;
   // The first call pays for OpenCV's lazy initialisation; time the calls after it.
   const vision::Features features = extractor->extract(image);
   std::vector<double> times;
@@ -95,7 +101,7 @@ void run_features(const FeaturesArguments& arguments) {
   }
   std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
   const double milliseconds = times[times.size() / 2];
-  std::printf("image: %s (%dx%d)\n", arguments.image.c_str(), image.cols, image.rows);
+  std::printf("image: %s (%dx%d)\n", frame.name.c_str(), image.cols, image.rows);
   std::printf("descriptor: %s (%zu bytes)\n", extractor->name().c_str(), extractor->code_size());
   std::printf("keypoints: %zu\n", features.keypoints.size());
   std::printf("time: %.3f ms (median of %d runs)\n", milliseconds, arguments.repeat);
@@ -113,7 +119,10 @@ void add_features_command(CLI::App& app) {
       "features",
       "Detect keypoints and compute binary descriptors in one image; print the count "
       "and the extraction time");
-  command->add_option("image", arguments->image, "Image file (any format OpenCV reads)")
+  command
+      ->add_option("image", arguments->image,
+                   "Image file (any format OpenCV reads); of a video, directory or text list "
+                   "of images, the first frame")
       ->required();
   add_descriptor_option(command, arguments->descriptor);
   add_features_option(command, arguments->max_features, "-n,--features");
@@ -129,6 +138,7 @@ void add_features_command(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   command->add_option("--draw", arguments->draw, "Write the image with its keypoints to this file");
+  add_image_source_options(command, arguments->source);
   command->callback([arguments] { run_features(*arguments); });
 }
 

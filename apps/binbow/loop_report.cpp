@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "binbow/error.h"
+#include "binbow/vision/image_source.h"
 
 namespace binbow::cli {
 namespace {
@@ -78,12 +79,12 @@ std::string base64(const std::vector<unsigned char>& bytes) {
   return out;
 }
 
-// The two images scaled to one height, side by side, inliers as lines. Empty
-// string if an image cannot be read.
+// The two images scaled to one height, side by side, inliers as lines, as a
+// data URL. Throws FileError if an image cannot be read.
 std::string pair_image(const ReportLoop& loop) {
-  const cv::Mat query = cv::imread(loop.detection.query_file, cv::IMREAD_COLOR);
-  const cv::Mat match = cv::imread(loop.detection.match_file, cv::IMREAD_COLOR);
-  if (query.empty() || match.empty()) return {};
+  // By name: a file, or "video#N" for a frame of a video.
+  const cv::Mat query = vision::read_frame(loop.detection.query_file, vision::FramePixels::kBgr);
+  const cv::Mat match = vision::read_frame(loop.detection.match_file, vision::FramePixels::kBgr);
   const double sq = double(kPairHeight) / query.rows, sm = double(kPairHeight) / match.rows;
   cv::Mat a, b;
   cv::resize(query, a, cv::Size(std::max(1, int(query.cols * sq)), kPairHeight), 0, 0,
@@ -230,13 +231,13 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
     ++drawn;
     const auto& d = loop.detection;
     html << "<figure id='loop-" << d.query << "-" << d.match << "'>";
-    const std::string image = pair_image(loop);
-    if (image.empty())
-      html << "<p>(images not readable: " << escape(d.query_file) << ", " << escape(d.match_file)
-           << ")</p>";
-    else
+    try {
+      const std::string image = pair_image(loop);
       html << "<img alt='query " << d.query << " and match " << d.match << "' src='" << image
            << "'>";
+    } catch (const FileError& e) {
+      html << "<p>(images not readable: " << escape(e.what()) << ")</p>";
+    }
     html << "<figcaption>query " << d.query << " (" << escape(d.query_file) << ") ↔ match "
          << d.match << " (" << escape(d.match_file) << "): " << loop.inliers.size()
          << " inliers drawn, score " << format("%.4f", d.score)

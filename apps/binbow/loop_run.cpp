@@ -54,6 +54,8 @@ void LoopRun::save(const std::string& path) const {
   j["descriptor"] = descriptor;
   j["max_features"] = max_features;
   j["params"] = Json::parse(params_json);
+  j["source"] = {
+      {"stride", source.stride}, {"max_width", source.max_width}, {"video_fps", source.video_fps}};
   Json frames_json = Json::array();
   for (const FrameRecord& f : frames)
     frames_json.push_back({{"file", f.file},
@@ -87,6 +89,12 @@ LoopRun LoopRun::load(const std::string& path) {
     run.descriptor = j.at("descriptor").get<std::string>();
     run.max_features = j.at("max_features").get<int>();
     run.params_json = j.at("params").dump(2);
+    if (j.contains("source")) {  // absent from records of earlier versions
+      const Json& source = j.at("source");
+      run.source.stride = source.at("stride").get<std::size_t>();
+      run.source.max_width = source.at("max_width").get<int>();
+      run.source.video_fps = source.at("video_fps").get<double>();
+    }
     for (const Json& f : j.at("frames"))
       run.frames.push_back({f.at("file").get<std::string>(), f.at("status").get<std::string>(),
                             f.at("match").get<long long>(), f.at("score").get<double>(),

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "binbow/vision/image_source.h"
 #include "binbow/vision/loop_detector.h"
 
 namespace binbow::cli {
@@ -42,10 +43,11 @@ struct LoopRun {
   std::vector<std::string> inputs;  // absolute paths
   std::string vocabulary;           // absolute path
   std::string descriptor;
-  int max_features = 0;     // 0: the extractor's default
-  std::string params_json;  // LoopDetectorParams::to_json()
+  int max_features = 0;               // 0: the extractor's default
+  std::string params_json;            // LoopDetectorParams::to_json()
+  vision::ImageSourceOptions source;  // how the inputs were read (stride, ...)
   std::vector<FrameRecord> frames;
-  std::vector<LoopRecord> loops;
+  std::vector<LoopRecord> loops;    // inliers in pixels of the files (Frame::scale undone)
   std::vector<StageTiming> timing;  // features, transform, query, islands, verification, insertion
 
   static std::string path_for(const std::string& loops_csv) { return loops_csv + ".run.json"; }

@@ -86,7 +86,10 @@ class Vocabulary {
   // Hierarchical k-medians over training descriptors, one view per training
   // image (the images define the IDF weights: idf = log(N / N_i), N images,
   // N_i of them containing word i). Throws InvalidArgument on empty input,
-  // mixed code sizes, branching outside 2..255 or levels outside 1..16.
+  // mixed code sizes, branching outside 2..255 or levels outside 1..16, and
+  // when every word would weigh 0 (every BoW vector empty): IDF weighting of
+  // fewer than two images, or of images all sharing every word, or every word
+  // a stop word.
   static Vocabulary build(const std::vector<DescriptorView>& images, const BuildOptions& options);
 
   // From a plain tree. Validates it (parents in range, no cycle or unreachable

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numeric>
 #include <string>
@@ -328,9 +329,16 @@ std::vector<std::uint32_t> image_counts(const Vocabulary& vocabulary,
 Vocabulary Vocabulary::build(const std::vector<DescriptorView>& images,
                              const BuildOptions& options) {
   const std::size_t code_size = validate(images, options);
+  const bool idf = options.weighting == Weighting::kTfIdf || options.weighting == Weighting::kIdf;
+  // Checked before clustering, which can take minutes: the outcome is known.
+  if (idf && images.size() < 2) {
+    throw InvalidArgument(std::string("Vocabulary::build: ") + to_string(options.weighting) +
+                          " weighting needs at least two training images that differ: with one "
+                          "image every word's IDF, log(N / N_i), is 0, so every BoW vector would "
+                          "be empty; train on more images or use tf weighting");
+  }
   VocabularyTree tree = TreeBuilder(images, code_size, options).build();
 
-  const bool idf = options.weighting == Weighting::kTfIdf || options.weighting == Weighting::kIdf;
   const bool stop_words = options.stop_word_fraction < 1.0;
   if (!idf && !stop_words) return from_tree(tree);
 
@@ -351,6 +359,29 @@ Vocabulary Vocabulary::build(const std::vector<DescriptorView>& images,
     if (idf) weight = counts[word] == 0 ? 0.0 : std::log(image_count / counts[word]);
     if (stop_words && counts[word] > stop_limit) weight = 0.0;
     weighted.weights[word_nodes[word]] = static_cast<float>(weight);
+  }
+  // Such a vocabulary transforms every image to an empty BoW vector.
+  if (std::all_of(weighted.weights.begin(), weighted.weights.end(),
+                  [](float weight) { return weight == 0.0f; })) {
+    const bool in_every_image = std::all_of(counts.begin(), counts.end(), [&](std::uint32_t n) {
+      return n == 0 || n == images.size();
+    });
+    if (idf && in_every_image) {
+      throw InvalidArgument(std::string("Vocabulary::build: ") + to_string(options.weighting) +
+                            " weighting needs at least two training images that differ: every "
+                            "word appears in all " +
+                            std::to_string(images.size()) +
+                            " training images, so every word's IDF, log(N / N_i), is 0 and "
+                            "every BoW vector would be empty; train on more images or use tf "
+                            "weighting");
+    }
+    char fraction[32];
+    std::snprintf(fraction, sizeof fraction, "%g", options.stop_word_fraction);
+    throw InvalidArgument(std::string("Vocabulary::build: every word is a stop word (in more "
+                                      "than stop_word_fraction = ") +
+                          fraction + " of the " + std::to_string(images.size()) +
+                          " training images), so every BoW vector would be empty; raise "
+                          "stop_word_fraction");
   }
   return from_tree(weighted);
 }

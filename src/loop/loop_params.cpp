@@ -107,14 +107,30 @@ const std::vector<Field>& fields() {
   return table;
 }
 
-LoopDetectorParams from_object(const Json& object, const std::string& name) {
+// The frame-count parameters of `p` scaled from the paper's 1 Hz values to `f` Hz.
+void scale_to_frequency(LoopDetectorParams& p, double f) {
+  if (!(f > 0) || f > kMaxFrequency) throw InvalidArgument("frequency must be in (0, 10000] Hz");
+  const auto scaled = [f](double base, int at_least) {
+    return std::max(at_least, static_cast<int>(base * f));
+  };
+  p.frequency = f;
+  p.dislocal = scaled(20, 0);
+  p.max_db_results = scaled(50, 1);
+  p.min_matches_per_island = scaled(1, 1);
+  p.max_intra_island_gap = scaled(3, 1);
+  p.max_distance_between_islands = scaled(3, 0);
+  p.max_distance_between_queries = scaled(2, 1);
+}
+
+LoopDetectorParams from_object(const Json& object, const std::string& name,
+                               const LoopDetectorParams& defaults) {
   if (!object.is_object()) throw FileError(name, "loop detector parameters must be an object");
-  LoopDetectorParams params;
+  LoopDetectorParams params = defaults;
   if (object.contains("frequency")) {
     const Json& f = object["frequency"];
     if (!f.is_number() || !(f.get<double>() > 0) || !(f.get<double>() <= kMaxFrequency))
       throw FileError(name, "\"frequency\" must be a number in (0, 10000]");
-    params = LoopDetectorParams::for_frequency(f.get<double>());
+    scale_to_frequency(params, f.get<double>());
   }
   for (const auto& [key, value] : object.items()) {
     const auto field = std::find_if(fields().begin(), fields().end(),
@@ -190,18 +206,8 @@ const char* to_string(LoopStatus status) {
 }
 
 LoopDetectorParams LoopDetectorParams::for_frequency(double f) {
-  if (!(f > 0) || f > kMaxFrequency) throw InvalidArgument("frequency must be in (0, 10000] Hz");
-  const auto scaled = [f](double base, int at_least) {
-    return std::max(at_least, static_cast<int>(base * f));
-  };
   LoopDetectorParams p;
-  p.frequency = f;
-  p.dislocal = scaled(20, 0);
-  p.max_db_results = scaled(50, 1);
-  p.min_matches_per_island = scaled(1, 1);
-  p.max_intra_island_gap = scaled(3, 1);
-  p.max_distance_between_islands = scaled(3, 0);
-  p.max_distance_between_queries = scaled(2, 1);
+  scale_to_frequency(p, f);
   return p;
 }
 
@@ -243,24 +249,26 @@ void LoopDetectorParams::validate() const {
   in_range("max_ransac_iterations", max_ransac_iterations, 1, kMaxRansacIterations);
 }
 
-LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name) {
+LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name,
+                                                 const LoopDetectorParams& defaults) {
   Json object;
   try {
     object = Json::parse(text);
   } catch (const Json::exception& e) {
     throw FileError(name, std::string("invalid JSON: ") + e.what());
   }
-  return from_object(object, name);
+  return from_object(object, name, defaults);
 }
 
-LoopDetectorParams LoopDetectorParams::load(const std::string& path) {
+LoopDetectorParams LoopDetectorParams::load(const std::string& path,
+                                            const LoopDetectorParams& defaults) {
   const std::string text = read_regular_file(path, kMaxLoopParamsFileBytes);
   // Both parsers recurse per nesting level; parameters are one flat mapping.
   check_storage_nesting(text, path);
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool json = (first != std::string::npos && text[first] == '{') ||
                     (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0);
-  if (json) return from_json(text, path);
+  if (json) return from_json(text, path, defaults);
 
   // YAML (or XML) through OpenCV: converted to JSON to share one validator.
   Json object = Json::object();
@@ -275,7 +283,15 @@ LoopDetectorParams LoopDetectorParams::load(const std::string& path) {
   } catch (const cv::Exception& e) {
     throw FileError(path, "invalid YAML: " + e.msg);
   }
-  return from_object(object, path);
+  return from_object(object, path, defaults);
+}
+
+LoopDetectorParams LoopDetectorParams::load(const std::string& path) {
+  return load(path, LoopDetectorParams{});
+}
+
+LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name) {
+  return from_json(text, name, LoopDetectorParams{});
 }
 
 std::string LoopDetectorParams::to_json() const {

@@ -7,7 +7,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <string>
 #include <system_error>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -79,6 +81,25 @@ const std::vector<int>& file_backends() {
   return backends;
 }
 
+// Opens a video file with the first backend that can; throws FileError.
+void open_video_file(cv::VideoCapture& capture, const std::string& path) {
+  bool opened = false;
+  try {
+    for (const int backend : file_backends()) {
+      if ((opened = capture.open(path, backend))) break;
+    }
+  } catch (const cv::Exception& e) {
+    throw FileError(path, "cannot open video: " + e.msg);
+  }
+  if (!opened) throw FileError(path, "cannot open as an image or a video");
+}
+
+// The frame rate a video reports, 0 if none.
+double reported_frame_rate(const cv::VideoCapture& capture) {
+  const double fps = capture.get(cv::CAP_PROP_FPS);
+  return std::isfinite(fps) && fps > 0 ? fps : 0;
+}
+
 cv::Mat limit_width(const cv::Mat& image, int max_width) {
   if (max_width <= 0 || image.cols <= max_width) return image;
   const double scale = static_cast<double>(max_width) / image.cols;
@@ -120,9 +141,8 @@ void check_pixel_count(const std::string& path, const char* what, std::uint64_t 
   }
 }
 
-}  // namespace
-
-cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
+// The checks of read_grey_image, then decoding with `imread_flags`.
+cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint64_t max_pixels) {
   const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
   if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
@@ -147,7 +167,7 @@ cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
   try {
     image = cv::imdecode(
         cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
-        cv::IMREAD_GRAYSCALE);
+        imread_flags);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot decode image: " + e.msg);
   }
@@ -158,13 +178,81 @@ cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
   // The decoder read the same header; a larger result means this reader was misled.
   check_pixel_count(path, "decoded image", static_cast<std::uint64_t>(image.cols),
                     static_cast<std::uint64_t>(image.rows), max_pixels);
-  return to_grey(image);
+  return image;
+}
+
+cv::Mat to_pixels(const cv::Mat& image, FramePixels pixels) {
+  if (pixels == FramePixels::kGrey) return to_grey(image);
+  if (image.channels() == 3) return image;
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, image.channels() == 4 ? cv::COLOR_BGRA2BGR : cv::COLOR_GRAY2BGR);
+  return bgr;
+}
+
+// Splits "VIDEO#N" into VIDEO and N; false for any other form.
+bool split_video_frame_name(const std::string& name, std::string& video, long long& frame) {
+  const std::size_t hash = name.rfind('#');
+  constexpr std::size_t kMaxDigits = 18;  // fits a long long
+  if (hash == std::string::npos || hash == 0 || hash + 1 == name.size() ||
+      name.size() - hash - 1 > kMaxDigits) {
+    return false;
+  }
+  const auto digit = [](unsigned char c) { return std::isdigit(c) != 0; };
+  if (!std::all_of(name.begin() + static_cast<long>(hash) + 1, name.end(), digit)) return false;
+  video = name.substr(0, hash);
+  frame = std::stoll(name.substr(hash + 1));
+  return true;
+}
+
+cv::Mat read_video_frame(const std::string& path, long long frame) {
+  cv::VideoCapture capture;
+  open_video_file(capture, path);
+  cv::Mat image;
+  try {
+    // Seeking is exact for intra-only codecs and OpenCV's FFmpeg backend; a
+    // backend that cannot seek, or lands elsewhere, is read from the start.
+    const auto target = static_cast<double>(frame);
+    const bool sought = frame == 0 || (capture.set(cv::CAP_PROP_POS_FRAMES, target) &&
+                                       capture.get(cv::CAP_PROP_POS_FRAMES) == target);
+    if (!sought) {
+      open_video_file(capture, path);
+      long long skipped = 0;
+      while (skipped < frame && capture.grab()) ++skipped;
+    }
+    capture.read(image);
+  } catch (const cv::Exception& e) {
+    throw FileError(path, "cannot read frame " + std::to_string(frame) + ": " + e.msg);
+  }
+  if (image.empty()) {
+    throw FileError(path, "has no frame " + std::to_string(frame) +
+                              " (frames are counted from 0) or cannot decode it");
+  }
+  return image;
+}
+
+}  // namespace
+
+cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
+  return to_grey(read_checked_image(path, cv::IMREAD_GRAYSCALE, max_pixels));
+}
+
+cv::Mat read_frame(const std::string& name, FramePixels pixels) {
+  std::error_code error;
+  std::string video;
+  long long frame = 0;
+  if (!fs::exists(name, error) && split_video_frame_name(name, video, frame) &&
+      fs::is_regular_file(video, error)) {
+    return to_pixels(read_video_frame(video, frame), pixels);
+  }
+  const int flags = pixels == FramePixels::kGrey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR;
+  return to_pixels(read_checked_image(name, flags, kDefaultMaxImagePixels), pixels);
 }
 
 struct ImageSource::Impl {
   struct Input {
     std::string path;
     bool video = false;
+    double frame_rate = -1;  // videos: as reported (0: none), -1 until read
   };
 
   std::vector<Input> inputs;
@@ -257,9 +345,7 @@ struct ImageSource::Impl {
       if (!capture.retrieve(image) || image.empty()) {
         throw FileError(video_path, "cannot decode frame " + std::to_string(video_frame));
       }
-      frame.image = limit_width(to_grey(image), options.max_width);
-      frame.name = video_path + "#" + std::to_string(video_frame);
-      frame.index = frames_kept++;
+      deliver(frame, to_grey(image), video_path + "#" + std::to_string(video_frame));
       return true;
     }
     // The backend stops at the first frame it cannot decode: what the
@@ -275,15 +361,7 @@ struct ImageSource::Impl {
     video_path = path;
     video_frame = -1;
     next_sample = 0;
-    bool opened = false;
-    try {
-      for (const int backend : file_backends()) {
-        if ((opened = capture.open(path, backend))) break;
-      }
-    } catch (const cv::Exception& e) {
-      throw FileError(path, "cannot open video: " + e.msg);
-    }
-    if (!opened) throw FileError(path, "cannot open as an image or a video");
+    open_video_file(capture, path);
     const double width = capture.get(cv::CAP_PROP_FRAME_WIDTH);
     const double height = capture.get(cv::CAP_PROP_FRAME_HEIGHT);
     if (width >= 0 && height >= 0 && width < 1e12 && height < 1e12) {
@@ -293,8 +371,15 @@ struct ImageSource::Impl {
     const double declared = capture.get(cv::CAP_PROP_FRAME_COUNT);
     video_declared_frames =
         std::isfinite(declared) && declared > 0 && declared < 1e15 ? std::llround(declared) : 0;
-    const double fps = capture.get(cv::CAP_PROP_FPS);
+    const double fps = reported_frame_rate(capture);
     video_step = (options.video_fps > 0 && fps > options.video_fps) ? fps / options.video_fps : 1;
+  }
+
+  void deliver(Frame& frame, const cv::Mat& grey, std::string name) {
+    frame.image = limit_width(grey, options.max_width);
+    frame.name = std::move(name);
+    frame.index = frames_kept++;
+    frame.scale = static_cast<double>(frame.image.cols) / grey.cols;
   }
 
   bool next(Frame& frame) {
@@ -310,9 +395,7 @@ struct ImageSource::Impl {
         continue;
       }
       if (!keep_next()) continue;
-      frame.image = limit_width(read_grey_image(input.path, options.max_pixels), options.max_width);
-      frame.name = input.path;
-      frame.index = frames_kept++;
+      deliver(frame, read_grey_image(input.path, options.max_pixels), input.path);
       return true;
     }
   }
@@ -346,6 +429,23 @@ long long ImageSource::size() const {
   if (has_video) return -1;
   const auto stride = static_cast<long long>(impl_->options.stride);
   return (static_cast<long long>(impl_->inputs.size()) + stride - 1) / stride;
+}
+
+double ImageSource::frame_rate() const {
+  double rate = 0;
+  for (Impl::Input& input : impl_->inputs) {
+    if (!input.video) return 0;
+    if (input.frame_rate < 0) {
+      cv::VideoCapture capture;
+      open_video_file(capture, input.path);
+      input.frame_rate = reported_frame_rate(capture);
+    }
+    if (input.frame_rate == 0 || (rate != 0 && input.frame_rate != rate)) return 0;
+    rate = input.frame_rate;
+  }
+  const ImageSourceOptions& options = impl_->options;
+  if (options.video_fps > 0) rate = std::min(rate, options.video_fps);
+  return rate / static_cast<double>(options.stride);
 }
 
 }  // namespace binbow::vision

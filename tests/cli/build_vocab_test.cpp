@@ -87,5 +87,30 @@ TEST(CliBuildVocab, RejectsBadArgumentsClearly) {
   EXPECT_TRUE(read_file(dir.file("v.bbw")).empty());
 }
 
+// One image gives every word IDF 0, so every BoW vector would be empty: an
+// error that says why, and no file.
+TEST(CliBuildVocab, RefusesATrainingSetOfOneImage) {
+  TempDir dir;
+  const std::string image = shared_data("dbow2-demo-images/image0.png");
+  std::string output;
+  EXPECT_EQ(
+      run_cli("build-vocab --branching 4 --levels 2 -o '" + dir.file("v.bbw") + "' '" + image + "'",
+              &output),
+      1);
+  EXPECT_NE(output.find("binbow: error: Vocabulary::build: tf-idf weighting needs at least two "
+                        "training images that differ"),
+            std::string::npos)
+      << output;
+  EXPECT_TRUE(read_file(dir.file("v.bbw")).empty());
+  // The same image twice: every word is in every image.
+  EXPECT_EQ(run_cli("build-vocab --branching 4 --levels 2 -o '" + dir.file("v.bbw") + "' '" +
+                        image + "' '" + image + "'",
+                    &output),
+            1);
+  EXPECT_NE(output.find("every word appears in all 2 training images"), std::string::npos)
+      << output;
+  EXPECT_TRUE(read_file(dir.file("v.bbw")).empty());
+}
+
 }  // namespace
 }  // namespace binbow

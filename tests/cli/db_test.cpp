@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -45,10 +47,139 @@ TEST(CliDb, BuildQueryInfo) {
   // Frame 54 revisits frame 14 (ground truth): itself first, its old view next.
   ASSERT_EQ(run_cli("db query '" + database + "' '" + folder + "/54.jpg' --top 3", &output), 0)
       << output;
-  EXPECT_NE(output.find("rank\tentry\tfile\tscore\n"), std::string::npos) << output;
+  EXPECT_EQ(output.find("query: " + folder + "/54.jpg\nrank\tentry\tfile\tscore\n"), 0u) << output;
   EXPECT_NE(output.find("1\t53\t" + folder + "/54.jpg\t1.000000\n"), std::string::npos) << output;
   EXPECT_NE(output.find("2\t13\t" + folder + "/14.jpg\t"), std::string::npos) << output;
-  EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 4) << output;
+  EXPECT_EQ(std::count(output.begin(), output.end(), '\n'), 5) << output;
+}
+
+// One table per query image, whether the images are named, in a folder, in
+// a list or sampled with the image-source options.
+TEST(CliDb, QueriesSeveralImagesOneTableEach) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  const std::string database = dir.file("corridor.bbdb");
+  std::string output;
+  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
+                        "' -o '" + database + "' '" + folder + "'",
+                    &output),
+            0)
+      << output;
+  ASSERT_EQ(
+      run_cli("db query '" + database + "' '" + folder + "/54.jpg' '" + folder + "/14.jpg' --top 2",
+              &output),
+      0)
+      << output;
+  const std::string first = "query: " + folder + "/54.jpg\nrank\tentry\tfile\tscore\n1\t53\t" +
+                            folder + "/54.jpg\t1.000000\n2\t13\t" + folder + "/14.jpg\t";
+  EXPECT_EQ(output.find(first), 0u) << output;
+  const std::string second = "\n\nquery: " + folder + "/14.jpg\nrank\tentry\tfile\tscore\n1\t13\t" +
+                             folder + "/14.jpg\t1.000000\n2\t52\t" + folder + "/53.jpg\t";
+  EXPECT_NE(output.find(second), std::string::npos) << output;
+
+  ASSERT_EQ(run_cli("db query '" + database + "' '" + folder + "' --stride 10 --top 1", &output), 0)
+      << output;
+  std::size_t tables = 0;
+  for (int frame = 1; frame <= 84; frame += 10) {
+    const std::string name = folder + "/" + std::to_string(frame) + ".jpg";
+    EXPECT_NE(output.find("query: " + name + "\nrank\tentry\tfile\tscore\n1\t" +
+                          std::to_string(frame - 1) + "\t" + name + "\t1.000000\n"),
+              std::string::npos)
+        << name << "\n"
+        << output;
+    ++tables;
+  }
+  EXPECT_EQ(static_cast<std::size_t>(std::count(output.begin(), output.end(), '\n')),
+            tables * 3 + tables - 1)
+      << output;
+}
+
+// Without --vocab, db build uses the bundled vocabulary of --descriptor, as
+// detect-loops does.
+TEST(CliDb, BuildDefaultsToTheBundledVocabulary) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  const std::string database = dir.file("d.bbdb");
+  std::string output;
+  ASSERT_EQ(run_cli("db build --descriptor brief -o '" + database + "' '" + folder + "/1.jpg' '" +
+                        folder + "/2.jpg'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("2 entries"), std::string::npos) << output;
+  EXPECT_NE(output.find("brief_default.bbw"), std::string::npos) << output;
+  ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
+  const Vocabulary bundled = load_vocabulary(test::source_path("data/vocab/brief_default.bbw"));
+  char checksum[16];
+  std::snprintf(checksum, sizeof checksum, "%08x", bundled.checksum());
+  EXPECT_NE(output.find(std::string("vocabulary_checksum: ") + checksum + "\n"), std::string::npos)
+      << output;
+}
+
+TEST(CliDb, AddsAndRemovesEntriesInPlace) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  const std::string database = dir.file("d.bbdb");
+  const std::string vocabulary = shared_data("kimera-small-voc/small_voc.yml.gz");
+  std::string output;
+  ASSERT_EQ(run_cli("db build --external-vocab --vocab '" + vocabulary + "' -o '" + database +
+                        "' '" + folder + "/1.jpg' '" + folder + "/2.jpg'",
+                    &output),
+            0)
+      << output;
+
+  const std::string list = dir.file("more.txt");
+  test::write_file(list, {'5', '4', '.', 'j', 'p', 'g', '\n'});
+  std::filesystem::copy_file(folder + "/54.jpg", dir.file("54.jpg"));
+  ASSERT_EQ(run_cli("db add '" + database + "' --vocab '" + vocabulary + "' '" + folder +
+                        "/14.jpg' '" + list + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("added 2\t" + folder + "/14.jpg\nadded 3\t" + dir.file("54.jpg") + "\n"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find(database + ": 2 entries added, 4 entries\n"), std::string::npos) << output;
+  ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
+  EXPECT_NE(output.find("entries: 4\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("vocabulary_included: no\n"), std::string::npos) << output;
+  ASSERT_EQ(run_cli("db query '" + database + "' --vocab '" + vocabulary + "' '" + folder +
+                        "/54.jpg' --top 2",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(
+      output.find("1\t3\t" + dir.file("54.jpg") + "\t1.000000\n2\t2\t" + folder + "/14.jpg\t"),
+      std::string::npos)
+      << output;
+
+  ASSERT_EQ(run_cli("db remove '" + database + "' --vocab '" + vocabulary + "' 0 3", &output), 0)
+      << output;
+  EXPECT_NE(output.find("removed 0\t" + folder + "/1.jpg\nremoved 3\t" + dir.file("54.jpg") + "\n" +
+                        database + ": 2 entries removed, 2 entries\n"),
+            std::string::npos)
+      << output;
+  ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
+  EXPECT_NE(output.find("entries: 2\nnext_entry_id: 4\n"), std::string::npos) << output;
+
+  // A missing entry changes nothing, even after a valid one.
+  const std::vector<std::uint8_t> before = test::read_file(database);
+  EXPECT_EQ(run_cli("db remove '" + database + "' --vocab '" + vocabulary + "' 1 3", &output), 1);
+  EXPECT_NE(output.find("binbow: error: " + database + ": no entry 3"), std::string::npos)
+      << output;
+  EXPECT_EQ(test::read_file(database), before);
+  EXPECT_EQ(run_cli("db add '" + database + "' --vocab '" + vocabulary + "' '" +
+                        dir.file("missing.jpg") + "'",
+                    &output),
+            1);
+  EXPECT_EQ(test::read_file(database), before);
+  // Saved through a temporary file and a rename: nothing else is left behind.
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    (void)entry;
+    ++files;
+  }
+  EXPECT_EQ(files, 3u);  // d.bbdb, more.txt, 54.jpg
 }
 
 TEST(CliDb, ClearErrors) {

@@ -135,6 +135,7 @@ TEST(VocabularyBuild, OneLevelQuantisesEveryTrainingRowToItsNearestWord) {
   const DescriptorMatrix rows = test::clustered_descriptors(3000, 32, 8, 0.1, rng);
   BuildOptions options = options_for(8, 1);
   options.max_iterations = 1000;
+  options.weighting = Weighting::kTf;  // every image has every word: IDF would weigh them 0
   const Vocabulary vocabulary = Vocabulary::build(split(rows, 10), options);
   ASSERT_EQ(vocabulary.word_count(), 8u);
   const std::vector<NodeId> word_nodes = vocabulary.word_nodes();
@@ -257,10 +258,42 @@ TEST(VocabularyBuild, StopWordsGetZeroWeight) {
   EXPECT_FLOAT_EQ(tiny.weight_of(tf_idf, 2), static_cast<float>(std::log(4.0)));
 }
 
+// A vocabulary whose words all weigh 0 makes every BoW vector empty: an
+// error that says why, not a useless file.
+TEST(VocabularyBuild, RejectsTrainingSetsThatGiveEveryWordWeightZero) {
+  std::mt19937_64 rng(8);
+  const DescriptorMatrix rows = test::random_descriptors(200, 32, rng);
+  const auto expect_error = [](const std::vector<DescriptorView>& images,
+                               const BuildOptions& options, const std::string& expected) {
+    try {
+      Vocabulary::build(images, options);
+      ADD_FAILURE() << "no error; expected: " << expected;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  const std::string why = "needs at least two training images that differ";
+  for (const Weighting weighting : {Weighting::kTfIdf, Weighting::kIdf}) {
+    BuildOptions options = options_for(4, 2);
+    options.weighting = weighting;
+    expect_error({rows.view()}, options, why);
+    expect_error({rows.view(), rows.view()}, options, why);  // every word in both images
+  }
+  BuildOptions every_word_stopped = options_for(4, 2);
+  every_word_stopped.weighting = Weighting::kTf;
+  every_word_stopped.stop_word_fraction = 0;
+  expect_error(split(rows, 4), every_word_stopped, "every word is a stop word");
+  // One image is fine when the weights do not depend on the image count.
+  BuildOptions tf = options_for(4, 2);
+  tf.weighting = Weighting::kTf;
+  EXPECT_NO_THROW(Vocabulary::build({rows.view()}, tf));
+}
+
 TEST(VocabularyBuild, IdenticalDescriptorsMakeOneWord) {
   std::vector<std::uint8_t> same(50 * 32, 0x5a);
-  const Vocabulary vocabulary =
-      Vocabulary::build({DescriptorView{same.data(), 50, 32}}, options_for(10, 6));
+  BuildOptions options = options_for(10, 6);
+  options.weighting = Weighting::kTf;  // one image: IDF would weigh the word 0
+  const Vocabulary vocabulary = Vocabulary::build({DescriptorView{same.data(), 50, 32}}, options);
   EXPECT_EQ(vocabulary.word_count(), 1u);
   EXPECT_EQ(vocabulary.node_count(), 2u);
   EXPECT_EQ(vocabulary.node_descriptor(1)[0], 0x5a);

@@ -57,6 +57,27 @@ TEST(LoopDetectorParams, FrequencyDerivesThenKeysOverride) {
   EXPECT_EQ(p.max_db_results, 7);
 }
 
+// The CLI derives the defaults from a video's frame rate; a file's keys win.
+TEST(LoopDetectorParams, KeysAbsentFromTheFileKeepTheGivenDefaults) {
+  LoopDetectorParams defaults = LoopDetectorParams::for_frequency(2);
+  defaults.alpha = 0.5;
+  const LoopDetectorParams kept = LoopDetectorParams::from_json(R"({"k": 4})", "p", defaults);
+  EXPECT_EQ(kept.k, 4);
+  EXPECT_EQ(kept.dislocal, 40);
+  EXPECT_EQ(kept.max_db_results, 100);
+  EXPECT_DOUBLE_EQ(kept.frequency, 2);
+  EXPECT_DOUBLE_EQ(kept.alpha, 0.5);
+  const LoopDetectorParams set =
+      LoopDetectorParams::from_json(R"({"dislocal": 5, "frequency": 3})", "p", defaults);
+  EXPECT_EQ(set.dislocal, 5);
+  EXPECT_EQ(set.max_db_results, 150);
+  EXPECT_DOUBLE_EQ(set.frequency, 3);
+  EXPECT_DOUBLE_EQ(set.alpha, 0.5);  // a frequency scales frame counts only
+  test::TempDir dir;
+  write_text(dir.file("p.yml"), "%YAML:1.0\nk: 2\n");
+  EXPECT_EQ(LoopDetectorParams::load(dir.file("p.yml"), defaults).dislocal, 40);
+}
+
 TEST(LoopDetectorParams, LoadsYamlAndJsonFiles) {
   test::TempDir dir;
   write_text(dir.file("p.yml"),

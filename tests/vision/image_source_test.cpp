@@ -525,6 +525,91 @@ TEST(ImageSource, VideoFramesAboveThePixelLimitAreRefused) {
   expect_file_error_naming(video, [&] { source.next(frame); });
 }
 
+TEST(ImageSource, FrameRateIsTheVideosAfterSamplingAndStride) {
+  TempDir dir;
+  const std::string video = write_video(dir, 4, 10);
+  const auto rate = [&](std::size_t stride, double video_fps, std::vector<std::string> inputs) {
+    ImageSourceOptions options;
+    options.stride = stride;
+    options.video_fps = video_fps;
+    return ImageSource(inputs, options).frame_rate();
+  };
+  EXPECT_DOUBLE_EQ(rate(1, 0, {video}), 10);
+  EXPECT_DOUBLE_EQ(rate(1, 4, {video}), 4);
+  EXPECT_DOUBLE_EQ(rate(1, 20, {video}), 10);  // video_fps above the video's rate: every frame
+  EXPECT_DOUBLE_EQ(rate(2, 0, {video}), 5);
+  EXPECT_DOUBLE_EQ(rate(3, 4, {video}), 4.0 / 3);
+  EXPECT_DOUBLE_EQ(rate(1, 0, {video, video}), 10);
+  // Still images have no rate, so a sequence with one has none.
+  ASSERT_TRUE(cv::imwrite(dir.file("still.png"), colour_image(1)));
+  EXPECT_EQ(rate(1, 0, {dir.file("still.png")}), 0);
+  EXPECT_EQ(rate(1, 0, {video, dir.file("still.png")}), 0);
+
+  write_text(dir.file("broken.avi"), "RIFF nonsense");
+  expect_file_error_naming(dir.file("broken.avi"),
+                           [&] { ImageSource({dir.file("broken.avi")}).frame_rate(); });
+}
+
+TEST(ImageSource, FrameScaleUndoesMaxWidth) {
+  TempDir dir;
+  ASSERT_TRUE(cv::imwrite(dir.file("wide.png"), colour_image(1, 80, 30)));
+  ImageSourceOptions options;
+  options.max_width = 20;
+  ImageSource source({dir.file("wide.png"), write_video(dir, 1, 10)}, options);
+  Frame frame;
+  ASSERT_TRUE(source.next(frame));
+  EXPECT_DOUBLE_EQ(frame.scale, 0.25);
+  ASSERT_TRUE(source.next(frame));
+  EXPECT_DOUBLE_EQ(frame.scale, 20.0 / 64);
+  ImageSource full({dir.file("wide.png")});
+  ASSERT_TRUE(full.next(frame));
+  EXPECT_EQ(frame.scale, 1);
+}
+
+// Every frame name ImageSource gives reads back as that frame, at the size
+// of the file, in grey or colour.
+TEST(ReadFrame, ReadsEveryFrameByItsName) {
+  TempDir dir;
+  const std::string video = write_video(dir, 12, 10);
+  ASSERT_TRUE(cv::imwrite(dir.file("take#2.png"), colour_image(2)));
+  ImageSourceOptions options;
+  options.max_width = 32;
+  options.stride = 2;
+  ImageSource source({video, dir.file("take#2.png")}, options);
+  std::vector<std::string> names;
+  Frame frame;
+  while (source.next(frame)) names.push_back(frame.name);
+  ASSERT_EQ(names.size(), 7u);
+  // Backwards, so that every video frame is a seek away from the start.
+  for (std::size_t i = names.size() - 1; i-- > 0;) {
+    const cv::Mat grey = read_frame(names[i]);
+    EXPECT_EQ(grey.type(), CV_8UC1) << names[i];
+    EXPECT_EQ(grey.size(), cv::Size(64, 48)) << names[i];
+    EXPECT_NEAR(cv::mean(grey)[0], 20.0 * (2 * i) + 10, 4.0) << names[i];
+    const cv::Mat colour = read_frame(names[i], FramePixels::kBgr);
+    EXPECT_EQ(colour.type(), CV_8UC3) << names[i];
+    EXPECT_EQ(colour.size(), cv::Size(64, 48)) << names[i];
+  }
+  // A file whose name ends in "#2" is that file, not a frame of "take".
+  EXPECT_EQ(names.back(), dir.file("take#2.png"));
+  const cv::Mat still = read_frame(names.back(), FramePixels::kBgr);
+  ASSERT_EQ(still.type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(still, colour_image(2), cv::NORM_INF), 0);
+  EXPECT_EQ(read_frame(names.back()).type(), CV_8UC1);
+}
+
+TEST(ReadFrame, MissingFramesAndFilesAreFileErrors) {
+  TempDir dir;
+  const std::string video = write_video(dir, 3, 10);
+  expect_file_error_naming(video, [&] { read_frame(video + "#3"); });
+  expect_file_error_naming(video, [&] { read_frame(video + "#999999999999999999"); });
+  expect_file_error_naming(dir.file("gone.avi#1"), [&] { read_frame(dir.file("gone.avi#1")); });
+  expect_file_error_naming(video + "#x", [&] { read_frame(video + "#x"); });
+  expect_file_error_naming(video + "#", [&] { read_frame(video + "#"); });
+  write_text(dir.file("broken.avi"), "RIFF nonsense");
+  expect_file_error_naming(dir.file("broken.avi"), [&] { read_frame(dir.file("broken.avi#0")); });
+}
+
 TEST(ImageSource, UnreadableVideoGivesFileError) {
   TempDir dir;
   write_text(dir.file("broken.avi"), "RIFF nonsense");

@@ -13,8 +13,11 @@ namespace binbow::vision {
 
 struct Frame {
   cv::Mat image;          // 8-bit grey
-  std::string name;       // file path, or "video.mp4#123" for video frames
+  std::string name;       // file path, or "video.mp4#123" for video frames (see read_frame)
   std::size_t index = 0;  // 0-based position in the sequence (after stride)
+  // Pixels of `image` per pixel of the file or video frame: below 1 when
+  // max_width downscaled it. Divide image coordinates by it for the file's.
+  double scale = 1;
 };
 
 // The default largest image (or video frame) decoded, in pixels: a 10000 ×
@@ -65,6 +68,12 @@ class ImageSource {
   // from OpenCV. Counted when a video ends; an estimate for containers that
   // do not store their frame count.
   std::size_t unreadable_frames() const noexcept;
+  // Frames delivered per second of video time, when every input is a video
+  // and all report the same frame rate: that rate, capped at video_fps, then
+  // divided by the stride. 0 when unknown (an input is an image, the rates
+  // differ, or a video reports none). Opens each video once to read its rate;
+  // throws FileError naming a video that cannot be opened.
+  double frame_rate() const;
 
  private:
   struct Impl;
@@ -80,5 +89,15 @@ class ImageSource {
 // warns about (truncated, corrupt data: OpenCV would fill the rest grey),
 // cannot be decoded by OpenCV, or decodes to 0×0 pixels.
 cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels = kDefaultMaxImagePixels);
+
+enum class FramePixels { kGrey, kBgr };  // 8-bit, 1 or 3 channels
+
+// Reads one frame by the name ImageSource gave it (Frame::name), at the size
+// of the file: an image file, or "VIDEO#N" for frame N of a video, counted
+// from 0 over every frame of the video (before video_fps and the stride),
+// when no file has that whole name. Image files get read_grey_image's
+// checks. Throws FileError naming the file when it cannot be read or the
+// video has no frame N.
+cv::Mat read_frame(const std::string& name, FramePixels pixels = FramePixels::kGrey);
 
 }  // namespace binbow::vision

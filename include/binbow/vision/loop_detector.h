@@ -125,15 +125,19 @@ struct LoopDetectorParams {
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
   // file (OpenCV FileStorage), at most kMaxLoopParamsFileBytes and nested at
-  // most 64 levels (both parsers recurse). Keys are the field names above; a
-  // "frequency" key first derives the frame-count defaults from it
-  // (for_frequency), the other keys then override. geometric_check takes the
-  // to_string() names. JSON and YAML values go through one validation:
-  // unknown keys, wrong types, non-finite numbers (YAML's .inf, .nan) and
-  // values out of range are FileErrors naming the file and the key. Anything
-  // but a regular file (a FIFO, a device) is refused before reading.
-  static LoopDetectorParams load(const std::string& path);
+  // most 64 levels (both parsers recurse). Keys are the field names above;
+  // keys absent keep their value in `defaults`. A "frequency" key first scales
+  // the frame-count parameters to it (as for_frequency), the other keys then
+  // override. geometric_check takes the to_string() names. JSON and YAML
+  // values go through one validation: unknown keys, wrong types, non-finite
+  // numbers (YAML's .inf, .nan) and values out of range are FileErrors naming
+  // the file and the key. Anything but a regular file (a FIFO, a device) is
+  // refused before reading.
+  static LoopDetectorParams load(const std::string& path, const LoopDetectorParams& defaults);
+  static LoopDetectorParams load(const std::string& path);  // defaults: the paper's
   // Same from JSON text; `name` is used in error messages.
+  static LoopDetectorParams from_json(const std::string& text, const std::string& name,
+                                      const LoopDetectorParams& defaults);
   static LoopDetectorParams from_json(const std::string& text, const std::string& name = "<json>");
   // Every field as a JSON object (the format load() reads), pretty-printed.
   std::string to_json() const;

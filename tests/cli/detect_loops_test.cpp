@@ -1,0 +1,229 @@
+// `binbow detect-loops` on videos (the image-source options, the loop
+// detector's frequency from the frames processed per second, the report's
+// pictures of video frames), its summary of frame statuses and the warning
+// when no frame can have a candidate; `binbow features` on a video.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "support/test_support.h"
+
+namespace binbow {
+namespace {
+
+using test::run_cli;
+using test::shared_data;
+using test::TempDir;
+
+std::string samples_folder() {
+  const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
+  return first.substr(0, first.rfind('/'));
+}
+
+// The 84 frames of the corridor walked twice as a 4 fps MJPG video.
+std::string write_corridor_video(const TempDir& dir) {
+  const std::string path = dir.file("corridor.avi");
+  cv::VideoWriter writer;
+  for (int i = 1; i <= 84; ++i) {
+    const cv::Mat frame = cv::imread(samples_folder() + "/" + std::to_string(i) + ".jpg");
+    EXPECT_FALSE(frame.empty()) << "frame " << i;
+    if (!writer.isOpened()) {
+      writer.open(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 4, frame.size(), true);
+      EXPECT_TRUE(writer.isOpened()) << "OpenCV cannot write MJPG .avi";
+    }
+    writer.write(frame);
+  }
+  writer.release();
+  return path;
+}
+
+// A list of the first `count` corridor frames.
+std::string write_frame_list(const TempDir& dir, int count) {
+  const std::string path = dir.file("frames.txt");
+  std::ofstream list(path);
+  for (int i = 1; i <= count; ++i) list << samples_folder() << "/" << i << ".jpg\n";
+  return path;
+}
+
+nlohmann::json run_record(const std::string& loops_csv) {
+  std::ifstream in(loops_csv + ".run.json");
+  EXPECT_TRUE(in.good()) << "no run record beside " << loops_csv;
+  return nlohmann::json::parse(in);
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::size_t count_of(const std::string& text, const std::string& needle) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos;
+       at = text.find(needle, at + needle.size()))
+    ++count;
+  return count;
+}
+
+TEST(CliDetectLoops, VideoFramesPerSecondSetTheFrequencyUnlessParamsDo) {
+  TempDir dir;
+  const std::string video = write_corridor_video(dir);
+  const std::string loops = dir.file("loops.csv");
+  std::string output;
+  // The README's tour line: 4 fps sampled at 2, so 42 frames at 2 Hz.
+  ASSERT_EQ(run_cli("detect-loops --descriptor brief -o '" + loops + "' '" + video +
+                        "' --video-fps 2 --max-width 320",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("42 frames, "), std::string::npos) << output;
+  EXPECT_NE(output.find("frequency: 2 Hz (video frames processed per second)\n"), std::string::npos)
+      << output;
+  nlohmann::json record = run_record(loops);
+  EXPECT_EQ(record["params"]["frequency"], 2.0);
+  EXPECT_EQ(record["params"]["dislocal"], 40);
+  EXPECT_EQ(record["params"]["max_db_results"], 100);
+  EXPECT_EQ(record["source"]["video_fps"], 2.0);
+  EXPECT_EQ(record["source"]["max_width"], 320);
+  EXPECT_EQ(record["frames"][41]["file"], video + "#82");
+
+  // --stride divides the rate too; --params keys win, the others follow it.
+  write_text(dir.file("k.json"), R"({"k": 2})");
+  ASSERT_EQ(run_cli("detect-loops -o '" + loops + "' '" + video + "' --stride 4 --params '" +
+                        dir.file("k.json") + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("21 frames, "), std::string::npos) << output;
+  EXPECT_NE(output.find("frequency: 1 Hz (video frames processed per second)\n"), std::string::npos)
+      << output;
+  record = run_record(loops);
+  EXPECT_EQ(record["params"]["k"], 2);
+  EXPECT_EQ(record["params"]["dislocal"], 20);
+  write_text(dir.file("f.json"), R"({"frequency": 0.5, "dislocal": 3})");
+  ASSERT_EQ(run_cli("detect-loops -o '" + loops + "' '" + video + "' --params '" +
+                        dir.file("f.json") + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("frequency: 0.5 Hz (--params)\n"), std::string::npos) << output;
+  record = run_record(loops);
+  EXPECT_EQ(record["params"]["dislocal"], 3);
+  EXPECT_EQ(record["params"]["max_db_results"], 25);
+
+  // Images have no frame rate: the paper's 1 Hz defaults.
+  ASSERT_EQ(run_cli("detect-loops -o '" + loops + "' '" + write_frame_list(dir, 30) + "'", &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("frequency: 1 Hz (the paper's default; images have no frame rate)\n"),
+            std::string::npos)
+      << output;
+  EXPECT_EQ(run_record(loops)["params"]["dislocal"], 20);
+}
+
+// evaluate --sweep re-reads the inputs as detect-loops read them.
+TEST(CliDetectLoops, SweepOfASampledRunReadsTheSameFrames) {
+  TempDir dir;
+  const std::string loops = dir.file("loops.csv");
+  std::string output;
+  ASSERT_EQ(
+      run_cli("detect-loops -o '" + loops + "' '" + samples_folder() + "' --stride 2", &output), 0)
+      << output;
+  EXPECT_NE(output.find("42 frames, "), std::string::npos) << output;
+  EXPECT_EQ(run_cli("evaluate --sweep --gt '" + shared_data("rtabmap-samples/samples_GT.bmp") +
+                        "' '" + loops + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("recall at 100% precision:"), std::string::npos) << output;
+}
+
+TEST(CliDetectLoops, ReportOfAVideoRunShowsItsFrames) {
+  TempDir dir;
+  const std::string video = write_corridor_video(dir);
+  write_text(dir.file("p.json"), R"({"dislocal": 20})");
+  std::string output;
+  ASSERT_EQ(
+      run_cli("detect-loops --max-width 320 --params '" + dir.file("p.json") + "' -o '" +
+                  dir.file("loops.csv") + "' --report '" + dir.file("report") + "' '" + video + "'",
+              &output),
+      0)
+      << output;
+  EXPECT_EQ(output.find("imread"), std::string::npos) << output;
+  std::smatch loops;
+  ASSERT_TRUE(std::regex_search(output, loops, std::regex("84 frames, ([0-9]+) loops"))) << output;
+  const int detected = std::stoi(loops[1]);
+  ASSERT_GT(detected, 10) << output;
+  std::ifstream in(dir.file("report/index.html"));
+  const std::string page((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(page.find("not readable"), std::string::npos);
+  EXPECT_EQ(count_of(page, "src='data:image/jpeg;base64,"), static_cast<std::size_t>(detected));
+  EXPECT_NE(page.find(video + "#"), std::string::npos);
+}
+
+TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) {
+  TempDir dir;
+  const std::string list = write_frame_list(dir, 10);
+  std::string output;
+  ASSERT_EQ(run_cli("detect-loops -o '" + dir.file("loops.csv") + "' '" + list + "'", &output), 0)
+      << output;
+  EXPECT_NE(output.find("10 frames, 0 loops"), std::string::npos) << output;
+  const std::string statuses =
+      "frames by status:\n  loop-detected: 0\n  no-database-results: 10\n"
+      "  low-normalisation-score: 0\n  low-scores: 0\n  no-islands: 0\n"
+      "  no-temporal-consistency: 0\n  no-geometric-consistency: 0\n";
+  EXPECT_NE(output.find(statuses), std::string::npos) << output;
+  EXPECT_NE(output.find("binbow: warning: no frame can have a loop candidate: candidates must be "
+                        "more than dislocal = 20 frames older than the query, and the sequence "
+                        "has only 10 frames; set a smaller \"dislocal\" with --params"),
+            std::string::npos)
+      << output;
+
+  // {"frequency": 10} makes dislocal 200 frames, longer than 84.
+  write_text(dir.file("p.json"), R"({"frequency": 10})");
+  ASSERT_EQ(run_cli("detect-loops --params '" + dir.file("p.json") + "' -o '" +
+                        dir.file("loops.csv") + "' '" + samples_folder() + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("dislocal = 200 frames"), std::string::npos) << output;
+
+  // Frames 21 and 22 of 23 can have candidates: no warning.
+  ASSERT_EQ(
+      run_cli("detect-loops -o '" + dir.file("loops.csv") + "' '" + write_frame_list(dir, 23) + "'",
+              &output),
+      0)
+      << output;
+  EXPECT_EQ(output.find("warning"), std::string::npos) << output;
+  EXPECT_NE(output.find("frames by status:\n  loop-detected: 0\n"), std::string::npos) << output;
+}
+
+TEST(CliFeatures, ReadsTheFirstFrameOfAVideoOrFolderWithTheSourceOptions) {
+  TempDir dir;
+  const std::string video = write_corridor_video(dir);
+  std::string output;
+  ASSERT_EQ(run_cli("features '" + video + "' --max-width 320", &output), 0) << output;
+  EXPECT_NE(output.find("image: " + video + "#0 (320x240)\n"), std::string::npos) << output;
+  ASSERT_EQ(run_cli("features '" + samples_folder() + "'", &output), 0) << output;
+  EXPECT_NE(output.find("image: " + samples_folder() + "/1.jpg (512x384)\n"), std::string::npos)
+      << output;
+}
+
+// Every command that reads images takes the same image-source options.
+TEST(CliImageSourceOptions, EveryImageReadingCommandTakesThem) {
+  for (const std::string command :
+       {"detect-loops", "db build", "db query", "db add", "build-vocab", "bench", "features"}) {
+    std::string output;
+    ASSERT_EQ(run_cli(command + " --help", &output), 0) << command << "\n" << output;
+    for (const char* option : {"--stride", "--max-width", "--video-fps"})
+      EXPECT_NE(output.find(option), std::string::npos) << command << " lacks " << option;
+  }
+}
+
+}  // namespace
+}  // namespace binbow
