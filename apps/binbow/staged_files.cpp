@@ -85,11 +85,12 @@ void StagedFiles::commit() {
     }
     if (std::rename(s.temporary.c_str(), s.target.c_str()) != 0) {
       const std::string why = errno_text();
-      // This target was not replaced: only a moved-aside original needs to come back.
-      if (!backups.back().linked && !backups.back().path.empty())
-        std::rename(backups.back().path.c_str(), s.target.c_str());
-      else if (backups.back().linked)
-        ::unlink(backups.back().path.c_str());
+      // This target was not replaced: its second link goes, or, moved aside, it comes back.
+      const Backup& unused = backups.back();
+      if (unused.linked)
+        ::unlink(unused.path.c_str());
+      else if (!unused.path.empty())
+        std::rename(unused.path.c_str(), s.target.c_str());
       backups.pop_back();
       undo();
       throw FileError(s.target, "cannot replace the file: " + why);
