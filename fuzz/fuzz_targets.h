@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "core/little_endian.h"
 #include "formats/codecs.h"
 #include "formats/container.h"
+#include "formats/gzip.h"
 
 namespace binbow::fuzz {
 
@@ -142,6 +144,45 @@ inline void load_bbdb(const std::uint8_t* data, std::size_t size) {
   check_accepted_database(Database::deserialize(data, size, "fuzz"));
 }
 
+// gzip: the head the format sniffers read is a prefix of the whole, and
+// what gunzip accepts survives gzip and gunzip unchanged.
+inline void load_gzip(const std::uint8_t* data, std::size_t size) {
+  const std::vector<std::uint8_t> head = detail::gunzip_head(data, size, 1024);
+  const std::vector<std::uint8_t> whole =
+      detail::gunzip(data, size, "fuzz", detail::gunzip_limit(size));
+  if (head.size() > whole.size() || !std::equal(head.begin(), head.end(), whole.begin()))
+    throw std::logic_error("gunzip_head is not a prefix of gunzip");
+  const std::vector<std::uint8_t> again = detail::gzip(whole);
+  if (detail::gunzip(again.data(), again.size(), "regzipped", detail::gunzip_limit(again.size())) !=
+      whole)
+    throw std::logic_error("gzip and gunzip changed the data");
+}
+
+// tar: the member found lies inside the archive, a prefix of the archive
+// (what the sniffers read) finds the same member, and so does the whole
+// archive gzipped (as .tar.gz vocabularies are read).
+inline void load_tar(const std::uint8_t* data, std::size_t size) {
+  std::size_t offset = 0, member = 0;
+  if (!detail::find_tar_member(data, size, "fuzz", false, offset, member))
+    throw FileError("fuzz", "not a tar archive");
+  if (offset > size || member > size - offset)
+    throw std::logic_error("the tar member extends beyond the archive");
+  std::size_t head_offset = 0, head_member = 0;
+  try {
+    if (detail::find_tar_member(data, std::min<std::size_t>(size, offset + 1), "fuzz", true,
+                                head_offset, head_member) &&
+        (head_offset != offset || head_member != member))
+      throw std::logic_error("a prefix of the archive gives another member");
+  } catch (const FileError&) {
+  }
+  if (member == 0) return;  // open_contained rejects an empty file
+  const std::vector<std::uint8_t> gzipped =
+      detail::gzip(std::vector<std::uint8_t>(data, data + size));
+  const detail::ContainedFile file = detail::open_contained(gzipped.data(), gzipped.size(), "fuzz");
+  if (!file.tar || file.size != member || std::memcmp(file.data, data + offset, member) != 0)
+    throw std::logic_error("the gzipped archive gives another member");
+}
+
 // Target names (fuzz_<name>, fuzz/corpus/<name>/) and their functions.
 struct Target {
   const char* name;
@@ -161,11 +202,15 @@ inline const Target kTargets[] = {
      [](const std::uint8_t* d, std::size_t n) { load_tree_format(VocabularyFormat::kFbow, d, n); }},
     {"bbw", load_bbw},
     {"bbdb", load_bbdb},
+    {"gzip", load_gzip},
+    {"tar", load_tar},
 };
 
-// The body of LLVMFuzzerTestOneInput for target `name`.
-inline int run_target(const char* name, const std::uint8_t* data, std::size_t size) {
-  for (const Target& target : kTargets) {
+// The body of LLVMFuzzerTestOneInput for target `name` of `targets`.
+template <std::size_t N>
+int run_target(const Target (&targets)[N], const char* name, const std::uint8_t* data,
+               std::size_t size) {
+  for (const Target& target : targets) {
     if (std::string(target.name) != name) continue;
     try {
       target.run(data, size);
@@ -174,6 +219,10 @@ inline int run_target(const char* name, const std::uint8_t* data, std::size_t si
     return 0;
   }
   throw std::logic_error(std::string("unknown fuzz target ") + name);
+}
+
+inline int run_target(const char* name, const std::uint8_t* data, std::size_t size) {
+  return run_target(kTargets, name, data, size);
 }
 
 }  // namespace binbow::fuzz

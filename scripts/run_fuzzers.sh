@@ -1,17 +1,20 @@
 #!/usr/bin/env bash
 # Builds every libFuzzer target (fuzz/fuzz_*.cpp) with clang, AddressSanitizer
-# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 30) on
-# its corpus fuzz/corpus/<name>/. Fails if any target crashes, leaks, hangs,
-# exceeds 2 GiB, or makes a single allocation over 512 MiB (inputs are at most
-# 16 KiB: such an allocation means a reader trusted a header). New inputs go to the build directory, not the repository;
-# a crashing input is saved there as <build>/fuzz-artifacts/<name>-crash-*:
-# fix the bug, then copy the input into fuzz/corpus/<name>/ so ctest
-# (test_formats, FuzzCorpus.*) replays it from then on.
+# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 15; 17
+# targets) on its corpus fuzz/corpus/<name>/ and prints the coverage reached.
+# Fails if any target crashes, leaks, hangs, exceeds 2 GiB, or makes a single
+# allocation over 512 MiB (inputs are at most a few KiB, see max_len_of: such
+# an allocation means a reader trusted a header), and if a seed is longer than
+# its target's input limit (libFuzzer would cut it, and a cut .bbdb seed never
+# loads). New inputs go to the build directory, not the repository; a crashing
+# input is saved there as <build>/fuzz-artifacts/<name>-crash-*: fix the bug,
+# then copy the input into fuzz/corpus/<name>/ so ctest (FuzzCorpus.* in
+# test_formats and test_loop) replays it from then on.
 #
 # Usage: scripts/run_fuzzers.sh [SECONDS]   (env: BINBOW_FUZZ_BUILD_DIR, JOBS)
 set -euo pipefail
 
-seconds="${1:-30}"
+seconds="${1:-15}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BINBOW_FUZZ_BUILD_DIR:-$root/build-fuzz}"
 jobs="${JOBS:-2}"
@@ -34,6 +37,17 @@ for source in "$root"/fuzz/fuzz_*.cpp; do
 done
 cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 
+# The longest input of each target (-max_len): room for a valid file a few
+# times its seeds' size, small enough that every input runs fast.
+max_len_of() {
+  case "$1" in
+    gt_pairs) echo 1024 ;;
+    params_json | params_yaml | gt_mat | loops_csv) echo 2048 ;;
+    orbslam_text | dbow2_yaml | gzip | tar | loop_run) echo 8192 ;;
+    *) echo 4096 ;;
+  esac
+}
+
 failed=()
 for target in "${targets[@]}"; do
   name="${target#fuzz_}"
@@ -42,14 +56,23 @@ for target in "${targets[@]}"; do
   work="$build/fuzz-work/$name"
   artifacts="$build/fuzz-artifacts"
   mkdir -p "$corpus" "$work" "$artifacts"
-  echo "== $target: ${seconds}s on $(find "$corpus" -type f | wc -l) seed(s)"
-  if ! "$binary" -max_total_time="$seconds" -max_len=16384 -timeout=10 -rss_limit_mb=2048 \
+  max_len="$(max_len_of "$name")"
+  long_seeds="$(find "$corpus" -type f -size +"$max_len"c)"
+  if [[ -n "$long_seeds" ]]; then
+    echo "run_fuzzers: seeds longer than -max_len=$max_len of $target would be cut:" >&2
+    echo "$long_seeds" >&2
+    failed+=("$target")
+    continue
+  fi
+  echo "== $target: ${seconds}s on $(find "$corpus" -type f | wc -l) seed(s), -max_len=$max_len"
+  if ! "$binary" -max_total_time="$seconds" -max_len="$max_len" -timeout=10 -rss_limit_mb=2048 \
       -malloc_limit_mb=512 \
       -print_final_stats=1 -artifact_prefix="$artifacts/$name-" "$work" "$corpus" \
       >"$build/fuzz-$name.log" 2>&1; then
     tail -n 40 "$build/fuzz-$name.log" >&2
     failed+=("$target")
   else
+    grep -oE "cov: [0-9]+" "$build/fuzz-$name.log" | tail -n 1 | tr '\n' ' '
     grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "$build/fuzz-$name.log" | tr '\n' ' '
     echo
   fi

@@ -22,6 +22,7 @@
 #include "loop_run.h"
 #include "output_options.h"
 #include "progress.h"
+#include "staged_files.h"
 
 namespace binbow::cli {
 namespace {
@@ -110,72 +111,81 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   vision::LoopDetector detector(std::move(vocabulary), params);
   const long long known = source.size();
   Progress progress("detecting loops", known > 0 ? static_cast<std::size_t>(known) : 0);
-  run.timing = {{"features", {}}, {"transform", {}},    {"query", {}},
-                {"islands", {}},  {"verification", {}}, {"insertion", {}}};
+  // loops.csv and its run record appear together or not at all.
+  StagedFiles outputs;
+  const std::string csv = outputs.stage(arguments.output);
+  const std::string record_path = LoopRun::path_for(arguments.output);
+  LoopRunWriter record(outputs.stage(record_path), record_path, run);
+  std::vector<std::string> names;  // of every frame: a loop's match_file
   std::vector<vision::Detection> detections;
   StatusCounts status_counts{};
   std::vector<double> scales;  // Frame::scale of every frame, to record inliers in file pixels
+  std::vector<std::array<float, 4>> inliers;
   vision::Frame frame;
   while (source.next(frame)) {
     const auto start = std::chrono::steady_clock::now();
     const vision::Features features = extractor->extract(frame.image);
-    run.timing[0].ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count());
+    const double features_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     const vision::LoopResult result = detector.process(features);
-    run.timing[1].ms.push_back(result.times.transform_ms);
-    run.timing[2].ms.push_back(result.times.query_ms);
-    run.timing[3].ms.push_back(result.times.islands_ms);
-    run.timing[4].ms.push_back(result.times.verification_ms);
-    run.timing[5].ms.push_back(result.times.insertion_ms);
+    const vision::LoopStageTimes& t = result.times;
+    record.add_frame(
+        {frame.name, vision::to_string(result.status),
+         result.has_candidate ? static_cast<long long>(result.match) : -1, result.score,
+         result.normalised_score, result.inliers.size()},
+        {features_ms, t.transform_ms, t.query_ms, t.islands_ms, t.verification_ms, t.insertion_ms});
+    names.push_back(frame.name);
     scales.push_back(frame.scale);
     ++status_counts[static_cast<std::size_t>(result.status)];
-    run.frames.push_back({frame.name, vision::to_string(result.status),
-                          result.has_candidate ? static_cast<long long>(result.match) : -1,
-                          result.score, result.normalised_score, result.inliers.size()});
     if (result.detection()) {
-      detections.push_back({result.query, result.match, frame.name, run.frames[result.match].file,
+      detections.push_back({result.query, result.match, frame.name, names[result.match],
                             result.normalised_score, result.inliers.size()});
-      LoopRecord loop{result.query, result.match, {}};
-      const Span<vision::Keypoint> match_points = detector.keypoints(result.match);
-      const auto qs = static_cast<float>(frame.scale);
-      const auto ms = static_cast<float>(scales[result.match]);
-      for (const vision::Correspondence& c : result.inliers) {
-        const vision::Keypoint& q = features.keypoints[c.first];
-        const vision::Keypoint& m = match_points[c.second];
-        loop.inliers.push_back({q.x / qs, q.y / qs, m.x / ms, m.y / ms});
+      if (record.keeps_next_loop()) {
+        const Span<vision::Keypoint> match_points = detector.keypoints(result.match);
+        inliers.clear();
+        const auto qs = static_cast<float>(frame.scale);
+        const auto ms = static_cast<float>(scales[result.match]);
+        for (const vision::Correspondence& c : result.inliers) {
+          const vision::Keypoint& q = features.keypoints[c.first];
+          const vision::Keypoint& m = match_points[c.second];
+          inliers.push_back({q.x / qs, q.y / qs, m.x / ms, m.y / ms});
+        }
+        record.add_loop(result.query, result.match, inliers);
       }
-      run.loops.push_back(std::move(loop));
     }
-    progress.update(run.frames.size());
+    progress.update(names.size());
   }
   progress.finish();
-  if (run.frames.empty()) throw InvalidArgument("detect-loops: no images found in the inputs");
+  if (names.empty()) throw InvalidArgument("detect-loops: no images found in the inputs");
 
-  vision::write_detections_csv(arguments.output, detections);
-  run.save(LoopRun::path_for(arguments.output));
-  std::fprintf(stderr, "%zu frames, %zu loops -> %s\n", run.frames.size(), detections.size(),
+  vision::write_detections_csv(csv, detections);
+  record.finish();
+  outputs.commit();
+  std::fprintf(stderr, "%zu frames, %zu loops -> %s\n", names.size(), detections.size(),
                arguments.output.c_str());
   if (source.unreadable_frames() > 0)
     std::fprintf(stderr, "frames unreadable: %zu\n", source.unreadable_frames());
   std::fprintf(stderr, "frequency: %s (%s)\n", hertz(params.frequency).c_str(),
                frequency_origin(params, defaults, frame_rate).c_str());
   print_status_counts(status_counts);
-  warn_if_no_frame_can_have_a_candidate(params, run.frames.size());
-  if (arguments.timing) std::cout << format_timing_table(run.timing) << std::flush;
+  warn_if_no_frame_can_have_a_candidate(params, names.size());
+  if (arguments.timing) std::cout << format_timing_table(record.timing()) << std::flush;
   if (!arguments.report.empty()) {
     LoopReport report;
     report.title = "binbow loop detection";
     report.facts = {{"inputs", run.inputs.front() + (run.inputs.size() > 1 ? " ..." : "")},
-                    {"frames", std::to_string(run.frames.size())},
+                    {"frames", std::to_string(names.size())},
                     {"loops", std::to_string(detections.size())},
                     {"frequency", hertz(params.frequency)},
                     {"vocabulary", run.vocabulary},
                     {"descriptor", run.descriptor}};
     report.params_json = run.params_json;
-    report.timing = run.timing;
+    report.timing = record.timing();
     for (std::size_t i = 0; i < detections.size(); ++i)
-      report.loops.push_back({detections[i], run.loops[i].inliers, -1});
+      report.loops.push_back({detections[i],
+                              i < record.loops().size() ? record.loops()[i].inliers
+                                                        : std::vector<std::array<float, 4>>{},
+                              -1});
     const std::string page = write_loop_report(arguments.report, report);
     std::fprintf(stderr, "report: %s\n", page.c_str());
   }

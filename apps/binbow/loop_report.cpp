@@ -14,8 +14,6 @@
 namespace binbow::cli {
 namespace {
 
-// More pairs make the page too heavy to open; the table still lists every loop.
-constexpr std::size_t kMaxImagePairs = 300;
 constexpr int kPairHeight = 280;
 
 std::string escape(const std::string& s) {
@@ -94,7 +92,9 @@ std::string pair_image(const ReportLoop& loop) {
   cv::Mat canvas(kPairHeight, a.cols + b.cols + 8, CV_8UC3, cv::Scalar(255, 255, 255));
   a.copyTo(canvas(cv::Rect(0, 0, a.cols, a.rows)));
   b.copyTo(canvas(cv::Rect(a.cols + 8, 0, b.cols, b.rows)));
-  for (const auto& p : loop.inliers) {
+  const std::size_t drawn = std::min(loop.inliers.size(), kDrawnInliers);
+  for (std::size_t i = 0; i < drawn; ++i) {
+    const auto& p = loop.inliers[i * loop.inliers.size() / drawn];
     const cv::Point2f pa(p[0] * float(sq), p[1] * float(sq));
     const cv::Point2f pb(p[2] * float(sm) + float(a.cols + 8), p[3] * float(sm));
     cv::line(canvas, pa, pb, cv::Scalar(60, 200, 60), 1, cv::LINE_AA);
@@ -224,8 +224,9 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
   html << "</table>\n<h2>Loops</h2>\n";
   std::size_t drawn = 0;
   for (const ReportLoop& loop : report.loops) {
-    if (drawn == kMaxImagePairs) {
-      html << "<p>Only the first " << kMaxImagePairs << " loops are drawn.</p>";
+    // The table above still lists every loop.
+    if (drawn == kDrawnLoops) {
+      html << "<p>Only the first " << kDrawnLoops << " loops are drawn.</p>";
       break;
     }
     ++drawn;
@@ -239,7 +240,8 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
       html << "<p>(images not readable: " << escape(e.what()) << ")</p>";
     }
     html << "<figcaption>query " << d.query << " (" << escape(d.query_file) << ") ↔ match "
-         << d.match << " (" << escape(d.match_file) << "): " << loop.inliers.size()
+         << d.match << " (" << escape(d.match_file)
+         << "): " << std::min(loop.inliers.size(), kDrawnInliers) << " of " << d.inliers
          << " inliers drawn, score " << format("%.4f", d.score)
          << (loop.verdict == 1   ? ", true loop"
              : loop.verdict == 0 ? ", FALSE loop"

@@ -17,8 +17,9 @@ namespace binbow::cli {
 
 struct ReportLoop {
   vision::Detection detection;
-  std::vector<std::array<float, 4>> inliers;  // query x, y, match x, y (pixels of the files)
-  int verdict = -1;                           // 1 true positive, 0 false positive, -1 unknown
+  // Query x, y, match x, y (pixels of the files); kDrawnInliers of them are drawn.
+  std::vector<std::array<float, 4>> inliers;
+  int verdict = -1;  // 1 true positive, 0 false positive, -1 unknown
 };
 
 struct LoopReport {

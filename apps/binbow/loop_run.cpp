@@ -45,34 +45,76 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   detail::write_file_atomically(path, text.data(), text.size());
 }
 
-void LoopRun::save(const std::string& path) const {
-  Json j;
-  j["format"] = "binbow-loop-run";
-  j["version"] = 1;
-  j["inputs"] = inputs;
-  j["vocabulary"] = vocabulary;
-  j["descriptor"] = descriptor;
-  j["max_features"] = max_features;
-  j["params"] = Json::parse(params_json);
-  j["source"] = {
-      {"stride", source.stride}, {"max_width", source.max_width}, {"video_fps", source.video_fps}};
-  Json frames_json = Json::array();
-  for (const FrameRecord& f : frames)
-    frames_json.push_back({{"file", f.file},
-                           {"status", f.status},
-                           {"match", f.match},
-                           {"score", f.score},
-                           {"normalised_score", f.normalised_score},
-                           {"inliers", f.inliers}});
-  j["frames"] = std::move(frames_json);
-  Json loops_json = Json::array();
-  for (const LoopRecord& l : loops)
-    loops_json.push_back({{"query", l.query}, {"match", l.match}, {"inliers", l.inliers}});
-  j["loops"] = std::move(loops_json);
-  Json timing_json = Json::object();
-  for (const StageTiming& t : timing) timing_json[t.stage] = t.ms;
-  j["timing_ms"] = std::move(timing_json);
-  write_file_atomically(path, j.dump());
+const char* const kStageNames[kStageCount] = {"features", "transform",    "query",
+                                              "islands",  "verification", "insertion"};
+
+LoopRunWriter::LoopRunWriter(const std::string& path, const std::string& target, const LoopRun& run)
+    : target_(target), file_(std::fopen(path.c_str(), "wb")) {
+  if (file_ == nullptr)
+    throw FileError(target, std::string("cannot write the run record: ") + std::strerror(errno));
+  for (const char* stage : kStageNames) timing_.push_back({stage, {}});
+  // The keys of a version 1 record, written one value at a time; "frames"
+  // stays open until finish().
+  write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" + Json(run.inputs).dump() +
+        ",\"vocabulary\":" + Json(run.vocabulary).dump() + ",\"descriptor\":" +
+        Json(run.descriptor).dump() + ",\"max_features\":" + std::to_string(run.max_features) +
+        ",\"params\":" + Json::parse(run.params_json).dump() + ",\"source\":" +
+        Json{{"stride", run.source.stride},
+             {"max_width", run.source.max_width},
+             {"video_fps", run.source.video_fps}}
+            .dump() +
+        ",\n\"frames\":[");
+}
+
+LoopRunWriter::~LoopRunWriter() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+void LoopRunWriter::write(const std::string& text) {
+  if (file_ == nullptr) throw FileError(target_, "the run record is already finished");
+  detail::write_all(file_, text.data(), text.size(), target_);
+}
+
+void LoopRunWriter::add_frame(const FrameRecord& f,
+                              const std::array<double, kStageCount>& stage_ms) {
+  const Json frame = {{"file", f.file},
+                      {"status", f.status},
+                      {"match", f.match},
+                      {"score", f.score},
+                      {"normalised_score", f.normalised_score},
+                      {"inliers", f.inliers}};
+  write((frames_ == 0 ? "\n" : ",\n") + frame.dump());
+  ++frames_;
+  for (std::size_t s = 0; s < kStageCount; ++s) timing_[s].ms.push_back(stage_ms[s]);
+}
+
+void LoopRunWriter::add_loop(std::size_t query, std::size_t match,
+                             const std::vector<std::array<float, 4>>& inliers) {
+  if (!keeps_next_loop()) return;
+  LoopRecord loop{query, match, {}};
+  const std::size_t drawn = std::min(inliers.size(), kDrawnInliers);
+  loop.inliers.reserve(drawn);
+  for (std::size_t i = 0; i < drawn; ++i)
+    loop.inliers.push_back(inliers[i * inliers.size() / drawn]);
+  loops_.push_back(std::move(loop));
+}
+
+void LoopRunWriter::finish() {
+  write("],\n\"loops\":[");
+  for (std::size_t i = 0; i < loops_.size(); ++i) {
+    const LoopRecord& l = loops_[i];
+    write((i == 0 ? "\n" : ",\n") +
+          Json{{"query", l.query}, {"match", l.match}, {"inliers", l.inliers}}.dump());
+  }
+  write("],\n\"timing_ms\":{");
+  for (std::size_t s = 0; s < kStageCount; ++s)
+    write((s == 0 ? "\n" : ",\n") + Json(timing_[s].stage).dump() + ":" +
+          Json(timing_[s].ms).dump());
+  write("}}\n");
+  std::FILE* file = file_;
+  file_ = nullptr;
+  if (std::fclose(file) != 0)
+    throw FileError(target_, std::string("cannot write the run record: ") + std::strerror(errno));
 }
 
 LoopRun LoopRun::load(const std::string& path) {
@@ -109,11 +151,10 @@ LoopRun LoopRun::load(const std::string& path) {
     throw FileError(path, std::string("malformed run record: ") + e.what());
   }
   // Stages in pipeline order (JSON objects come back sorted by name).
-  static const char* const order[] = {"features", "transform",    "query",
-                                      "islands",  "verification", "insertion"};
   const auto rank = [](const std::string& s) {
-    return std::find_if(std::begin(order), std::end(order), [&](const char* o) { return s == o; }) -
-           std::begin(order);
+    return std::find_if(std::begin(kStageNames), std::end(kStageNames),
+                        [&](const char* o) { return s == o; }) -
+           std::begin(kStageNames);
   };
   std::stable_sort(
       run.timing.begin(), run.timing.end(),

@@ -24,7 +24,9 @@
 // Concurrency: any number of threads may call the const methods (query,
 // feature_vector, ...) at the same time; add, remove, clear and set_label need
 // exclusive access. The class enforces this with an internal reader-writer
-// lock, so mixing them from several threads is safe, writers simply wait.
+// lock, so mixing them from several threads is safe: a writer waits for the
+// calls already running, and calls that arrive after it wait for the writer,
+// so writers make progress under any query load.
 // Moving or destroying a Database while another thread uses it is not.
 #pragma once
 

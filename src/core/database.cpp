@@ -9,6 +9,7 @@
 #include <limits>
 #include <mutex>
 #include <new>
+#include <shared_mutex>
 #include <utility>
 
 #if defined(__SSE2__)

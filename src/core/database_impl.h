@@ -9,7 +9,6 @@
 #include <cstring>
 #include <memory>
 #include <new>
-#include <shared_mutex>
 #include <string>
 #include <vector>
 
@@ -18,6 +17,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "writer_priority_mutex.h"
 
 namespace binbow::detail {
 
@@ -260,7 +260,7 @@ struct Database::Impl {
 
   Vocabulary vocabulary;
   DatabaseOptions options;
-  mutable std::shared_mutex mutex;
+  mutable detail::WriterPriorityMutex mutex;
 
   std::vector<std::unique_ptr<detail::Segment>> segments;
 

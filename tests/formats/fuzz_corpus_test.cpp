@@ -1,39 +1,15 @@
-// Replays every fuzz corpus (seeds and inputs that once crashed) through the
-// normal build: each file must load or be rejected with a FileError.
+// Replays the fuzz corpora of the core readers (vocabularies, databases,
+// gzip and tar) through the normal build.
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <string>
-#include <vector>
-
 #include "../../fuzz/fuzz_targets.h"
-#include "support/test_support.h"
+#include "support/fuzz_corpus.h"
 
 namespace binbow {
 namespace {
 
 TEST(FuzzCorpus, EveryInputLoadsOrIsRejectedCleanly) {
-  for (const fuzz::Target& target : fuzz::kTargets) {
-    const std::filesystem::path corpus =
-        test::source_path(std::string("fuzz/corpus/") + target.name);
-    ASSERT_TRUE(std::filesystem::is_directory(corpus)) << corpus << " is missing";
-    std::size_t inputs = 0, accepted = 0;
-    for (const auto& entry : std::filesystem::directory_iterator(corpus)) {
-      if (!entry.is_regular_file()) continue;
-      SCOPED_TRACE(entry.path().string());
-      const std::vector<std::uint8_t> bytes = test::read_file(entry.path().string());
-      ++inputs;
-      try {
-        target.run(bytes.data(), bytes.size());
-        ++accepted;
-      } catch (const FileError&) {
-      } catch (const std::exception& e) {
-        ADD_FAILURE() << target.name << ": " << e.what();
-      }
-    }
-    EXPECT_GT(inputs, 0u) << "no inputs in " << corpus;
-    EXPECT_GT(accepted, 0u) << "no valid seed in " << corpus;
-  }
+  test::replay_fuzz_corpora(fuzz::kTargets);
 }
 
 }  // namespace

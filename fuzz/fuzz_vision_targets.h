@@ -1,0 +1,160 @@
+// The fuzz targets of binbow::vision's readers of untrusted files: loop
+// detector parameters (JSON and YAML), BRIEF patterns, ground truth (.mat,
+// image, text pairs) and loops.csv. Same contract as fuzz_targets.h: each
+// function returns for a valid file, throws binbow::FileError for an invalid
+// one, and throws std::logic_error when an accepted file breaks an invariant.
+// Readers that only take a path get the input through a temporary file.
+#pragma once
+
+#include <unistd.h>
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "binbow/error.h"
+#include "binbow/vision/evaluation.h"
+#include "binbow/vision/loop_detector.h"
+#include "fuzz_targets.h"
+#include "vision/brief_pattern.h"
+
+namespace binbow::fuzz {
+
+// A directory of this process for the inputs, removed at exit.
+class InputDirectory {
+ public:
+  InputDirectory()
+      : path_(std::filesystem::temp_directory_path() /
+              ("binbow-fuzz-" + std::to_string(::getpid()))) {
+    std::filesystem::create_directories(path_);
+  }
+  ~InputDirectory() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  InputDirectory(const InputDirectory&) = delete;
+  InputDirectory& operator=(const InputDirectory&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A file named input<suffix> in that directory (the name picks the reader:
+// .json, .mat, ...).
+inline std::string input_path(const char* suffix) {
+  static const InputDirectory directory;
+  return (directory.path() / (std::string("input") + suffix)).string();
+}
+
+// The input written to input_path(suffix), afresh for every input.
+inline std::string input_file(const std::uint8_t* data, std::size_t size, const char* suffix) {
+  const std::string path = input_path(suffix);
+  // A new file each time: ext4 flushes a file truncated and rewritten when it
+  // is closed (auto_da_alloc), which made every input cost 4 ms.
+  std::remove(path.c_str());
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) throw std::runtime_error("cannot write the fuzz input " + path);
+  const bool written = std::fwrite(data, 1, size, file) == size;
+  if (std::fclose(file) != 0 || !written)
+    throw std::runtime_error("cannot write the fuzz input " + path);
+  return path;
+}
+
+// Accepted parameters are valid and survive to_json / from_json unchanged.
+inline void check_accepted(const vision::LoopDetectorParams& params) {
+  params.validate();
+  const std::string json = params.to_json();
+  if (vision::LoopDetectorParams::from_json(json, "rewritten").to_json() != json)
+    throw std::logic_error("writing and reading back changed the parameters");
+}
+
+inline void load_params_json(const std::uint8_t* data, std::size_t size) {
+  check_accepted(vision::LoopDetectorParams::from_json(
+      std::string(reinterpret_cast<const char*>(data), size), "fuzz"));
+}
+
+inline void load_params_yaml(const std::uint8_t* data, std::size_t size) {
+  check_accepted(vision::LoopDetectorParams::load(input_file(data, size, ".yml")));
+}
+
+inline void load_brief_pattern(const std::uint8_t* data, std::size_t size) {
+  const vision::BriefPattern pattern = vision::load_brief_pattern(input_file(data, size, ".yml"));
+  const std::size_t tests = pattern.tests();
+  if (tests == 0 || tests % 8 != 0 || pattern.y1.size() != tests || pattern.x2.size() != tests ||
+      pattern.y2.size() != tests)
+    throw std::logic_error("accepted a pattern of unequal or partial-byte tests");
+  if (pattern.radius() > vision::kMaxBriefPatternRadius)
+    throw std::logic_error("accepted a pattern wider than kMaxBriefPatternRadius");
+}
+
+// Every query's earlier matches are earlier, increasing, and is_loop agrees.
+inline void check_accepted(const vision::GroundTruth& truth) {
+  std::size_t queries_with_loops = 0;
+  for (std::size_t q = 0; q < truth.frames(); ++q) {
+    const Span<std::uint32_t> matches = truth.earlier_matches(q);
+    if (!matches.empty()) ++queries_with_loops;
+    for (std::size_t i = 0; i < matches.size(); ++i) {
+      if (matches[i] >= q || (i > 0 && matches[i - 1] >= matches[i]))
+        throw std::logic_error("earlier matches not earlier and increasing");
+      if (!truth.is_loop(q, matches[i]) || !truth.is_loop(matches[i], q))
+        throw std::logic_error("is_loop disagrees with earlier_matches");
+    }
+  }
+  if (queries_with_loops != truth.queries_with_loops())
+    throw std::logic_error("queries_with_loops disagrees with earlier_matches");
+}
+
+inline void load_ground_truth(const std::uint8_t* data, std::size_t size, const char* suffix) {
+  check_accepted(vision::GroundTruth::load(input_file(data, size, suffix)));
+}
+
+inline std::string file_text(const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) throw std::runtime_error("cannot read " + path);
+  std::string text;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, file)) > 0;) text.append(buffer, n);
+  std::fclose(file);
+  return text;
+}
+
+// An accepted loops.csv is written back and read again with the same rows;
+// scores are written to 9 significant digits, so they only have to give the
+// same file when written once more.
+inline void load_loops_csv(const std::uint8_t* data, std::size_t size) {
+  const std::vector<vision::Detection> detections =
+      vision::read_detections_csv(input_file(data, size, ".csv"));
+  std::string rewritten[2] = {input_path("-rewritten.csv"), input_path("-rewritten-twice.csv")};
+  for (const std::string& path : rewritten)
+    std::remove(path.c_str());  // renaming over it would flush it, as above
+  vision::write_detections_csv(rewritten[0], detections);
+  const std::vector<vision::Detection> again = vision::read_detections_csv(rewritten[0]);
+  const auto same_row = [](const vision::Detection& a, const vision::Detection& b) {
+    return a.query == b.query && a.match == b.match && a.query_file == b.query_file &&
+           a.match_file == b.match_file && a.inliers == b.inliers;
+  };
+  if (again.size() != detections.size() ||
+      !std::equal(again.begin(), again.end(), detections.begin(), same_row))
+    throw std::logic_error("writing and reading back changed the detections");
+  vision::write_detections_csv(rewritten[1], again);
+  if (file_text(rewritten[0]) != file_text(rewritten[1]))
+    throw std::logic_error("writing loops.csv twice gave two files");
+}
+
+inline const Target kVisionTargets[] = {
+    {"params_json", load_params_json},
+    {"params_yaml", load_params_yaml},
+    {"brief_pattern", load_brief_pattern},
+    {"gt_mat", [](const std::uint8_t* d, std::size_t n) { load_ground_truth(d, n, ".mat"); }},
+    {"gt_image", [](const std::uint8_t* d, std::size_t n) { load_ground_truth(d, n, ".png"); }},
+    {"gt_pairs", [](const std::uint8_t* d, std::size_t n) { load_ground_truth(d, n, ".txt"); }},
+    {"loops_csv", load_loops_csv},
+};
+
+}  // namespace binbow::fuzz
