@@ -64,7 +64,7 @@ def test_heavy_calls_let_other_threads_run(name, many_descriptors):
         "quantize": lambda: voc.quantize(many_descriptors),
         "Database.add": lambda: binbow.Database(voc).add(many_descriptors),
         "build": lambda: binbow.Vocabulary.build(
-            [many_descriptors[:50_000]], branching=10, levels=3, threads=1
+            [many_descriptors[:50_000]], branching=10, levels=3, threads=1, weighting="tf"
         ),
     }
     iterations, seconds = main_thread_progress_during(calls[name])

@@ -57,10 +57,10 @@ def test_records_the_descriptor_it_was_trained_on(tmp_path, images, vocabulary):
 
 
 def test_stop_words_get_weight_zero(images):
-    # Every image has all 50 centres, so with a fraction of 0.5 every word
-    # present in most images is a stop word: transforms become sparser.
-    plain = binbow.Vocabulary.build(images, branching=5, levels=2, seed=1)
-    stopped = binbow.Vocabulary.build(images, branching=5, levels=2, seed=1,
+    # With a fraction of 0.5 every word present in more than half of the
+    # images is a stop word: transforms become sparser.
+    plain = binbow.Vocabulary.build(images, branching=5, levels=3, seed=1)
+    stopped = binbow.Vocabulary.build(images, branching=5, levels=3, seed=1,
                                       stop_word_fraction=0.5)
     assert stopped.checksum != plain.checksum
     assert len(stopped.transform(images[0])) < len(plain.transform(images[0]))
@@ -120,7 +120,7 @@ def test_default_vocabulary_errors(monkeypatch, tmp_path):
     # BINBOW_DATA_DIR comes first.
     (tmp_path / "vocab").mkdir()
     rng = np.random.default_rng(5)
-    own = binbow.Vocabulary.build([clustered(rng, 100)], branching=3, levels=2)
+    own = binbow.Vocabulary.build([clustered(rng, 100)], branching=3, levels=2, weighting="tf")
     own.save(tmp_path / "vocab" / "brief_default.bbw")
     monkeypatch.setenv("BINBOW_DATA_DIR", str(tmp_path))
     assert binbow.data_directories()[0] == str(tmp_path)
