@@ -13,8 +13,10 @@
 #include <functional>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include <matio.h>
+#include <zlib.h>
 
 #include "binbow/error.h"
 #include "binbow/vision/image_source.h"
@@ -105,8 +107,119 @@ struct VarFreer {
   void operator()(matvar_t* v) const { Mat_VarFree(v); }
 };
 
-// matio reads a truncated compressed variable as zeros without complaint, so
-// the level-5 element chain is walked first: every element must fit in the file.
+// The level-5 data types that stand at the top of a .mat file, and the ones
+// of a matrix's first sub-elements.
+constexpr std::uint32_t kMiInt8 = 1, kMiInt32 = 5, kMiUint32 = 6, kMiMatrix = 14,
+                        kMiCompressed = 15;
+constexpr std::uint32_t kMxSparseClass = 5;
+// matio sizes its first allocations of a variable from these: the dimension
+// list (rank 32 at most) and the name.
+constexpr std::uint64_t kMaxMatDimensionBytes = 32 * 4;
+constexpr std::uint64_t kMaxMatNameBytes = 4096;
+// Inflating a compressed variable once to check it costs time, not memory:
+// 1 GiB is a dense 11,585² double matrix. matio allocates a sparse matrix's
+// index and value arrays whole, so those may expand at most 64x (real sparse
+// ground truths expand 3-10x), or to 16 MiB.
+constexpr std::uint64_t kMaxMatInflatedBytes = std::uint64_t{1} << 30;
+constexpr std::uint64_t kMaxSparseExpansion = 64;
+constexpr std::uint64_t kMinSparseInflatedLimit = std::uint64_t{16} << 20;
+
+struct Level5Reader {
+  const std::string& path;
+  bool swapped;
+
+  std::uint32_t word(const unsigned char* bytes) const {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= std::uint32_t(bytes[swapped ? 3 - i : i]) << (8 * i);
+    return v;
+  }
+
+  [[noreturn]] void fail(std::uint64_t offset, const std::string& what) const {
+    throw FileError(path, "variable at byte " + std::to_string(offset) + ": " + what);
+  }
+
+  // Checks the head of a matrix (its array flags, dimensions and name), whose
+  // sizes matio allocates before anything else, against `size`, the bytes of
+  // the matrix after its tag; `head` holds its first bytes. Returns the class.
+  std::uint32_t check_matrix_head(std::uint64_t offset, const unsigned char* head,
+                                  std::size_t head_size, std::uint64_t size) const {
+    if (head_size < 24 || size < 24) fail(offset, "a matrix too short for its array flags");
+    if (word(head) != kMiUint32 || word(head + 4) != 8)
+      fail(offset, "a matrix whose array flags are damaged");
+    const std::uint32_t matrix_class = word(head + 8) & 0xff;
+    if (word(head + 16) != kMiInt32) fail(offset, "a matrix whose dimensions are damaged");
+    const std::uint64_t dimension_bytes = word(head + 20);
+    if (dimension_bytes < 8 || dimension_bytes % 4 != 0 ||
+        dimension_bytes > kMaxMatDimensionBytes || 24 + dimension_bytes > size)
+      fail(offset, "a matrix declaring " + std::to_string(dimension_bytes) +
+                       " bytes of dimensions (8 to 128 expected)");
+    const std::uint64_t name_at = 24 + (dimension_bytes + 7) / 8 * 8;
+    if (name_at + 8 > head_size || name_at + 8 > size) fail(offset, "a matrix with no name");
+    const std::uint32_t name_tag = word(head + name_at);
+    if ((name_tag >> 16) == 0) {  // not a small data element: a length of its own
+      const std::uint64_t name_bytes = word(head + name_at + 4);
+      if (name_tag != kMiInt8 || name_bytes > kMaxMatNameBytes || name_at + 8 + name_bytes > size)
+        fail(offset, "a matrix whose name declares " + std::to_string(name_bytes) + " bytes");
+    }
+    return matrix_class;
+  }
+
+  // Inflates a compressed variable once, keeping only its first bytes:
+  // matio would read a damaged stream as zeros, or size arrays from it.
+  void check_compressed(std::ifstream& in, std::uint64_t offset, std::uint64_t bytes) const {
+    z_stream stream{};
+    if (inflateInit(&stream) != Z_OK) fail(offset, "cannot start zlib");
+    std::unique_ptr<z_stream, int (*)(z_streamp)> guard(&stream, inflateEnd);
+    std::vector<unsigned char> input(64 << 10), output(64 << 10);
+    unsigned char head[512];
+    std::size_t head_size = 0;
+    std::uint64_t inflated = 0, left = bytes;
+    int status = Z_OK;
+    in.seekg(static_cast<std::streamoff>(offset + 8));
+    while (status != Z_STREAM_END) {
+      if (stream.avail_in == 0) {
+        if (left == 0) fail(offset, "a compressed variable that ends before its zlib stream");
+        const auto chunk = static_cast<std::size_t>(std::min<std::uint64_t>(left, input.size()));
+        if (!in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(chunk)))
+          fail(offset, "a compressed variable cut short");
+        left -= chunk;
+        stream.next_in = input.data();
+        stream.avail_in = static_cast<uInt>(chunk);
+      }
+      stream.next_out = output.data();
+      stream.avail_out = static_cast<uInt>(output.size());
+      status = inflate(&stream, Z_NO_FLUSH);
+      if (status != Z_OK && status != Z_STREAM_END)
+        fail(offset, "a compressed variable whose zlib stream is damaged");
+      const std::size_t produced = output.size() - stream.avail_out;
+      const std::size_t kept = std::min(produced, sizeof head - head_size);
+      std::memcpy(head + head_size, output.data(), kept);
+      head_size += kept;
+      inflated += produced;
+      if (inflated > kMaxMatInflatedBytes)
+        fail(offset, "a compressed variable expanding beyond " +
+                         std::to_string(kMaxMatInflatedBytes) + " bytes");
+    }
+    if (left != 0 || stream.avail_in != 0)
+      fail(offset, "a compressed variable with bytes after its zlib stream");
+    if (head_size < 8 || word(head) != kMiMatrix)
+      fail(offset, "a compressed variable that holds no matrix");
+    const std::uint64_t size = word(head + 4);
+    if (8 + size > inflated) fail(offset, "a compressed matrix longer than its zlib stream");
+    const std::uint32_t matrix_class = check_matrix_head(offset, head + 8, head_size - 8, size);
+    const std::uint64_t sparse_limit =
+        std::max(kMinSparseInflatedLimit, kMaxSparseExpansion * bytes);
+    if (matrix_class == kMxSparseClass && inflated > sparse_limit)
+      fail(offset, "a compressed sparse matrix expanding " + std::to_string(inflated) +
+                       " bytes, more than " + std::to_string(sparse_limit));
+  }
+};
+
+// matio reads a truncated compressed variable as zeros without complaint, and
+// sizes its allocations from the headers of a variable, so the level-5
+// element chain is walked first: every element is a matrix or a compressed
+// matrix that fits in the file, with a plausible head, and every compressed
+// one inflates to what it declares.
 void check_level5_elements(const std::string& path) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));
@@ -119,25 +232,33 @@ void check_level5_elements(const std::string& path) {
   const bool swapped = header[126] == 'M' && header[127] == 'I';
   if (!swapped && !(header[126] == 'I' && header[127] == 'M'))
     throw FileError(path, "not a MATLAB level-5 .mat file (bad endian indicator)");
+  const Level5Reader reader{path, swapped};
   std::uint64_t offset = 128;
   while (offset < size) {
     unsigned char tag[8];
     in.seekg(static_cast<std::streamoff>(offset));
     if (size - offset < 8 || !in.read(reinterpret_cast<char*>(tag), 8))
       throw FileError(path, "truncated: incomplete element tag at byte " + std::to_string(offset));
-    const auto word = [&](int at) {
-      std::uint32_t v = 0;
-      for (int i = 0; i < 4; ++i) v |= std::uint32_t(tag[at + (swapped ? 3 - i : i)]) << (8 * i);
-      return v;
-    };
-    std::uint64_t bytes = word(4);
-    if ((word(0) >> 16) != 0) bytes = 0;  // small data element: data packed in the tag
+    const std::uint32_t type = reader.word(tag);
+    const std::uint64_t bytes = reader.word(tag + 4);
+    if (type != kMiMatrix && type != kMiCompressed)
+      throw FileError(path, "element at byte " + std::to_string(offset) + " has type " +
+                                std::to_string(type) + ", not a variable");
     const std::uint64_t end = offset + 8 + bytes;
     if (end > size)
       throw FileError(path, "truncated: element at byte " + std::to_string(offset) + " needs " +
                                 std::to_string(bytes) + " bytes, file ends after " +
                                 std::to_string(size - offset - 8));
-    offset = word(0) == 15 ? end : (end + 7) / 8 * 8;  // compressed elements are not padded
+    if (type == kMiCompressed) {
+      reader.check_compressed(in, offset, bytes);
+    } else {
+      unsigned char head[512];
+      const auto head_size = static_cast<std::size_t>(std::min<std::uint64_t>(bytes, sizeof head));
+      if (!in.read(reinterpret_cast<char*>(head), static_cast<std::streamsize>(head_size)))
+        throw FileError(path, "truncated variable at byte " + std::to_string(offset));
+      reader.check_matrix_head(offset, head, head_size, bytes);
+    }
+    offset = type == kMiCompressed ? end : (end + 7) / 8 * 8;  // compressed ones are not padded
   }
 }
 

@@ -264,7 +264,7 @@ LoopDetectorParams LoopDetectorParams::load(const std::string& path,
                                             const LoopDetectorParams& defaults) {
   const std::string text = read_regular_file(path, kMaxLoopParamsFileBytes);
   // Both parsers recurse per nesting level; parameters are one flat mapping.
-  check_storage_nesting(text, path);
+  check_storage_text(text, path);
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool json = (first != std::string::npos && text[first] == '{') ||
                     (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0);

@@ -136,7 +136,11 @@ std::size_t nesting_depth_bound(std::string_view text) {
   return yaml_depth_bound(text);
 }
 
-void check_storage_nesting(std::string_view text, const std::string& path) {
+void check_storage_text(std::string_view text, const std::string& path) {
+  // OpenCV's parsers take a NUL for the end of the text, then read on past it
+  // (a crash in its XML reader): text files have none.
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos)
+    throw FileError(path, "a NUL byte at byte " + std::to_string(nul) + ": not a text file");
   const std::size_t depth = nesting_depth_bound(text);
   if (depth > kMaxStorageNesting) {
     throw FileError(path, "nested " + std::to_string(depth) +
@@ -165,7 +169,7 @@ std::string read_storage_text(const std::string& path, std::uint64_t max_bytes) 
         detail::gunzip(bytes, text.size(), path, static_cast<std::size_t>(max_bytes));
     text.assign(inflated.begin(), inflated.end());
   }
-  check_storage_nesting(text, path);
+  check_storage_text(text, path);
   return text;
 }
 

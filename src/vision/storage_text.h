@@ -21,9 +21,9 @@ inline constexpr std::size_t kMaxStorageNesting = 64;
 // a line. Linear in the text, never less than the depth a parser sees.
 std::size_t nesting_depth_bound(std::string_view text);
 
-// Throws FileError(path, ...) when nesting_depth_bound(text) exceeds
-// kMaxStorageNesting.
-void check_storage_nesting(std::string_view text, const std::string& path);
+// Throws FileError(path, ...) when `text` holds a NUL byte or
+// nesting_depth_bound(text) exceeds kMaxStorageNesting.
+void check_storage_text(std::string_view text, const std::string& path);
 
 // The FileStorage format flag (FORMAT_XML, FORMAT_JSON or FORMAT_YAML) for
 // `text` read from `path`: OpenCV's rule (the name's extension, a trailing
@@ -31,8 +31,8 @@ void check_storage_nesting(std::string_view text, const std::string& path);
 int storage_format(std::string_view text, const std::string& path);
 
 // The text of `path` (a regular file, gzip-compressed or not), refusing more
-// than `max_bytes` bytes before or after decompression and nesting deeper
-// than kMaxStorageNesting (FileError naming the file). Give it to
+// than `max_bytes` bytes before or after decompression, NUL bytes, and
+// nesting deeper than kMaxStorageNesting (FileError naming the file). Give it to
 // cv::FileStorage with READ | MEMORY | storage_format(text, path).
 std::string read_storage_text(const std::string& path, std::uint64_t max_bytes);
 

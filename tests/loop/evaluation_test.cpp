@@ -102,6 +102,38 @@ TEST(GroundTruth, DamagedFilesAreFileErrors) {
   EXPECT_THROW(GroundTruth::load(dir.file("missing.txt")), FileError);
 }
 
+void expect_mat_error_mentioning(const std::string& path, const std::string& needle) {
+  try {
+    GroundTruth::load(path);
+    ADD_FAILURE() << "loaded " << path;
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+// matio sizes allocations from a variable's head (found by fuzzing: a
+// dimension list declaring 1 GB made it allocate 2 GB) and leaked on
+// elements that are not variables; both are refused before matio reads.
+TEST(GroundTruth, MatHeadsAreCheckedBeforeMatioAllocates) {
+  TempDir dir;
+  const auto plain = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double.mat"));
+  ASSERT_GT(plain.size(), 0xa0u);
+  auto huge_dimensions = plain;
+  huge_dimensions[0x9f] = 0x3f;  // the high byte of the dimension list's length
+  test::write_file(dir.file("dims.mat"), huge_dimensions);
+  expect_mat_error_mentioning(dir.file("dims.mat"), "bytes of dimensions");
+
+  auto junk = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
+  junk.insert(junk.end(), 16, 0xff);
+  test::write_file(dir.file("junk.mat"), junk);
+  expect_mat_error_mentioning(dir.file("junk.mat"), "not a variable");
+
+  auto damaged = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
+  damaged[damaged.size() - 6] ^= 0xff;  // inside the deflate stream or its checksum
+  test::write_file(dir.file("damaged.mat"), damaged);
+  expect_mat_error_mentioning(dir.file("damaged.mat"), "zlib stream");
+}
+
 TEST(Detections, CsvRoundTripWithAwkwardNames) {
   TempDir dir;
   const std::vector<Detection> detections = {

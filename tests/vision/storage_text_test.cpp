@@ -73,6 +73,17 @@ TEST(BriefPattern, DeeplyNestedFilesAreRefusedBeforeOpenCvParsesThem) {
   expect_pattern_error_mentioning(dir.file("deep.yml.gz"), "nested");
 }
 
+// OpenCV's XML reader crashed on NUL bytes in the <?xml declaration (found
+// by fuzzing); a text file has no NUL, so none reaches OpenCV.
+TEST(BriefPattern, NulBytesAreRefusedBeforeOpenCvParses) {
+  test::TempDir dir;
+  std::string xml = "<?xml version=";
+  xml += std::string(21, '\0');
+  xml += "\"1.0\"?>\n<opencv_storage>\n<x1>-45 11</x1>\n</opencv_storage>\n";
+  write_text(dir.file("nul.xml"), xml);
+  expect_pattern_error_mentioning(dir.file("nul.xml"), "NUL byte at byte 14");
+}
+
 TEST(BriefPattern, GzipPatternsLoadAndGzipBombsAreRefused) {
   test::TempDir dir;
   const std::vector<std::uint8_t> text =
