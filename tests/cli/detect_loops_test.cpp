@@ -19,13 +19,9 @@ namespace binbow {
 namespace {
 
 using test::run_cli;
+using test::samples_folder;
 using test::shared_data;
 using test::TempDir;
-
-std::string samples_folder() {
-  const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
-  return first.substr(0, first.rfind('/'));
-}
 
 // The 84 frames of the corridor walked twice as a 4 fps MJPG video.
 std::string write_corridor_video(const TempDir& dir) {

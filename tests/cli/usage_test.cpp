@@ -15,16 +15,12 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::run_cli;
+using test::samples_folder;
 using test::shared_data;
 using test::TempDir;
 
 std::string quoted(const std::string& path) {
   return "'" + path + "'";
-}
-
-std::string samples_folder() {
-  const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
-  return first.substr(0, first.rfind('/'));
 }
 
 // A text list of the first `count` corridor frames: a short real sequence.

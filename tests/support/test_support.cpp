@@ -26,6 +26,11 @@ std::string shared_data(const std::string& relative) {
   return path;
 }
 
+std::string samples_folder() {
+  const std::string first = shared_data("rtabmap-samples/samples/1.jpg");
+  return first.substr(0, first.rfind('/'));
+}
+
 std::string source_path(const std::string& relative) {
   return std::string(BINBOW_SOURCE_DIR) + "/" + relative;
 }

@@ -14,6 +14,8 @@ namespace binbow::test {
 // Path of a file under ../shared/data (see its README). Fails the current test
 // with a clear message, and throws to stop it, when the file is missing.
 std::string shared_data(const std::string& relative);
+// The folder of rtabmap-samples' 84 corridor frames (a real sequence).
+std::string samples_folder();
 // Path of a file in the repository (e.g. "data/...").
 std::string source_path(const std::string& relative);
 // Path of the binbow CLI built beside the tests.
