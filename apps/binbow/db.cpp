@@ -20,6 +20,7 @@
 #include "loop_run.h"
 #include "output_options.h"
 #include "progress.h"
+#include "vision/regular_file.h"
 
 namespace binbow::cli {
 namespace {
@@ -186,6 +187,7 @@ void add_database_options(CLI::App* command, DbArguments& arguments,
 }  // namespace
 
 bool print_database_info(const std::string& path, bool verify) {
+  vision::require_regular_file(path);  // a FIFO would block the read below
   char magic[8] = {};
   std::ifstream file(path, std::ios::binary);
   if (!file.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWDB", 8) != 0) return false;

@@ -18,6 +18,7 @@
 #include "binbow/vocabulary.h"
 #include "core/file_io.h"
 #include "default_vocabulary.h"
+#include "vision/regular_file.h"
 
 namespace binbow::cli {
 
@@ -118,12 +119,11 @@ void LoopRunWriter::finish() {
 }
 
 LoopRun LoopRun::load(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw FileError(path, "cannot open the run record (written by detect-loops beside loops.csv)");
+  // Only a regular file, read whole: a FIFO would block, a device never end.
+  const std::string text = vision::read_regular_file(path, kMaxRunRecordBytes);
   LoopRun run;
   try {
-    const Json j = Json::parse(in);
+    const Json j = Json::parse(text);
     if (j.at("format") != "binbow-loop-run" || j.at("version") != 1)
       throw FileError(path, "not a binbow detect-loops run record (version 1)");
     run.inputs = j.at("inputs").get<std::vector<std::string>>();

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -32,6 +33,9 @@ struct FrameRecord {
 // for 5,000 frames when it kept every inlier of every loop).
 constexpr std::size_t kDrawnLoops = 300;
 constexpr std::size_t kDrawnInliers = 200;
+// A record grows ~230 bytes per frame plus at most ~3 MB of inliers: 1 GiB
+// holds millions of frames, and no larger file is read.
+constexpr std::uint64_t kMaxRunRecordBytes = std::uint64_t{1} << 30;
 
 struct LoopRecord {
   std::size_t query = 0;

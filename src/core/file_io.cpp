@@ -26,7 +26,8 @@ std::string errno_text() {
 }  // namespace
 
 MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) throw FileError(path, "cannot open: " + errno_text());
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
@@ -37,6 +38,12 @@ MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
   if (S_ISDIR(st.st_mode)) {
     ::close(fd);
     throw FileError(path, "is a directory, expected a file");
+  }
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw FileError(path, S_ISFIFO(st.st_mode)   ? "is a FIFO, not a regular file"
+                          : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file"
+                                                 : "is a device, not a regular file");
   }
   if (st.st_size <= 0) {
     ::close(fd);

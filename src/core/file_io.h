@@ -12,7 +12,8 @@
 namespace binbow::detail {
 
 // A read-only memory map of a whole file. Throws FileError naming the file
-// when it is missing, a directory, unreadable or empty.
+// when it is missing, a directory, not a regular file (a FIFO, a socket, a
+// device: refused without blocking), unreadable or empty.
 class MappedFile {
  public:
   // `populate`: fault every page in at once, faster when all of it is read.

@@ -49,7 +49,7 @@ TEST(CliHostileInputs, DeeplyNestedFileStorageInputsAreErrors) {
 
 TEST(CliHostileInputs, FifosAreRefusedWithoutBlocking) {
   test::TempDir dir;
-  for (const char* name : {"params.json", "frames.png", "gt.txt"})
+  for (const char* name : {"params.json", "frames.png", "gt.txt", "voc.bbw", "db.bbdb"})
     ASSERT_EQ(mkfifo(dir.file(name).c_str(), 0600), 0);
   const std::string frames = test::source_path("data/samples/rtabmap/samples");
   expect_error("detect-loops --params " + dir.file("params.json") + " -o " + dir.file("l.csv") +
@@ -60,6 +60,17 @@ TEST(CliHostileInputs, FifosAreRefusedWithoutBlocking) {
   vision::write_detections_csv(dir.file("loops.csv"), {{5, 1, "", "", 1, 12}});
   expect_error("evaluate --gt " + dir.file("gt.txt") + " " + dir.file("loops.csv"),
                dir.file("gt.txt"), "is a FIFO");
+  // Vocabularies and databases are memory-mapped; info reads a database's magic first.
+  expect_error("info " + dir.file("voc.bbw"), dir.file("voc.bbw"), "is a FIFO");
+  expect_error(
+      "detect-loops --vocab " + dir.file("voc.bbw") + " -o " + dir.file("l.csv") + " " + frames,
+      dir.file("voc.bbw"), "is a FIFO");
+  expect_error("db query " + dir.file("db.bbdb") + " " + frames, dir.file("db.bbdb"), "is a FIFO");
+  // The run record beside loops.csv.
+  ASSERT_EQ(mkfifo((dir.file("loops.csv") + ".run.json").c_str(), 0600), 0);
+  expect_error("evaluate --gt " + test::source_path("data/samples/rtabmap/samples_GT.bmp") + " " +
+                   dir.file("loops.csv"),
+               dir.file("loops.csv") + ".run.json", "is a FIFO");
 }
 
 TEST(CliHostileInputs, PixelLimitFlagRefusesLargerImages) {

@@ -42,6 +42,20 @@ std::set<std::string> names_in(const std::string& directory) {
   return names;
 }
 
+// Every vocabulary and database is read through MappedFile: opening a FIFO
+// used to wait for a writer forever (binbow info FIFO hung).
+TEST(FileIo, MappingAFifoIsRefusedWithoutBlocking) {
+  test::TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  try {
+    detail::MappedFile mapped(dir.file("fifo"));
+    FAIL() << "mapped a FIFO";
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), dir.file("fifo"));
+    EXPECT_NE(std::string(e.what()).find("FIFO"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FileIo, SaveRemovesTemporariesOfDeadWritersOfTheSameTarget) {
   test::TempDir dir;
   // What `kill -9` during a save leaves: an unlocked "<target>.tmp-XXXXXX", hours old.
