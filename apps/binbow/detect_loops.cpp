@@ -15,6 +15,7 @@
 #include "binbow/vision/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "core/file_io.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
@@ -22,7 +23,6 @@
 #include "loop_run.h"
 #include "output_options.h"
 #include "progress.h"
-#include "staged_files.h"
 
 namespace binbow::cli {
 namespace {
@@ -112,8 +112,8 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   const long long known = source.size();
   Progress progress("detecting loops", known > 0 ? static_cast<std::size_t>(known) : 0);
   // loops.csv and its run record appear together or not at all.
-  StagedFiles outputs;
-  const std::string csv = outputs.stage(arguments.output);
+  detail::StagedFiles outputs;
+  std::FILE* const csv = outputs.stage(arguments.output);
   const std::string record_path = LoopRun::path_for(arguments.output);
   LoopRunWriter record(outputs.stage(record_path), record_path, run);
   std::vector<std::string> names;  // of every frame: a loop's match_file
@@ -158,7 +158,8 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   progress.finish();
   if (names.empty()) throw InvalidArgument("detect-loops: no images found in the inputs");
 
-  vision::write_detections_csv(csv, detections);
+  const std::string csv_text = vision::format_detections_csv(detections);
+  detail::write_all(csv, csv_text.data(), csv_text.size(), arguments.output);
   record.finish();
   outputs.commit();
   std::fprintf(stderr, "%zu frames, %zu loops -> %s\n", names.size(), detections.size(),

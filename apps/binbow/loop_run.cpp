@@ -49,10 +49,8 @@ void write_file_atomically(const std::string& path, const std::string& text) {
 const char* const kStageNames[kStageCount] = {"features", "transform",    "query",
                                               "islands",  "verification", "insertion"};
 
-LoopRunWriter::LoopRunWriter(const std::string& path, const std::string& target, const LoopRun& run)
-    : target_(target), file_(std::fopen(path.c_str(), "wb")) {
-  if (file_ == nullptr)
-    throw FileError(target, std::string("cannot write the run record: ") + std::strerror(errno));
+LoopRunWriter::LoopRunWriter(std::FILE* file, const std::string& target, const LoopRun& run)
+    : target_(target), file_(file) {
   for (const char* stage : kStageNames) timing_.push_back({stage, {}});
   // The keys of a version 1 record, written one value at a time; "frames"
   // stays open until finish().
@@ -65,10 +63,6 @@ LoopRunWriter::LoopRunWriter(const std::string& path, const std::string& target,
              {"video_fps", run.source.video_fps}}
             .dump() +
         ",\n\"frames\":[");
-}
-
-LoopRunWriter::~LoopRunWriter() {
-  if (file_ != nullptr) std::fclose(file_);
 }
 
 void LoopRunWriter::write(const std::string& text) {
@@ -112,10 +106,7 @@ void LoopRunWriter::finish() {
     write((s == 0 ? "\n" : ",\n") + Json(timing_[s].stage).dump() + ":" +
           Json(timing_[s].ms).dump());
   write("}}\n");
-  std::FILE* file = file_;
   file_ = nullptr;
-  if (std::fclose(file) != 0)
-    throw FileError(target_, std::string("cannot write the run record: ") + std::strerror(errno));
 }
 
 LoopRun LoopRun::load(const std::string& path) {

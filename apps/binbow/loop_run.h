@@ -80,10 +80,9 @@ struct LoopRun {
 class LoopRunWriter {
  public:
   // Writes the description of the run (`run`'s inputs, vocabulary,
-  // descriptor, max_features and params_json) to `path`, a file created
-  // beforehand (a temporary staged for commit); errors name `target`.
-  LoopRunWriter(const std::string& path, const std::string& target, const LoopRun& run);
-  ~LoopRunWriter();
+  // descriptor, max_features, params_json and source) to `file`, which the
+  // caller owns (a temporary staged for commit); errors name `target`.
+  LoopRunWriter(std::FILE* file, const std::string& target, const LoopRun& run);
   LoopRunWriter(const LoopRunWriter&) = delete;
   LoopRunWriter& operator=(const LoopRunWriter&) = delete;
 
@@ -93,7 +92,7 @@ class LoopRunWriter {
   // Keeps the loop, with kDrawnInliers of its inliers, while keeps_next_loop().
   void add_loop(std::size_t query, std::size_t match,
                 const std::vector<std::array<float, 4>>& inliers);
-  // Writes the kept loops and the timings and closes the file. Throws
+  // Writes the kept loops and the timings, the end of the record. Throws
   // FileError naming the target when anything could not be written.
   void finish();
 

@@ -160,6 +160,57 @@ void sync_directory(const std::string& directory, const std::string& path) {
   if (!synced) throw FileError(path, "cannot flush its directory to disk: " + why);
 }
 
+// The previous version of a destination while a group is renamed, to put
+// back if a later rename fails.
+struct Backup {
+  std::string path;  // empty: the destination did not exist
+  bool linked = false;
+};
+
+// Reserves a fresh name beside `destination` for its previous version.
+std::string backup_name(const std::string& destination, const std::string& path) {
+  std::string name = destination + ".old-XXXXXX";
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) throw FileError(path, "cannot create a file beside it: " + errno_text());
+  ::close(fd);
+  ::unlink(name.c_str());
+  return name;
+}
+
+Backup keep_previous(const std::string& destination, const std::string& path) {
+  Backup backup;
+  struct stat st {};
+  if (::lstat(destination.c_str(), &st) != 0) return backup;
+  if (S_ISDIR(st.st_mode)) throw FileError(path, "cannot replace it: it is a directory");
+  backup.path = backup_name(destination, path);
+  // A second link keeps the destination in place until the rename replaces
+  // it; where links are not supported it moves aside for that moment.
+  if (::link(destination.c_str(), backup.path.c_str()) == 0) {
+    backup.linked = true;
+  } else if (std::rename(destination.c_str(), backup.path.c_str()) != 0) {
+    throw FileError(path, "cannot keep the previous version while replacing it: " + errno_text());
+  }
+  return backup;
+}
+
+// Undoes keep_previous for a destination that was not replaced.
+void drop_unused(const std::string& destination, const Backup& backup) {
+  if (backup.linked)
+    ::unlink(backup.path.c_str());
+  else if (!backup.path.empty())
+    std::rename(backup.path.c_str(), destination.c_str());
+}
+
+// Puts a replaced destination's previous version back.
+void restore(const std::string& destination, const Backup& backup) {
+  if (backup.path.empty())
+    ::unlink(destination.c_str());
+  else
+    std::rename(backup.path.c_str(), destination.c_str());
+}
+
+}  // namespace
+
 // A locked temporary beside a destination; removed unless renamed over it.
 class TemporaryFile {
  public:
@@ -226,28 +277,49 @@ class TemporaryFile {
   bool renamed_ = false;
 };
 
-}  // namespace
+StagedFiles::StagedFiles() = default;
+StagedFiles::~StagedFiles() = default;
 
-void write_files_atomically(const std::vector<FileToWrite>& files) {
-  std::vector<std::unique_ptr<TemporaryFile>> temporaries;
-  for (const FileToWrite& file : files) {
-    temporaries.push_back(std::make_unique<TemporaryFile>(file.path, resolve_symlinks(file.path)));
-    file.write(temporaries.back()->file());
-    temporaries.back()->flush();
-  }
-  std::string replaced;
-  for (const auto& temporary : temporaries) {
+std::FILE* StagedFiles::stage(const std::string& path) {
+  temporaries_.push_back(std::make_unique<TemporaryFile>(path, resolve_symlinks(path)));
+  return temporaries_.back()->file();
+}
+
+void StagedFiles::commit() {
+  for (const auto& temporary : temporaries_) temporary->flush();
+  std::vector<Backup> backups;
+  const auto undo = [&] {
+    for (std::size_t i = backups.size(); i-- > 0;)
+      restore(temporaries_[i]->destination(), backups[i]);
+  };
+  for (const auto& temporary : temporaries_) {
+    try {
+      backups.push_back(keep_previous(temporary->destination(), temporary->path()));
+    } catch (const FileError&) {
+      undo();
+      throw;
+    }
     try {
       temporary->rename();
-    } catch (const FileError& e) {
-      if (replaced.empty()) throw;
-      throw FileError(temporary->path(), e.problem() + " (already replaced:" + replaced + ")");
+    } catch (const FileError&) {
+      drop_unused(temporary->destination(), backups.back());
+      backups.pop_back();
+      undo();
+      throw;
     }
-    replaced += " " + temporary->path();
   }
+  for (const Backup& backup : backups)
+    if (!backup.path.empty()) ::unlink(backup.path.c_str());
   // The renames reach the disk with their directories.
-  for (const auto& temporary : temporaries)
+  for (const auto& temporary : temporaries_)
     sync_directory(directory_of(temporary->destination()), temporary->path());
+  temporaries_.clear();
+}
+
+void write_files_atomically(const std::vector<FileToWrite>& files) {
+  StagedFiles staged;
+  for (const FileToWrite& file : files) file.write(staged.stage(file.path));
+  staged.commit();
 }
 
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {

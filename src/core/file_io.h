@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,13 +54,34 @@ struct FileToWrite {
   std::function<void(std::FILE*)> write;
 };
 
-// write_file_atomically for files that belong together (a result and its
-// description): every temporary is written and flushed to disk before the
-// first rename, so a failure while writing (an exception from a `write`, a
-// full disk) leaves every destination as it was and removes all the
-// temporaries. The renames themselves come last and in order; only they can
-// still fail (the destination directory changed meanwhile), and the error
-// then says which files were replaced.
+class TemporaryFile;
+
+// Files that belong together (a result and its description), written over a
+// while and replacing their destinations together or not at all. stage()
+// gives each a temporary beside its destination, as write_file_atomically
+// does (links followed, flock()ed, swept by a later save if its writer is
+// killed); commit() flushes every temporary to disk, then renames them in
+// order, and if a rename fails puts back what the earlier ones replaced.
+// Destroyed without a commit (a write failed, a full disk), it removes its
+// temporaries and every destination stays as it was.
+class StagedFiles {
+ public:
+  StagedFiles();
+  StagedFiles(const StagedFiles&) = delete;
+  StagedFiles& operator=(const StagedFiles&) = delete;
+  ~StagedFiles();
+
+  // The temporary of `path`, open for writing until commit() or destruction.
+  // Throws FileError naming `path`.
+  std::FILE* stage(const std::string& path);
+  // Throws FileError naming the file that could not be written or replaced.
+  void commit();
+
+ private:
+  std::vector<std::unique_ptr<TemporaryFile>> temporaries_;
+};
+
+// StagedFiles for contents written at once.
 void write_files_atomically(const std::vector<FileToWrite>& files);
 
 // Writes all bytes or throws FileError naming `path`.

@@ -556,7 +556,7 @@ Span<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
   return {earlier_.data() + offset, static_cast<std::size_t>(last - first)};
 }
 
-void write_detections_csv(const std::string& path, const std::vector<Detection>& detections) {
+std::string format_detections_csv(const std::vector<Detection>& detections) {
   std::ostringstream out;
   out << "query_index,match_index,query_file,match_file,score,inliers\n";
   char score[64];
@@ -565,7 +565,11 @@ void write_detections_csv(const std::string& path, const std::vector<Detection>&
     out << d.query << ',' << d.match << ',' << csv_field(d.query_file) << ','
         << csv_field(d.match_file) << ',' << score << ',' << d.inliers << '\n';
   }
-  const std::string text = out.str();
+  return out.str();
+}
+
+void write_detections_csv(const std::string& path, const std::vector<Detection>& detections) {
+  const std::string text = format_detections_csv(detections);
   detail::write_file_atomically(path, text.data(), text.size());
 }
 

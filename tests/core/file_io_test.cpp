@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -54,6 +55,30 @@ TEST(FileIo, MappingAFifoIsRefusedWithoutBlocking) {
     EXPECT_EQ(e.path(), dir.file("fifo"));
     EXPECT_NE(std::string(e.what()).find("FIFO"), std::string::npos) << e.what();
   }
+}
+
+// detect-loops streams loops.csv and its run record into staged temporaries
+// for the whole run: a run killed then leaves both, and the next save of
+// either target sweeps them.
+TEST(FileIo, StagedFilesOfAKilledWriterAreSweptByTheNextSave) {
+  test::TempDir dir;
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    detail::StagedFiles staged;
+    std::fputs("half a run", staged.stage(dir.file("loops.csv")));
+    std::fputs("{\"frames\":[", staged.stage(dir.file("loops.csv.run.json")));
+    std::fflush(nullptr);
+    ::_exit(0);  // as if killed: no destructor runs, no lock is kept
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_EQ(names_in(dir.path()).size(), 2u);
+  detail::StagedFiles staged;
+  std::fputs("loops", staged.stage(dir.file("loops.csv")));
+  std::fputs("record", staged.stage(dir.file("loops.csv.run.json")));
+  staged.commit();
+  EXPECT_EQ(names_in(dir.path()), (std::set<std::string>{"loops.csv", "loops.csv.run.json"}));
 }
 
 TEST(FileIo, SaveRemovesTemporariesOfDeadWritersOfTheSameTarget) {

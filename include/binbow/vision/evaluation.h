@@ -95,6 +95,8 @@ struct Detection {
 // takes about 100 bytes per row plus the file names longer than 15
 // characters (at most ~10 times the file's size; files up to 2 GiB).
 void write_detections_csv(const std::string& path, const std::vector<Detection>& detections);
+// The text write_detections_csv writes, header included.
+std::string format_detections_csv(const std::vector<Detection>& detections);
 std::vector<Detection> read_detections_csv(const std::string& path);
 
 // The paper's measures: a detection at query i is a true positive when
