@@ -111,7 +111,7 @@ struct VarFreer {
 // of a matrix's first sub-elements.
 constexpr std::uint32_t kMiInt8 = 1, kMiInt32 = 5, kMiUint32 = 6, kMiMatrix = 14,
                         kMiCompressed = 15;
-constexpr std::uint32_t kMxSparseClass = 5;
+constexpr std::uint32_t kMxSparseClass = 5, kMxFirstNumericClass = 6;  // double, ... uint64
 // matio sizes its first allocations of a variable from these: the dimension
 // list (rank 32 at most) and the name.
 constexpr std::uint64_t kMaxMatDimensionBytes = 32 * 4;
@@ -153,6 +153,21 @@ struct Level5Reader {
         dimension_bytes > kMaxMatDimensionBytes || 24 + dimension_bytes > size)
       fail(offset, "a matrix declaring " + std::to_string(dimension_bytes) +
                        " bytes of dimensions (8 to 128 expected)");
+    if (24 + dimension_bytes > head_size) fail(offset, "a matrix cut inside its dimensions");
+    // matio and this reader visit every cell of a dense matrix, and every
+    // column of a sparse one: each takes at least a byte, or 4, of the file.
+    std::uint64_t cells = 1;
+    for (std::uint64_t at = 24; at < 24 + dimension_bytes; at += 4) {
+      const std::uint64_t extent = word(head + at);
+      cells = extent != 0 && cells > size / extent ? size + 1 : cells * extent;
+    }
+    const std::uint64_t columns = dimension_bytes >= 8 ? word(head + 28) : 0;
+    if (matrix_class >= kMxFirstNumericClass && cells > size)
+      fail(offset,
+           "a matrix declaring more cells than its " + std::to_string(size) + " bytes hold");
+    if (matrix_class == kMxSparseClass && (columns + 1) * 4 > size)
+      fail(offset, "a sparse matrix declaring more columns than its " + std::to_string(size) +
+                       " bytes hold");
     const std::uint64_t name_at = 24 + (dimension_bytes + 7) / 8 * 8;
     if (name_at + 8 > head_size || name_at + 8 > size) fail(offset, "a matrix with no name");
     const std::uint32_t name_tag = word(head + name_at);

@@ -8,10 +8,10 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/core/persistence.hpp>
 
 #include "binbow/error.h"
 #include "binbow/vision/loop_detector.h"
+#include "vision/flat_yaml.h"
 #include "vision/regular_file.h"
 #include "vision/storage_text.h"
 
@@ -155,13 +155,6 @@ LoopDetectorParams from_object(const Json& object, const std::string& name,
   return params;
 }
 
-Json yaml_node_to_json(const cv::FileNode& node, const std::string& name, const std::string& key) {
-  if (node.isInt()) return Json(static_cast<int>(node));
-  if (node.isReal()) return Json(static_cast<double>(node));
-  if (node.isString()) return Json(static_cast<std::string>(node));
-  throw FileError(name, "\"" + key + "\" must be a number or a string");
-}
-
 }  // namespace
 
 const char* to_string(GeometricCheck check) {
@@ -263,27 +256,16 @@ LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const 
 LoopDetectorParams LoopDetectorParams::load(const std::string& path,
                                             const LoopDetectorParams& defaults) {
   const std::string text = read_regular_file(path, kMaxLoopParamsFileBytes);
-  // Both parsers recurse per nesting level; parameters are one flat mapping.
+  // nlohmann's JSON parser recurses per nesting level; parameters are one flat mapping.
   check_storage_text(text, path);
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool json = (first != std::string::npos && text[first] == '{') ||
                     (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0);
   if (json) return from_json(text, path, defaults);
 
-  // YAML (or XML) through OpenCV: converted to JSON to share one validator.
-  Json object = Json::object();
-  try {
-    cv::FileStorage storage(
-        text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
-    if (!storage.isOpened()) throw FileError(path, "neither JSON nor YAML");
-    const cv::FileNode root = storage.root();
-    if (!root.isMap()) throw FileError(path, "loop detector parameters must be a mapping");
-    for (const std::string& key : root.keys())
-      object[key] = yaml_node_to_json(root[key], path, key);
-  } catch (const cv::Exception& e) {
-    throw FileError(path, "invalid YAML: " + e.msg);
-  }
-  return from_object(object, path, defaults);
+  // YAML: parsed here (OpenCV's parser hangs on some malformed files) into
+  // JSON, to share one validator.
+  return from_object(parse_flat_yaml(text, path), path, defaults);
 }
 
 LoopDetectorParams LoopDetectorParams::load(const std::string& path) {

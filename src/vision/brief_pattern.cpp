@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cstdlib>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
 #include "binbow/error.h"
+#include "vision/flat_yaml.h"
 #include "vision/storage_text.h"
 
 namespace binbow::vision {
@@ -20,6 +22,16 @@ int BriefPattern::radius() const {
 
 namespace {
 
+int checked_offset(int value, const char* key, const std::string& path) {
+  if (std::abs(value) > kMaxBriefPatternRadius) {
+    throw FileError(path, std::string("BRIEF pattern '") + key + "' has offset " +
+                              std::to_string(value) + ", beyond ±" +
+                              std::to_string(kMaxBriefPatternRadius));
+  }
+  return value;
+}
+
+// One coordinate sequence of an OpenCV FileStorage pattern (XML).
 std::vector<int> read_coordinates(const cv::FileStorage& storage, const char* key,
                                   const std::string& path) {
   const cv::FileNode node = storage[key];
@@ -32,15 +44,33 @@ std::vector<int> read_coordinates(const cv::FileStorage& storage, const char* ke
     if (!element.isInt()) {
       throw FileError(path, std::string("BRIEF pattern '") + key + "' holds a non-integer");
     }
-    const int value = static_cast<int>(element);
-    if (std::abs(value) > kMaxBriefPatternRadius) {
-      throw FileError(path, std::string("BRIEF pattern '") + key + "' has offset " +
-                                std::to_string(value) + ", beyond ±" +
-                                std::to_string(kMaxBriefPatternRadius));
-    }
-    values.push_back(value);
+    values.push_back(checked_offset(static_cast<int>(element), key, path));
   }
   return values;
+}
+
+// The same from a YAML or JSON pattern, read as JSON.
+std::vector<int> read_coordinates(const nlohmann::json& object, const char* key,
+                                  const std::string& path) {
+  const auto node = object.find(key);
+  if (node == object.end() || !node->is_array())
+    throw FileError(path, std::string("BRIEF pattern has no sequence '") + key + "'");
+  std::vector<int> values;
+  values.reserve(node->size());
+  for (const nlohmann::json& element : *node) {
+    if (!element.is_number_integer() || std::abs(element.get<long long>()) > kMaxBriefPatternRadius)
+      throw FileError(path, std::string("BRIEF pattern '") + key + "' holds " + element.dump() +
+                                ", not an integer within ±" +
+                                std::to_string(kMaxBriefPatternRadius));
+    values.push_back(element.get<int>());
+  }
+  return values;
+}
+
+BriefPattern read_pattern(const nlohmann::json& object, const std::string& path) {
+  if (!object.is_object()) throw FileError(path, "a BRIEF pattern must be a mapping");
+  return {read_coordinates(object, "x1", path), read_coordinates(object, "y1", path),
+          read_coordinates(object, "x2", path), read_coordinates(object, "y2", path)};
 }
 
 }  // namespace
@@ -48,16 +78,27 @@ std::vector<int> read_coordinates(const cv::FileStorage& storage, const char* ke
 BriefPattern load_brief_pattern(const std::string& path) {
   const std::string text = read_storage_text(path, kMaxBriefPatternFileBytes);
   BriefPattern pattern;
-  try {
-    cv::FileStorage storage(
-        text, cv::FileStorage::READ | cv::FileStorage::MEMORY | storage_format(text, path));
-    if (!storage.isOpened()) throw FileError(path, "cannot open BRIEF pattern");
-    pattern.x1 = read_coordinates(storage, "x1", path);
-    pattern.y1 = read_coordinates(storage, "y1", path);
-    pattern.x2 = read_coordinates(storage, "x2", path);
-    pattern.y2 = read_coordinates(storage, "y2", path);
-  } catch (const cv::Exception& e) {
-    throw FileError(path, "cannot parse BRIEF pattern: " + e.msg);
+  const int format = storage_format(text, path);
+  if (format == cv::FileStorage::FORMAT_YAML) {
+    // Parsed here: OpenCV's YAML parser hangs on some malformed files.
+    pattern = read_pattern(parse_flat_yaml(text, path), path);
+  } else if (format == cv::FileStorage::FORMAT_JSON) {
+    try {
+      pattern = read_pattern(nlohmann::json::parse(text), path);
+    } catch (const nlohmann::json::exception& e) {
+      throw FileError(path, std::string("invalid JSON: ") + e.what());
+    }
+  } else {
+    try {
+      cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | format);
+      if (!storage.isOpened()) throw FileError(path, "cannot open BRIEF pattern");
+      pattern.x1 = read_coordinates(storage, "x1", path);
+      pattern.y1 = read_coordinates(storage, "y1", path);
+      pattern.x2 = read_coordinates(storage, "x2", path);
+      pattern.y2 = read_coordinates(storage, "y2", path);
+    } catch (const cv::Exception& e) {
+      throw FileError(path, "cannot parse BRIEF pattern: " + e.msg);
+    }
   }
   const std::size_t tests = pattern.x1.size();
   if (pattern.y1.size() != tests || pattern.x2.size() != tests || pattern.y2.size() != tests) {

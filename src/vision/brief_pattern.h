@@ -28,7 +28,8 @@ inline constexpr std::uint64_t kMaxBriefPatternFileBytes = std::uint64_t{4} << 2
 
 // DLoopDetector's / VINS' brief_pattern.yml, built in.
 const BriefPattern& default_brief_pattern();
-// Reads an OpenCV FileStorage file (YAML, XML, JSON; optionally .gz) with the
+// Reads a pattern file as OpenCV's FileStorage writes it (YAML, read by
+// binbow's flat YAML parser; JSON; XML, through OpenCV; optionally .gz) with the
 // integer sequences x1 y1 x2 y2. Throws FileError naming the file for anything
 // missing, unequal, not a multiple of 8, or outside ±kMaxBriefPatternRadius,
 // for a file that is not a regular file, larger than

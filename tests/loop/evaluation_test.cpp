@@ -128,6 +128,13 @@ TEST(GroundTruth, MatHeadsAreCheckedBeforeMatioAllocates) {
   test::write_file(dir.file("junk.mat"), junk);
   expect_mat_error_mentioning(dir.file("junk.mat"), "not a variable");
 
+  // Found by fuzzing: a 192-byte matrix declaring 16,777,222 x 4,218,880
+  // cells, which the dense reader visited for minutes.
+  auto many_cells = plain;
+  many_cells[0xa3] = 0x01;  // the first dimension becomes 2^24 + its value
+  test::write_file(dir.file("cells.mat"), many_cells);
+  expect_mat_error_mentioning(dir.file("cells.mat"), "more cells than");
+
   auto damaged = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
   damaged[damaged.size() - 6] ^= 0xff;  // inside the deflate stream or its checksum
   test::write_file(dir.file("damaged.mat"), damaged);

@@ -124,8 +124,8 @@ struct LoopDetectorParams {
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
-  // file (OpenCV FileStorage), at most kMaxLoopParamsFileBytes and nested at
-  // most 64 levels (both parsers recurse). Keys are the field names above;
+  // file (a flat mapping, as OpenCV writes it; see docs/limits.md), at most
+  // kMaxLoopParamsFileBytes and nested at most 64 levels. Keys are the field names above;
   // keys absent keep their value in `defaults`. A "frequency" key first scales
   // the frame-count parameters to it (as for_frequency), the other keys then
   // override. geometric_check takes the to_string() names. JSON and YAML
