@@ -46,6 +46,14 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   detail::write_file_atomically(path, text.data(), text.size());
 }
 
+namespace {
+// JSON text of `value`; file names that are not UTF-8 (any bytes are allowed
+// on Linux) get U+FFFD instead of failing the run at its end.
+std::string json_text(const Json& value) {
+  return value.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+}  // namespace
+
 const char* const kStageNames[kStageCount] = {"features", "transform",    "query",
                                               "islands",  "verification", "insertion"};
 
@@ -54,10 +62,10 @@ LoopRunWriter::LoopRunWriter(std::FILE* file, const std::string& target, const L
   for (const char* stage : kStageNames) timing_.push_back({stage, {}});
   // The keys of a version 1 record, written one value at a time; "frames"
   // stays open until finish().
-  write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" + Json(run.inputs).dump() +
-        ",\"vocabulary\":" + Json(run.vocabulary).dump() + ",\"descriptor\":" +
-        Json(run.descriptor).dump() + ",\"max_features\":" + std::to_string(run.max_features) +
-        ",\"params\":" + Json::parse(run.params_json).dump() + ",\"source\":" +
+  write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" + json_text(Json(run.inputs)) +
+        ",\"vocabulary\":" + json_text(Json(run.vocabulary)) + ",\"descriptor\":" +
+        json_text(Json(run.descriptor)) + ",\"max_features\":" + std::to_string(run.max_features) +
+        ",\"params\":" + json_text(Json::parse(run.params_json)) + ",\"source\":" +
         Json{{"stride", run.source.stride},
              {"max_width", run.source.max_width},
              {"video_fps", run.source.video_fps}}
@@ -78,7 +86,7 @@ void LoopRunWriter::add_frame(const FrameRecord& f,
                       {"score", f.score},
                       {"normalised_score", f.normalised_score},
                       {"inliers", f.inliers}};
-  write((frames_ == 0 ? "\n" : ",\n") + frame.dump());
+  write((frames_ == 0 ? "\n" : ",\n") + json_text(frame));
   ++frames_;
   for (std::size_t s = 0; s < kStageCount; ++s) timing_[s].ms.push_back(stage_ms[s]);
 }
@@ -103,8 +111,8 @@ void LoopRunWriter::finish() {
   }
   write("],\n\"timing_ms\":{");
   for (std::size_t s = 0; s < kStageCount; ++s)
-    write((s == 0 ? "\n" : ",\n") + Json(timing_[s].stage).dump() + ":" +
-          Json(timing_[s].ms).dump());
+    write((s == 0 ? "\n" : ",\n") + json_text(Json(timing_[s].stage)) + ":" +
+          json_text(Json(timing_[s].ms)));
   write("}}\n");
   file_ = nullptr;
 }

@@ -111,7 +111,9 @@ struct VarFreer {
 // of a matrix's first sub-elements.
 constexpr std::uint32_t kMiInt8 = 1, kMiInt32 = 5, kMiUint32 = 6, kMiMatrix = 14,
                         kMiCompressed = 15;
-constexpr std::uint32_t kMxSparseClass = 5, kMxFirstNumericClass = 6;  // double, ... uint64
+constexpr std::uint32_t kMxSparseClass = 5;
+// Characters (4), sparse (5) and the numeric classes (6 double ... 15 uint64).
+constexpr std::uint32_t kMxFirstPlainClass = 4, kMxLastPlainClass = 15;
 // matio sizes its first allocations of a variable from these: the dimension
 // list (rank 32 at most) and the name.
 constexpr std::uint64_t kMaxMatDimensionBytes = 32 * 4;
@@ -147,6 +149,12 @@ struct Level5Reader {
     if (word(head) != kMiUint32 || word(head + 4) != 8)
       fail(offset, "a matrix whose array flags are damaged");
     const std::uint32_t matrix_class = word(head + 8) & 0xff;
+    // Cell arrays, structures and objects nest further matrices, each with a
+    // head of its own that matio sizes allocations from: no ground truth
+    // needs them.
+    if (matrix_class < kMxFirstPlainClass || matrix_class > kMxLastPlainClass)
+      fail(offset, "a cell array, structure, object or other nested variable (class " +
+                       std::to_string(matrix_class) + "); save the ground truth alone");
     if (word(head + 16) != kMiInt32) fail(offset, "a matrix whose dimensions are damaged");
     const std::uint64_t dimension_bytes = word(head + 20);
     if (dimension_bytes < 8 || dimension_bytes % 4 != 0 ||
@@ -154,15 +162,16 @@ struct Level5Reader {
       fail(offset, "a matrix declaring " + std::to_string(dimension_bytes) +
                        " bytes of dimensions (8 to 128 expected)");
     if (24 + dimension_bytes > head_size) fail(offset, "a matrix cut inside its dimensions");
-    // matio and this reader visit every cell of a dense matrix, and every
-    // column of a sparse one: each takes at least a byte, or 4, of the file.
+    // matio allocates, and this reader visits, every cell of a dense matrix
+    // (numbers, characters, cells of a cell array) and every column of a
+    // sparse one: each takes at least a byte, or 4, of the file.
     std::uint64_t cells = 1;
     for (std::uint64_t at = 24; at < 24 + dimension_bytes; at += 4) {
       const std::uint64_t extent = word(head + at);
       cells = extent != 0 && cells > size / extent ? size + 1 : cells * extent;
     }
     const std::uint64_t columns = dimension_bytes >= 8 ? word(head + 28) : 0;
-    if (matrix_class >= kMxFirstNumericClass && cells > size)
+    if (matrix_class != kMxSparseClass && cells > size)
       fail(offset,
            "a matrix declaring more cells than its " + std::to_string(size) + " bytes hold");
     if (matrix_class == kMxSparseClass && (columns + 1) * 4 > size)

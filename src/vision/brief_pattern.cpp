@@ -1,6 +1,7 @@
 #include "vision/brief_pattern.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 
 #include <nlohmann/json.hpp>
@@ -58,9 +59,15 @@ std::vector<int> read_coordinates(const nlohmann::json& object, const char* key,
   std::vector<int> values;
   values.reserve(node->size());
   for (const nlohmann::json& element : *node) {
-    if (!element.is_number_integer() || std::abs(element.get<long long>()) > kMaxBriefPatternRadius)
-      throw FileError(path, std::string("BRIEF pattern '") + key + "' holds " + element.dump() +
-                                ", not an integer within ±" +
+    // No dump() of the value: a string of invalid UTF-8 would throw there.
+    const bool in_range =
+        element.is_number_unsigned()
+            ? element.get<std::uint64_t>() <= static_cast<std::uint64_t>(kMaxBriefPatternRadius)
+            : element.is_number_integer() &&
+                  std::abs(element.get<std::int64_t>()) <= kMaxBriefPatternRadius;
+    if (!in_range)
+      throw FileError(path, std::string("BRIEF pattern '") + key +
+                                "' holds a value that is not an integer within ±" +
                                 std::to_string(kMaxBriefPatternRadius));
     values.push_back(element.get<int>());
   }

@@ -135,6 +135,14 @@ TEST(GroundTruth, MatHeadsAreCheckedBeforeMatioAllocates) {
   test::write_file(dir.file("cells.mat"), many_cells);
   expect_mat_error_mentioning(dir.file("cells.mat"), "more cells than");
 
+  // Found by fuzzing: a cell array declaring 4 x 4,294,901,766 cells made
+  // matio allocate 128 GB. Nested variables are refused altogether.
+  auto cells = plain;
+  cells[0x90] = 0x01;                                    // the class: a cell array
+  cells[0xa4] = 0x06, cells[0xa6] = cells[0xa7] = 0xff;  // the second dimension
+  test::write_file(dir.file("cell.mat"), cells);
+  expect_mat_error_mentioning(dir.file("cell.mat"), "a cell array");
+
   auto damaged = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
   damaged[damaged.size() - 6] ^= 0xff;  // inside the deflate stream or its checksum
   test::write_file(dir.file("damaged.mat"), damaged);

@@ -84,6 +84,17 @@ TEST(BriefPattern, NulBytesAreRefusedBeforeOpenCvParses) {
   expect_pattern_error_mentioning(dir.file("nul.xml"), "NUL byte at byte 14");
 }
 
+// Found by fuzzing: a string of invalid UTF-8 in a sequence made the error
+// message's JSON dump throw past every handler.
+TEST(BriefPattern, NonIntegersAreErrorsWhateverTheirBytes) {
+  test::TempDir dir;
+  write_text(dir.file("utf8.yml"), "x1: [ -5, -3,\xa0-9 ]\ny1: [1]\nx2: [1]\ny2: [1]\n");
+  expect_pattern_error_mentioning(dir.file("utf8.yml"), "not an integer within");
+  write_text(dir.file("big.json"),
+             R"({"x1": [18446744073709551615], "y1": [1], "x2": [1], "y2": [1]})");
+  expect_pattern_error_mentioning(dir.file("big.json"), "not an integer within");
+}
+
 TEST(BriefPattern, GzipPatternsLoadAndGzipBombsAreRefused) {
   test::TempDir dir;
   const std::vector<std::uint8_t> text =
