@@ -252,10 +252,14 @@ void check_level5_elements(const std::string& path) {
   in.seekg(0);
   if (size < 128 || !in.read(reinterpret_cast<char*>(header), 128))
     throw FileError(path, "too short for a MATLAB .mat file");
-  if (std::memcmp(header, "MATLAB 7.3", 10) == 0) return;  // HDF5 inside: matio checks it
   const bool swapped = header[126] == 'M' && header[127] == 'I';
   if (!swapped && !(header[126] == 'I' && header[127] == 'M'))
     throw FileError(path, "not a MATLAB level-5 .mat file (bad endian indicator)");
+  // The version field, not the header's text, decides how matio reads the
+  // file (found by fuzzing: a level-5 file whose text said "MATLAB 7.3").
+  const unsigned version =
+      swapped ? header[124] << 8 | header[125] : header[125] << 8 | header[124];
+  if (version == 0x0200) return;  // 7.3: HDF5 inside, which matio checks
   const Level5Reader reader{path, swapped};
   std::uint64_t offset = 128;
   while (offset < size) {

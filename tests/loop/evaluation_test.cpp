@@ -143,6 +143,15 @@ TEST(GroundTruth, MatHeadsAreCheckedBeforeMatioAllocates) {
   test::write_file(dir.file("cell.mat"), cells);
   expect_mat_error_mentioning(dir.file("cell.mat"), "a cell array");
 
+  // Found by fuzzing: the text "MATLAB 7.3" on a level-5 file skipped every
+  // check, and matio leaked on its damaged compressed variable.
+  auto text_says_hdf5 =
+      test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
+  std::copy_n("MATLAB 7.3", 10, text_says_hdf5.begin());
+  text_says_hdf5.resize(text_says_hdf5.size() - 8);
+  test::write_file(dir.file("hdf5_text.mat"), text_says_hdf5);
+  expect_mat_error_mentioning(dir.file("hdf5_text.mat"), "truncated");
+
   auto damaged = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
   damaged[damaged.size() - 6] ^= 0xff;  // inside the deflate stream or its checksum
   test::write_file(dir.file("damaged.mat"), damaged);
