@@ -25,6 +25,15 @@ std::string errno_text() {
 }
 }  // namespace
 
+const char* file_kind(unsigned mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISREG(mode)) return "a regular file";
+  return "a special file";
+}
+
 MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
   // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
@@ -41,9 +50,7 @@ MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
   }
   if (!S_ISREG(st.st_mode)) {
     ::close(fd);
-    throw FileError(path, S_ISFIFO(st.st_mode)   ? "is a FIFO, not a regular file"
-                          : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file"
-                                                 : "is a device, not a regular file");
+    throw FileError(path, std::string("is ") + file_kind(st.st_mode) + ", not a regular file");
   }
   if (st.st_size <= 0) {
     ::close(fd);

@@ -12,6 +12,10 @@
 
 namespace binbow::detail {
 
+// "a FIFO", "a directory", "a socket", "a device", ... for the file type bits
+// of a stat mode: what a path names when it is not a regular file.
+const char* file_kind(unsigned mode);
+
 // A read-only memory map of a whole file. Throws FileError naming the file
 // when it is missing, a directory, not a regular file (a FIFO, a socket, a
 // device: refused without blocking), unreadable or empty.

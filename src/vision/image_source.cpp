@@ -1,6 +1,8 @@
 // ImageSource and read_grey_image: every input kind turned into grey frames.
 #include "binbow/vision/image_source.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -17,6 +19,7 @@
 #include <opencv2/videoio/registry.hpp>
 
 #include "binbow/error.h"
+#include "core/file_io.h"
 #include "vision/image_header.h"
 #include "vision/jpeg_check.h"
 #include "vision/natural_order.h"
@@ -107,20 +110,6 @@ cv::Mat limit_width(const cv::Mat& image, int max_width) {
   cv::Mat resized;
   cv::resize(image, resized, cv::Size(max_width, height), 0, 0, cv::INTER_AREA);
   return resized;
-}
-
-const char* special_file_kind(fs::file_type type) {
-  switch (type) {
-    case fs::file_type::fifo:
-      return "a FIFO";
-    case fs::file_type::socket:
-      return "a socket";
-    case fs::file_type::block:
-    case fs::file_type::character:
-      return "a device";
-    default:
-      return "a special file";
-  }
 }
 
 std::string describe_size(std::uint64_t width, std::uint64_t height) {
@@ -280,8 +269,10 @@ struct ImageSource::Impl {
       add_directory(path);
     } else if (!fs::is_regular_file(status)) {
       // A FIFO or a device would block or never end; videos are regular files too.
-      const std::string problem = std::string("is ") + special_file_kind(status.type()) +
-                                  ", not a regular file or a directory";
+      struct stat st {};
+      const char* kind =
+          ::stat(path.c_str(), &st) == 0 ? detail::file_kind(st.st_mode) : "a special file";
+      const std::string problem = std::string("is ") + kind + ", not a regular file or a directory";
       if (list != nullptr) throw FileError(*list, "lists '" + path + "', which " + problem);
       throw FileError(path, problem);
     } else if (has_image_extension(path)) {

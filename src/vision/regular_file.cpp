@@ -9,12 +9,13 @@
 #include <cstring>
 
 #include "binbow/error.h"
+#include "core/file_io.h"
 
 namespace binbow::vision {
 namespace {
 
 [[noreturn]] void throw_not_regular(const std::string& path, mode_t mode) {
-  throw FileError(path, std::string("is ") + file_kind(mode) + ", not a regular file");
+  throw FileError(path, std::string("is ") + detail::file_kind(mode) + ", not a regular file");
 }
 
 // Closes the descriptor on every path out of read_regular_file.
@@ -24,15 +25,6 @@ struct Descriptor {
 };
 
 }  // namespace
-
-const char* file_kind(unsigned mode) {
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISFIFO(mode)) return "a FIFO";
-  if (S_ISSOCK(mode)) return "a socket";
-  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
-  if (S_ISREG(mode)) return "a regular file";
-  return "a special file";
-}
 
 void require_regular_file(const std::string& path) {
   struct stat status {};

@@ -17,8 +17,4 @@ void require_regular_file(const std::string& path);
 // than `max_bytes` bytes (the message gives the limit).
 std::string read_regular_file(const std::string& path, std::uint64_t max_bytes);
 
-// "a FIFO", "a directory", "a socket", "a device", ... for the file type bits
-// of a stat mode: what a path names when it is not a regular file.
-const char* file_kind(unsigned mode);
-
 }  // namespace binbow::vision
