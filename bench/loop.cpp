@@ -37,13 +37,13 @@
 #include "binbow/formats.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 
 namespace binbow::bench {
 namespace {
 
 using vision::Features;
-using vision::LoopDetector;
+using loop::LoopDetector;
 
 constexpr std::size_t kFeaturesPerFrame = 300;
 
@@ -125,7 +125,7 @@ double median(std::vector<double> v) {
 // Medians of each stage, to see where the time goes.
 struct StageTimes {
   std::vector<double> transform, query, verification, insertion;
-  void add(const vision::LoopStageTimes& t) {
+  void add(const loop::LoopStageTimes& t) {
     transform.push_back(t.transform_ms);
     query.push_back(t.query_ms + t.islands_ms);
     verification.push_back(t.verification_ms);
@@ -164,7 +164,7 @@ void BM_Detect(benchmark::State& state) {
     state.ResumeTiming();
     for (const Features& f : features) {
       const auto start = std::chrono::steady_clock::now();
-      const vision::LoopResult r = detector->process(f);
+      const loop::LoopResult r = detector->process(f);
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count());
@@ -194,7 +194,7 @@ void BM_FeaturesAndDetect(benchmark::State& state) {
     state.ResumeTiming();
     for (const cv::Mat& image : frames_640x480()) {
       const auto start = std::chrono::steady_clock::now();
-      const vision::LoopResult r = detector->process(extractor->extract(image));
+      const loop::LoopResult r = detector->process(extractor->extract(image));
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count());

@@ -15,7 +15,7 @@ namespace binbow::fuzz {
 // evaluate --sweep re-runs detection with the recorded parameters.
 inline void load_loop_run(const std::uint8_t* data, std::size_t size) {
   const cli::LoopRun run = cli::LoopRun::load(input_file(data, size, ".run.json"));
-  (void)vision::LoopDetectorParams::from_json(run.params_json, "the run record's params");
+  (void)loop::LoopDetectorParams::from_json(run.params_json, "the run record's params");
 }
 
 inline const Target kCliTargets[] = {

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "binbow/error.h"
-#include "binbow/vision/evaluation.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/evaluation.h"
+#include "binbow/loop/loop_detector.h"
 #include "fuzz_targets.h"
 #include "vision/brief_pattern.h"
 
@@ -67,20 +67,20 @@ inline std::string input_file(const std::uint8_t* data, std::size_t size, const 
 }
 
 // Accepted parameters are valid and survive to_json / from_json unchanged.
-inline void check_accepted(const vision::LoopDetectorParams& params) {
+inline void check_accepted(const loop::LoopDetectorParams& params) {
   params.validate();
   const std::string json = params.to_json();
-  if (vision::LoopDetectorParams::from_json(json, "rewritten").to_json() != json)
+  if (loop::LoopDetectorParams::from_json(json, "rewritten").to_json() != json)
     throw std::logic_error("writing and reading back changed the parameters");
 }
 
 inline void load_params_json(const std::uint8_t* data, std::size_t size) {
-  check_accepted(vision::LoopDetectorParams::from_json(
+  check_accepted(loop::LoopDetectorParams::from_json(
       std::string(reinterpret_cast<const char*>(data), size), "fuzz"));
 }
 
 inline void load_params_yaml(const std::uint8_t* data, std::size_t size) {
-  check_accepted(vision::LoopDetectorParams::load(input_file(data, size, ".yml")));
+  check_accepted(loop::LoopDetectorParams::load(input_file(data, size, ".yml")));
 }
 
 inline void load_brief_pattern(const std::uint8_t* data, std::size_t size) {
@@ -94,7 +94,7 @@ inline void load_brief_pattern(const std::uint8_t* data, std::size_t size) {
 }
 
 // Every query's earlier matches are earlier, increasing, and is_loop agrees.
-inline void check_accepted(const vision::GroundTruth& truth) {
+inline void check_accepted(const loop::GroundTruth& truth) {
   std::size_t queries_with_loops = 0;
   for (std::size_t q = 0; q < truth.frames(); ++q) {
     const Span<std::uint32_t> matches = truth.earlier_matches(q);
@@ -111,7 +111,7 @@ inline void check_accepted(const vision::GroundTruth& truth) {
 }
 
 inline void load_ground_truth(const std::uint8_t* data, std::size_t size, const char* suffix) {
-  check_accepted(vision::GroundTruth::load(input_file(data, size, suffix)));
+  check_accepted(loop::GroundTruth::load(input_file(data, size, suffix)));
 }
 
 inline std::string file_text(const std::string& path) {
@@ -128,21 +128,21 @@ inline std::string file_text(const std::string& path) {
 // scores are written to 9 significant digits, so they only have to give the
 // same file when written once more.
 inline void load_loops_csv(const std::uint8_t* data, std::size_t size) {
-  const std::vector<vision::Detection> detections =
-      vision::read_detections_csv(input_file(data, size, ".csv"));
+  const std::vector<loop::Detection> detections =
+      loop::read_detections_csv(input_file(data, size, ".csv"));
   std::string rewritten[2] = {input_path("-rewritten.csv"), input_path("-rewritten-twice.csv")};
   for (const std::string& path : rewritten)
     std::remove(path.c_str());  // renaming over it would flush it, as above
-  vision::write_detections_csv(rewritten[0], detections);
-  const std::vector<vision::Detection> again = vision::read_detections_csv(rewritten[0]);
-  const auto same_row = [](const vision::Detection& a, const vision::Detection& b) {
+  loop::write_detections_csv(rewritten[0], detections);
+  const std::vector<loop::Detection> again = loop::read_detections_csv(rewritten[0]);
+  const auto same_row = [](const loop::Detection& a, const loop::Detection& b) {
     return a.query == b.query && a.match == b.match && a.query_file == b.query_file &&
            a.match_file == b.match_file && a.inliers == b.inliers;
   };
   if (again.size() != detections.size() ||
       !std::equal(again.begin(), again.end(), detections.begin(), same_row))
     throw std::logic_error("writing and reading back changed the detections");
-  vision::write_detections_csv(rewritten[1], again);
+  loop::write_detections_csv(rewritten[1], again);
   if (file_text(rewritten[0]) != file_text(rewritten[1]))
     throw std::logic_error("writing loops.csv twice gave two files");
 }

@@ -13,7 +13,7 @@
 #include "binbow/formats.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
@@ -95,7 +95,7 @@ void run_bench(const BenchArguments& args) {
 
   auto& detection = stage("loop detection, features excluded");
   {
-    vision::LoopDetector detector(vocabulary);
+    loop::LoopDetector detector(vocabulary);
     for (const Frame& frame : frames) {
       const auto start = Clock::now();
       detector.process(frame.features);

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "loop_run.h"
@@ -54,8 +54,8 @@ void run_demo(const std::string& out_dir) {
   run_command({"evaluate", "--gt", truth, "--sweep", "--report", out_dir, loops});
 
   const LoopRun run = LoopRun::load(LoopRun::path_for(loops));
-  const vision::PrecisionRecall result = vision::evaluate_detections(
-      vision::read_detections_csv(loops), vision::GroundTruth::load(truth));
+  const loop::PrecisionRecall result = loop::evaluate_detections(
+      loop::read_detections_csv(loops), loop::GroundTruth::load(truth));
   std::printf("\n== summary\n");
   std::printf("frames: %zu\n", run.frames.size());
   std::printf("loops found: %zu\n", result.detections);

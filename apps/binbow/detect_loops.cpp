@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "binbow/error.h"
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "core/file_io.h"
@@ -52,8 +52,8 @@ std::string hertz(double frequency) {
 }
 
 // Why the detector runs at params.frequency, for the summary.
-std::string frequency_origin(const vision::LoopDetectorParams& params,
-                             const vision::LoopDetectorParams& defaults, double frame_rate) {
+std::string frequency_origin(const loop::LoopDetectorParams& params,
+                             const loop::LoopDetectorParams& defaults, double frame_rate) {
   if (params.frequency != defaults.frequency) return "--params";
   if (frame_rate > 0) return "video frames processed per second";
   return "the paper's default; images have no frame rate";
@@ -61,7 +61,7 @@ std::string frequency_origin(const vision::LoopDetectorParams& params,
 
 // Loop candidates of frame t are frames j < t - dislocal, so a sequence not
 // longer than dislocal + 1 frames cannot close a loop whatever it shows.
-void warn_if_no_frame_can_have_a_candidate(const vision::LoopDetectorParams& params,
+void warn_if_no_frame_can_have_a_candidate(const loop::LoopDetectorParams& params,
                                            std::size_t frames) {
   if (static_cast<std::size_t>(params.dislocal) + 1 < frames) return;
   std::fprintf(stderr,
@@ -75,12 +75,12 @@ void warn_if_no_frame_can_have_a_candidate(const vision::LoopDetectorParams& par
 // Frames per LoopStatus, indexed by its value (consecutive from kLoopDetected).
 using StatusCounts =
     std::array<std::size_t,
-               static_cast<std::size_t>(vision::LoopStatus::kNoGeometricConsistency) + 1>;
+               static_cast<std::size_t>(loop::LoopStatus::kNoGeometricConsistency) + 1>;
 
 void print_status_counts(const StatusCounts& counts) {
   std::fprintf(stderr, "frames by status:\n");
   for (std::size_t value = 0; value < counts.size(); ++value)
-    std::fprintf(stderr, "  %s: %zu\n", vision::to_string(static_cast<vision::LoopStatus>(value)),
+    std::fprintf(stderr, "  %s: %zu\n", loop::to_string(static_cast<loop::LoopStatus>(value)),
                  counts[value]);
 }
 
@@ -91,12 +91,12 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
   vision::ImageSource source(arguments.inputs, arguments.source);
   const double frame_rate = source.frame_rate();
-  const vision::LoopDetectorParams defaults =
-      frame_rate > 0 ? vision::LoopDetectorParams::for_frequency(frame_rate)
-                     : vision::LoopDetectorParams{};
-  const vision::LoopDetectorParams params =
+  const loop::LoopDetectorParams defaults =
+      frame_rate > 0 ? loop::LoopDetectorParams::for_frequency(frame_rate)
+                     : loop::LoopDetectorParams{};
+  const loop::LoopDetectorParams params =
       arguments.params.empty() ? defaults
-                               : vision::LoopDetectorParams::load(arguments.params, defaults);
+                               : loop::LoopDetectorParams::load(arguments.params, defaults);
   const auto extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
   Vocabulary vocabulary;
   LoopRun run;
@@ -108,7 +108,7 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   run.source = arguments.source;
   for (const std::string& input : arguments.inputs) run.inputs.push_back(absolute(input));
 
-  vision::LoopDetector detector(std::move(vocabulary), params);
+  loop::LoopDetector detector(std::move(vocabulary), params);
   const long long known = source.size();
   Progress progress("detecting loops", known > 0 ? static_cast<std::size_t>(known) : 0);
   // loops.csv and its run record appear together or not at all.
@@ -117,7 +117,7 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   const std::string record_path = LoopRun::path_for(arguments.output);
   LoopRunWriter record(outputs.stage(record_path), record_path, run);
   std::vector<std::string> names;  // of every frame: a loop's match_file
-  std::vector<vision::Detection> detections;
+  std::vector<loop::Detection> detections;
   StatusCounts status_counts{};
   std::vector<double> scales;  // Frame::scale of every frame, to record inliers in file pixels
   std::vector<std::array<float, 4>> inliers;
@@ -127,10 +127,10 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
     const vision::Features features = extractor->extract(frame.image);
     const double features_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    const vision::LoopResult result = detector.process(features);
-    const vision::LoopStageTimes& t = result.times;
+    const loop::LoopResult result = detector.process(features);
+    const loop::LoopStageTimes& t = result.times;
     record.add_frame(
-        {frame.name, vision::to_string(result.status),
+        {frame.name, loop::to_string(result.status),
          result.has_candidate ? static_cast<long long>(result.match) : -1, result.score,
          result.normalised_score, result.inliers.size()},
         {features_ms, t.transform_ms, t.query_ms, t.islands_ms, t.verification_ms, t.insertion_ms});
@@ -158,7 +158,7 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   progress.finish();
   if (names.empty()) throw InvalidArgument("detect-loops: no images found in the inputs");
 
-  const std::string csv_text = vision::format_detections_csv(detections);
+  const std::string csv_text = loop::format_detections_csv(detections);
   detail::write_all(csv, csv_text.data(), csv_text.size(), arguments.output);
   record.finish();
   outputs.commit();

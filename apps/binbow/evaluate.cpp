@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "binbow/error.h"
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "loop_report.h"
@@ -40,12 +40,12 @@ std::vector<double> alpha_values() {
 }
 
 // Re-runs the recorded detection for every α, features extracted once.
-std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
-                                              const vision::GroundTruth& truth) {
+std::vector<loop::PrCurvePoint> sweep_alpha(const LoopRun& run,
+                                              const loop::GroundTruth& truth) {
   const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
   Vocabulary vocabulary;
   load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), vocabulary);
-  const vision::LoopDetectorParams base = vision::LoopDetectorParams::from_json(run.params_json);
+  const loop::LoopDetectorParams base = loop::LoopDetectorParams::from_json(run.params_json);
 
   vision::ImageSource source(run.inputs, run.source);
   std::vector<vision::Features> features;
@@ -65,20 +65,20 @@ std::vector<vision::PrCurvePoint> sweep_alpha(const LoopRun& run,
                           std::to_string(run.frames.size()) + "; run detect-loops again");
 
   const std::vector<double> alphas = alpha_values();
-  std::vector<vision::PrCurvePoint> curve;
+  std::vector<loop::PrCurvePoint> curve;
   Progress progress("sweeping alpha", alphas.size());
   for (double alpha : alphas) {
-    vision::LoopDetectorParams params = base;
+    loop::LoopDetectorParams params = base;
     params.alpha = alpha;
-    vision::LoopDetector detector(vocabulary, params);
-    std::vector<vision::Detection> detections;
+    loop::LoopDetector detector(vocabulary, params);
+    std::vector<loop::Detection> detections;
     for (std::size_t i = 0; i < features.size(); ++i) {
-      const vision::LoopResult r = detector.process(features[i]);
+      const loop::LoopResult r = detector.process(features[i]);
       if (r.detection())
         detections.push_back(
             {r.query, r.match, names[i], names[r.match], r.normalised_score, r.inliers.size()});
     }
-    curve.push_back({alpha, vision::evaluate_detections(detections, truth)});
+    curve.push_back({alpha, loop::evaluate_detections(detections, truth)});
     progress.update(curve.size());
   }
   return curve;
@@ -91,16 +91,16 @@ void run_evaluate(const EvaluateArguments& arguments) {
   std::unique_ptr<LoopRun> run;
   if (std::filesystem::exists(run_path)) run = std::make_unique<LoopRun>(LoopRun::load(run_path));
 
-  vision::GroundTruthOptions options;
+  loop::GroundTruthOptions options;
   options.pairs_index_base = arguments.ground_truth_base;
   // The run's frames size the ground truth: a larger matrix is read only that far.
   if (run) options.frames = run->frames.size();
-  const vision::GroundTruth truth = vision::GroundTruth::load(arguments.ground_truth, options);
-  const std::vector<vision::Detection> detections =
-      vision::read_detections_csv(arguments.detections);
-  vision::PrecisionRecall result;
+  const loop::GroundTruth truth = loop::GroundTruth::load(arguments.ground_truth, options);
+  const std::vector<loop::Detection> detections =
+      loop::read_detections_csv(arguments.detections);
+  loop::PrecisionRecall result;
   try {
-    result = vision::evaluate_detections(detections, truth);
+    result = loop::evaluate_detections(detections, truth);
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(arguments.detections + ": " + e.what() + " (wrong --gt?)");
   }
@@ -116,7 +116,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
       result.detections, result.true_positives, result.false_positives, result.queries_with_loops,
       result.queries_found);
 
-  std::vector<vision::PrCurvePoint> curve;
+  std::vector<loop::PrCurvePoint> curve;
   std::string swept;
   if (arguments.sweep) {
     if (run) {
@@ -127,10 +127,10 @@ void run_evaluate(const EvaluateArguments& arguments) {
                    "note: no run record %s; the curve thresholds the scores of %s instead of "
                    "re-running detection\n",
                    run_path.c_str(), arguments.detections.c_str());
-      curve = vision::pr_curve_by_score(detections, truth);
+      curve = loop::pr_curve_by_score(detections, truth);
       swept = "score";
     }
-    std::printf("recall at 100%% precision: %.6g\n", vision::recall_at_full_precision(curve));
+    std::printf("recall at 100%% precision: %.6g\n", loop::recall_at_full_precision(curve));
     std::printf("%-8s %10s %10s %10s\n", swept.c_str(), "precision", "recall", "detections");
     for (const auto& p : curve)
       std::printf("%-8.3g %10.4f %10.4f %10zu\n", p.parameter, p.result.precision, p.result.recall,
@@ -146,7 +146,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
     report.result = result;
     report.curve = curve;
     report.curve_parameter = swept;
-    report.recall_at_full_precision = vision::recall_at_full_precision(curve);
+    report.recall_at_full_precision = loop::recall_at_full_precision(curve);
     if (run) {
       report.facts.emplace_back("vocabulary", run->vocabulary);
       report.facts.emplace_back("descriptor", run->descriptor);
@@ -158,7 +158,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
     std::map<std::pair<std::size_t, std::size_t>, const LoopRecord*> recorded;
     if (run)
       for (const LoopRecord& r : run->loops) recorded[{r.query, r.match}] = &r;
-    for (const vision::Detection& d : detections) {
+    for (const loop::Detection& d : detections) {
       ReportLoop loop{d, {}, truth.is_loop(d.query, d.match) ? 1 : 0};
       const auto found = recorded.find({d.query, d.match});
       if (found != recorded.end()) loop.inliers = found->second->inliers;

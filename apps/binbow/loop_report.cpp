@@ -131,7 +131,7 @@ std::string pr_curve_svg(const LoopReport& report) {
       << "' font-size='13' text-anchor='middle'>recall</text><text x='15' y='" << top + ph / 2
       << "' font-size='13' text-anchor='middle' transform='rotate(-90 15 " << top + ph / 2
       << ")'>precision</text>";
-  std::vector<vision::PrCurvePoint> points = report.curve;
+  std::vector<loop::PrCurvePoint> points = report.curve;
   std::stable_sort(points.begin(), points.end(), [](const auto& a, const auto& b) {
     return a.result.recall < b.result.recall ||
            (a.result.recall == b.result.recall && a.result.precision > b.result.precision);

@@ -10,13 +10,13 @@
 #include <utility>
 #include <vector>
 
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 #include "loop_run.h"
 
 namespace binbow::cli {
 
 struct ReportLoop {
-  vision::Detection detection;
+  loop::Detection detection;
   // Query x, y, match x, y (pixels of the files); kDrawnInliers of them are drawn.
   std::vector<std::array<float, 4>> inliers;
   int verdict = -1;  // 1 true positive, 0 false positive, -1 unknown
@@ -29,8 +29,8 @@ struct LoopReport {
   std::vector<StageTiming> timing;                         // empty: not measured
   std::vector<ReportLoop> loops;
   bool has_result = false;  // precision and recall against ground truth
-  vision::PrecisionRecall result;
-  std::vector<vision::PrCurvePoint> curve;  // empty: no curve
+  loop::PrecisionRecall result;
+  std::vector<loop::PrCurvePoint> curve;  // empty: no curve
   std::string curve_parameter;              // what the curve sweeps ("alpha", "score")
   double recall_at_full_precision = 0;
 };

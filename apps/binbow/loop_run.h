@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "binbow/vision/image_source.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 
 namespace binbow::cli {
 

@@ -1,4 +1,4 @@
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,7 +23,11 @@
 #include "core/file_io.h"
 #include "vision/regular_file.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
+
+using vision::read_grey_image;
+using vision::read_regular_file;
+using vision::require_regular_file;
 namespace {
 
 // (later, earlier) index pairs, as GroundTruth::from_later_earlier takes them.
@@ -742,4 +746,4 @@ std::vector<PrCurvePoint> pr_curve_by_score(const std::vector<Detection>& detect
   return curve;
 }
 
-}  // namespace binbow::vision
+}  // namespace binbow::loop

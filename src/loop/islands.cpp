@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace binbow::vision::detail {
+namespace binbow::loop::detail {
 
 void compute_islands(std::vector<Candidate>& candidates, int max_gap, int min_length,
                      std::vector<Island>& islands) {
@@ -55,4 +55,4 @@ int TemporalWindow::update(const Island& island, EntryId query) {
   return consistent_;
 }
 
-}  // namespace binbow::vision::detail
+}  // namespace binbow::loop::detail

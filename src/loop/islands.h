@@ -6,7 +6,7 @@
 
 #include "binbow/types.h"
 
-namespace binbow::vision::detail {
+namespace binbow::loop::detail {
 
 // A database entry that passed the α threshold, with its (normalised) score.
 struct Candidate {
@@ -58,4 +58,4 @@ class TemporalWindow {
   EntryId last_query_ = 0;
 };
 
-}  // namespace binbow::vision::detail
+}  // namespace binbow::loop::detail

@@ -1,4 +1,4 @@
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 
 #include <algorithm>
 #include <chrono>
@@ -7,7 +7,17 @@
 #include "binbow/error.h"
 #include "loop/islands.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
+
+using vision::check_fundamental;
+using vision::Correspondence;
+using vision::Features;
+using vision::FundamentalCheckParams;
+using vision::FundamentalCheckResult;
+using vision::Keypoint;
+using vision::match_direct_index;
+using vision::match_exhaustive;
+using vision::MatchOptions;
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -262,4 +272,4 @@ void LoopDetector::clear() {
   d.offsets.assign(1, 0);
 }
 
-}  // namespace binbow::vision
+}  // namespace binbow::loop

@@ -10,12 +10,16 @@
 #include <nlohmann/json.hpp>
 
 #include "binbow/error.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 #include "vision/flat_yaml.h"
 #include "vision/regular_file.h"
 #include "vision/storage_text.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
+
+using vision::check_storage_text;
+using vision::parse_flat_yaml;
+using vision::read_regular_file;
 namespace {
 
 using Json = nlohmann::json;
@@ -282,4 +286,4 @@ std::string LoopDetectorParams::to_json() const {
   return object.dump(2);
 }
 
-}  // namespace binbow::vision
+}  // namespace binbow::loop

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -57,7 +57,7 @@ TEST(CliHostileInputs, FifosAreRefusedWithoutBlocking) {
                dir.file("params.json"), "is a FIFO");
   expect_error("detect-loops -o " + dir.file("l.csv") + " " + dir.file("frames.png"),
                dir.file("frames.png"), "is a FIFO");
-  vision::write_detections_csv(dir.file("loops.csv"), {{5, 1, "", "", 1, 12}});
+  loop::write_detections_csv(dir.file("loops.csv"), {{5, 1, "", "", 1, 12}});
   expect_error("evaluate --gt " + dir.file("gt.txt") + " " + dir.file("loops.csv"),
                dir.file("gt.txt"), "is a FIFO");
   // Vocabularies and databases are memory-mapped; info reads a database's magic first.
@@ -90,7 +90,7 @@ TEST(CliHostileInputs, PixelLimitFlagRefusesLargerImages) {
 // Bug report: `evaluate --gt photo.jpg` (512x384) exited 0 with a warning.
 TEST(CliHostileInputs, NonSquareGroundTruthImageIsAnError) {
   test::TempDir dir;
-  vision::write_detections_csv(dir.file("loops.csv"), {{5, 1, "", "", 1, 12}});
+  loop::write_detections_csv(dir.file("loops.csv"), {{5, 1, "", "", 1, 12}});
   const std::string photo = test::source_path("data/samples/rtabmap/samples/1.jpg");
   expect_error("evaluate --gt " + photo + " " + dir.file("loops.csv"), photo, "512x384");
 }
@@ -100,10 +100,10 @@ TEST(CliHostileInputs, NonSquareGroundTruthImageIsAnError) {
 TEST(CliHostileInputs, EvaluateSweepIsLinearInTheDetections) {
   test::TempDir dir;
   write_text(dir.file("gt.txt"), "# 0-based\n49999999 0\n20009 19999\n");
-  std::vector<vision::Detection> detections;
+  std::vector<loop::Detection> detections;
   for (std::size_t q = 0; q < 20'000; ++q)
     detections.push_back({q + 10, q, "", "", static_cast<double>(q) / 20'000, 12});
-  vision::write_detections_csv(dir.file("loops.csv"), detections);
+  loop::write_detections_csv(dir.file("loops.csv"), detections);
   int status = -1;
   const std::string out =
       run("evaluate --gt " + dir.file("gt.txt") + " --sweep " + dir.file("loops.csv"), &status);

@@ -9,14 +9,18 @@
 #include <regex>
 #include <sstream>
 
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
+#include "binbow/loop/loop_detector.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/vision/loop_detector.h"
 #include "support/test_support.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 namespace {
+
+using vision::Frame;
+using vision::ImageSource;
+using vision::make_extractor;
 
 using test::shared_data;
 
@@ -168,4 +172,4 @@ TEST_F(RealSequence, MissingDefaultVocabularyAsksForVocab) {
 }
 
 }  // namespace
-}  // namespace binbow::vision
+}  // namespace binbow::loop

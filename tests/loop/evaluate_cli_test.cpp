@@ -1,10 +1,10 @@
 // `binbow evaluate` on a MATLAB ground truth, against the library's numbers.
 #include <gtest/gtest.h>
 
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 #include "support/test_support.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 namespace {
 
 TEST(EvaluateCommand, MatGroundTruthAndErrors) {
@@ -35,4 +35,4 @@ TEST(EvaluateCommand, MatGroundTruthAndErrors) {
 }
 
 }  // namespace
-}  // namespace binbow::vision
+}  // namespace binbow::loop

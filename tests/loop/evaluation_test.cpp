@@ -1,4 +1,4 @@
-#include "binbow/vision/evaluation.h"
+#include "binbow/loop/evaluation.h"
 
 #include <sys/stat.h>
 
@@ -14,7 +14,7 @@
 #include "binbow/error.h"
 #include "support/test_support.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 namespace {
 
 using test::shared_data;
@@ -380,4 +380,4 @@ TEST(Detections, NonFiniteScoresAreRefused) {
 }
 
 }  // namespace
-}  // namespace binbow::vision
+}  // namespace binbow::loop

@@ -4,7 +4,7 @@
 
 #include <random>
 
-namespace binbow::vision::detail {
+namespace binbow::loop::detail {
 namespace {
 
 std::vector<Island> islands_of(std::vector<Candidate> candidates, int gap, int min_length) {
@@ -120,4 +120,4 @@ TEST(TemporalWindow, RestartsOnDistantIslandOrQueryGap) {
 }
 
 }  // namespace
-}  // namespace binbow::vision::detail
+}  // namespace binbow::loop::detail

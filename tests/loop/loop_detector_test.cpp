@@ -1,4 +1,4 @@
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,10 @@
 #include "binbow/error.h"
 #include "support/test_support.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 namespace {
+
+using vision::Features;
 
 // A one-level vocabulary: every word's own descriptor quantises to it, so
 // images can be written down as sets of words.
@@ -168,4 +170,4 @@ TEST(LoopDetector, KeepsFeaturesForVerification) {
 }
 
 }  // namespace
-}  // namespace binbow::vision
+}  // namespace binbow::loop

@@ -8,10 +8,10 @@
 #include <string>
 
 #include "binbow/error.h"
-#include "binbow/vision/loop_detector.h"
+#include "binbow/loop/loop_detector.h"
 #include "support/test_support.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 namespace {
 
 void write_text(const std::string& path, const std::string& text) {
@@ -220,4 +220,4 @@ TEST(LoopStatus, Names) {
 }
 
 }  // namespace
-}  // namespace binbow::vision
+}  // namespace binbow::loop

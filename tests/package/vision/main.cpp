@@ -4,7 +4,7 @@
 #include <binbow/formats.h>
 #include <binbow/vision/features.h>
 #include <binbow/vision/image_source.h>
-#include <binbow/vision/loop_detector.h>
+#include <binbow/loop/loop_detector.h>
 
 #include <cstdio>
 #include <string>
@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   const binbow::Vocabulary vocabulary = binbow::load_vocabulary(argv[1]);
   const auto orb = binbow::vision::make_orb_extractor();
   binbow::Database database(vocabulary);
-  binbow::vision::LoopDetector detector(vocabulary);
+  binbow::loop::LoopDetector detector(vocabulary);
   binbow::vision::ImageSource images({argv[2]});
   binbow::vision::Frame frame;
   std::size_t frames = 0;

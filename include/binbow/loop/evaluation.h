@@ -12,7 +12,7 @@
 
 #include "binbow/span.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 
 // The largest ground-truth image decoded by default, in pixels (10000 ×
 // 10000): as vision::kDefaultMaxImagePixels. Larger sequences: .mat or pairs.
@@ -137,4 +137,4 @@ double recall_at_full_precision(const std::vector<PrCurvePoint>& curve);
 std::vector<PrCurvePoint> pr_curve_by_score(const std::vector<Detection>& detections,
                                             const GroundTruth& truth);
 
-}  // namespace binbow::vision
+}  // namespace binbow::loop

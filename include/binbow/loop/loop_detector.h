@@ -26,7 +26,7 @@
 #include "binbow/vision/geometric_check.h"
 #include "binbow/vocabulary.h"
 
-namespace binbow::vision {
+namespace binbow::loop {
 
 // How candidate correspondences for the fundamental matrix are found.
 enum class GeometricCheck : std::uint8_t {
@@ -188,7 +188,7 @@ struct LoopResult {
   std::size_t correspondences = 0;  // putative correspondences given to RANSAC
   bool exhaustive_fallback_used = false;
   // RANSAC inliers: first = feature of the query, second = feature of the match.
-  std::vector<Correspondence> inliers;
+  std::vector<vision::Correspondence> inliers;
   LoopStageTimes times;
 
   bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }
@@ -206,14 +206,14 @@ class LoopDetector {
   // ones. Keypoint i is described by descriptor row i (their counts must
   // match, and the code size must be the vocabulary's: InvalidArgument).
   // An image without features is added too (it can match nothing).
-  LoopResult process(const Features& features);
-  LoopResult process(Span<Keypoint> keypoints, const DescriptorView& descriptors);
+  LoopResult process(const vision::Features& features);
+  LoopResult process(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
 
   std::size_t size() const noexcept;  // images processed
   const LoopDetectorParams& params() const noexcept;
   const Database& database() const noexcept;
   // Features kept for the geometric check (empty with GeometricCheck::kNone).
-  Span<Keypoint> keypoints(EntryId entry) const;
+  Span<vision::Keypoint> keypoints(EntryId entry) const;
   DescriptorView descriptors(EntryId entry) const;
 
   // Forgets every image; the next one gets entry id 0.
@@ -224,4 +224,4 @@ class LoopDetector {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace binbow::vision
+}  // namespace binbow::loop
