@@ -220,7 +220,7 @@ void add_db_command(CLI::App& app) {
       ->add_option("--direct-index-levels-up", build->levels_up,
                    "Direct index nodes this many levels above the words (the root when more "
                    "than the vocabulary's depth)")
-      ->check(CLI::Range(0, 255))  // what a .bbdb file holds
+      ->check(CLI::Range(0u, kMaxDirectIndexLevelsUp))
       ->capture_default_str();
   build_command->add_flag("--no-direct-index", build->no_direct_index,
                           "Do not keep the direct index (smaller file)");

@@ -54,9 +54,14 @@ struct QueryResult {
   }
 };
 
+// The largest DatabaseOptions::direct_index_levels_up: what a .bbdb file can
+// record (deeper than any vocabulary: levels above the root mean the root).
+inline constexpr unsigned kMaxDirectIndexLevelsUp = 255;
+
 struct DatabaseOptions {
   // Keep each entry's FeatureVector (direct index) at `direct_index_levels_up`
   // levels above the leaves. DLoopDetector uses 2 with the paper's defaults.
+  // [0, kMaxDirectIndexLevelsUp]
   bool direct_index = true;
   unsigned direct_index_levels_up = 4;
 };
@@ -77,7 +82,9 @@ struct DatabaseFileInfo {
 
 class Database {
  public:
-  // An empty database. Throws InvalidArgument if the vocabulary is empty.
+  // An empty database. Throws InvalidArgument if the vocabulary is empty or
+  // options.direct_index_levels_up > kMaxDirectIndexLevelsUp (such a
+  // database could be saved but never loaded).
   explicit Database(Vocabulary vocabulary, DatabaseOptions options = {});
   Database(Database&&) noexcept;
   Database& operator=(Database&&) noexcept;

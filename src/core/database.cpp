@@ -452,6 +452,10 @@ std::string no_entry_message(EntryId entry, EntryId next) {
 Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
     : vocabulary(std::move(vocabulary_in)), options(options_in) {
   if (vocabulary.empty()) throw InvalidArgument("Database: the vocabulary is empty");
+  if (options.direct_index_levels_up > kMaxDirectIndexLevelsUp)
+    throw InvalidArgument("Database: direct_index_levels_up is " +
+                          std::to_string(options.direct_index_levels_up) + ", at most " +
+                          std::to_string(kMaxDirectIndexLevelsUp) + " can be saved");
   const std::size_t words = vocabulary.word_count();
   while ((words - 1) >> (detail::kGroupBits + high_bits) != 0) ++high_bits;
   row_order = detail::RowOrder(words);

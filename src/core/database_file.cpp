@@ -108,7 +108,7 @@ class Layout {
     const auto section_count = detail::load_le<std::uint32_t>(data + 48);
     if (header_.flags > (kFlagDirectIndex | kFlagVocabulary))
       fail("unknown flags " + std::to_string(header_.flags));
-    if (header_.levels_up > 255)
+    if (header_.levels_up > kMaxDirectIndexLevelsUp)
       fail("direct index level " + std::to_string(header_.levels_up) + " is out of range");
     if (header_.live_entries > header_.next_entry_id || header_.next_entry_id == kAllEntries)
       fail("inconsistent entry counts in the header");

@@ -531,6 +531,9 @@ TEST(Database, WithoutDirectIndex) {
 TEST(Database, BadInput) {
   const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
   EXPECT_THROW(Database{Vocabulary{}}, InvalidArgument);
+  // A level a .bbdb file cannot record: such a database could be saved, never loaded.
+  EXPECT_THROW(Database(vocabulary, {true, kMaxDirectIndexLevelsUp + 1}), InvalidArgument);
+  EXPECT_NO_THROW(Database(vocabulary, {true, kMaxDirectIndexLevelsUp}));
   Database database(vocabulary);
   const Corpus corpus = random_corpus(vocabulary, 5, 8);
   for (const auto& bow : corpus.bows) database.add(bow);
