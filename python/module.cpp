@@ -41,6 +41,8 @@ PYBIND11_MODULE(_binbow, m) {
   });
 
   binbow::python::bind_core(m);
+  binbow::python::bind_vision(m);
+  binbow::python::bind_loop(m);
 
   py::delattr(m, "__module__");
 }

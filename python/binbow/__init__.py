@@ -13,8 +13,15 @@ from ._binbow import (
     BuildProgress,
     Database,
     Error,
+    Evaluation,
+    FeatureExtractor,
+    GroundTruth,
+    LoopDetector,
+    LoopDetectorParams,
+    LoopResult,
     Vocabulary,
     __version__,
+    evaluate,
     hamming,
 )
 
@@ -23,8 +30,15 @@ __all__ = [
     "BuildProgress",
     "Database",
     "Error",
+    "Evaluation",
+    "FeatureExtractor",
+    "GroundTruth",
+    "LoopDetector",
+    "LoopDetectorParams",
+    "LoopResult",
     "Vocabulary",
     "data_directories",
+    "evaluate",
     "hamming",
 ]
 
