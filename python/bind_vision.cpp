@@ -110,9 +110,11 @@ class PythonExtractor {
   std::optional<int> max_features() const { return max_features_; }
   const py::dict& options() const { return options_; }
   const vision::FeatureExtractor& extractor() const { return *extractor_; }
+  // For holders that outlive this object (a loop::SequenceDetector).
+  std::shared_ptr<const vision::FeatureExtractor> shared() const { return extractor_; }
 
  private:
-  std::unique_ptr<vision::FeatureExtractor> make() const {
+  std::shared_ptr<const vision::FeatureExtractor> make() const {
     const auto option = [this](const char* name) -> py::object {
       return options_.contains(name) ? py::object(options_[name]) : py::object();
     };
@@ -148,7 +150,7 @@ class PythonExtractor {
   std::string descriptor_;
   std::optional<int> max_features_;
   py::dict options_;
-  std::unique_ptr<vision::FeatureExtractor> extractor_;
+  std::shared_ptr<const vision::FeatureExtractor> extractor_;
 };
 
 // A grey (H, W) or BGR (H, W, 3) uint8 image, kept alive while `image` views it.
@@ -229,6 +231,11 @@ std::string extractor_repr(const PythonExtractor& self) {
 }
 
 }  // namespace
+
+std::shared_ptr<const vision::FeatureExtractor> extractor_of(const py::handle& object) {
+  if (!py::isinstance<PythonExtractor>(object)) return nullptr;
+  return object.cast<const PythonExtractor&>().shared();
+}
 
 void bind_vision(py::module_& m) {
   py::class_<PythonExtractor>(

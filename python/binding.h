@@ -13,11 +13,16 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "binbow/descriptors.h"
+
+namespace binbow::vision {
+class FeatureExtractor;
+}
 
 namespace binbow::python {
 
@@ -48,6 +53,9 @@ Descriptors to_descriptors(const py::handle& object, const std::string& what,
 py::bytes to_bytes(const std::vector<std::uint8_t>& bytes);
 // The bytes of a pickled state; `data` stays valid while `bytes` lives.
 std::pair<const std::uint8_t*, std::size_t> bytes_of(const py::bytes& bytes);
+
+// The extractor of a binbow.FeatureExtractor object; null when `object` is not one.
+std::shared_ptr<const vision::FeatureExtractor> extractor_of(const py::handle& object);
 
 // The binding of each room of the library, called by module.cpp in this order.
 void bind_core(py::module_& m);

@@ -6,6 +6,8 @@ an image without keypoints) is an image with no features.
 """
 
 import os as _os
+import sys as _sys
+import time as _time
 
 from . import _data_location
 from ._binbow import (
@@ -83,3 +85,112 @@ def _default_vocabulary(descriptor="orb"):
 
 
 Vocabulary.default = staticmethod(_default_vocabulary)
+
+
+class _CliProgress:
+    """The CLI's progress line on stderr: redrawn in place on a terminal, one
+    line per 10 % otherwise (logs stay short), and a closing line."""
+
+    def __init__(self, label):
+        self._label = label
+        self._tty = _sys.stderr.isatty()
+        self._start = _time.monotonic()
+        self._last_draw = self._start
+        self._last_decile = -1
+        self._done = 0
+
+    def __call__(self, done, total):
+        self._done = done
+        now = _time.monotonic()
+        seconds = now - self._start
+        if self._tty:
+            if now - self._last_draw < 0.1 and done != total:
+                return
+            self._last_draw = now
+            if total:
+                filled = 30 * done // total
+                bar = "=" * filled + " " * (30 - filled)
+                _sys.stderr.write(f"\r{self._label} [{bar}] {done}/{total} {seconds:.1f}s")
+            else:
+                _sys.stderr.write(f"\r{self._label} {done} {seconds:.1f}s")
+            _sys.stderr.flush()
+            return
+        if not total:
+            return
+        decile = 10 * done // total
+        if decile != self._last_decile:
+            self._last_decile = decile
+            _sys.stderr.write(
+                f"{self._label}: {done}/{total} ({decile * 10}%) {seconds:.1f}s\n"
+            )
+
+    def finish(self):
+        seconds = _time.monotonic() - self._start
+        if self._tty:
+            _sys.stderr.write("\r\033[K")
+        _sys.stderr.write(f"{self._label}: {self._done} done in {seconds:.2f}s\n")
+        _sys.stderr.flush()
+
+
+def detect_loops(
+    inputs,
+    vocabulary=None,
+    descriptor="orb",
+    params=None,
+    progress=False,
+    *,
+    max_features=None,
+    stride=1,
+    max_width=0,
+    video_fps=0.0,
+):
+    """Loop closures of an image sequence: what `binbow detect-loops` finds.
+
+    inputs: a path or a list of paths of image files, folders (their images in
+    natural order: 2.jpg before 10.jpg), videos (frames named "video.mp4#N") or
+    text lists of images. vocabulary: None for Vocabulary.default(descriptor).
+    descriptor: the extractor, "orb", "brief", "akaze" or "brisk", with the
+    CLI's defaults (max_features: None for the extractor's default). params: a
+    LoopDetectorParams, a parameter file (JSON or YAML, as --params: keys it
+    omits keep the defaults) or None: the paper's parameters, whose frame
+    counts follow the frames processed per second of a video. progress: True
+    prints the CLI's progress on stderr; a callable is called with (done,
+    total) after each frame, total None when not known beforehand. stride,
+    max_width and video_fps thin the frames out as the CLI's options do.
+
+    Returns one LoopResult per frame, in order, with its file name. The GIL is
+    released while frames are read and processed.
+    """
+    if isinstance(inputs, (str, bytes, _os.PathLike)):
+        inputs = [inputs]
+    paths = []
+    for index, item in enumerate(inputs):
+        if not isinstance(item, (str, bytes, _os.PathLike)):
+            raise TypeError(f"inputs[{index}] must be a path, got {type(item).__name__}")
+        paths.append(_os.fsdecode(item))
+    if vocabulary is None:
+        vocabulary = Vocabulary.default(descriptor)
+    printer = None
+    if progress is True:
+        printer = _CliProgress("detecting loops")
+        callback = printer
+    elif progress is False or progress is None:
+        callback = None
+    elif callable(progress):
+        callback = progress
+    else:
+        raise TypeError(f"progress must be a bool or a callable, got {type(progress).__name__}")
+    if params is not None and not isinstance(params, LoopDetectorParams):
+        if not isinstance(params, (str, bytes, _os.PathLike)):
+            raise TypeError(
+                "params must be a LoopDetectorParams, a parameter file or None, got "
+                + type(params).__name__
+            )
+        params = _os.fsdecode(params)
+    results = _detect_loops(
+        paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
+        callback,
+    )
+    if printer is not None:
+        printer.finish()
+    return results

@@ -3,12 +3,15 @@
 They use paths relative to the repository's root and write report/ there, so
 they run in a temporary folder whose data/ is the repository's.
 """
+import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
+import binbow
 from conftest import SAMPLES, SOURCE_DIR
 
 
@@ -27,8 +30,11 @@ def root(tmp_path):
 
 
 def run(example, cwd):
-    result = subprocess.run([sys.executable, "-c", example], cwd=cwd, capture_output=True,
-                            text=True, timeout=300)
+    # The package under test, wherever the working folder is.
+    package_parent = str(Path(binbow.__file__).resolve().parents[1])
+    environment = dict(os.environ, PYTHONPATH=package_parent)
+    result = subprocess.run([sys.executable, "-c", example], cwd=cwd, env=environment,
+                            capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     return result.stdout.splitlines()
 
