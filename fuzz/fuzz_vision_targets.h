@@ -20,6 +20,7 @@
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
 #include "binbow/loop/loop_detector.h"
+#include "binbow/loop/run_record.h"
 #include "fuzz_targets.h"
 #include "vision/brief_pattern.h"
 
@@ -147,6 +148,12 @@ inline void load_loops_csv(const std::uint8_t* data, std::size_t size) {
     throw std::logic_error("writing loops.csv twice gave two files");
 }
 
+// evaluate --sweep re-runs detection with the recorded parameters.
+inline void load_loop_run(const std::uint8_t* data, std::size_t size) {
+  const loop::LoopRun run = loop::LoopRun::load(input_file(data, size, ".run.json"));
+  (void)loop::LoopDetectorParams::from_json(run.params_json, "the run record's params");
+}
+
 inline const Target kVisionTargets[] = {
     {"params_json", load_params_json},
     {"params_yaml", load_params_yaml},
@@ -155,6 +162,7 @@ inline const Target kVisionTargets[] = {
     {"gt_image", [](const std::uint8_t* d, std::size_t n) { load_ground_truth(d, n, ".png"); }},
     {"gt_pairs", [](const std::uint8_t* d, std::size_t n) { load_ground_truth(d, n, ".txt"); }},
     {"loops_csv", load_loops_csv},
+    {"loop_run", load_loop_run},
 };
 
 }  // namespace binbow::fuzz

@@ -11,14 +11,14 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/formats.h"
+#include "binbow/loop/loop_detector.h"
+#include "binbow/loop/run_record.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/loop/loop_detector.h"
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
-#include "loop_run.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -53,7 +53,7 @@ void run_bench(const BenchArguments& args) {
       load_loop_vocabulary(args.vocabulary, args.descriptor, extractor->code_size(), vocabulary);
 
   // Each stage's samples in milliseconds: per load, per frame, per entry, per query.
-  std::vector<StageTiming> timing;
+  std::vector<loop::StageTiming> timing;
   auto stage = [&timing](const std::string& name) -> std::vector<double>& {
     timing.push_back({name, {}});
     return timing.back().ms;
@@ -132,7 +132,7 @@ void run_bench(const BenchArguments& args) {
                   static_cast<double>(std::max<std::size_t>(database.size(), 1)));
   std::printf("hamming kernel: %s\n\n", hamming_kernel_name());
   std::printf("%-36s %10s %10s %10s\n", "stage (ms)", "median", "mean", "max");
-  for (const StageTiming& t : timing)
+  for (const loop::StageTiming& t : timing)
     std::printf("%-36s %10.3f %10.3f %10.3f\n", t.stage.c_str(), t.median(), t.mean(), t.max());
 }
 

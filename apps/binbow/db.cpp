@@ -17,7 +17,6 @@
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
-#include "loop_run.h"
 #include "output_options.h"
 #include "progress.h"
 #include "vision/regular_file.h"

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "binbow/error.h"
+#include "binbow/formats.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
@@ -103,6 +104,17 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
                           ": pass --descriptor " + vocabulary.descriptor() +
                           " or a vocabulary trained on " + descriptor);
   }
+}
+
+std::string load_loop_vocabulary(const std::string& vocab_argument, const std::string& descriptor,
+                                 std::size_t code_size, Vocabulary& vocabulary) {
+  const std::string path =
+      vocab_argument.empty() ? default_vocabulary_path(descriptor) : vocab_argument;
+  vocabulary = load_vocabulary(path);
+  check_vocabulary_fits(vocabulary, path, descriptor, code_size);
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  return error ? path : absolute.string();
 }
 
 }  // namespace binbow::cli

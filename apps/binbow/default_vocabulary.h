@@ -47,4 +47,9 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
                            const std::string& descriptor, std::size_t code_size,
                            bool embedded_in_database = false);
 
+// --vocab, or the default vocabulary of the descriptor when empty; loads it and
+// checks that it fits (check_vocabulary_fits). Returns the absolute path.
+std::string load_loop_vocabulary(const std::string& vocab_argument, const std::string& descriptor,
+                                 std::size_t code_size, Vocabulary& vocabulary);
+
 }  // namespace binbow::cli

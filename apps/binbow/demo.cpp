@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/run_record.h"
 #include "commands.h"
 #include "default_vocabulary.h"
-#include "loop_run.h"
 #include "output_options.h"
 
 namespace binbow::cli {
@@ -29,9 +29,9 @@ void run_command(const std::vector<std::string>& arguments) {
   app.parse(reversed);
 }
 
-double median_ms_per_frame(const LoopRun& run) {
+double median_ms_per_frame(const loop::LoopRun& run) {
   std::vector<double> total;
-  for (const StageTiming& stage : run.timing) {
+  for (const loop::StageTiming& stage : run.timing) {
     if (total.size() < stage.ms.size()) total.resize(stage.ms.size(), 0.0);
     for (std::size_t i = 0; i < stage.ms.size(); ++i) total[i] += stage.ms[i];
   }
@@ -53,9 +53,9 @@ void run_demo(const std::string& out_dir) {
   run_command({"detect-loops", "--descriptor", "orb", "-o", loops, frames});
   run_command({"evaluate", "--gt", truth, "--sweep", "--report", out_dir, loops});
 
-  const LoopRun run = LoopRun::load(LoopRun::path_for(loops));
-  const loop::PrecisionRecall result = loop::evaluate_detections(
-      loop::read_detections_csv(loops), loop::GroundTruth::load(truth));
+  const loop::LoopRun run = loop::LoopRun::load(loop::LoopRun::path_for(loops));
+  const loop::PrecisionRecall result =
+      loop::evaluate_detections(loop::read_detections_csv(loops), loop::GroundTruth::load(truth));
   std::printf("\n== summary\n");
   std::printf("frames: %zu\n", run.frames.size());
   std::printf("loops found: %zu\n", result.detections);

@@ -9,13 +9,13 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/report.h"
+#include "binbow/loop/run_record.h"
+#include "binbow/loop/sweep.h"
 #include "binbow/vision/features.h"
-#include "binbow/vision/image_source.h"
-#include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
-#include "loop_report.h"
-#include "loop_run.h"
+#include "default_vocabulary.h"
 #include "output_options.h"
 #include "progress.h"
 
@@ -30,74 +30,42 @@ struct EvaluateArguments {
   std::string detections;
 };
 
-// α values of the sweep: the paper's range, then beyond 1 (η can exceed 1
-// when the loop image is more similar than the previous frame).
-std::vector<double> alpha_values() {
-  std::vector<double> values;
-  for (int i = 0; i <= 20; ++i) values.push_back(i * 0.05);
-  for (double v : {1.2, 1.5, 2.0, 3.0}) values.push_back(v);
-  return values;
-}
-
 // Re-runs the recorded detection for every α, features extracted once.
-std::vector<loop::PrCurvePoint> sweep_alpha(const LoopRun& run,
-                                              const loop::GroundTruth& truth) {
+std::vector<loop::PrCurvePoint> sweep_alpha(const loop::LoopRun& run,
+                                            const loop::GroundTruth& truth) {
   const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
   Vocabulary vocabulary;
   load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), vocabulary);
-  const loop::LoopDetectorParams base = loop::LoopDetectorParams::from_json(run.params_json);
-
-  vision::ImageSource source(run.inputs, run.source);
-  std::vector<vision::Features> features;
-  std::vector<std::string> names;
-  {
-    Progress progress("extracting features", run.frames.size());
-    vision::Frame frame;
-    while (source.next(frame)) {
-      features.push_back(extractor->extract(frame.image));
-      names.push_back(frame.name);
-      progress.update(features.size());
+  std::unique_ptr<Progress> progress;
+  std::string stage;
+  const auto report = [&](const std::string& now, std::size_t done, std::size_t total) {
+    if (now != stage) {
+      if (progress) progress->finish();
+      progress = std::make_unique<Progress>(now, total);
+      stage = now;
     }
-  }
-  if (features.size() != run.frames.size())
-    throw InvalidArgument("the inputs of the recorded run now have " +
-                          std::to_string(features.size()) + " frames instead of " +
-                          std::to_string(run.frames.size()) + "; run detect-loops again");
-
-  const std::vector<double> alphas = alpha_values();
-  std::vector<loop::PrCurvePoint> curve;
-  Progress progress("sweeping alpha", alphas.size());
-  for (double alpha : alphas) {
-    loop::LoopDetectorParams params = base;
-    params.alpha = alpha;
-    loop::LoopDetector detector(vocabulary, params);
-    std::vector<loop::Detection> detections;
-    for (std::size_t i = 0; i < features.size(); ++i) {
-      const loop::LoopResult r = detector.process(features[i]);
-      if (r.detection())
-        detections.push_back(
-            {r.query, r.match, names[i], names[r.match], r.normalised_score, r.inliers.size()});
-    }
-    curve.push_back({alpha, loop::evaluate_detections(detections, truth)});
-    progress.update(curve.size());
-  }
+    progress->update(done);
+  };
+  auto curve =
+      loop::sweep_parameter(run, vocabulary, truth, "alpha", loop::default_alpha_values(), report);
+  if (progress) progress->finish();
   return curve;
 }
 
 void run_evaluate(const EvaluateArguments& arguments) {
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
 
-  const std::string run_path = LoopRun::path_for(arguments.detections);
-  std::unique_ptr<LoopRun> run;
-  if (std::filesystem::exists(run_path)) run = std::make_unique<LoopRun>(LoopRun::load(run_path));
+  const std::string run_path = loop::LoopRun::path_for(arguments.detections);
+  std::unique_ptr<loop::LoopRun> run;
+  if (std::filesystem::exists(run_path))
+    run = std::make_unique<loop::LoopRun>(loop::LoopRun::load(run_path));
 
   loop::GroundTruthOptions options;
   options.pairs_index_base = arguments.ground_truth_base;
   // The run's frames size the ground truth: a larger matrix is read only that far.
   if (run) options.frames = run->frames.size();
   const loop::GroundTruth truth = loop::GroundTruth::load(arguments.ground_truth, options);
-  const std::vector<loop::Detection> detections =
-      loop::read_detections_csv(arguments.detections);
+  const std::vector<loop::Detection> detections = loop::read_detections_csv(arguments.detections);
   loop::PrecisionRecall result;
   try {
     result = loop::evaluate_detections(detections, truth);
@@ -139,7 +107,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
   std::fflush(stdout);
 
   if (!arguments.report.empty()) {
-    LoopReport report;
+    loop::LoopReport report;
     report.title = "binbow loop detection: evaluation";
     report.facts = {{"detections", arguments.detections}, {"ground truth", arguments.ground_truth}};
     report.has_result = true;
@@ -155,16 +123,16 @@ void run_evaluate(const EvaluateArguments& arguments) {
       report.timing = run->timing;
     }
     // The run's loops by (query, match): one lookup per detection, not a scan.
-    std::map<std::pair<std::size_t, std::size_t>, const LoopRecord*> recorded;
+    std::map<std::pair<std::size_t, std::size_t>, const loop::LoopRecord*> recorded;
     if (run)
-      for (const LoopRecord& r : run->loops) recorded[{r.query, r.match}] = &r;
+      for (const loop::LoopRecord& r : run->loops) recorded[{r.query, r.match}] = &r;
     for (const loop::Detection& d : detections) {
-      ReportLoop loop{d, {}, truth.is_loop(d.query, d.match) ? 1 : 0};
+      loop::ReportLoop entry{d, {}, truth.is_loop(d.query, d.match) ? 1 : 0};
       const auto found = recorded.find({d.query, d.match});
-      if (found != recorded.end()) loop.inliers = found->second->inliers;
-      report.loops.push_back(std::move(loop));
+      if (found != recorded.end()) entry.inliers = found->second->inliers;
+      report.loops.push_back(std::move(entry));
     }
-    const std::string page = write_loop_report(arguments.report, report);
+    const std::string page = loop::write_loop_report(arguments.report, report);
     std::fprintf(stderr, "report: %s\n", page.c_str());
   }
 }

@@ -10,8 +10,7 @@
 
 namespace binbow::cli {
 
-// The descriptor of every command when --descriptor is not given.
-inline constexpr const char* kDefaultDescriptor = "orb";
+using vision::kDefaultDescriptor;  // of every command when --descriptor is not given
 // Far above any useful count; it only keeps absurd values away from OpenCV.
 inline constexpr int kMaxFeatures = 1000000;
 

@@ -1,9 +1,8 @@
-// Replays the fuzz corpora of the vision readers (parameters, BRIEF
-// patterns, ground truth, loops.csv) and of the run record through the
-// normal build.
+// Replays the fuzz corpora of the vision and loop readers (parameters, BRIEF
+// patterns, ground truth, loops.csv, the run record) through the normal
+// build.
 #include <gtest/gtest.h>
 
-#include "../../fuzz/fuzz_cli_targets.h"
 #include "../../fuzz/fuzz_vision_targets.h"
 #include "support/fuzz_corpus.h"
 
@@ -12,10 +11,6 @@ namespace {
 
 TEST(FuzzCorpus, VisionReadersLoadOrRejectEveryInputCleanly) {
   test::replay_fuzz_corpora(fuzz::kVisionTargets);
-}
-
-TEST(FuzzCorpus, RunRecordReaderLoadsOrRejectsEveryInputCleanly) {
-  test::replay_fuzz_corpora(fuzz::kCliTargets);
 }
 
 }  // namespace

@@ -106,6 +106,8 @@ std::unique_ptr<FeatureExtractor> make_opencv_extractor(cv::Ptr<cv::Feature2D> d
 // of features (≤ 0: the extractor's default; AKAZE and BRISK keep the
 // strongest `max_features` when > 0). Throws InvalidArgument for other names.
 std::unique_ptr<FeatureExtractor> make_extractor(const std::string& name, int max_features = 0);
+// The extractor binbow's tools run when none is named.
+inline constexpr const char* kDefaultDescriptor = "orb";
 // The names make_extractor() accepts, ORB first: the one list that tools
 // offer as choices.
 std::vector<std::string> extractor_names();

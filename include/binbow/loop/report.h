@@ -11,12 +11,13 @@
 #include <vector>
 
 #include "binbow/loop/evaluation.h"
-#include "loop_run.h"
+#include "binbow/loop/run_record.h"
+#include "binbow/loop/sequence.h"
 
-namespace binbow::cli {
+namespace binbow::loop {
 
 struct ReportLoop {
-  loop::Detection detection;
+  Detection detection;
   // Query x, y, match x, y (pixels of the files); kDrawnInliers of them are drawn.
   std::vector<std::array<float, 4>> inliers;
   int verdict = -1;  // 1 true positive, 0 false positive, -1 unknown
@@ -29,9 +30,9 @@ struct LoopReport {
   std::vector<StageTiming> timing;                         // empty: not measured
   std::vector<ReportLoop> loops;
   bool has_result = false;  // precision and recall against ground truth
-  loop::PrecisionRecall result;
-  std::vector<loop::PrCurvePoint> curve;  // empty: no curve
-  std::string curve_parameter;              // what the curve sweeps ("alpha", "score")
+  PrecisionRecall result;
+  std::vector<PrCurvePoint> curve;  // empty: no curve
+  std::string curve_parameter;      // what the curve sweeps ("alpha", "score")
   double recall_at_full_precision = 0;
 };
 
@@ -39,4 +40,10 @@ struct LoopReport {
 // Returns the page's path. Images that cannot be read are reported as such.
 std::string write_loop_report(const std::string& directory, const LoopReport& report);
 
-}  // namespace binbow::cli
+// The report of a sequence run in memory (detect_sequence): its detections
+// with their inliers, the stage timings and the parameters; with a ground
+// truth, each detection's verdict and precision and recall too.
+LoopReport make_loop_report(const std::vector<SequenceFrame>& frames,
+                            const LoopDetectorParams& params, const GroundTruth* truth = nullptr);
+
+}  // namespace binbow::loop

@@ -1,0 +1,237 @@
+#include "binbow/loop/run_record.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "binbow/error.h"
+#include "core/file_io.h"
+#include "vision/regular_file.h"
+
+namespace binbow::loop {
+
+using Json = nlohmann::json;
+
+double StageTiming::mean() const {
+  return ms.empty() ? 0 : std::accumulate(ms.begin(), ms.end(), 0.0) / double(ms.size());
+}
+
+double StageTiming::median() const {
+  if (ms.empty()) return 0;
+  std::vector<double> sorted = ms;
+  const std::size_t mid = sorted.size() / 2;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(mid), sorted.end());
+  const double upper = sorted[mid];
+  if (sorted.size() % 2 == 1) return upper;
+  return (upper + *std::max_element(sorted.begin(), sorted.begin() + static_cast<long>(mid))) / 2;
+}
+
+double StageTiming::max() const {
+  return ms.empty() ? 0 : *std::max_element(ms.begin(), ms.end());
+}
+
+namespace {
+// JSON text of `value`; file names that are not UTF-8 (any bytes are allowed
+// on Linux) get U+FFFD instead of failing the run at its end.
+std::string json_text(const Json& value) {
+  return value.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+}  // namespace
+
+struct LoopRunFiles::Impl {
+  Impl(const std::string& loops_csv, const LoopRun& run)
+      : csv_path(loops_csv),
+        record_path(LoopRun::path_for(loops_csv)),
+        csv(staged.stage(csv_path)),
+        record(staged.stage(record_path)) {
+    for (const char* stage : kStageNames) timing.push_back({stage, {}});
+    // The keys of a version 1 record, written one value at a time; "frames"
+    // stays open until commit().
+    write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" +
+          json_text(Json(run.inputs)) + ",\"vocabulary\":" + json_text(Json(run.vocabulary)) +
+          ",\"descriptor\":" + json_text(Json(run.descriptor)) +
+          ",\"max_features\":" + std::to_string(run.max_features) +
+          ",\"params\":" + json_text(Json::parse(run.params_json)) + ",\"source\":" +
+          Json{{"stride", run.source.stride},
+               {"max_width", run.source.max_width},
+               {"video_fps", run.source.video_fps}}
+              .dump() +
+          ",\n\"frames\":[");
+  }
+
+  void write(const std::string& text) {
+    if (committed) throw FileError(record_path, "the run record is already finished");
+    detail::write_all(record, text.data(), text.size(), record_path);
+  }
+
+  void add_frame(const SequenceFrame& f) {
+    const LoopResult& r = f.result;
+    const Json frame = {{"file", f.file},
+                        {"status", to_string(r.status)},
+                        {"match", r.has_candidate ? static_cast<long long>(r.match) : -1},
+                        {"score", r.score},
+                        {"normalised_score", r.normalised_score},
+                        {"inliers", r.inliers.size()}};
+    write((frames == 0 ? "\n" : ",\n") + json_text(frame));
+    ++frames;
+    const std::array<double, kStageCount> stage_ms = f.stage_ms();
+    for (std::size_t s = 0; s < kStageCount; ++s) timing[s].ms.push_back(stage_ms[s]);
+  }
+
+  // Keeps kDrawnInliers of the loop's inliers, spread over all of them.
+  void add_loop(const SequenceFrame& f) {
+    const auto& inliers = f.inlier_points;
+    LoopRecord loop{f.result.query, f.result.match, {}};
+    const std::size_t drawn = std::min(inliers.size(), kDrawnInliers);
+    loop.inliers.reserve(drawn);
+    for (std::size_t i = 0; i < drawn; ++i)
+      loop.inliers.push_back(inliers[i * inliers.size() / drawn]);
+    loops.push_back(std::move(loop));
+  }
+
+  void finish_record() {
+    write("],\n\"loops\":[");
+    for (std::size_t i = 0; i < loops.size(); ++i) {
+      const LoopRecord& l = loops[i];
+      write((i == 0 ? "\n" : ",\n") +
+            Json{{"query", l.query}, {"match", l.match}, {"inliers", l.inliers}}.dump());
+    }
+    write("],\n\"timing_ms\":{");
+    for (std::size_t s = 0; s < kStageCount; ++s)
+      write((s == 0 ? "\n" : ",\n") + json_text(Json(timing[s].stage)) + ":" +
+            json_text(Json(timing[s].ms)));
+    write("}}\n");
+  }
+
+  std::string csv_path;
+  std::string record_path;
+  detail::StagedFiles staged;
+  std::FILE* csv;
+  std::FILE* record;
+  bool committed = false;
+  std::size_t frames = 0;
+  std::vector<Detection> detections;
+  std::vector<LoopRecord> loops;
+  std::vector<StageTiming> timing;
+};
+
+LoopRunFiles::LoopRunFiles(const std::string& loops_csv, const LoopRun& description)
+    : impl_(std::make_unique<Impl>(loops_csv, description)) {}
+
+LoopRunFiles::~LoopRunFiles() = default;
+
+void LoopRunFiles::add(const SequenceFrame& frame) {
+  Impl& d = *impl_;
+  d.add_frame(frame);
+  const LoopResult& r = frame.result;
+  if (!r.detection()) return;
+  d.detections.push_back(
+      {r.query, r.match, frame.file, frame.match_file, r.normalised_score, r.inliers.size()});
+  if (d.loops.size() < kDrawnLoops) d.add_loop(frame);
+}
+
+void LoopRunFiles::commit() {
+  Impl& d = *impl_;
+  const std::string csv_text = format_detections_csv(d.detections);
+  detail::write_all(d.csv, csv_text.data(), csv_text.size(), d.csv_path);
+  d.finish_record();
+  d.committed = true;
+  d.staged.commit();
+}
+
+std::size_t LoopRunFiles::frames() const noexcept {
+  return impl_->frames;
+}
+const std::vector<Detection>& LoopRunFiles::detections() const noexcept {
+  return impl_->detections;
+}
+const std::vector<LoopRecord>& LoopRunFiles::loops() const noexcept {
+  return impl_->loops;
+}
+const std::vector<StageTiming>& LoopRunFiles::timing() const noexcept {
+  return impl_->timing;
+}
+
+std::vector<StageTiming> stage_timings(const std::vector<SequenceFrame>& frames) {
+  std::vector<StageTiming> timing;
+  for (const char* stage : kStageNames) timing.push_back({stage, {}});
+  for (const SequenceFrame& frame : frames) {
+    const std::array<double, kStageCount> stage_ms = frame.stage_ms();
+    for (std::size_t s = 0; s < kStageCount; ++s) timing[s].ms.push_back(stage_ms[s]);
+  }
+  return timing;
+}
+
+LoopRun LoopRun::load(const std::string& path) {
+  // Only a regular file, read whole: a FIFO would block, a device never end.
+  const std::string text = vision::read_regular_file(path, kMaxRunRecordBytes);
+  LoopRun run;
+  try {
+    const Json j = Json::parse(text);
+    if (j.at("format") != "binbow-loop-run" || j.at("version") != 1)
+      throw FileError(path, "not a binbow detect-loops run record (version 1)");
+    run.inputs = j.at("inputs").get<std::vector<std::string>>();
+    run.vocabulary = j.at("vocabulary").get<std::string>();
+    run.descriptor = j.at("descriptor").get<std::string>();
+    run.max_features = j.at("max_features").get<int>();
+    run.params_json = j.at("params").dump(2);
+    if (j.contains("source")) {  // absent from records of earlier versions
+      const Json& source = j.at("source");
+      run.source.stride = source.at("stride").get<std::size_t>();
+      run.source.max_width = source.at("max_width").get<int>();
+      run.source.video_fps = source.at("video_fps").get<double>();
+    }
+    for (const Json& f : j.at("frames"))
+      run.frames.push_back({f.at("file").get<std::string>(), f.at("status").get<std::string>(),
+                            f.at("match").get<long long>(), f.at("score").get<double>(),
+                            f.at("normalised_score").get<double>(),
+                            f.at("inliers").get<std::size_t>()});
+    for (const Json& l : j.at("loops"))
+      run.loops.push_back({l.at("query").get<std::size_t>(), l.at("match").get<std::size_t>(),
+                           l.at("inliers").get<std::vector<std::array<float, 4>>>()});
+    for (const auto& [stage, values] : j.at("timing_ms").items())
+      run.timing.push_back({stage, values.get<std::vector<double>>()});
+  } catch (const Json::exception& e) {
+    throw FileError(path, std::string("malformed run record: ") + e.what());
+  }
+  // Stages in pipeline order (JSON objects come back sorted by name).
+  const auto rank = [](const std::string& s) {
+    return std::find_if(std::begin(kStageNames), std::end(kStageNames),
+                        [&](const char* o) { return s == o; }) -
+           std::begin(kStageNames);
+  };
+  std::stable_sort(
+      run.timing.begin(), run.timing.end(),
+      [&](const StageTiming& a, const StageTiming& b) { return rank(a.stage) < rank(b.stage); });
+  return run;
+}
+
+std::string format_timing_table(const std::vector<StageTiming>& timing) {
+  std::ostringstream out;
+  char line[160];
+  std::snprintf(line, sizeof line, "%-14s %10s %10s %10s\n", "stage (ms)", "mean", "median", "max");
+  out << line;
+  StageTiming total{"total", {}};
+  for (const StageTiming& t : timing) {
+    std::snprintf(line, sizeof line, "%-14s %10.3f %10.3f %10.3f\n", t.stage.c_str(), t.mean(),
+                  t.median(), t.max());
+    out << line;
+    if (total.ms.size() < t.ms.size()) total.ms.resize(t.ms.size(), 0);
+    for (std::size_t i = 0; i < t.ms.size(); ++i) total.ms[i] += t.ms[i];
+  }
+  std::snprintf(line, sizeof line, "%-14s %10.3f %10.3f %10.3f\n", "total", total.mean(),
+                total.median(), total.max());
+  out << line;
+  return out.str();
+}
+
+}  // namespace binbow::loop
