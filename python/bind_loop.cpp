@@ -22,6 +22,8 @@
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
 #include "binbow/loop/loop_detector.h"
+#include "binbow/loop/report.h"
+#include "binbow/loop/sequence.h"
 #include "binbow/vision/features.h"
 #include "binding.h"
 
@@ -299,15 +301,6 @@ void bind_params(py::module_& m) {
 
 // --- Loop detection
 
-// One processed frame: what LoopDetector.process and detect_loops return.
-struct FrameResult {
-  std::string file;  // the frame's name ("" from LoopDetector.process)
-  loop::LoopResult result;
-  double features_ms = 0;  // feature extraction (0 from LoopDetector.process)
-  // Detections only: query x, y, match x, y of each inlier, in pixels of the files.
-  std::vector<std::array<float, 4>> inlier_points;
-};
-
 std::vector<vision::Keypoint> keypoints_from_array(const py::array& array) {
   if (array.dtype().kind() != 'f' ||
       (array.dtype().itemsize() != 4 && array.dtype().itemsize() != 8))
@@ -385,13 +378,13 @@ class PythonLoopDetector {
   PythonLoopDetector(Vocabulary vocabulary, const LoopDetectorParams& params)
       : detector_(std::move(vocabulary), params) {}
 
-  FrameResult process(const py::handle& keypoints, const py::handle& descriptors) {
+  loop::SequenceFrame process(const py::handle& keypoints, const py::handle& descriptors) {
     const Descriptors d =
         to_descriptors(descriptors, "descriptors", detector_.database().vocabulary().code_size());
     const std::vector<vision::Keypoint> points = to_keypoints(keypoints, d.view.rows);
     py::gil_scoped_release release;
     const std::lock_guard<std::mutex> lock(mutex_);
-    FrameResult frame;
+    loop::SequenceFrame frame;
     frame.result = detector_.process(Span<vision::Keypoint>(points.data(), points.size()), d.view);
     if (frame.result.detection()) {
       const Span<vision::Keypoint> match = detector_.keypoints(frame.result.match);
@@ -438,15 +431,10 @@ py::array_t<float> inlier_points_array(const std::vector<std::array<float, 4>>& 
   return out;
 }
 
-py::dict times_dict(const FrameResult& frame) {
-  const loop::LoopStageTimes& t = frame.result.times;
+py::dict times_dict(const loop::SequenceFrame& frame) {
+  const std::array<double, loop::kStageCount> ms = frame.stage_ms();
   py::dict out;
-  out["features"] = frame.features_ms;
-  out["transform"] = t.transform_ms;
-  out["query"] = t.query_ms;
-  out["islands"] = t.islands_ms;
-  out["verification"] = t.verification_ms;
-  out["insertion"] = t.insertion_ms;
+  for (std::size_t i = 0; i < loop::kStageCount; ++i) out[loop::kStageNames[i]] = ms[i];
   return out;
 }
 
@@ -456,7 +444,7 @@ bool has_island(const loop::LoopResult& r) {
          r.status == loop::LoopStatus::kNoGeometricConsistency || r.detection();
 }
 
-std::string result_repr(const FrameResult& frame) {
+std::string result_repr(const loop::SequenceFrame& frame) {
   const loop::LoopResult& r = frame.result;
   std::string text = "<binbow.LoopResult query " + std::to_string(r.query);
   if (!frame.file.empty()) text += " (" + frame.file + ")";
@@ -472,66 +460,72 @@ std::string result_repr(const FrameResult& frame) {
 }
 
 void bind_detection(py::module_& m) {
-  py::class_<FrameResult>(m, "LoopResult",
-                          "The outcome of one frame of loop detection (LoopDetector.process,\n"
-                          "detect_loops).")
-      .def_readonly("file", &FrameResult::file,
+  py::class_<loop::SequenceFrame>(
+      m, "LoopResult",
+      "The outcome of one frame of loop detection (LoopDetector.process,\n"
+      "detect_loops).")
+      .def_readonly("file", &loop::SequenceFrame::file,
                     "The frame's name (file path, or \"video.mp4#N\"); \"\" from process().")
+      .def_readonly("match_file", &loop::SequenceFrame::match_file,
+                    "Detections of detect_loops: the loop's earlier frame's name; \"\" otherwise.")
       .def_property_readonly(
-          "status", [](const FrameResult& f) { return loop::to_string(f.result.status); },
+          "status", [](const loop::SequenceFrame& f) { return loop::to_string(f.result.status); },
           "Why the frame did or did not close a loop, as the CLI names it: \"loop-detected\",\n"
           "\"no-database-results\", \"low-normalisation-score\", \"low-scores\", \"no-islands\",\n"
           "\"no-temporal-consistency\", \"no-geometric-consistency\".")
       .def_property_readonly(
-          "detection", [](const FrameResult& f) { return f.result.detection(); },
+          "detection", [](const loop::SequenceFrame& f) { return f.result.detection(); },
           "Whether a loop was detected.")
       .def_property_readonly(
-          "query", [](const FrameResult& f) { return f.result.query; },
+          "query", [](const loop::SequenceFrame& f) { return f.result.query; },
           "The frame's 0-based index in the sequence (its entry id).")
       .def_property_readonly(
           "match",
-          [](const FrameResult& f) -> std::optional<EntryId> {
+          [](const loop::SequenceFrame& f) -> std::optional<EntryId> {
             if (!f.result.has_candidate) return std::nullopt;
             return f.result.match;
           },
           "The loop's earlier frame when detected, otherwise the best candidate so far;\n"
           "None when there was no candidate.")
       .def_property_readonly(
-          "score", [](const FrameResult& f) { return f.result.score; },
+          "score", [](const loop::SequenceFrame& f) { return f.result.score; },
           "Similarity s(v_t, v_match) of the frame and the match.")
       .def_property_readonly(
-          "normalisation_score", [](const FrameResult& f) { return f.result.normalisation_score; },
+          "normalisation_score",
+          [](const loop::SequenceFrame& f) { return f.result.normalisation_score; },
           "s(v_t, v_t-1), what the score is divided by; 0 before the first query.")
       .def_property_readonly(
-          "normalised_score", [](const FrameResult& f) { return f.result.normalised_score; },
+          "normalised_score",
+          [](const loop::SequenceFrame& f) { return f.result.normalised_score; },
           "eta of the match (the score when normalisation is off); loops.csv's score.")
       .def_property_readonly(
           "island",
-          [](const FrameResult& f) -> std::optional<std::pair<EntryId, EntryId>> {
+          [](const loop::SequenceFrame& f) -> std::optional<std::pair<EntryId, EntryId>> {
             if (!has_island(f.result)) return std::nullopt;
             return std::make_pair(f.result.island_first, f.result.island_last);
           },
           "(first, last) frames of the best island, None when no island formed.")
       .def_property_readonly(
-          "island_score", [](const FrameResult& f) { return f.result.island_score; },
+          "island_score", [](const loop::SequenceFrame& f) { return f.result.island_score; },
           "H, the sum of eta over the best island (0 without one).")
       .def_property_readonly(
-          "consistent_queries", [](const FrameResult& f) { return f.result.consistent_queries; },
+          "consistent_queries",
+          [](const loop::SequenceFrame& f) { return f.result.consistent_queries; },
           "Consecutive queries agreeing on the island so far, this one included.")
       .def_property_readonly(
-          "correspondences", [](const FrameResult& f) { return f.result.correspondences; },
+          "correspondences", [](const loop::SequenceFrame& f) { return f.result.correspondences; },
           "Putative correspondences given to RANSAC.")
       .def_property_readonly(
           "exhaustive_fallback_used",
-          [](const FrameResult& f) { return f.result.exhaustive_fallback_used; },
+          [](const loop::SequenceFrame& f) { return f.result.exhaustive_fallback_used; },
           "Whether the geometric check retried with exhaustive matching.")
       .def_property_readonly(
-          "inliers", [](const FrameResult& f) { return inlier_array(f.result.inliers); },
+          "inliers", [](const loop::SequenceFrame& f) { return inlier_array(f.result.inliers); },
           "RANSAC inliers as an int64 (M, 2) array: feature of the frame, feature of the match\n"
           "(rows of their keypoints and descriptors).")
       .def_property_readonly(
           "inlier_points",
-          [](const FrameResult& f) { return inlier_points_array(f.inlier_points); },
+          [](const loop::SequenceFrame& f) { return inlier_points_array(f.inlier_points); },
           "Detections: float32 (M, 4) rows x, y in the frame, x, y in the match, in pixels of\n"
           "the files (detect_loops) or of the keypoints given (process); empty otherwise.")
       .def_property_readonly("times", &times_dict,
@@ -578,22 +572,15 @@ std::vector<loop::Detection> detections_of(const py::handle& results) {
   if (!py::isinstance<py::iterable>(results))
     throw py::type_error("results must be a list of LoopResult or a loops.csv path, got " +
                          type_name(results));
-  std::vector<const FrameResult*> frames;
-  for (const py::handle item : results) {
-    if (!py::isinstance<FrameResult>(item))
-      throw py::type_error("results must hold LoopResult objects, got " + type_name(item));
-    frames.push_back(&item.cast<const FrameResult&>());
-  }
-  std::map<EntryId, const std::string*> files;  // by query: the match's file of each detection
-  for (const FrameResult* f : frames) files[f->result.query] = &f->file;
   std::vector<loop::Detection> detections;
-  for (const FrameResult* f : frames) {
-    const loop::LoopResult& r = f->result;
-    if (!r.detection()) continue;
-    const auto match_file = files.find(r.match);
-    detections.push_back({r.query, r.match, f->file,
-                          match_file == files.end() ? std::string() : *match_file->second,
-                          r.normalised_score, r.inliers.size()});
+  for (const py::handle item : results) {
+    if (!py::isinstance<loop::SequenceFrame>(item))
+      throw py::type_error("results must hold LoopResult objects, got " + type_name(item));
+    const auto& frame = item.cast<const loop::SequenceFrame&>();
+    const loop::LoopResult& r = frame.result;
+    if (r.detection())
+      detections.push_back(
+          {r.query, r.match, frame.file, frame.match_file, r.normalised_score, r.inliers.size()});
   }
   return detections;
 }
@@ -719,12 +706,137 @@ void bind_evaluation(py::module_& m) {
         "ground truth.");
 }
 
+// --- Sequences: detect_loops and write_report, faces of loop::SequenceDetector
+// and loop::make_loop_report.
+
+// As the CLI's --stride, --max-width and --video-fps accept.
+vision::ImageSourceOptions source_options(long long stride, long long max_width, double video_fps) {
+  if (stride < 1 || stride > 1000000)
+    throw py::value_error("stride must be in [1, 1000000], got " + std::to_string(stride));
+  if (max_width < 0 || max_width > 1000000)
+    throw py::value_error("max_width must be in [0, 1000000], got " + std::to_string(max_width));
+  if (!(video_fps >= 0 && video_fps <= 1000))
+    throw py::value_error("video_fps must be in [0, 1000], got " + std::to_string(video_fps));
+  vision::ImageSourceOptions source;
+  source.stride = static_cast<std::size_t>(stride);
+  source.max_width = static_cast<int>(max_width);
+  source.video_fps = video_fps;
+  return source;
+}
+
+// binbow.detect_loops (binbow/__init__.py) after its arguments are resolved:
+// `descriptor` a name or a FeatureExtractor, `params` a LoopDetectorParams, a
+// parameter file's path or None, `progress` None or a callable(done, total).
+std::pair<std::vector<loop::SequenceFrame>, LoopDetectorParams> detect_loops(
+    const std::vector<std::string>& inputs, Vocabulary vocabulary, const py::object& descriptor,
+    const py::object& max_features, const py::object& params, long long stride, long long max_width,
+    double video_fps, const py::object& progress) {
+  loop::SequenceOptions options;
+  options.source = source_options(stride, max_width, video_fps);
+  if (const auto extractor = extractor_of(descriptor)) {
+    if (!max_features.is_none())
+      throw py::value_error(
+          "max_features applies to a descriptor name; a FeatureExtractor has its own");
+    options.extractor = extractor;
+  } else if (py::isinstance<py::str>(descriptor)) {
+    options.descriptor = descriptor.cast<std::string>();
+    if (!max_features.is_none()) {
+      if (!PyLong_Check(max_features.ptr()) || PyBool_Check(max_features.ptr()))
+        throw py::type_error("max_features must be an int, got " + type_name(max_features));
+      const auto count = max_features.cast<long long>();
+      if (count < 1 || count > 1000000)
+        throw py::value_error("max_features must be in [1, 1000000], got " + std::to_string(count));
+      options.max_features = static_cast<int>(count);
+    }
+  } else {
+    throw py::type_error("descriptor must be a name (\"orb\", ...) or a FeatureExtractor, got " +
+                         type_name(descriptor));
+  }
+  std::optional<LoopDetectorParams> given;
+  if (py::isinstance<LoopDetectorParams>(params))
+    given = params.cast<LoopDetectorParams>();
+  else if (!params.is_none())
+    options.params_file = params.cast<std::string>();
+
+  std::unique_ptr<loop::SequenceDetector> sequence;
+  {
+    py::gil_scoped_release release;
+    sequence =
+        given ? std::make_unique<loop::SequenceDetector>(inputs, std::move(vocabulary), options,
+                                                         *given)
+              : std::make_unique<loop::SequenceDetector>(inputs, std::move(vocabulary), options);
+  }
+  const long long known = sequence->size();
+  const py::object total = known >= 0 ? py::object(py::int_(known)) : py::object(py::none());
+  std::vector<loop::SequenceFrame> frames;
+  while (true) {
+    loop::SequenceFrame frame;
+    bool more = false;
+    {
+      py::gil_scoped_release release;
+      more = sequence->next(frame);
+    }
+    if (!more) break;
+    frames.push_back(std::move(frame));
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C stops the run
+    if (!progress.is_none()) progress(frames.size(), total);
+  }
+  return {std::move(frames), sequence->params()};
+}
+
+std::vector<loop::SequenceFrame> frames_of(const py::handle& results) {
+  if (!py::isinstance<py::iterable>(results) || py::isinstance<py::str>(results))
+    throw py::type_error("results must be a list of LoopResult, got " + type_name(results));
+  std::vector<loop::SequenceFrame> frames;
+  for (const py::handle item : results) {
+    if (!py::isinstance<loop::SequenceFrame>(item))
+      throw py::type_error("results must hold LoopResult objects, got " + type_name(item));
+    frames.push_back(item.cast<const loop::SequenceFrame&>());
+  }
+  return frames;
+}
+
+// The CLI's detect-loops report: make_loop_report's page with the facts the
+// CLI shows (inputs, frequency, vocabulary, descriptor) where the run knew them.
+std::string write_report(const Path& folder, const py::handle& results,
+                         const loop::GroundTruth* truth,
+                         const std::optional<LoopDetectorParams>& params, const std::string& inputs,
+                         const std::string& vocabulary, const std::string& descriptor) {
+  const std::vector<loop::SequenceFrame> frames = frames_of(results);
+  py::gil_scoped_release release;
+  loop::LoopReport report =
+      loop::make_loop_report(frames, params.value_or(LoopDetectorParams{}), truth);
+  if (params) {
+    char hertz[32];
+    std::snprintf(hertz, sizeof hertz, "%g Hz", params->frequency);
+    report.facts.emplace_back("frequency", hertz);
+  } else {
+    report.params_json.clear();  // not known: not shown as the defaults
+  }
+  if (!inputs.empty()) report.facts.insert(report.facts.begin(), {"inputs", inputs});
+  if (!vocabulary.empty()) report.facts.emplace_back("vocabulary", vocabulary);
+  if (!descriptor.empty()) report.facts.emplace_back("descriptor", descriptor);
+  return loop::write_loop_report(folder.string(), report);
+}
+
+void bind_sequences(py::module_& m) {
+  m.def("_detect_loops", &detect_loops, py::arg("inputs"), py::arg("vocabulary"),
+        py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
+        py::arg("max_width"), py::arg("video_fps"), py::arg("progress"),
+        "binbow.detect_loops once its arguments are resolved (use that): the frames and\n"
+        "the parameters used.");
+  m.def("_write_report", &write_report, py::arg("folder"), py::arg("results"),
+        py::arg("ground_truth"), py::arg("params"), py::arg("inputs"), py::arg("vocabulary"),
+        py::arg("descriptor"), "binbow.write_report with the run's facts resolved (use that).");
+}
+
 }  // namespace
 
 void bind_loop(py::module_& m) {
   bind_params(m);
   bind_detection(m);
   bind_evaluation(m);
+  bind_sequences(m);
 }
 
 }  // namespace binbow::python

@@ -23,7 +23,9 @@ from ._binbow import (
     LoopResult,
     Vocabulary,
     __version__,
+    _detect_loops,
     evaluate,
+    _write_report,
     hamming,
 )
 
@@ -38,10 +40,13 @@ __all__ = [
     "LoopDetector",
     "LoopDetectorParams",
     "LoopResult",
+    "LoopResults",
     "Vocabulary",
     "data_directories",
+    "detect_loops",
     "evaluate",
     "hamming",
+    "write_report",
 ]
 
 _DEFAULT_DESCRIPTORS = ("orb", "brief")
@@ -60,12 +65,8 @@ def data_directories():
     return [_os.path.normpath(override), bundled] if override else [bundled]
 
 
-def _default_vocabulary(descriptor="orb"):
-    """The bundled default vocabulary of "orb" or "brief" descriptors.
-
-    Searched in vocab/ of each of data_directories(); FileNotFoundError names
-    the places searched when it is not installed.
-    """
+def _default_vocabulary_file(descriptor):
+    """The file of the bundled default vocabulary of "orb" or "brief" descriptors."""
     if descriptor not in _DEFAULT_DESCRIPTORS:
         raise ValueError(
             f"no default vocabulary for descriptor {descriptor!r}: choose one of "
@@ -77,11 +78,20 @@ def _default_vocabulary(descriptor="orb"):
     ]
     for path in candidates:
         if _os.path.isfile(path):
-            return Vocabulary.load(path)
+            return path
     raise FileNotFoundError(
         f"the default {descriptor} vocabulary is not installed; set BINBOW_DATA_DIR to binbow's "
         "data folder (the repository's data/). Searched: " + ", ".join(candidates)
     )
+
+
+def _default_vocabulary(descriptor="orb"):
+    """The bundled default vocabulary of "orb" or "brief" descriptors.
+
+    Searched in vocab/ of each of data_directories(); FileNotFoundError names
+    the places searched when it is not installed.
+    """
+    return Vocabulary.load(_default_vocabulary_file(descriptor))
 
 
 Vocabulary.default = staticmethod(_default_vocabulary)
@@ -150,7 +160,8 @@ def detect_loops(
     natural order: 2.jpg before 10.jpg), videos (frames named "video.mp4#N") or
     text lists of images. vocabulary: None for Vocabulary.default(descriptor).
     descriptor: the extractor, "orb", "brief", "akaze" or "brisk", with the
-    CLI's defaults (max_features: None for the extractor's default). params: a
+    CLI's defaults (max_features: None for the extractor's default), or a
+    FeatureExtractor configured otherwise. params: a
     LoopDetectorParams, a parameter file (JSON or YAML, as --params: keys it
     omits keep the defaults) or None: the paper's parameters, whose frame
     counts follow the frames processed per second of a video. progress: True
@@ -158,8 +169,9 @@ def detect_loops(
     total) after each frame, total None when not known beforehand. stride,
     max_width and video_fps thin the frames out as the CLI's options do.
 
-    Returns one LoopResult per frame, in order, with its file name. The GIL is
-    released while frames are read and processed.
+    Returns a LoopResults: one LoopResult per frame, in order, with its file
+    name, and what the run used. The GIL is released while frames are read and
+    processed; Ctrl-C stops the run.
     """
     if isinstance(inputs, (str, bytes, _os.PathLike)):
         inputs = [inputs]
@@ -168,8 +180,11 @@ def detect_loops(
         if not isinstance(item, (str, bytes, _os.PathLike)):
             raise TypeError(f"inputs[{index}] must be a path, got {type(item).__name__}")
         paths.append(_os.fsdecode(item))
+    name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
+    vocabulary_file = None
     if vocabulary is None:
-        vocabulary = Vocabulary.default(descriptor)
+        vocabulary_file = _default_vocabulary_file(name)
+        vocabulary = Vocabulary.load(vocabulary_file)
     printer = None
     if progress is True:
         printer = _CliProgress("detecting loops")
@@ -187,10 +202,54 @@ def detect_loops(
                 + type(params).__name__
             )
         params = _os.fsdecode(params)
-    results = _detect_loops(
+    frames, used = _detect_loops(
         paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
         callback,
     )
     if printer is not None:
         printer.finish()
+    results = LoopResults(frames)
+    results.params = used
+    results.descriptor = name
+    results.vocabulary = vocabulary
+    results.vocabulary_file = vocabulary_file
+    results.inputs = [_os.path.normpath(_os.path.abspath(path)) for path in paths]
     return results
+
+
+class LoopResults(list):
+    """What detect_loops returns: a list of LoopResult, one per frame, with
+    what the run used, which write_report shows as the CLI's report does.
+
+    params: the LoopDetectorParams of the run (after a video's frame rate and
+    a parameter file); descriptor: the extractor's name; vocabulary: the
+    Vocabulary; vocabulary_file: its file when detect_loops loaded the default
+    one, else None; inputs: the inputs as absolute paths.
+    """
+
+    params = None
+    descriptor = ""
+    vocabulary = None
+    vocabulary_file = None
+    inputs = ()
+
+
+def write_report(folder, results, ground_truth=None):
+    """Write the HTML report of a run into folder (folder/index.html, the
+    page of the CLI's detect-loops --report) and return the page's path.
+
+    results: the LoopResults of detect_loops (whose frames know their files:
+    each loop is drawn with its two images and inliers), or any list of
+    LoopResult. ground_truth: a GroundTruth, to show each detection's verdict,
+    precision and recall (as evaluate --report). Written atomically; OSError
+    naming the folder when it cannot be.
+    """
+    run = results if isinstance(results, LoopResults) else LoopResults()
+    inputs = ""
+    if run.inputs:
+        inputs = run.inputs[0] + (" ..." if len(run.inputs) > 1 else "")
+    vocabulary = run.vocabulary_file or (repr(run.vocabulary) if run.vocabulary else "")
+    return _write_report(
+        _os.fsdecode(folder), results, ground_truth, run.params, inputs, vocabulary,
+        run.descriptor,
+    )

@@ -202,6 +202,8 @@ class LoopResult:
     @property
     def file(self) -> str: ...
     @property
+    def match_file(self) -> str: ...
+    @property
     def status(self) -> _Status: ...
     @property
     def detection(self) -> bool: ...
@@ -287,3 +289,28 @@ class Evaluation:
 def evaluate(
     results: Union[Iterable[LoopResult], _StrPath], ground_truth: GroundTruth
 ) -> Evaluation: ...
+
+class LoopResults(list[LoopResult]):
+    params: Optional[LoopDetectorParams]
+    descriptor: str
+    vocabulary: Optional[Vocabulary]
+    vocabulary_file: Optional[str]
+    inputs: Sequence[str]
+
+def detect_loops(
+    inputs: Union[_StrPath, Iterable[_StrPath]],
+    vocabulary: Optional[Vocabulary] = None,
+    descriptor: Union[Literal["orb", "brief", "akaze", "brisk"], FeatureExtractor] = "orb",
+    params: Union[None, LoopDetectorParams, _StrPath] = None,
+    progress: Union[bool, Callable[[int, Optional[int]], object]] = False,
+    *,
+    max_features: Optional[int] = None,
+    stride: int = 1,
+    max_width: int = 0,
+    video_fps: float = 0.0,
+) -> LoopResults: ...
+def write_report(
+    folder: _StrPath,
+    results: Iterable[LoopResult],
+    ground_truth: Optional[GroundTruth] = None,
+) -> str: ...

@@ -28,6 +28,8 @@ def public_members():
                     continue
                 if member.startswith("_") and not member.startswith("__"):
                     continue
+                if not callable(attribute) and not inspect.isdatadescriptor(attribute):
+                    continue  # plain data, described by its class's docstring
                 yield f"{name}.{member}", attribute
 
 
