@@ -459,6 +459,55 @@ std::string result_repr(const loop::SequenceFrame& frame) {
   return text + ">";
 }
 
+// A LoopResult as plain Python values, for pickle (results saved, or sent to
+// other processes): every field of the frame, in one fixed order.
+py::tuple frame_state(const loop::SequenceFrame& frame) {
+  const loop::LoopResult& r = frame.result;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> inliers;
+  for (const vision::Correspondence& c : r.inliers) inliers.emplace_back(c.first, c.second);
+  const loop::LoopStageTimes& t = r.times;
+  return py::make_tuple(frame.file, frame.match_file, frame.features_ms, frame.inlier_points,
+                        static_cast<int>(r.status), r.query, r.has_candidate, r.match, r.score,
+                        r.normalisation_score, r.normalised_score, r.island_score, r.island_first,
+                        r.island_last, r.consistent_queries, r.correspondences,
+                        r.exhaustive_fallback_used, inliers,
+                        std::array<double, 5>{t.transform_ms, t.query_ms, t.islands_ms,
+                                              t.verification_ms, t.insertion_ms});
+}
+
+loop::SequenceFrame frame_from_state(const py::tuple& state) {
+  constexpr int kLastStatus = static_cast<int>(loop::LoopStatus::kNoGeometricConsistency);
+  if (state.size() != 19) throw py::value_error("invalid pickled binbow.LoopResult");
+  loop::SequenceFrame frame;
+  frame.file = state[0].cast<std::string>();
+  frame.match_file = state[1].cast<std::string>();
+  frame.features_ms = state[2].cast<double>();
+  frame.inlier_points = state[3].cast<std::vector<std::array<float, 4>>>();
+  loop::LoopResult& r = frame.result;
+  const int status = state[4].cast<int>();
+  if (status < 0 || status > kLastStatus)
+    throw py::value_error("invalid pickled binbow.LoopResult: status " + std::to_string(status));
+  r.status = static_cast<loop::LoopStatus>(status);
+  r.query = state[5].cast<EntryId>();
+  r.has_candidate = state[6].cast<bool>();
+  r.match = state[7].cast<EntryId>();
+  r.score = state[8].cast<double>();
+  r.normalisation_score = state[9].cast<double>();
+  r.normalised_score = state[10].cast<double>();
+  r.island_score = state[11].cast<double>();
+  r.island_first = state[12].cast<EntryId>();
+  r.island_last = state[13].cast<EntryId>();
+  r.consistent_queries = state[14].cast<int>();
+  r.correspondences = state[15].cast<std::size_t>();
+  r.exhaustive_fallback_used = state[16].cast<bool>();
+  for (const auto& [first, second] :
+       state[17].cast<std::vector<std::pair<std::uint32_t, std::uint32_t>>>())
+    r.inliers.push_back({first, second});
+  const auto ms = state[18].cast<std::array<double, 5>>();
+  r.times = {ms[0], ms[1], ms[2], ms[3], ms[4]};
+  return frame;
+}
+
 void bind_detection(py::module_& m) {
   py::class_<loop::SequenceFrame>(
       m, "LoopResult",
@@ -532,7 +581,8 @@ void bind_detection(py::module_& m) {
                              "Milliseconds of each stage: features (0 from process(), which gets\n"
                              "them extracted), transform, query, islands, verification, "
                              "insertion.")
-      .def("__repr__", &result_repr, "Status, match and scores as text.");
+      .def("__repr__", &result_repr, "Status, match and scores as text.")
+      .def(py::pickle(&frame_state, &frame_from_state));
 
   py::class_<PythonLoopDetector>(
       m, "LoopDetector",

@@ -68,8 +68,8 @@ def plot(scores, scoring, results, truth, evaluation, output, title):
         axes.scatter([r.match for r in loops], [r.query for r in loops], s=30, marker="x",
                      color="white", linewidths=1.5, label="detection")
 
-    axes.set_xlabel("earlier image")
-    axes.set_ylabel("query image")
+    axes.set_xlabel("earlier image (0-based index)")
+    axes.set_ylabel("query image (0-based index)")
     axes.set_title(title, fontsize=10)
     if axes.get_legend_handles_labels()[0]:
         axes.legend(loc="upper right", fontsize=8, framealpha=0.8)
