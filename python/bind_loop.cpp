@@ -323,6 +323,10 @@ std::vector<vision::Keypoint> keypoints_from_array(const py::array& array) {
       k.size = static_cast<float>(r(i, 2));
       k.angle = static_cast<float>(r(i, 3));
       k.response = static_cast<float>(r(i, 4));
+      // Only a whole pyramid level is an octave (and converts to int safely).
+      if (!(std::abs(r(i, 5)) <= 64) || r(i, 5) != std::floor(r(i, 5)))
+        throw py::value_error("keypoints[" + std::to_string(i) + "] has octave " +
+                              std::to_string(r(i, 5)) + ", not a pyramid level");
       k.octave = static_cast<int>(r(i, 5));
     }
   }

@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <climits>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -171,6 +172,8 @@ Image image_from_array(const py::handle& object) {
   if (!(array.ndim() == 2 || (array.ndim() == 3 && array.shape(2) == 3)))
     throw py::value_error("image must be grey (H, W) or BGR (H, W, 3), got shape " +
                           shape_of(array));
+  if (array.shape(0) > INT_MAX || array.shape(1) > INT_MAX)
+    throw py::value_error("image of shape " + shape_of(array) + " is larger than OpenCV takes");
   Image out;
   out.array = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
   if (!out.array) throw py::error_already_set();

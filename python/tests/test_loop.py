@@ -112,6 +112,11 @@ def test_strict_inputs(features):
     nan[3, 0] = np.nan
     with pytest.raises(ValueError, match=r"keypoints\[3\]"):
         detector.process(nan, descriptors)
+    for octave in (np.inf, 1e12, 2.5):
+        odd = keypoints.copy()
+        odd[7, 5] = octave
+        with pytest.raises(ValueError, match=r"keypoints\[7\] has octave"):
+            detector.process(odd, descriptors)
     assert len(detector) == 0, "refused inputs add nothing"
     strided = np.asfortranarray(keypoints)
     assert detector.process(strided, np.asfortranarray(descriptors)).query == 0
