@@ -1,26 +1,21 @@
-// The loop room: binbow.LoopDetectorParams, LoopDetector, LoopResult,
-// GroundTruth and evaluate.
+// The loop room: binbow.LoopDetector, LoopResult, detect_loops and
+// write_report (LoopDetectorParams: bind_params.cpp; GroundTruth and
+// evaluate: bind_evaluation.cpp).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <array>
-#include <climits>
 #include <cmath>
 #include <cstdio>
-#include <functional>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
-#include "binbow/error.h"
-#include "binbow/loop/evaluation.h"
 #include "binbow/loop/loop_detector.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/sequence.h"
@@ -31,273 +26,6 @@ namespace binbow::python {
 namespace {
 
 using loop::LoopDetectorParams;
-
-// --- Python values checked as the parameter file's values are: a count is an
-// int (not a bool, not 2.5), a switch a bool, a threshold a real number.
-
-bool is_bool(const py::handle& value) {
-  return PyBool_Check(value.ptr()) ||
-         py::isinstance(value, py::module_::import("numpy").attr("bool_"));
-}
-
-bool is_integer(const py::handle& value) {
-  return !is_bool(value) && PyIndex_Check(value.ptr());
-}
-
-bool is_real(const py::handle& value) {
-  return !is_bool(value) && (PyFloat_Check(value.ptr()) || PyIndex_Check(value.ptr()) ||
-                             py::isinstance(value, py::module_::import("numpy").attr("floating")));
-}
-
-// One field of LoopDetectorParams as a Python property.
-struct Field {
-  const char* name;
-  const char* doc;
-  std::function<py::object(const LoopDetectorParams&)> get;
-  // Sets the field of `p` from a checked Python value (validate() comes after).
-  std::function<void(LoopDetectorParams&, const py::handle&)> set;
-};
-
-Field int_field(const char* name, int LoopDetectorParams::*member, const char* doc) {
-  return {name, doc, [member](const LoopDetectorParams& p) { return py::int_(p.*member); },
-          [name, member](LoopDetectorParams& p, const py::handle& value) {
-            if (!is_integer(value))
-              throw py::type_error(std::string("loop detector parameter ") + name +
-                                   " must be an int, got " + type_name(value));
-            const auto number = py::int_(py::reinterpret_borrow<py::object>(value));
-            long long x = 0;
-            try {
-              x = number.cast<long long>();
-            } catch (const py::cast_error&) {
-              x = LLONG_MAX;  // beyond long long: out of range below
-            }
-            if (x < INT_MIN || x > INT_MAX)
-              throw py::value_error(std::string("loop detector parameter ") + name +
-                                    " is out of range, got " +
-                                    py::repr(number).cast<std::string>());
-            p.*member = static_cast<int>(x);
-          }};
-}
-
-Field real_field(const char* name, double LoopDetectorParams::*member, const char* doc) {
-  return {name, doc, [member](const LoopDetectorParams& p) { return py::float_(p.*member); },
-          [name, member](LoopDetectorParams& p, const py::handle& value) {
-            if (!is_real(value))
-              throw py::type_error(std::string("loop detector parameter ") + name +
-                                   " must be a real number, got " + type_name(value));
-            p.*member = py::float_(py::reinterpret_borrow<py::object>(value)).cast<double>();
-          }};
-}
-
-Field bool_field(const char* name, bool LoopDetectorParams::*member, const char* doc) {
-  return {name, doc, [member](const LoopDetectorParams& p) { return py::bool_(p.*member); },
-          [name, member](LoopDetectorParams& p, const py::handle& value) {
-            if (!is_bool(value))
-              throw py::type_error(std::string("loop detector parameter ") + name +
-                                   " must be a bool, got " + type_name(value));
-            p.*member = value.cast<bool>();
-          }};
-}
-
-// Every field, in the order of loop_detector.h and of to_json(); a test
-// checks that the keys are the library's.
-const std::vector<Field>& fields() {
-  using P = LoopDetectorParams;
-  static const std::vector<Field> table = {
-      real_field("frequency", &P::frequency,
-                 "Images per second the parameters were derived for, (0, 10000] (informative;\n"
-                 "for_frequency and the keyword frequency= scale the frame counts to it)."),
-      bool_field("use_normalised_score", &P::use_normalised_score,
-                 "Compare the normalised score eta instead of the raw score with alpha."),
-      real_field("alpha", &P::alpha, "Minimum eta (or raw score) of a candidate, [0, 1000]."),
-      real_field("min_normalisation_score", &P::min_normalisation_score,
-                 "Frames whose score with the previous frame is below this are skipped,\n"
-                 "[0, 1000]."),
-      int_field("dislocal", &P::dislocal,
-                "Candidates of image t are images j < t - dislocal (20 f), [0, 1e6]."),
-      int_field("max_db_results", &P::max_db_results,
-                "Candidates taken from each database query (50 f), [1, 1e6]."),
-      int_field("max_intra_island_gap", &P::max_intra_island_gap,
-                "Entries closer than this join one island (3 f), [1, 1e6]."),
-      int_field("min_matches_per_island", &P::min_matches_per_island,
-                "Minimum island length (f), [1, 1e6]."),
-      int_field("k", &P::k, "Consistent previous queries needed, [0, 1000]."),
-      int_field("max_distance_between_islands", &P::max_distance_between_islands,
-                "Islands of consecutive queries this far apart still agree (3 f), [0, 1e6]."),
-      int_field("max_distance_between_queries", &P::max_distance_between_queries,
-                "Queries further apart break the chain (2 f), [1, 1e6]."),
-      Field{"geometric_check",
-            "How correspondences for the fundamental matrix are found: \"direct-index\"\n"
-            "(the paper's), \"exhaustive\" or \"none\" (no geometric check).",
-            [](const P& p) { return py::str(loop::to_string(p.geometric_check)); },
-            [](P& p, const py::handle& value) {
-              if (!py::isinstance<py::str>(value))
-                throw py::type_error("loop detector parameter geometric_check must be a str, got " +
-                                     type_name(value));
-              p.geometric_check = loop::parse_geometric_check(value.cast<std::string>());
-            }},
-      int_field("direct_index_levels", &P::direct_index_levels,
-                "Direct index this many levels above the words, [0, 16]."),
-      bool_field("exhaustive_fallback", &P::exhaustive_fallback,
-                 "Retry with exhaustive matching when the direct index finds no fundamental\n"
-                 "matrix (binbow's addition)."),
-      int_field("max_verified_entries", &P::max_verified_entries,
-                "Entries of the best island checked geometrically, best first, [1, 10]."),
-      real_field("max_neighbor_ratio", &P::max_neighbor_ratio,
-                 "Nearest-neighbour ratio test of correspondences, (0, 1]."),
-      real_field("max_match_distance", &P::max_match_distance,
-                 "Largest Hamming distance of a correspondence, as a fraction of the bits,\n"
-                 "[0, 1]."),
-      bool_field("accept_single_candidate", &P::accept_single_candidate,
-                 "Accept a correspondence without a second neighbour (DLoopDetector does)."),
-      int_field("min_inliers", &P::min_inliers,
-                "Minimum RANSAC inliers of the fundamental matrix, [8, 10000]."),
-      real_field("max_reprojection_error", &P::max_reprojection_error,
-                 "RANSAC threshold in pixels, [0.1, 100]."),
-      real_field("ransac_confidence", &P::ransac_confidence, "RANSAC confidence, (0, 1)."),
-      int_field("max_ransac_iterations", &P::max_ransac_iterations,
-                "RANSAC iterations, [1, 5000]."),
-  };
-  return table;
-}
-
-const Field* find_field(const std::string& name) {
-  for (const Field& f : fields())
-    if (name == f.name) return &f;
-  return nullptr;
-}
-
-std::string field_names() {
-  std::string names;
-  for (const Field& f : fields()) names += (names.empty() ? "" : ", ") + std::string(f.name);
-  return names;
-}
-
-// Parameters from keywords or a dict, as a parameter file reads them: a
-// "frequency" first scales the frame-count parameters (for_frequency), the
-// other keys then override; the result is validated. An unknown key is a
-// TypeError among keywords, as Python's own, and a ValueError in a dict.
-LoopDetectorParams params_from_items(const py::dict& items, bool keywords) {
-  LoopDetectorParams params;
-  for (const auto& [key, value] : items) {
-    if (!py::isinstance<py::str>(key))
-      throw py::type_error("loop detector parameter names are str, got " + type_name(key));
-    if (!find_field(key.cast<std::string>())) {
-      const std::string message = "unknown loop detector parameter \"" + key.cast<std::string>() +
-                                  "\" (known: " + field_names() + ")";
-      if (keywords) throw py::type_error(message);
-      throw py::value_error(message);
-    }
-  }
-  if (items.contains("frequency")) {
-    LoopDetectorParams scaled;
-    find_field("frequency")->set(scaled, items["frequency"]);
-    params = LoopDetectorParams::for_frequency(scaled.frequency);
-  }
-  for (const auto& [key, value] : items) find_field(key.cast<std::string>())->set(params, value);
-  params.validate();
-  return params;
-}
-
-py::dict params_dict(const LoopDetectorParams& params) {
-  py::dict out;
-  for (const Field& f : fields()) out[f.name] = f.get(params);
-  return out;
-}
-
-std::string params_repr(const LoopDetectorParams& params) {
-  std::string text = "binbow.LoopDetectorParams(";
-  bool first = true;
-  for (const Field& f : fields()) {
-    text += (first ? "" : ", ") + std::string(f.name) + "=" +
-            py::repr(f.get(params)).cast<std::string>();
-    first = false;
-  }
-  return text + ")";
-}
-
-// A parameter file's errors name the file; a dict's or a JSON text's are the
-// caller's argument.
-template <class Function>
-LoopDetectorParams params_from_text(Function&& read) {
-  try {
-    return read();
-  } catch (const FileError& e) {
-    throw py::value_error(e.problem());
-  }
-}
-
-void bind_params(py::module_& m) {
-  auto cls = py::class_<LoopDetectorParams>(
-      m, "LoopDetectorParams",
-      "Every parameter of the loop detector (the paper's, at 1 Hz, by default).\n\n"
-      "LoopDetectorParams(**fields): the defaults with the given fields; a frequency=\n"
-      "first scales the frame-count parameters to it (as for_frequency and parameter\n"
-      "files do), the other keywords then override. Values are checked as parameter\n"
-      "files are: a wrong type is a TypeError, a value out of range a ValueError with\n"
-      "the library's message, an unknown name a TypeError. Setting a property checks\n"
-      "the new value the same way (frequency alone rescales nothing).");
-  cls.def(py::init([](const py::kwargs& fields) { return params_from_items(fields, true); }),
-          "The defaults with the given fields (see the class docstring).")
-      .def_static("for_frequency", &LoopDetectorParams::for_frequency, py::arg("hz"),
-                  "The defaults with the frame-count parameters scaled to hz images per second,\n"
-                  "as DLoopDetector does (dislocal 20 f, max_db_results 50 f, ...).")
-      .def_static(
-          "from_file",
-          [](const Path& path, const std::optional<LoopDetectorParams>& defaults) {
-            py::gil_scoped_release release;
-            return LoopDetectorParams::load(path.string(), defaults.value_or(LoopDetectorParams{}));
-          },
-          py::arg("path"), py::arg("defaults") = py::none(),
-          "Read a JSON or YAML parameter file (the CLI's --params); keys it omits keep their\n"
-          "value in defaults (the paper's when None). OSError naming the file and the key\n"
-          "for anything invalid.")
-      .def_static(
-          "from_dict", [](const py::dict& d) { return params_from_items(d, false); }, py::arg("d"),
-          "From a dict such as to_dict() returns; absent keys keep their defaults, a\n"
-          "\"frequency\" key scales the frame counts first. Unknown keys and invalid values:\n"
-          "ValueError; wrong types: TypeError.")
-      .def("to_dict", &params_dict, "Every field by name: the keys of a parameter file.")
-      .def_static(
-          "from_json",
-          [](const std::string& text) {
-            return params_from_text([&] { return LoopDetectorParams::from_json(text); });
-          },
-          py::arg("text"), "From the JSON text to_json() writes (or a parameter file holds).")
-      .def("to_json", &LoopDetectorParams::to_json,
-           "Every field as a JSON object: a parameter file for the CLI's --params.")
-      .def(
-          "__eq__",
-          [](const LoopDetectorParams& a, const LoopDetectorParams& b) {
-            return a.to_json() == b.to_json();
-          },
-          py::is_operator(), "Every field equal.")
-      .def("__repr__", &params_repr, "The constructor call with every field.")
-      .def(
-          "__copy__", [](const LoopDetectorParams& p) { return p; }, "A copy.")
-      .def(
-          "__deepcopy__", [](const LoopDetectorParams& p, const py::object&) { return p; },
-          py::arg("memo"), "A copy.")
-      .def(py::pickle([](const LoopDetectorParams& p) { return p.to_json(); },
-                      [](const std::string& state) {
-                        return params_from_text([&] {
-                          return LoopDetectorParams::from_json(state,
-                                                               "<pickled LoopDetectorParams>");
-                        });
-                      }));
-  cls.attr("__hash__") = py::none();  // mutable, compared by value
-  for (const Field& field : fields()) {
-    cls.def_property(
-        field.name, [&field](const LoopDetectorParams& p) { return field.get(p); },
-        [&field](LoopDetectorParams& p, const py::handle& value) {
-          LoopDetectorParams changed = p;
-          field.set(changed, value);
-          changed.validate();
-          p = changed;
-        },
-        field.doc);
-  }
-}
 
 // --- Loop detection
 
@@ -382,7 +110,7 @@ class PythonLoopDetector {
   PythonLoopDetector(Vocabulary vocabulary, const LoopDetectorParams& params)
       : detector_(std::move(vocabulary), params) {}
 
-  loop::SequenceFrame process(const py::handle& keypoints, const py::handle& descriptors) {
+  loop::SequenceFrame process(const py::object& keypoints, const py::object& descriptors) {
     const Descriptors d =
         to_descriptors(descriptors, "descriptors", detector_.database().vocabulary().code_size());
     const std::vector<vision::Keypoint> points = to_keypoints(keypoints, d.view.rows);
@@ -615,151 +343,6 @@ void bind_detection(py::module_& m) {
 
 // --- Evaluation
 
-// The detections of `results` (LoopResults, or a loops.csv path) as loops.csv rows.
-std::vector<loop::Detection> detections_of(const py::handle& results) {
-  if (py::isinstance<py::str>(results) || py::hasattr(results, "__fspath__")) {
-    const std::string path =
-        py::module_::import("os").attr("fsdecode")(results).cast<std::string>();
-    py::gil_scoped_release release;
-    return loop::read_detections_csv(path);
-  }
-  if (!py::isinstance<py::iterable>(results))
-    throw py::type_error("results must be a list of LoopResult or a loops.csv path, got " +
-                         type_name(results));
-  std::vector<loop::Detection> detections;
-  for (const py::handle item : results) {
-    if (!py::isinstance<loop::SequenceFrame>(item))
-      throw py::type_error("results must hold LoopResult objects, got " + type_name(item));
-    const auto& frame = item.cast<const loop::SequenceFrame&>();
-    const loop::LoopResult& r = frame.result;
-    if (r.detection())
-      detections.push_back(
-          {r.query, r.match, frame.file, frame.match_file, r.normalised_score, r.inliers.size()});
-  }
-  return detections;
-}
-
-struct Evaluation {
-  loop::PrecisionRecall measures;
-  std::vector<std::tuple<std::size_t, std::size_t, bool>> verdicts;  // per detection
-  std::map<std::size_t, bool> query_verdicts;  // per ground-truth query with a loop: found
-};
-
-Evaluation evaluate(const py::handle& results, const loop::GroundTruth& truth) {
-  const std::vector<loop::Detection> detections = detections_of(results);
-  py::gil_scoped_release release;
-  Evaluation out;
-  out.measures = loop::evaluate_detections(detections, truth);
-  for (std::size_t q = 0; q < truth.frames(); ++q)
-    if (truth.has_loop(q)) out.query_verdicts[q] = false;
-  for (const loop::Detection& d : detections) {
-    const bool correct = truth.is_loop(d.query, d.match);
-    out.verdicts.emplace_back(d.query, d.match, correct);
-    if (correct) out.query_verdicts[d.query] = true;
-  }
-  return out;
-}
-
-void bind_evaluation(py::module_& m) {
-  py::class_<loop::GroundTruth>(
-      m, "GroundTruth",
-      "Which images of a sequence show the same place (symmetric; a query i has a loop\n"
-      "when it shares a place with an earlier image). Stored sparsely.")
-      .def(py::init<std::size_t, const std::vector<std::pair<std::size_t, std::size_t>>&>(),
-           py::arg("frames"), py::arg("pairs"),
-           "From 0-based (i, j) pairs of the same place among frames images.")
-      .def_static(
-          "load",
-          [](const Path& path, std::optional<int> base, std::optional<std::size_t> frames) {
-            loop::GroundTruthOptions options;
-            if (base) {
-              if (*base != 0 && *base != 1)
-                throw py::value_error("base must be 0, 1 or None, got " + std::to_string(*base));
-              options.pairs_index_base = *base;
-            }
-            options.frames = frames.value_or(0);
-            py::gil_scoped_release release;
-            return loop::GroundTruth::load(path.string(), options);
-          },
-          py::arg("path"), py::arg("base") = py::none(), py::arg("frames") = py::none(),
-          "Load a ground truth as the CLI's evaluate --gt does: a square image (row = query,\n"
-          "non-zero = same place), a MATLAB .mat matrix, or text pairs \"query match\".\n"
-          "base: index base of text pairs, 0 or 1 (None: from a \"0-based\"/\"1-based\" comment,\n"
-          "or 0 when an index 0 appears). frames: cut the ground truth to that many frames.")
-      .def_property_readonly("frames", &loop::GroundTruth::frames, "Number of images.")
-      .def("is_loop", &loop::GroundTruth::is_loop, py::arg("query"), py::arg("match"),
-           "Whether the two images show the same place.")
-      .def("has_loop", &loop::GroundTruth::has_loop, py::arg("query"),
-           "Whether the image shares a place with an earlier one.")
-      .def(
-          "earlier_matches",
-          [](const loop::GroundTruth& t, std::size_t query) {
-            const Span<std::uint32_t> matches = t.earlier_matches(query);
-            return std::vector<std::uint32_t>(matches.begin(), matches.end());
-          },
-          py::arg("query"), "Earlier images sharing a place with the query, increasing.")
-      .def_property_readonly("queries_with_loops", &loop::GroundTruth::queries_with_loops,
-                             "Number of images that share a place with an earlier one.")
-      .def_property_readonly("pair_count", &loop::GroundTruth::pair_count,
-                             "Number of (later, earlier) same-place pairs.")
-      .def(
-          "__repr__",
-          [](const loop::GroundTruth& t) {
-            return "<binbow.GroundTruth " + std::to_string(t.frames()) + " frames, " +
-                   std::to_string(t.queries_with_loops()) + " queries with a loop>";
-          },
-          "Size as text.");
-
-  py::class_<Evaluation>(m, "Evaluation",
-                         "Precision and recall of detections (the paper's measures, as the\n"
-                         "CLI's evaluate prints them), with the verdict on each detection and\n"
-                         "each ground-truth query.")
-      .def_property_readonly(
-          "precision", [](const Evaluation& e) { return e.measures.precision; },
-          "True positives / detections (1 without detections).")
-      .def_property_readonly(
-          "recall", [](const Evaluation& e) { return e.measures.recall; },
-          "Queries found / queries with a loop.")
-      .def_property_readonly(
-          "detections", [](const Evaluation& e) { return e.measures.detections; },
-          "Number of detections.")
-      .def_property_readonly(
-          "true_positives", [](const Evaluation& e) { return e.measures.true_positives; },
-          "Detections the ground truth confirms.")
-      .def_property_readonly(
-          "false_positives", [](const Evaluation& e) { return e.measures.false_positives; },
-          "Detections the ground truth denies.")
-      .def_property_readonly(
-          "queries_with_loops", [](const Evaluation& e) { return e.measures.queries_with_loops; },
-          "Ground-truth queries that have a loop.")
-      .def_property_readonly(
-          "queries_found", [](const Evaluation& e) { return e.measures.queries_found; },
-          "Distinct queries with a true positive.")
-      .def_readonly("verdicts", &Evaluation::verdicts,
-                    "(query, match, correct) of each detection, in the order of the results.")
-      .def_readonly("query_verdicts", &Evaluation::query_verdicts,
-                    "{query: found} for each ground-truth query with a loop, increasing.")
-      .def(
-          "__repr__",
-          [](const Evaluation& e) {
-            char text[160];
-            std::snprintf(text, sizeof text,
-                          "<binbow.Evaluation precision %.4g recall %.4g: %zu detections, %zu "
-                          "true positives, %zu/%zu queries found>",
-                          e.measures.precision, e.measures.recall, e.measures.detections,
-                          e.measures.true_positives, e.measures.queries_found,
-                          e.measures.queries_with_loops);
-            return std::string(text);
-          },
-          "The measures as text.");
-
-  m.def("evaluate", &evaluate, py::arg("results"), py::arg("ground_truth"),
-        "Precision and recall of loop detections against a GroundTruth, as the CLI's evaluate:\n"
-        "results is a list of LoopResult (detect_loops' or LoopDetector.process's, in order)\n"
-        "or the path of a loops.csv. ValueError when a detection's index is outside the\n"
-        "ground truth.");
-}
-
 // --- Sequences: detect_loops and write_report, faces of loop::SequenceDetector
 // and loop::make_loop_report.
 
@@ -852,7 +435,7 @@ std::vector<loop::SequenceFrame> frames_of(const py::handle& results) {
 
 // The CLI's detect-loops report: make_loop_report's page with the facts the
 // CLI shows (inputs, frequency, vocabulary, descriptor) where the run knew them.
-std::string write_report(const Path& folder, const py::handle& results,
+std::string write_report(const Path& folder, const py::object& results,
                          const loop::GroundTruth* truth,
                          const std::optional<LoopDetectorParams>& params, const std::string& inputs,
                          const std::string& vocabulary, const std::string& descriptor) {
@@ -887,9 +470,7 @@ void bind_sequences(py::module_& m) {
 }  // namespace
 
 void bind_loop(py::module_& m) {
-  bind_params(m);
   bind_detection(m);
-  bind_evaluation(m);
   bind_sequences(m);
 }
 

@@ -1,5 +1,6 @@
 // Conversions between Python objects and binbow's types shared by the
-// binding files (bind_core.cpp, bind_vision.cpp, bind_loop.cpp).
+// binding files (bind_core.cpp, bind_vision.cpp, bind_params.cpp, bind_loop.cpp,
+// bind_evaluation.cpp).
 //
 // Inputs are taken strictly: a numpy array of the wrong dtype is a TypeError
 // naming it and a wrong shape a ValueError, never a silent conversion (float
@@ -57,9 +58,12 @@ std::pair<const std::uint8_t*, std::size_t> bytes_of(const py::bytes& bytes);
 // The extractor of a binbow.FeatureExtractor object; null when `object` is not one.
 std::shared_ptr<const vision::FeatureExtractor> extractor_of(const py::handle& object);
 
-// The binding of each room of the library, called by module.cpp in this order.
+// The binding of each room of the library, called by module.cpp in this order
+// (a class is registered before the signatures that name it).
 void bind_core(py::module_& m);
 void bind_vision(py::module_& m);
+void bind_params(py::module_& m);
+void bind_evaluation(py::module_& m);
 void bind_loop(py::module_& m);
 
 }  // namespace binbow::python

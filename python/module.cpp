@@ -1,8 +1,9 @@
 // The compiled part of the `binbow` Python package, imported as binbow._binbow
 // and re-exported by binbow/__init__.py (which adds Vocabulary.default and the
-// pure-Python helpers). Each room of the library has its binding file
-// (bind_core.cpp, bind_vision.cpp, bind_loop.cpp); binding.h lists them and
-// the strict input conversions they share.
+// pure-Python helpers). Each room of the library has its binding files
+// (bind_core.cpp, bind_vision.cpp, bind_params.cpp, bind_loop.cpp,
+// bind_evaluation.cpp); binding.h lists them and the strict input
+// conversions they share.
 //
 // The GIL is released around every call that does real work, so threads run
 // in parallel.
@@ -42,6 +43,8 @@ PYBIND11_MODULE(_binbow, m) {
 
   binbow::python::bind_core(m);
   binbow::python::bind_vision(m);
+  binbow::python::bind_params(m);
+  binbow::python::bind_evaluation(m);
   binbow::python::bind_loop(m);
 
   py::delattr(m, "__module__");
