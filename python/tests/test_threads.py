@@ -170,3 +170,12 @@ def test_one_detector_shared_by_threads_is_serialised():
         t.join()
     assert len(detector) == len(frames)
     assert sorted(queries) == list(range(len(frames)))
+
+
+def test_process_lets_other_threads_run(many_descriptors):
+    detector = binbow.LoopDetector(binbow.Vocabulary.default("orb"))
+    keypoints = np.random.default_rng(2).random((len(many_descriptors), 2), dtype=np.float32)
+    iterations, seconds = main_thread_progress_during(
+        lambda: detector.process(keypoints * 500, many_descriptors))
+    assert seconds > 0.02, f"process was too quick to tell: {seconds:.3f} s"
+    assert iterations > 1000, f"process held the GIL: {iterations} in {seconds:.3f} s"
