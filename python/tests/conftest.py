@@ -4,6 +4,7 @@ The package under test is the one on PYTHONPATH: ctest points it at the build
 tree's build/python.
 """
 import csv
+import importlib
 import os
 import subprocess
 from pathlib import Path
@@ -94,3 +95,12 @@ def cli_loops(tmp_path_factory):
         rows = list(csv.DictReader(file))
     assert rows, "the CLI found no loop on the bundled sample"
     return path, rows
+
+
+def require_module(name, package):
+    """Imports `name`; a clear failure (not a skip) when its Debian package is missing."""
+    try:
+        return importlib.import_module(name)
+    except ImportError as error:
+        pytest.fail(f"cannot import {name} ({error}): install Debian's {package} "
+                    "(scripts/install-deps.sh)")

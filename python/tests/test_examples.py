@@ -2,15 +2,14 @@
 import subprocess
 import sys
 
-import pytest
 
-from conftest import SAMPLES, SOURCE_DIR
+from conftest import SAMPLES, SOURCE_DIR, require_module
 
 EXAMPLES = SOURCE_DIR / "python" / "examples"
 
 
 def test_detect_and_plot_draws_the_similarity_matrix(tmp_path):
-    image = pytest.importorskip("matplotlib.image")
+    image = require_module("matplotlib.image", "python3-matplotlib")
     output = tmp_path / "similarity.png"
     result = subprocess.run(
         [sys.executable, str(EXAMPLES / "detect_and_plot.py"), str(SAMPLES / "samples"),

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 
 import binbow
-from conftest import SAMPLES, run_cli
+from conftest import SAMPLES, require_module, run_cli
 
 FRAME = SAMPLES / "samples" / "1.jpg"
 
 
 @pytest.fixture(scope="module")
 def grey():
-    cv2 = pytest.importorskip("cv2")
+    cv2 = require_module("cv2", "python3-opencv")
     image = cv2.imread(str(FRAME), cv2.IMREAD_GRAYSCALE)
     assert image is not None, f"cannot read {FRAME}"
     return image

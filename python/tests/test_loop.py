@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import binbow
-from conftest import sample_frames
+from conftest import require_module, sample_frames
 
 STATUSES = {
     "loop-detected", "no-database-results", "low-normalisation-score", "low-scores",
@@ -64,7 +64,7 @@ def test_result_fields(results, features):
 
 
 def test_keypoint_forms_give_the_same_loops(features, results):
-    cv2 = pytest.importorskip("cv2")
+    cv2 = require_module("cv2", "python3-opencv")
     voc = binbow.Vocabulary.default("orb")
     xy = binbow.LoopDetector(voc)
     opencv = binbow.LoopDetector(voc)
