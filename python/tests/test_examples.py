@@ -2,7 +2,6 @@
 import subprocess
 import sys
 
-
 from conftest import SAMPLES, SOURCE_DIR, require_module
 
 EXAMPLES = SOURCE_DIR / "python" / "examples"
