@@ -6,6 +6,8 @@ an image without keypoints) is an image with no features.
 """
 
 import os as _os
+import sys as _sys
+import time as _time
 
 from . import _data_location
 from ._binbow import (
@@ -13,8 +15,17 @@ from ._binbow import (
     BuildProgress,
     Database,
     Error,
+    Evaluation,
+    FeatureExtractor,
+    GroundTruth,
+    LoopDetector,
+    LoopDetectorParams,
+    LoopResult,
     Vocabulary,
     __version__,
+    _detect_loops,
+    evaluate,
+    _write_report,
     hamming,
 )
 
@@ -23,9 +34,19 @@ __all__ = [
     "BuildProgress",
     "Database",
     "Error",
+    "Evaluation",
+    "FeatureExtractor",
+    "GroundTruth",
+    "LoopDetector",
+    "LoopDetectorParams",
+    "LoopResult",
+    "LoopResults",
     "Vocabulary",
     "data_directories",
+    "detect_loops",
+    "evaluate",
     "hamming",
+    "write_report",
 ]
 
 _DEFAULT_DESCRIPTORS = ("orb", "brief")
@@ -44,12 +65,8 @@ def data_directories():
     return [_os.path.normpath(override), bundled] if override else [bundled]
 
 
-def _default_vocabulary(descriptor="orb"):
-    """The bundled default vocabulary of "orb" or "brief" descriptors.
-
-    Searched in vocab/ of each of data_directories(); FileNotFoundError names
-    the places searched when it is not installed.
-    """
+def _default_vocabulary_file(descriptor):
+    """The file of the bundled default vocabulary of "orb" or "brief" descriptors."""
     if descriptor not in _DEFAULT_DESCRIPTORS:
         raise ValueError(
             f"no default vocabulary for descriptor {descriptor!r}: choose one of "
@@ -61,11 +78,178 @@ def _default_vocabulary(descriptor="orb"):
     ]
     for path in candidates:
         if _os.path.isfile(path):
-            return Vocabulary.load(path)
+            return path
     raise FileNotFoundError(
         f"the default {descriptor} vocabulary is not installed; set BINBOW_DATA_DIR to binbow's "
         "data folder (the repository's data/). Searched: " + ", ".join(candidates)
     )
 
 
+def _default_vocabulary(descriptor="orb"):
+    """The bundled default vocabulary of "orb" or "brief" descriptors.
+
+    Searched in vocab/ of each of data_directories(); FileNotFoundError names
+    the places searched when it is not installed.
+    """
+    return Vocabulary.load(_default_vocabulary_file(descriptor))
+
+
 Vocabulary.default = staticmethod(_default_vocabulary)
+
+
+class _CliProgress:
+    """The CLI's progress line on stderr: redrawn in place on a terminal, one
+    line per 10 % otherwise (logs stay short), and a closing line."""
+
+    def __init__(self, label):
+        self._label = label
+        self._tty = _sys.stderr.isatty()
+        self._start = _time.monotonic()
+        self._last_draw = self._start
+        self._last_decile = -1
+        self._done = 0
+
+    def __call__(self, done, total):
+        self._done = done
+        now = _time.monotonic()
+        seconds = now - self._start
+        if self._tty:
+            if now - self._last_draw < 0.1 and done != total:
+                return
+            self._last_draw = now
+            if total:
+                filled = 30 * done // total
+                bar = "=" * filled + " " * (30 - filled)
+                _sys.stderr.write(f"\r{self._label} [{bar}] {done}/{total} {seconds:.1f}s")
+            else:
+                _sys.stderr.write(f"\r{self._label} {done} {seconds:.1f}s")
+            _sys.stderr.flush()
+            return
+        if not total:
+            return
+        decile = 10 * done // total
+        if decile != self._last_decile:
+            self._last_decile = decile
+            _sys.stderr.write(
+                f"{self._label}: {done}/{total} ({decile * 10}%) {seconds:.1f}s\n"
+            )
+
+    def finish(self):
+        seconds = _time.monotonic() - self._start
+        if self._tty:
+            _sys.stderr.write("\r\033[K")
+        _sys.stderr.write(f"{self._label}: {self._done} done in {seconds:.2f}s\n")
+        _sys.stderr.flush()
+
+
+def detect_loops(
+    inputs,
+    vocabulary=None,
+    descriptor="orb",
+    params=None,
+    progress=False,
+    *,
+    max_features=None,
+    stride=1,
+    max_width=0,
+    video_fps=0.0,
+):
+    """Loop closures of an image sequence: what `binbow detect-loops` finds.
+
+    inputs: a path or a list of paths of image files, folders (their images in
+    natural order: 2.jpg before 10.jpg), videos (frames named "video.mp4#N") or
+    text lists of images. vocabulary: None for Vocabulary.default(descriptor).
+    descriptor: the extractor, "orb", "brief", "akaze" or "brisk", with the
+    CLI's defaults (max_features: None for the extractor's default), or a
+    FeatureExtractor configured otherwise. params: a
+    LoopDetectorParams, a parameter file (JSON or YAML, as --params: keys it
+    omits keep the defaults) or None: the paper's parameters, whose frame
+    counts follow the frames processed per second of a video. progress: True
+    prints the CLI's progress on stderr; a callable is called with (done,
+    total) after each frame, total None when not known beforehand. stride,
+    max_width and video_fps thin the frames out as the CLI's options do.
+
+    Returns a LoopResults: one LoopResult per frame, in order, with its file
+    name, and what the run used. The GIL is released while frames are read and
+    processed; Ctrl-C stops the run.
+    """
+    if isinstance(inputs, (str, bytes, _os.PathLike)):
+        inputs = [inputs]
+    paths = []
+    for index, item in enumerate(inputs):
+        if not isinstance(item, (str, bytes, _os.PathLike)):
+            raise TypeError(f"inputs[{index}] must be a path, got {type(item).__name__}")
+        paths.append(_os.fsdecode(item))
+    name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
+    vocabulary_file = None
+    if vocabulary is None:
+        vocabulary_file = _default_vocabulary_file(name)
+        vocabulary = Vocabulary.load(vocabulary_file)
+    printer = None
+    if progress is True:
+        printer = _CliProgress("detecting loops")
+        callback = printer
+    elif progress is False or progress is None:
+        callback = None
+    elif callable(progress):
+        callback = progress
+    else:
+        raise TypeError(f"progress must be a bool or a callable, got {type(progress).__name__}")
+    if params is not None and not isinstance(params, LoopDetectorParams):
+        if not isinstance(params, (str, bytes, _os.PathLike)):
+            raise TypeError(
+                "params must be a LoopDetectorParams, a parameter file or None, got "
+                + type(params).__name__
+            )
+        params = _os.fsdecode(params)
+    frames, used = _detect_loops(
+        paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
+        callback,
+    )
+    if printer is not None:
+        printer.finish()
+    results = LoopResults(frames)
+    results.params = used
+    results.descriptor = name
+    results.vocabulary = vocabulary
+    results.vocabulary_file = vocabulary_file
+    results.inputs = [_os.path.normpath(_os.path.abspath(path)) for path in paths]
+    return results
+
+
+class LoopResults(list):
+    """What detect_loops returns: a list of LoopResult, one per frame, with
+    what the run used, which write_report shows as the CLI's report does.
+
+    params: the LoopDetectorParams of the run (after a video's frame rate and
+    a parameter file); descriptor: the extractor's name; vocabulary: the
+    Vocabulary; vocabulary_file: its file when detect_loops loaded the default
+    one, else None; inputs: the inputs as absolute paths.
+    """
+
+    params = None
+    descriptor = ""
+    vocabulary = None
+    vocabulary_file = None
+    inputs = ()
+
+
+def write_report(folder, results, ground_truth=None):
+    """Write the HTML report of a run into folder (folder/index.html, the
+    page of the CLI's detect-loops --report) and return the page's path.
+
+    results: the LoopResults of detect_loops (whose frames know their files:
+    each loop is drawn with its two images and inliers), or any list of
+    LoopResult. ground_truth: a GroundTruth, to show each detection's verdict,
+    precision and recall (as evaluate --report). Written atomically; OSError
+    naming the folder when it cannot be.
+    """
+    run = results if isinstance(results, LoopResults) else LoopResults()
+    inputs = ""
+    if run.inputs:
+        inputs = run.inputs[0] + (" ..." if len(run.inputs) > 1 else "")
+    vocabulary = run.vocabulary_file or (repr(run.vocabulary) if run.vocabulary else "")
+    return _write_report(
+        _os.fsdecode(folder), results, ground_truth, run.params, inputs, vocabulary,
+        run.descriptor,
+    )

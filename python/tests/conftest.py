@@ -3,7 +3,10 @@
 The package under test is the one on PYTHONPATH: ctest points it at the build
 tree's build/python.
 """
+import csv
+import importlib
 import os
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -54,3 +57,50 @@ def require_env(name):
     if not value:
         pytest.fail(f"${name} is not set: run this test through ctest (python.packaging)")
     return value
+
+
+SAMPLES = SOURCE_DIR / "data" / "samples" / "rtabmap"
+
+
+def sample_frames():
+    """The bundled sample's 84 frames in the CLI's natural order (2.jpg before 10.jpg)."""
+    frames = sorted((SAMPLES / "samples").glob("*.jpg"), key=lambda p: int(p.stem))
+    if len(frames) != 84:
+        pytest.fail(f"the bundled sample {SAMPLES / 'samples'} should have 84 frames, "
+                    f"found {len(frames)}")
+    return frames
+
+
+def cli():
+    """The binbow command of the build tree under test."""
+    binary = Path(require_env("BINBOW_BUILD_DIR")) / "bin" / "binbow"
+    if not binary.is_file():
+        pytest.fail(f"{binary} does not exist: build the binbow target")
+    return binary
+
+
+def run_cli(*arguments, cwd=SOURCE_DIR):
+    result = subprocess.run([str(cli()), *map(str, arguments)], cwd=cwd, capture_output=True,
+                            text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    return result
+
+
+@pytest.fixture(scope="session")
+def cli_loops(tmp_path_factory):
+    """loops.csv of `binbow detect-loops` on the bundled sample, as (path, rows)."""
+    path = tmp_path_factory.mktemp("cli") / "loops.csv"
+    run_cli("detect-loops", "-o", path, SAMPLES / "samples")
+    with open(path, newline="", encoding="utf-8") as file:
+        rows = list(csv.DictReader(file))
+    assert rows, "the CLI found no loop on the bundled sample"
+    return path, rows
+
+
+def require_module(name, package):
+    """Imports `name`; a clear failure (not a skip) when its Debian package is missing."""
+    try:
+        return importlib.import_module(name)
+    except ImportError as error:
+        pytest.fail(f"cannot import {name} ({error}): install Debian's {package} "
+                    "(scripts/install-deps.sh)")

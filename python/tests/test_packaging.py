@@ -29,6 +29,9 @@ db = binbow.Database(vocabulary)
 db.add(None, label="empty")
 db.add(np.zeros((5, 32), np.uint8))
 assert len(db) == 2 and db.label(0) == "empty"
+# The whole pipeline, with the vocabulary installed with the package.
+results = binbow.detect_loops(sys.argv[3])
+assert len(results) == 84 and sum(r.detection for r in results) == 35, results
 print("imported", binbow.__file__, binbow.__version__)
 """
 
@@ -44,7 +47,8 @@ def import_installed(site_dir, cwd, extra_env=None):
     env.update(extra_env or {})
     code = f"import sys; sys.path.insert(0, {str(site_dir)!r})\n" + CHECK
     result = subprocess.run(
-        [sys.executable, "-I", "-c", code, project_version(), str(site_dir)],
+        [sys.executable, "-I", "-c", code, project_version(), str(site_dir),
+         str(SOURCE_DIR / "data" / "samples" / "rtabmap" / "samples")],
         cwd=cwd, env=env, capture_output=True, text=True,
     )
     assert result.returncode == 0, result.stdout + result.stderr

@@ -1,4 +1,4 @@
-"""pickle and copy of Vocabulary, BowVector and Database."""
+"""pickle and copy of Vocabulary, BowVector, Database and loop results."""
 import copy
 import pickle
 
@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import binbow
+from conftest import SOURCE_DIR
 
 
 def test_vocabulary_pickles_as_its_bbw_bytes(tmp_path, vocabulary, images):
@@ -75,3 +76,27 @@ def test_database_copies_are_independent(database, vocabulary, images, clone):
     assert copied.levels_up == database.levels_up
     query = vocabulary.transform(images[1])
     assert copied.query(query, 3) == database.query(query, 3)
+
+
+LOOP_RESULT_FIELDS = (
+    "file", "match_file", "status", "detection", "query", "match", "score",
+    "normalisation_score", "normalised_score", "island", "island_score", "consistent_queries",
+    "correspondences", "exhaustive_fallback_used", "times",
+)
+
+
+def test_loop_results_round_trip():
+    folder = SOURCE_DIR / "data" / "samples" / "rtabmap" / "samples"
+    results = binbow.detect_loops(folder, stride=2)
+    for clone in (pickle.loads(pickle.dumps(results)), copy.deepcopy(results)):
+        assert isinstance(clone, binbow.LoopResults) and len(clone) == len(results)
+        assert clone.params == results.params and clone.inputs == results.inputs
+        assert clone.vocabulary.checksum == results.vocabulary.checksum
+        for a, b in zip(results, clone):
+            for name in LOOP_RESULT_FIELDS:
+                assert getattr(a, name) == getattr(b, name), name
+            np.testing.assert_array_equal(a.inliers, b.inliers)
+            np.testing.assert_array_equal(a.inlier_points, b.inlier_points)
+    assert any(r.detection for r in results), "the round trip covered a detection"
+    with pytest.raises(ValueError, match="LoopResult"):
+        binbow.LoopResult.__new__(binbow.LoopResult).__setstate__(("x",))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import binbow
-from conftest import clustered
+from conftest import clustered, sample_frames
 
 
 def main_thread_progress_during(call):
@@ -98,3 +98,84 @@ def test_queries_and_adds_from_many_threads():
     assert results == expected
     assert len(db) == 40
     assert sorted(db.label(e) for e in range(20, 40)) == sorted(f"late {i}" for i in range(20))
+
+
+def test_extract_lets_other_threads_run():
+    rng = np.random.default_rng(5)
+    image = rng.integers(0, 256, size=(1500, 2000), dtype=np.uint8)
+    extractor = binbow.FeatureExtractor("orb", max_features=5000)
+    iterations, seconds = main_thread_progress_during(lambda: extractor.extract(image))
+    assert seconds > 0.02, f"extract was too quick to tell: {seconds:.3f} s"
+    assert iterations > 1000, f"extract held the GIL: {iterations} iterations in {seconds:.3f} s"
+
+
+def test_extractors_and_detectors_in_threads():
+    frames = sample_frames()[:50]
+    voc = binbow.Vocabulary.default("orb")
+    shared = {name: binbow.FeatureExtractor(name) for name in ("orb", "brief", "brisk")}
+    expected = {name: [e.extract(f)[1] for f in frames[:20]] for name, e in shared.items()}
+    features = [shared["orb"].extract(f) for f in frames]
+    sequential = []
+    detector = binbow.LoopDetector(voc)
+    for k, d in features:
+        r = detector.process(k, d)
+        sequential.append((r.status, r.match, r.inliers.tolist()))
+
+    extracted = {}
+    detected = [None] * 4
+    failures = []
+
+    def extract(name):
+        try:
+            extracted[name] = [shared[name].extract(f)[1] for f in frames[:20]]
+        except BaseException as error:
+            failures.append(error)
+
+    def detect(slot):
+        try:
+            own = binbow.LoopDetector(voc)
+            detected[slot] = [
+                (r.status, r.match, r.inliers.tolist())
+                for r in (own.process(k, d) for k, d in features)
+            ]
+        except BaseException as error:
+            failures.append(error)
+
+    threads = [threading.Thread(target=extract, args=(name,)) for name in shared]
+    threads += [threading.Thread(target=detect, args=(slot,)) for slot in range(len(detected))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not failures, failures
+    for name in shared:
+        assert all((a == b).all() for a, b in zip(extracted[name], expected[name])), name
+    assert all(d == sequential for d in detected)
+
+
+def test_one_detector_shared_by_threads_is_serialised():
+    frames = sample_frames()[:40]
+    features = [binbow.FeatureExtractor().extract(f) for f in frames]
+    detector = binbow.LoopDetector(binbow.Vocabulary.default("orb"))
+    queries = []
+
+    def feed(part):
+        for k, d in part:
+            queries.append(detector.process(k, d).query)
+
+    threads = [threading.Thread(target=feed, args=(features[i::4],)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(detector) == len(frames)
+    assert sorted(queries) == list(range(len(frames)))
+
+
+def test_process_lets_other_threads_run(many_descriptors):
+    detector = binbow.LoopDetector(binbow.Vocabulary.default("orb"))
+    keypoints = np.random.default_rng(2).random((len(many_descriptors), 2), dtype=np.float32)
+    iterations, seconds = main_thread_progress_during(
+        lambda: detector.process(keypoints * 500, many_descriptors))
+    assert seconds > 0.02, f"process was too quick to tell: {seconds:.3f} s"
+    assert iterations > 1000, f"process held the GIL: {iterations} in {seconds:.3f} s"

@@ -1,20 +1,11 @@
-// The compiled part of the `binbow` Python package, imported as binbow._binbow
-// and re-exported by binbow/__init__.py (which adds Vocabulary.default).
-//
-// Descriptors are taken strictly: a numpy uint8 array of shape (n, code_size),
-// one row per feature, or None (what OpenCV returns for an image without
-// keypoints), which is an image with no features. Any other dtype is a
-// TypeError and any other shape a ValueError: a silent conversion would turn
-// float SIFT descriptors or out-of-range values into wrong bits. Only a
-// non-contiguous array is copied. The GIL is released around every call that
-// does real work, so threads run in parallel.
+// The core room: descriptors, BowVector, Vocabulary, Database (no OpenCV).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <cstdint>
-#include <filesystem>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -26,68 +17,10 @@
 #include "binbow/error.h"
 #include "binbow/formats.h"
 #include "binbow/vocabulary.h"
+#include "binding.h"
 
-namespace py = pybind11;
-using namespace binbow;
-
+namespace binbow::python {
 namespace {
-
-using Path = std::filesystem::path;
-
-std::string type_name(const py::handle& object) {
-  return py::str(py::type::of(object).attr("__name__")).cast<std::string>();
-}
-
-std::string shape_of(const py::array& array) {
-  std::string shape = "(";
-  for (py::ssize_t i = 0; i < array.ndim(); ++i)
-    shape += (i ? ", " : "") + std::to_string(array.shape(i));
-  return shape + (array.ndim() == 1 ? ",)" : ")");
-}
-
-// The uint8 array of one image's descriptors: `what` names it in errors
-// ("descriptors", "images[3]").
-py::array checked_uint8_array(const py::handle& object, const std::string& what) {
-  if (!py::isinstance<py::array>(object))
-    throw py::type_error(what + " must be a numpy uint8 array, got " + type_name(object));
-  auto array = py::reinterpret_borrow<py::array>(object);
-  if (array.dtype().kind() != 'u' || array.dtype().itemsize() != 1)
-    throw py::type_error(what + " must be a numpy uint8 array, got dtype " +
-                         py::str(array.dtype()).cast<std::string>() +
-                         " (binary descriptors are bytes; convert explicitly if that is meant)");
-  return array;
-}
-
-// Descriptors of one image received from Python, kept alive while the view is used.
-struct Descriptors {
-  py::array_t<std::uint8_t, py::array::c_style> array;  // null for None
-  DescriptorView view;
-};
-
-// `code_size`: the size the caller needs (the vocabulary's), 0 when any size
-// fits (training). None becomes an empty view of that size.
-Descriptors to_descriptors(const py::handle& object, const std::string& what,
-                           std::size_t code_size) {
-  Descriptors out;
-  out.view.code_size = code_size;
-  if (object.is_none()) return out;
-  const py::array array = checked_uint8_array(object, what);
-  if (array.ndim() != 2)
-    throw py::value_error(
-        what + " must be 2-D with one row per feature, shape (n, code_size); got shape " +
-        shape_of(array));
-  const auto columns = static_cast<std::size_t>(array.shape(1));
-  if (code_size != 0 && columns != code_size)
-    throw py::value_error(what + " have " + std::to_string(columns) + " bytes (" +
-                          std::to_string(columns * 8) + " bits) per row, the vocabulary's words " +
-                          std::to_string(code_size) + " bytes (" + std::to_string(code_size * 8) +
-                          " bits): wrong descriptor type for this vocabulary?");
-  // Copies only an array that is not C-contiguous: the dtype is already uint8.
-  out.array = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
-  if (!out.array) throw py::error_already_set();
-  out.view = {out.array.data(), static_cast<std::size_t>(out.array.shape(0)), columns};
-  return out;
-}
 
 py::array_t<WordId> words_of(const BowVector& bow) {
   py::array_t<WordId> out(static_cast<py::ssize_t>(bow.size()));
@@ -145,19 +78,6 @@ std::vector<std::tuple<EntryId, double, std::uint32_t>> results_list(
   out.reserve(results.size());
   for (const QueryResult& r : results) out.emplace_back(r.entry, r.score, r.shared_words);
   return out;
-}
-
-py::bytes to_bytes(const std::vector<std::uint8_t>& bytes) {
-  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
-}
-
-// The bytes of a pickled state; `data` stays valid while `bytes` lives.
-std::pair<const std::uint8_t*, std::size_t> bytes_of(const py::bytes& bytes) {
-  char* data = nullptr;
-  py::ssize_t size = 0;
-  if (PYBIND11_BYTES_AS_STRING_AND_SIZE(bytes.ptr(), &data, &size) != 0)
-    throw py::error_already_set();
-  return {reinterpret_cast<const std::uint8_t*>(data), static_cast<std::size_t>(size)};
 }
 
 Vocabulary vocabulary_from_bytes(const py::bytes& state) {
@@ -253,31 +173,7 @@ std::string database_repr(const Database& db) {
 
 }  // namespace
 
-PYBIND11_MODULE(_binbow, m) {
-  m.doc() =
-      "Bags of binary words for fast place recognition (Galvez-Lopez & Tardos 2012).\n\n"
-      "The compiled part of the binbow package: import binbow, not binbow._binbow.";
-  m.attr("__version__") = BINBOW_VERSION;
-  // Classes and their signatures are named after the public package
-  // (binbow.Vocabulary), which is also where pickle finds them again.
-  m.attr("__module__") = "binbow";
-
-  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
-  error.attr("__module__") = "binbow";
-  error.doc() =
-      "A binbow error that is neither a bad argument (ValueError) nor a file problem (OSError).";
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const InvalidArgument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
-    } catch (const FileError& e) {
-      PyErr_SetString(PyExc_OSError, e.what());
-    } catch (const Error& e) {
-      error(e.what());
-    }
-  });
-
+void bind_core(py::module_& m) {
   m.def(
       "hamming",
       [](const py::object& a, const py::object& b) {
@@ -523,6 +419,6 @@ PYBIND11_MODULE(_binbow, m) {
                         py::gil_scoped_release release;
                         return Database::deserialize(data, size, "<pickled binbow.Database>");
                       }));
-
-  py::delattr(m, "__module__");
 }
+
+}  // namespace binbow::python

@@ -1,0 +1,477 @@
+// The loop room: binbow.LoopDetector, LoopResult, detect_loops and
+// write_report (LoopDetectorParams: bind_params.cpp; GroundTruth and
+// evaluate: bind_evaluation.cpp).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "binbow/loop/loop_detector.h"
+#include "binbow/loop/report.h"
+#include "binbow/loop/sequence.h"
+#include "binbow/vision/features.h"
+#include "binding.h"
+
+namespace binbow::python {
+namespace {
+
+using loop::LoopDetectorParams;
+
+// --- Loop detection
+
+std::vector<vision::Keypoint> keypoints_from_array(const py::array& array) {
+  if (array.dtype().kind() != 'f' ||
+      (array.dtype().itemsize() != 4 && array.dtype().itemsize() != 8))
+    throw py::type_error("keypoints must be a float32 (or float64) array, got dtype " +
+                         py::str(array.dtype()).cast<std::string>());
+  if (array.ndim() != 2 || (array.shape(1) != 6 && array.shape(1) != 2))
+    throw py::value_error(
+        "keypoints must be (N, 6) as FeatureExtractor gives them (x, y, size, angle, "
+        "response, octave) or (N, 2) (x, y); got shape " +
+        shape_of(array));
+  const auto rows = py::array_t<double, py::array::forcecast>::ensure(array);
+  if (!rows) throw py::error_already_set();
+  const auto r = rows.unchecked<2>();
+  std::vector<vision::Keypoint> keypoints(static_cast<std::size_t>(r.shape(0)));
+  for (py::ssize_t i = 0; i < r.shape(0); ++i) {
+    vision::Keypoint& k = keypoints[static_cast<std::size_t>(i)];
+    k.x = static_cast<float>(r(i, 0));
+    k.y = static_cast<float>(r(i, 1));
+    if (r.shape(1) == 6) {
+      k.size = static_cast<float>(r(i, 2));
+      k.angle = static_cast<float>(r(i, 3));
+      k.response = static_cast<float>(r(i, 4));
+      // Only a whole pyramid level is an octave (and converts to int safely).
+      if (!(std::abs(r(i, 5)) <= 64) || r(i, 5) != std::floor(r(i, 5)))
+        throw py::value_error("keypoints[" + std::to_string(i) + "] has octave " +
+                              std::to_string(r(i, 5)) + ", not a pyramid level");
+      k.octave = static_cast<int>(r(i, 5));
+    }
+  }
+  return keypoints;
+}
+
+// cv2.KeyPoint objects (what cv2.ORB.detectAndCompute returns), by their attributes.
+std::vector<vision::Keypoint> keypoints_from_opencv(const py::sequence& objects) {
+  std::vector<vision::Keypoint> keypoints;
+  keypoints.reserve(objects.size());
+  for (const py::handle object : objects) {
+    if (!py::hasattr(object, "pt"))
+      throw py::type_error("keypoints must be an array or a sequence of cv2.KeyPoint, got a " +
+                           type_name(object) + " in the sequence");
+    const py::tuple pt = object.attr("pt");
+    vision::Keypoint k;
+    k.x = pt[0].cast<float>();
+    k.y = pt[1].cast<float>();
+    k.size = object.attr("size").cast<float>();
+    k.angle = object.attr("angle").cast<float>();
+    k.response = object.attr("response").cast<float>();
+    k.octave = object.attr("octave").cast<int>();
+    keypoints.push_back(k);
+  }
+  return keypoints;
+}
+
+std::vector<vision::Keypoint> to_keypoints(const py::handle& object, std::size_t rows) {
+  std::vector<vision::Keypoint> keypoints;
+  if (py::isinstance<py::array>(object))
+    keypoints = keypoints_from_array(py::reinterpret_borrow<py::array>(object));
+  else if (py::isinstance<py::list>(object) || py::isinstance<py::tuple>(object))
+    keypoints = keypoints_from_opencv(py::reinterpret_borrow<py::sequence>(object));
+  else if (!object.is_none())
+    throw py::type_error(
+        "keypoints must be a float32 (N, 6) or (N, 2) array, a sequence of cv2.KeyPoint or "
+        "None, got " +
+        type_name(object));
+  for (std::size_t i = 0; i < keypoints.size(); ++i)
+    if (!std::isfinite(keypoints[i].x) || !std::isfinite(keypoints[i].y))
+      throw py::value_error("keypoints[" + std::to_string(i) + "] has a non-finite position");
+  if (keypoints.size() != rows)
+    throw py::value_error("keypoints has " + std::to_string(keypoints.size()) +
+                          " rows but descriptors " + std::to_string(rows) +
+                          ": one keypoint per descriptor");
+  return keypoints;
+}
+
+// LoopDetector is used by one thread at a time; the Python object may be
+// shared, so calls are serialised here rather than left to race.
+class PythonLoopDetector {
+ public:
+  PythonLoopDetector(Vocabulary vocabulary, const LoopDetectorParams& params)
+      : detector_(std::move(vocabulary), params) {}
+
+  loop::SequenceFrame process(const py::object& keypoints, const py::object& descriptors) {
+    const Descriptors d =
+        to_descriptors(descriptors, "descriptors", detector_.database().vocabulary().code_size());
+    const std::vector<vision::Keypoint> points = to_keypoints(keypoints, d.view.rows);
+    py::gil_scoped_release release;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    loop::SequenceFrame frame;
+    frame.result = detector_.process(Span<vision::Keypoint>(points.data(), points.size()), d.view);
+    if (frame.result.detection()) {
+      const Span<vision::Keypoint> match = detector_.keypoints(frame.result.match);
+      for (const vision::Correspondence& c : frame.result.inliers)
+        frame.inlier_points.push_back(
+            {points[c.first].x, points[c.first].y, match[c.second].x, match[c.second].y});
+    }
+    return frame;
+  }
+
+  std::size_t size() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return detector_.size();
+  }
+  void clear() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    detector_.clear();
+  }
+  // Both fixed at construction.
+  const LoopDetectorParams& params() const { return detector_.params(); }
+  const Vocabulary& vocabulary() const { return detector_.database().vocabulary(); }
+
+ private:
+  loop::LoopDetector detector_;
+  mutable std::mutex mutex_;
+};
+
+py::array_t<std::int64_t> inlier_array(const std::vector<vision::Correspondence>& inliers) {
+  py::array_t<std::int64_t> out({static_cast<py::ssize_t>(inliers.size()), py::ssize_t{2}});
+  auto rows = out.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < rows.shape(0); ++i) {
+    rows(i, 0) = inliers[static_cast<std::size_t>(i)].first;
+    rows(i, 1) = inliers[static_cast<std::size_t>(i)].second;
+  }
+  return out;
+}
+
+py::array_t<float> inlier_points_array(const std::vector<std::array<float, 4>>& points) {
+  py::array_t<float> out({static_cast<py::ssize_t>(points.size()), py::ssize_t{4}});
+  auto rows = out.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < rows.shape(0); ++i)
+    for (py::ssize_t j = 0; j < 4; ++j)
+      rows(i, j) = points[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+  return out;
+}
+
+py::dict times_dict(const loop::SequenceFrame& frame) {
+  const std::array<double, loop::kStageCount> ms = frame.stage_ms();
+  py::dict out;
+  for (std::size_t i = 0; i < loop::kStageCount; ++i) out[loop::kStageNames[i]] = ms[i];
+  return out;
+}
+
+// An island exists once the candidates passed alpha and formed one.
+bool has_island(const loop::LoopResult& r) {
+  return r.status == loop::LoopStatus::kNoTemporalConsistency ||
+         r.status == loop::LoopStatus::kNoGeometricConsistency || r.detection();
+}
+
+std::string result_repr(const loop::SequenceFrame& frame) {
+  const loop::LoopResult& r = frame.result;
+  std::string text = "<binbow.LoopResult query " + std::to_string(r.query);
+  if (!frame.file.empty()) text += " (" + frame.file + ")";
+  text += std::string(" ") + loop::to_string(r.status);
+  if (r.has_candidate) {
+    char numbers[96];
+    std::snprintf(numbers, sizeof numbers, " match %u score %.4g normalised %.4g",
+                  static_cast<unsigned>(r.match), r.score, r.normalised_score);
+    text += numbers;
+  }
+  if (r.detection()) text += " inliers " + std::to_string(r.inliers.size());
+  return text + ">";
+}
+
+// A LoopResult as plain Python values, for pickle (results saved, or sent to
+// other processes): every field of the frame, in one fixed order.
+py::tuple frame_state(const loop::SequenceFrame& frame) {
+  const loop::LoopResult& r = frame.result;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> inliers;
+  for (const vision::Correspondence& c : r.inliers) inliers.emplace_back(c.first, c.second);
+  const loop::LoopStageTimes& t = r.times;
+  return py::make_tuple(frame.file, frame.match_file, frame.features_ms, frame.inlier_points,
+                        static_cast<int>(r.status), r.query, r.has_candidate, r.match, r.score,
+                        r.normalisation_score, r.normalised_score, r.island_score, r.island_first,
+                        r.island_last, r.consistent_queries, r.correspondences,
+                        r.exhaustive_fallback_used, inliers,
+                        std::array<double, 5>{t.transform_ms, t.query_ms, t.islands_ms,
+                                              t.verification_ms, t.insertion_ms});
+}
+
+loop::SequenceFrame frame_from_state(const py::tuple& state) {
+  constexpr int kLastStatus = static_cast<int>(loop::LoopStatus::kNoGeometricConsistency);
+  if (state.size() != 19) throw py::value_error("invalid pickled binbow.LoopResult");
+  loop::SequenceFrame frame;
+  frame.file = state[0].cast<std::string>();
+  frame.match_file = state[1].cast<std::string>();
+  frame.features_ms = state[2].cast<double>();
+  frame.inlier_points = state[3].cast<std::vector<std::array<float, 4>>>();
+  loop::LoopResult& r = frame.result;
+  const int status = state[4].cast<int>();
+  if (status < 0 || status > kLastStatus)
+    throw py::value_error("invalid pickled binbow.LoopResult: status " + std::to_string(status));
+  r.status = static_cast<loop::LoopStatus>(status);
+  r.query = state[5].cast<EntryId>();
+  r.has_candidate = state[6].cast<bool>();
+  r.match = state[7].cast<EntryId>();
+  r.score = state[8].cast<double>();
+  r.normalisation_score = state[9].cast<double>();
+  r.normalised_score = state[10].cast<double>();
+  r.island_score = state[11].cast<double>();
+  r.island_first = state[12].cast<EntryId>();
+  r.island_last = state[13].cast<EntryId>();
+  r.consistent_queries = state[14].cast<int>();
+  r.correspondences = state[15].cast<std::size_t>();
+  r.exhaustive_fallback_used = state[16].cast<bool>();
+  for (const auto& [first, second] :
+       state[17].cast<std::vector<std::pair<std::uint32_t, std::uint32_t>>>())
+    r.inliers.push_back({first, second});
+  const auto ms = state[18].cast<std::array<double, 5>>();
+  r.times = {ms[0], ms[1], ms[2], ms[3], ms[4]};
+  return frame;
+}
+
+void bind_detection(py::module_& m) {
+  py::class_<loop::SequenceFrame>(
+      m, "LoopResult",
+      "The outcome of one frame of loop detection (LoopDetector.process,\n"
+      "detect_loops).")
+      .def_readonly("file", &loop::SequenceFrame::file,
+                    "The frame's name (file path, or \"video.mp4#N\"); \"\" from process().")
+      .def_readonly("match_file", &loop::SequenceFrame::match_file,
+                    "Detections of detect_loops: the loop's earlier frame's name; \"\" otherwise.")
+      .def_property_readonly(
+          "status", [](const loop::SequenceFrame& f) { return loop::to_string(f.result.status); },
+          "Why the frame did or did not close a loop, as the CLI names it: \"loop-detected\",\n"
+          "\"no-database-results\", \"low-normalisation-score\", \"low-scores\", \"no-islands\",\n"
+          "\"no-temporal-consistency\", \"no-geometric-consistency\".")
+      .def_property_readonly(
+          "detection", [](const loop::SequenceFrame& f) { return f.result.detection(); },
+          "Whether a loop was detected.")
+      .def_property_readonly(
+          "query", [](const loop::SequenceFrame& f) { return f.result.query; },
+          "The frame's 0-based index in the sequence (its entry id).")
+      .def_property_readonly(
+          "match",
+          [](const loop::SequenceFrame& f) -> std::optional<EntryId> {
+            if (!f.result.has_candidate) return std::nullopt;
+            return f.result.match;
+          },
+          "The loop's earlier frame when detected, otherwise the best candidate so far;\n"
+          "None when there was no candidate.")
+      .def_property_readonly(
+          "score", [](const loop::SequenceFrame& f) { return f.result.score; },
+          "Similarity s(v_t, v_match) of the frame and the match.")
+      .def_property_readonly(
+          "normalisation_score",
+          [](const loop::SequenceFrame& f) { return f.result.normalisation_score; },
+          "s(v_t, v_t-1), what the score is divided by; 0 before the first query.")
+      .def_property_readonly(
+          "normalised_score",
+          [](const loop::SequenceFrame& f) { return f.result.normalised_score; },
+          "eta of the match (the score when normalisation is off); loops.csv's score.")
+      .def_property_readonly(
+          "island",
+          [](const loop::SequenceFrame& f) -> std::optional<std::pair<EntryId, EntryId>> {
+            if (!has_island(f.result)) return std::nullopt;
+            return std::make_pair(f.result.island_first, f.result.island_last);
+          },
+          "(first, last) frames of the best island, None when no island formed.")
+      .def_property_readonly(
+          "island_score", [](const loop::SequenceFrame& f) { return f.result.island_score; },
+          "H, the sum of eta over the best island (0 without one).")
+      .def_property_readonly(
+          "consistent_queries",
+          [](const loop::SequenceFrame& f) { return f.result.consistent_queries; },
+          "Consecutive queries agreeing on the island so far, this one included.")
+      .def_property_readonly(
+          "correspondences", [](const loop::SequenceFrame& f) { return f.result.correspondences; },
+          "Putative correspondences given to RANSAC.")
+      .def_property_readonly(
+          "exhaustive_fallback_used",
+          [](const loop::SequenceFrame& f) { return f.result.exhaustive_fallback_used; },
+          "Whether the geometric check retried with exhaustive matching.")
+      .def_property_readonly(
+          "inliers", [](const loop::SequenceFrame& f) { return inlier_array(f.result.inliers); },
+          "RANSAC inliers as an int64 (M, 2) array: feature of the frame, feature of the match\n"
+          "(rows of their keypoints and descriptors).")
+      .def_property_readonly(
+          "inlier_points",
+          [](const loop::SequenceFrame& f) { return inlier_points_array(f.inlier_points); },
+          "Detections: float32 (M, 4) rows x, y in the frame, x, y in the match, in pixels of\n"
+          "the files (detect_loops) or of the keypoints given (process); empty otherwise.")
+      .def_property_readonly("times", &times_dict,
+                             "Milliseconds of each stage: features (0 from process(), which gets\n"
+                             "them extracted), transform, query, islands, verification, "
+                             "insertion.")
+      .def("__repr__", &result_repr, "Status, match and scores as text.")
+      .def(py::pickle(&frame_state, &frame_from_state));
+
+  py::class_<PythonLoopDetector>(
+      m, "LoopDetector",
+      "The paper's loop detector over a sequence of images (Galvez-Lopez & Tardos 2012,\n"
+      "Section V): process() each image's features in order. Calls from several threads\n"
+      "are serialised; use one detector per sequence.")
+      .def(py::init([](Vocabulary vocabulary, const std::optional<LoopDetectorParams>& params) {
+             return std::make_unique<PythonLoopDetector>(std::move(vocabulary),
+                                                         params.value_or(LoopDetectorParams{}));
+           }),
+           py::arg("vocabulary"), py::arg("params") = py::none(),
+           "A detector over the vocabulary, with params (the paper's defaults when None).")
+      .def("process", &PythonLoopDetector::process, py::arg("keypoints"), py::arg("descriptors"),
+           "Add the next image and look for a loop with the earlier ones; returns a LoopResult.\n\n"
+           "keypoints: float32 (N, 6) as FeatureExtractor.extract gives them, or (N, 2) x, y\n"
+           "(float64 too), or a sequence of cv2.KeyPoint; descriptors: uint8 (N, code_size),\n"
+           "row i describing keypoint i. An image without features: descriptors None and\n"
+           "keypoints None or empty (it is added, and can match nothing).")
+      .def("__len__", &PythonLoopDetector::size, "Images processed.")
+      .def("clear", &PythonLoopDetector::clear, "Forget every image; the next one is query 0.")
+      .def_property_readonly("params", &PythonLoopDetector::params,
+                             "The detector's parameters (a copy).")
+      .def_property_readonly("vocabulary", &PythonLoopDetector::vocabulary,
+                             "The detector's vocabulary.");
+}
+
+// --- Evaluation
+
+// --- Sequences: detect_loops and write_report, faces of loop::SequenceDetector
+// and loop::make_loop_report.
+
+// As the CLI's --stride, --max-width and --video-fps accept.
+vision::ImageSourceOptions source_options(long long stride, long long max_width, double video_fps) {
+  if (stride < 1 || stride > 1000000)
+    throw py::value_error("stride must be in [1, 1000000], got " + std::to_string(stride));
+  if (max_width < 0 || max_width > 1000000)
+    throw py::value_error("max_width must be in [0, 1000000], got " + std::to_string(max_width));
+  if (!(video_fps >= 0 && video_fps <= 1000))
+    throw py::value_error("video_fps must be in [0, 1000], got " + std::to_string(video_fps));
+  vision::ImageSourceOptions source;
+  source.stride = static_cast<std::size_t>(stride);
+  source.max_width = static_cast<int>(max_width);
+  source.video_fps = video_fps;
+  return source;
+}
+
+// binbow.detect_loops (binbow/__init__.py) after its arguments are resolved:
+// `descriptor` a name or a FeatureExtractor, `params` a LoopDetectorParams, a
+// parameter file's path or None, `progress` None or a callable(done, total).
+std::pair<std::vector<loop::SequenceFrame>, LoopDetectorParams> detect_loops(
+    const std::vector<std::string>& inputs, Vocabulary vocabulary, const py::object& descriptor,
+    const py::object& max_features, const py::object& params, long long stride, long long max_width,
+    double video_fps, const py::object& progress) {
+  loop::SequenceOptions options;
+  options.source = source_options(stride, max_width, video_fps);
+  if (const auto extractor = extractor_of(descriptor)) {
+    if (!max_features.is_none())
+      throw py::value_error(
+          "max_features applies to a descriptor name; a FeatureExtractor has its own");
+    options.extractor = extractor;
+  } else if (py::isinstance<py::str>(descriptor)) {
+    options.descriptor = descriptor.cast<std::string>();
+    if (!max_features.is_none()) {
+      if (!PyLong_Check(max_features.ptr()) || PyBool_Check(max_features.ptr()))
+        throw py::type_error("max_features must be an int, got " + type_name(max_features));
+      const auto count = max_features.cast<long long>();
+      if (count < 1 || count > 1000000)
+        throw py::value_error("max_features must be in [1, 1000000], got " + std::to_string(count));
+      options.max_features = static_cast<int>(count);
+    }
+  } else {
+    throw py::type_error("descriptor must be a name (\"orb\", ...) or a FeatureExtractor, got " +
+                         type_name(descriptor));
+  }
+  std::optional<LoopDetectorParams> given;
+  if (py::isinstance<LoopDetectorParams>(params))
+    given = params.cast<LoopDetectorParams>();
+  else if (!params.is_none())
+    options.params_file = params.cast<std::string>();
+
+  std::unique_ptr<loop::SequenceDetector> sequence;
+  {
+    py::gil_scoped_release release;
+    sequence =
+        given ? std::make_unique<loop::SequenceDetector>(inputs, std::move(vocabulary), options,
+                                                         *given)
+              : std::make_unique<loop::SequenceDetector>(inputs, std::move(vocabulary), options);
+  }
+  const long long known = sequence->size();
+  const py::object total = known >= 0 ? py::object(py::int_(known)) : py::object(py::none());
+  std::vector<loop::SequenceFrame> frames;
+  while (true) {
+    loop::SequenceFrame frame;
+    bool more = false;
+    {
+      py::gil_scoped_release release;
+      more = sequence->next(frame);
+    }
+    if (!more) break;
+    frames.push_back(std::move(frame));
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C stops the run
+    if (!progress.is_none()) progress(frames.size(), total);
+  }
+  return {std::move(frames), sequence->params()};
+}
+
+std::vector<loop::SequenceFrame> frames_of(const py::handle& results) {
+  if (!py::isinstance<py::iterable>(results) || py::isinstance<py::str>(results))
+    throw py::type_error("results must be a list of LoopResult, got " + type_name(results));
+  std::vector<loop::SequenceFrame> frames;
+  for (const py::handle item : results) {
+    if (!py::isinstance<loop::SequenceFrame>(item))
+      throw py::type_error("results must hold LoopResult objects, got " + type_name(item));
+    frames.push_back(item.cast<const loop::SequenceFrame&>());
+  }
+  return frames;
+}
+
+// The CLI's detect-loops report: make_loop_report's page with the facts the
+// CLI shows (inputs, frequency, vocabulary, descriptor) where the run knew them.
+std::string write_report(const Path& folder, const py::object& results,
+                         const loop::GroundTruth* truth,
+                         const std::optional<LoopDetectorParams>& params, const std::string& inputs,
+                         const std::string& vocabulary, const std::string& descriptor) {
+  const std::vector<loop::SequenceFrame> frames = frames_of(results);
+  py::gil_scoped_release release;
+  loop::LoopReport report =
+      loop::make_loop_report(frames, params.value_or(LoopDetectorParams{}), truth);
+  if (params) {
+    char hertz[32];
+    std::snprintf(hertz, sizeof hertz, "%g Hz", params->frequency);
+    report.facts.emplace_back("frequency", hertz);
+  } else {
+    report.params_json.clear();  // not known: not shown as the defaults
+  }
+  if (!inputs.empty()) report.facts.insert(report.facts.begin(), {"inputs", inputs});
+  if (!vocabulary.empty()) report.facts.emplace_back("vocabulary", vocabulary);
+  if (!descriptor.empty()) report.facts.emplace_back("descriptor", descriptor);
+  return loop::write_loop_report(folder.string(), report);
+}
+
+void bind_sequences(py::module_& m) {
+  m.def("_detect_loops", &detect_loops, py::arg("inputs"), py::arg("vocabulary"),
+        py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
+        py::arg("max_width"), py::arg("video_fps"), py::arg("progress"),
+        "binbow.detect_loops once its arguments are resolved (use that): the frames and\n"
+        "the parameters used.");
+  m.def("_write_report", &write_report, py::arg("folder"), py::arg("results"),
+        py::arg("ground_truth"), py::arg("params"), py::arg("inputs"), py::arg("vocabulary"),
+        py::arg("descriptor"), "binbow.write_report with the run's facts resolved (use that).");
+}
+
+}  // namespace
+
+void bind_loop(py::module_& m) {
+  bind_detection(m);
+  bind_sequences(m);
+}
+
+}  // namespace binbow::python

@@ -1,0 +1,69 @@
+// Conversions between Python objects and binbow's types shared by the
+// binding files (bind_core.cpp, bind_vision.cpp, bind_params.cpp, bind_loop.cpp,
+// bind_evaluation.cpp).
+//
+// Inputs are taken strictly: a numpy array of the wrong dtype is a TypeError
+// naming it and a wrong shape a ValueError, never a silent conversion (float
+// SIFT descriptors or out-of-range values would turn into wrong bits). Only
+// a non-contiguous array is copied.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "binbow/descriptors.h"
+
+namespace binbow::vision {
+class FeatureExtractor;
+}
+
+namespace binbow::python {
+
+namespace py = pybind11;
+using Path = std::filesystem::path;
+
+// The Python type name of `object`, for error messages.
+std::string type_name(const py::handle& object);
+// "(3, 32)", "(5,)": an array's shape as Python writes it.
+std::string shape_of(const py::array& array);
+
+// The uint8 array of one image's descriptors: `what` names it in errors
+// ("descriptors", "images[3]").
+py::array checked_uint8_array(const py::handle& object, const std::string& what);
+
+// Descriptors of one image received from Python, kept alive while the view is used.
+struct Descriptors {
+  py::array_t<std::uint8_t, py::array::c_style> array;  // null for None
+  DescriptorView view;
+};
+
+// `code_size`: the size the caller needs (the vocabulary's), 0 when any size
+// fits (training). None, what OpenCV returns for an image without keypoints,
+// becomes an empty view of that size.
+Descriptors to_descriptors(const py::handle& object, const std::string& what,
+                           std::size_t code_size);
+
+py::bytes to_bytes(const std::vector<std::uint8_t>& bytes);
+// The bytes of a pickled state; `data` stays valid while `bytes` lives.
+std::pair<const std::uint8_t*, std::size_t> bytes_of(const py::bytes& bytes);
+
+// The extractor of a binbow.FeatureExtractor object; null when `object` is not one.
+std::shared_ptr<const vision::FeatureExtractor> extractor_of(const py::handle& object);
+
+// The binding of each room of the library, called by module.cpp in this order
+// (a class is registered before the signatures that name it).
+void bind_core(py::module_& m);
+void bind_vision(py::module_& m);
+void bind_params(py::module_& m);
+void bind_evaluation(py::module_& m);
+void bind_loop(py::module_& m);
+
+}  // namespace binbow::python

@@ -1,0 +1,64 @@
+#include "binding.h"
+
+#include <string>
+
+namespace binbow::python {
+
+std::string type_name(const py::handle& object) {
+  return py::str(py::type::of(object).attr("__name__")).cast<std::string>();
+}
+
+std::string shape_of(const py::array& array) {
+  std::string shape = "(";
+  for (py::ssize_t i = 0; i < array.ndim(); ++i)
+    shape += (i ? ", " : "") + std::to_string(array.shape(i));
+  return shape + (array.ndim() == 1 ? ",)" : ")");
+}
+
+py::array checked_uint8_array(const py::handle& object, const std::string& what) {
+  if (!py::isinstance<py::array>(object))
+    throw py::type_error(what + " must be a numpy uint8 array, got " + type_name(object));
+  auto array = py::reinterpret_borrow<py::array>(object);
+  if (array.dtype().kind() != 'u' || array.dtype().itemsize() != 1)
+    throw py::type_error(what + " must be a numpy uint8 array, got dtype " +
+                         py::str(array.dtype()).cast<std::string>() +
+                         " (binary descriptors are bytes; convert explicitly if that is meant)");
+  return array;
+}
+
+Descriptors to_descriptors(const py::handle& object, const std::string& what,
+                           std::size_t code_size) {
+  Descriptors out;
+  out.view.code_size = code_size;
+  if (object.is_none()) return out;
+  const py::array array = checked_uint8_array(object, what);
+  if (array.ndim() != 2)
+    throw py::value_error(
+        what + " must be 2-D with one row per feature, shape (n, code_size); got shape " +
+        shape_of(array));
+  const auto columns = static_cast<std::size_t>(array.shape(1));
+  if (code_size != 0 && columns != code_size)
+    throw py::value_error(what + " have " + std::to_string(columns) + " bytes (" +
+                          std::to_string(columns * 8) + " bits) per row, the vocabulary's words " +
+                          std::to_string(code_size) + " bytes (" + std::to_string(code_size * 8) +
+                          " bits): wrong descriptor type for this vocabulary?");
+  // Copies only an array that is not C-contiguous: the dtype is already uint8.
+  out.array = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
+  if (!out.array) throw py::error_already_set();
+  out.view = {out.array.data(), static_cast<std::size_t>(out.array.shape(0)), columns};
+  return out;
+}
+
+py::bytes to_bytes(const std::vector<std::uint8_t>& bytes) {
+  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+std::pair<const std::uint8_t*, std::size_t> bytes_of(const py::bytes& bytes) {
+  char* data = nullptr;
+  py::ssize_t size = 0;
+  if (PYBIND11_BYTES_AS_STRING_AND_SIZE(bytes.ptr(), &data, &size) != 0)
+    throw py::error_already_set();
+  return {reinterpret_cast<const std::uint8_t*>(data), static_cast<std::size_t>(size)};
+}
+
+}  // namespace binbow::python

@@ -1,0 +1,177 @@
+"""binbow.detect_loops and binbow.write_report: the CLI's detect-loops from Python."""
+import csv
+import json
+import re
+
+import numpy as np
+import pytest
+
+import binbow
+from conftest import SAMPLES, run_cli, sample_frames
+
+FOLDER = SAMPLES / "samples"
+
+
+def csv_rows(path):
+    with open(path, newline="", encoding="utf-8") as file:
+        return list(csv.DictReader(file))
+
+
+def as_rows(results):
+    """The loops.csv rows detect-loops would write for these results."""
+    return [
+        (str(r.query), str(r.match), r.file, r.match_file, r.normalised_score, str(len(r.inliers)))
+        for r in results if r.detection
+    ]
+
+
+def assert_same_loops(results, rows):
+    found = as_rows(results)
+    expected = [(row["query_index"], row["match_index"], row["query_file"], row["match_file"],
+                 float(row["score"]), row["inliers"]) for row in rows]
+    assert [f[:4] + f[5:] for f in found] == [e[:4] + e[5:] for e in expected]
+    np.testing.assert_allclose([f[4] for f in found], [e[4] for e in expected], rtol=1e-5)
+
+
+@pytest.fixture(scope="module")
+def results():
+    return binbow.detect_loops(FOLDER)
+
+
+def test_finds_exactly_the_cli_loops(results, cli_loops):
+    _, rows = cli_loops
+    assert len(results) == 84 and isinstance(results, list)
+    assert_same_loops(results, rows)
+    assert [r.file for r in results] == [str(p) for p in sample_frames()]
+    assert all(r.times["features"] > 0 for r in results)
+    assert all((r.match_file != "") == r.detection for r in results)
+
+
+def test_the_run_is_described(results):
+    assert results.params == binbow.LoopDetectorParams()
+    assert results.descriptor == "orb" and results.inputs == [str(FOLDER)]
+    assert results.vocabulary.checksum == binbow.Vocabulary.default("orb").checksum
+    assert results.vocabulary_file.endswith("orb_default.bbw")
+
+
+@pytest.mark.parametrize(
+    "python, cli",
+    [
+        ({"descriptor": "brief"}, ["--descriptor", "brief"]),
+        ({"stride": 2, "max_width": 256}, ["--stride", "2", "--max-width", "256"]),
+        ({"max_features": 500}, ["--features", "500"]),
+    ],
+)
+def test_options_as_the_cli(tmp_path, python, cli):
+    output = tmp_path / "loops.csv"
+    run_cli("detect-loops", *cli, "-o", output, FOLDER)
+    assert_same_loops(binbow.detect_loops(FOLDER, **python), csv_rows(output))
+
+
+def test_params_objects_and_files_as_the_cli(tmp_path):
+    params_file = tmp_path / "params.json"
+    params_file.write_text(json.dumps({"dislocal": 10, "alpha": 0.2, "k": 2}))
+    output = tmp_path / "loops.csv"
+    run_cli("detect-loops", "--params", params_file, "-o", output, FOLDER)
+    expected = csv_rows(output)
+    from_file = binbow.detect_loops(FOLDER, params=params_file)
+    assert_same_loops(from_file, expected)
+    assert from_file.params == binbow.LoopDetectorParams(dislocal=10, alpha=0.2, k=2)
+    from_object = binbow.detect_loops([str(FOLDER)], params=from_file.params)
+    assert_same_loops(from_object, expected)
+
+
+def test_inputs_lists_and_extractors(tmp_path, results):
+    listing = tmp_path / "frames.txt"
+    listing.write_text("\n".join(str(p) for p in sample_frames()) + "\n")
+    assert as_rows(binbow.detect_loops(listing)) == as_rows(results)
+    assert as_rows(binbow.detect_loops(sample_frames())) == as_rows(results)
+    extractor = binbow.FeatureExtractor("orb")
+    assert as_rows(binbow.detect_loops(FOLDER, descriptor=extractor)) == as_rows(results)
+    few = binbow.detect_loops(sample_frames()[:30], descriptor=binbow.FeatureExtractor("brief"))
+    assert len(few) == 30 and few.descriptor == "brief"
+
+
+def test_progress(capfd):
+    calls = []
+    binbow.detect_loops(sample_frames()[:12], progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(done, 12) for done in range(1, 13)]
+    binbow.detect_loops(FOLDER, progress=True)
+    printed = capfd.readouterr().err
+    assert "detecting loops: 42/84 (50%)" in printed
+    assert re.search(r"^detecting loops: 84 done in [0-9.]+s$", printed, re.M), printed
+
+
+def test_a_raising_progress_stops_the_run():
+    seen = []
+
+    def stop(done, total):
+        seen.append(done)
+        if done == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        binbow.detect_loops(FOLDER, progress=stop)
+    assert seen == [1, 2, 3]
+
+
+def test_strict_arguments(tmp_path):
+    with pytest.raises(OSError, match="missing"):
+        binbow.detect_loops(tmp_path / "missing")
+    with pytest.raises(ValueError, match="no default vocabulary for descriptor 'akaze'"):
+        binbow.detect_loops(FOLDER, descriptor="akaze")
+    with pytest.raises(ValueError, match="akaze"):
+        binbow.detect_loops(FOLDER, vocabulary=binbow.Vocabulary.default("orb"),
+                            descriptor="akaze")
+    with pytest.raises(ValueError, match="unknown feature type"):
+        binbow.detect_loops(FOLDER, vocabulary=binbow.Vocabulary.default("orb"),
+                            descriptor="sift")
+    with pytest.raises(TypeError, match=r"inputs\[1\]"):
+        binbow.detect_loops([FOLDER, 3])
+    with pytest.raises(TypeError, match="progress"):
+        binbow.detect_loops(FOLDER, progress="yes")
+    with pytest.raises(TypeError, match="params"):
+        binbow.detect_loops(FOLDER, params={"alpha": 0.3})
+    with pytest.raises(ValueError, match="stride"):
+        binbow.detect_loops(FOLDER, stride=0)
+    with pytest.raises(TypeError, match="max_features must be an int"):
+        binbow.detect_loops(FOLDER, max_features=10.0)
+    with pytest.raises(ValueError, match="FeatureExtractor has its own"):
+        binbow.detect_loops(FOLDER, descriptor=binbow.FeatureExtractor(), max_features=10)
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"alpha": -1}')
+    with pytest.raises(OSError, match="bad.json"):
+        binbow.detect_loops(FOLDER, params=bad)
+
+
+def report_facts(page):
+    text = page.read_text(encoding="utf-8")
+    return dict(re.findall(r"<tr><th>([^<]*)</th><td>([^<]*)</td></tr>", text)), text
+
+
+def test_write_report_draws_the_cli_page(tmp_path, results):
+    cli_page = tmp_path / "cli" / "index.html"
+    run_cli("detect-loops", "--report", cli_page.parent, "-o", tmp_path / "loops.csv", FOLDER)
+    page = binbow.write_report(tmp_path / "python", results)
+    assert page == str(tmp_path / "python" / "index.html")
+    cli_facts, cli_text = report_facts(cli_page)
+    facts, text = report_facts(tmp_path / "python" / "index.html")
+    assert cli_facts.keys() == facts.keys()
+    for key in ("inputs", "frames", "loops", "frequency", "descriptor"):
+        assert facts[key] == cli_facts[key], key
+    headings = re.compile(r"<h2[^>]*>([^<]*)")
+    assert headings.findall(text) == headings.findall(cli_text)
+    assert text.count("data:image/") == cli_text.count("data:image/") > 0
+
+
+def test_write_report_with_ground_truth_and_plain_lists(tmp_path, results):
+    truth = binbow.GroundTruth.load(SAMPLES / "samples_GT_pairs.txt")
+    binbow.write_report(tmp_path / "evaluated", results, truth)
+    _, text = report_facts(tmp_path / "evaluated" / "index.html")
+    assert "Precision and recall" in text
+    plain = binbow.write_report(str(tmp_path / "plain"), list(results))
+    facts, text = report_facts(tmp_path / "plain" / "index.html")
+    assert facts["loops"] == "35" and "Parameters" not in text, "unknown parameters not shown"
+    assert plain.endswith("index.html")
+    with pytest.raises(TypeError, match="LoopResult"):
+        binbow.write_report(tmp_path / "bad", [1, 2])
