@@ -536,7 +536,7 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
              << parameter_value(best->parameter);
         std::vector<std::string> also;
         for (const PrCurvePoint& p : report.curve)
-          if (&p != best && p.result.precision == 1 && p.result.detections > 0 &&
+          if (&p != best && p.result.false_positives == 0 && p.result.detections > 0 &&
               p.result.recall == best->result.recall)
             also.push_back(parameter_value(p.parameter));
         if (!also.empty())

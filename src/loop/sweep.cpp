@@ -100,7 +100,7 @@ std::vector<double> sweep_values(const std::string& parameter, const std::vector
 const PrCurvePoint* full_precision_point(const std::vector<PrCurvePoint>& curve) {
   const PrCurvePoint* best = nullptr;
   for (const PrCurvePoint& p : curve)
-    if (p.result.precision == 1 && p.result.detections > 0 &&
+    if (p.result.false_positives == 0 && p.result.detections > 0 &&
         (best == nullptr || p.result.recall >= best->result.recall))
       best = &p;
   return best;
