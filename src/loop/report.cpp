@@ -457,7 +457,7 @@ std::string missed_section(const LoopReport& report) {
   }
   html << "<table id='missed-by-status'><tr><th>status</th><th>missed</th><th>meaning</th></tr>";
   for (const auto& [status, count] : by_status)
-    html << "<tr><td>" << escape(status) << "</td><td class='n'>" << count << "</td><td>"
+    html << "<tr><td class='s'>" << escape(status) << "</td><td class='n'>" << count << "</td><td>"
          << escape(status_explanation(status)) << "</td></tr>";
   html << "</table>";
   const bool known_truth = report.truth.frames() > 0;
@@ -472,7 +472,7 @@ std::string missed_section(const LoopReport& report) {
     html << "<tr id='missed-" << miss.query << "'><td class='n'>" << miss.query << "</td><td>"
          << escape(miss.file) << "</td>";
     if (known_truth) html << "<td class='n'>" << truth_matches(report.truth, miss.query) << "</td>";
-    html << "<td>" << (miss.status.empty() ? "unknown" : escape(miss.status))
+    html << "<td class='s'>" << (miss.status.empty() ? "unknown" : escape(miss.status))
          << "</td><td class='n'>" << (miss.match < 0 ? "none" : std::to_string(miss.match))
          << "</td><td>" << right << "</td><td class='n'>"
          << (miss.match < 0 ? "–" : format("%.3f", miss.normalised_score)) << "</td><td class='n'>"
@@ -505,7 +505,7 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
        << ".tp{color:#17702b}.fp{color:#b02020;font-weight:bold}pre{background:#f6f6f6;padding:8px}"
        << "figure{margin:10px 0 18px}figcaption{font-size:13px;max-width:900px}img{max-width:100%}"
        << ".side{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}"
-       << "tr.best td{background:#e3f4e6;font-weight:bold}"
+       << "tr.best td{background:#e3f4e6;font-weight:bold}td.s{white-space:nowrap}"
        << "</style></head><body>\n<h1>" << escape(report.title) << "</h1>\n";
 
   if (!report.facts.empty()) {

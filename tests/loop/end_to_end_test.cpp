@@ -106,6 +106,7 @@ TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
   std::getline(csv, header);
   EXPECT_EQ(header, "query_index,match_index,query_file,match_file,score,inliers");
   EXPECT_TRUE(std::filesystem::exists(dir.file("run-report/index.html")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("run-report/similarity.png")));
 
   ASSERT_EQ(test::run_command(cli + " evaluate --gt " + gt + " --sweep --report " +
                                   dir.file("report") + " " + dir.file("loops.csv"),
