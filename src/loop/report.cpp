@@ -304,7 +304,10 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
     return cv::Point(left + int(m.cell(match)) * zoom + zoom / 2,
                      top + int(m.cell(query)) * zoom + zoom / 2);
   };
-  const int radius = std::max(4, zoom / 2 + 2);
+  // Marks grow with the cells, but stay small when cells are single pixels,
+  // or thousands of loops would cover the matrix.
+  const int radius = zoom >= 4 ? zoom / 2 + 2 : 2;
+  const int stroke = zoom >= 4 ? 2 : 1;
   const cv::Scalar green = colour(20, 170, 40), red = colour(225, 20, 20),
                    orange = colour(255, 140, 0), grey = colour(120, 120, 120);
   for (const MissedLoop& miss : report.missed) {
@@ -314,7 +317,7 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
     cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
     if (miss.match >= 0 && static_cast<std::size_t>(miss.match) < m.frames)
       cv::drawMarker(canvas, centre(miss.query, static_cast<std::size_t>(miss.match)), orange,
-                     cv::MARKER_TILTED_CROSS, 2 * radius, 2, cv::LINE_AA);
+                     cv::MARKER_TILTED_CROSS, 2 * radius, stroke, cv::LINE_AA);
   }
   for (const ReportLoop& loop : report.loops) {
     const Detection& d = loop.detection;
