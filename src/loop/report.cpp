@@ -309,7 +309,8 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
   const int radius = zoom >= 4 ? zoom / 2 + 2 : 2;
   const int stroke = zoom >= 4 ? 2 : 1;
   const cv::Scalar green = colour(20, 170, 40), red = colour(225, 20, 20),
-                   orange = colour(255, 140, 0), grey = colour(120, 120, 120);
+                   orange = colour(255, 140, 0), unjudged = colour(170, 40, 230);
+  const bool known_truth = report.truth.frames() > 0;
   for (const MissedLoop& miss : report.missed) {
     if (miss.query >= m.frames) continue;
     const int y = top + int(m.cell(miss.query)) * zoom + zoom / 2;
@@ -325,8 +326,8 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
     cv::circle(canvas, centre(d.query, d.match), radius,
                loop.verdict == 1   ? green
                : loop.verdict == 0 ? red
-                                   : grey,
-               2, cv::LINE_AA);
+                                   : unjudged,
+               stroke, cv::LINE_AA);
   }
 
   // Axes: frame numbers, query i down, earlier image j across.
@@ -351,28 +352,36 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
     const double t = double(i) / (bar - 1);
     const cv::Vec3b g = mix(white, black, t), b = mix(light_blue, dark_blue, t);
     cv::line(canvas, {left + i, y - 10}, {left + i, y}, cv::Scalar(g[0], g[1], g[2]));
-    cv::line(canvas, {left + i, y + 6}, {left + i, y + 16}, cv::Scalar(b[0], b[1], b[2]));
+    if (known_truth)
+      cv::line(canvas, {left + i, y + 6}, {left + i, y + 16}, cv::Scalar(b[0], b[1], b[2]));
   }
   cv::rectangle(canvas, cv::Rect(left - 1, y - 11, bar + 2, 12), colour(140, 140, 140));
-  cv::rectangle(canvas, cv::Rect(left - 1, y + 5, bar + 2, 12), colour(140, 140, 140));
-  text("0", {left - 14, y + 10});
-  text(format(">= %.3g", full), {left + bar + 6, y + 2});
-  text("not the same place", {left + bar + 80, y});
-  text("same place (ground truth)", {left + bar + 80, y + 16});
+  text("0", {left - 14, y});
+  text(format(">= %.3g", full), {left + bar + 6, y});
+  if (known_truth) {
+    cv::rectangle(canvas, cv::Rect(left - 1, y + 5, bar + 2, 12), colour(140, 140, 140));
+    text("not the same place", {left + bar + 80, y});
+    text("same place (ground truth)", {left + bar + 80, y + 16});
+  }
   y += 42;
   int x = left;
-  cv::circle(canvas, {x + 6, y - 4}, 6, green, 2, cv::LINE_AA);
-  text("true loop", {x + 18, y});
-  x += 100;
-  cv::circle(canvas, {x + 6, y - 4}, 6, red, 2, cv::LINE_AA);
-  text("false loop", {x + 18, y});
-  x += 105;
-  cv::drawMarker(canvas, {x + 6, y - 4}, orange, cv::MARKER_TILTED_CROSS, 12, 2, cv::LINE_AA);
-  text("missed loop: its best candidate", {x + 18, y});
-  x += 250;
-  const std::vector<cv::Point> arrow = {{x, y - 8}, {x + 8, y - 4}, {x, y}};
-  cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
-  text("missed loop", {x + 14, y});
+  if (known_truth) {
+    cv::circle(canvas, {x + 6, y - 4}, 6, green, 2, cv::LINE_AA);
+    text("true loop", {x + 18, y});
+    x += 100;
+    cv::circle(canvas, {x + 6, y - 4}, 6, red, 2, cv::LINE_AA);
+    text("false loop", {x + 18, y});
+    x += 105;
+    cv::drawMarker(canvas, {x + 6, y - 4}, orange, cv::MARKER_TILTED_CROSS, 12, 2, cv::LINE_AA);
+    text("missed loop: its best candidate", {x + 18, y});
+    x += 250;
+    const std::vector<cv::Point> arrow = {{x, y - 8}, {x + 8, y - 4}, {x, y}};
+    cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
+    text("missed loop", {x + 14, y});
+  } else {
+    cv::circle(canvas, {x + 6, y - 4}, 6, unjudged, 2, cv::LINE_AA);
+    text("loop detected (no ground truth given: evaluate --report judges them)", {x + 18, y});
+  }
   y += 26;
   std::string note = std::to_string(m.frames) + " frames";
   if (m.bin > 1)
@@ -399,8 +408,11 @@ std::string similarity_section(const LoopReport& report, const std::string& dire
           "src='data:image/png;base64,"
        << base64(png) << "'><figcaption>BoW similarity s(v<sub>i</sub>, v<sub>j</sub>) of each "
        << "query i with every earlier image j (darker: more similar), scored with the run's "
-          "vocabulary; ground-truth cells in blue; detections circled (green true, red false); "
-          "missed ground-truth loops marked in orange (their best candidate crossed).";
+          "vocabulary; "
+       << (report.truth.frames() > 0
+               ? "ground-truth cells in blue; detections circled (green true, red false); "
+                 "missed ground-truth loops marked in orange (their best candidate crossed)."
+               : "detections circled in purple.");
   if (m.bin > 1)
     html << " Binned: a cell covers " << m.bin << " × " << m.bin
          << " frames and shows their highest score.";
