@@ -12,6 +12,7 @@
 #include "binbow/loop/report.h"
 #include "binbow/loop/run_record.h"
 #include "binbow/loop/sequence.h"
+#include "binbow/loop/similarity.h"
 #include "binbow/vision/features.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
@@ -115,6 +116,9 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
                     {"descriptor", run.descriptor}};
     report.params_json = run.params_json;
     report.timing = outputs.timing();
+    // From the features the detector kept for the geometric check.
+    if (params.geometric_check != loop::GeometricCheck::kNone)
+      report.similarity = loop::similarity_matrix(sequence.detector());
     const auto& detections = outputs.detections();
     for (std::size_t i = 0; i < detections.size(); ++i)
       report.loops.push_back({detections[i],

@@ -1,4 +1,5 @@
 // binbow evaluate: precision and recall of detected loops against ground truth.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -9,8 +10,10 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/misses.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/run_record.h"
+#include "binbow/loop/similarity.h"
 #include "binbow/loop/sweep.h"
 #include "binbow/vision/features.h"
 #include "binbow/vocabulary.h"
@@ -26,39 +29,66 @@ struct EvaluateArguments {
   std::string ground_truth;
   int ground_truth_base = -1;
   bool sweep = false;
+  std::string sweep_parameter = "alpha";
+  std::vector<double> sweep_values;  // empty: loop::default_sweep_values
   std::string report;
   std::string detections;
 };
 
-// Re-runs the recorded detection for every α, features extracted once.
-std::vector<loop::PrCurvePoint> sweep_alpha(const loop::LoopRun& run,
-                                            const loop::GroundTruth& truth) {
-  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
-  Vocabulary vocabulary;
-  load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), vocabulary);
-  std::unique_ptr<Progress> progress;
-  std::string stage;
-  const auto report = [&](const std::string& now, std::size_t done, std::size_t total) {
-    if (now != stage) {
-      if (progress) progress->finish();
-      progress = std::make_unique<Progress>(now, total);
-      stage = now;
+// One progress line per stage the library reports.
+class StageProgress {
+ public:
+  void operator()(const std::string& stage, std::size_t done, std::size_t total) {
+    if (stage != stage_) {
+      finish();
+      progress_ = std::make_unique<Progress>(stage, total);
+      stage_ = stage;
     }
-    progress->update(done);
-  };
-  auto curve =
-      loop::sweep_parameter(run, vocabulary, truth, "alpha", loop::default_alpha_values(), report);
-  if (progress) progress->finish();
-  return curve;
+    progress_->update(done);
+  }
+  void finish() {
+    if (progress_) progress_->finish();
+  }
+
+ private:
+  std::unique_ptr<Progress> progress_;
+  std::string stage_;
+};
+
+// The recorded run's vocabulary and features, read once for the sweep and
+// the similarity matrix.
+struct RunInputs {
+  Vocabulary vocabulary;
+  loop::RunFeatures features;
+};
+
+RunInputs read_run_inputs(const loop::LoopRun& run) {
+  RunInputs inputs;
+  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
+  load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), inputs.vocabulary);
+  StageProgress progress;
+  inputs.features =
+      loop::extract_run_features(run, [&](const std::string& stage, std::size_t done,
+                                          std::size_t total) { progress(stage, done, total); });
+  progress.finish();
+  return inputs;
 }
 
 void run_evaluate(const EvaluateArguments& arguments) {
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
+  // An unknown parameter is a usage error before anything is read.
+  const std::vector<double> sweep_values =
+      arguments.sweep ? loop::sweep_values(arguments.sweep_parameter, arguments.sweep_values)
+                      : std::vector<double>{};
 
   const std::string run_path = loop::LoopRun::path_for(arguments.detections);
   std::unique_ptr<loop::LoopRun> run;
   if (std::filesystem::exists(run_path))
     run = std::make_unique<loop::LoopRun>(loop::LoopRun::load(run_path));
+  if (arguments.sweep && !run && arguments.sweep_parameter != "alpha")
+    throw InvalidArgument("--sweep-param " + arguments.sweep_parameter +
+                          " re-runs detection, which needs the run record " + run_path +
+                          " written by detect-loops beside " + arguments.detections);
 
   loop::GroundTruthOptions options;
   options.pairs_index_base = arguments.ground_truth_base;
@@ -67,8 +97,11 @@ void run_evaluate(const EvaluateArguments& arguments) {
   const loop::GroundTruth truth = loop::GroundTruth::load(arguments.ground_truth, options);
   const std::vector<loop::Detection> detections = loop::read_detections_csv(arguments.detections);
   loop::PrecisionRecall result;
+  std::vector<loop::MissedLoop> missed;
   try {
     result = loop::evaluate_detections(detections, truth);
+    missed =
+        loop::missed_loops(run ? run->frames : std::vector<loop::FrameRecord>{}, detections, truth);
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(arguments.detections + ": " + e.what() + " (wrong --gt?)");
   }
@@ -83,13 +116,34 @@ void run_evaluate(const EvaluateArguments& arguments) {
       "queries with a loop: %zu\nqueries found: %zu\n",
       result.detections, result.true_positives, result.false_positives, result.queries_with_loops,
       result.queries_found);
+  std::printf("missed loops: %zu\n", missed.size());
+  for (const loop::MissedLoop& miss : missed)
+    std::printf("%s\n", loop::format_missed_loop(miss).c_str());
+  std::fflush(stdout);
+
+  // Features are extracted once, for the sweep and the report's similarity matrix.
+  std::unique_ptr<RunInputs> inputs;
+  if (run && arguments.sweep) {
+    inputs = std::make_unique<RunInputs>(read_run_inputs(*run));
+  } else if (run && !arguments.report.empty()) {
+    try {
+      inputs = std::make_unique<RunInputs>(read_run_inputs(*run));
+    } catch (const Error& e) {  // the report is still worth writing
+      std::fprintf(stderr, "note: no similarity matrix in the report: %s\n", e.what());
+    }
+  }
 
   std::vector<loop::PrCurvePoint> curve;
   std::string swept;
   if (arguments.sweep) {
     if (run) {
-      curve = sweep_alpha(*run, truth);
-      swept = "alpha";
+      StageProgress progress;
+      curve = loop::sweep_parameter(*run, inputs->features, inputs->vocabulary, truth,
+                                    arguments.sweep_parameter, sweep_values,
+                                    [&](const std::string& stage, std::size_t done,
+                                        std::size_t total) { progress(stage, done, total); });
+      progress.finish();
+      swept = arguments.sweep_parameter;
     } else {
       std::fprintf(stderr,
                    "note: no run record %s; the curve thresholds the scores of %s instead of "
@@ -99,10 +153,13 @@ void run_evaluate(const EvaluateArguments& arguments) {
       swept = "score";
     }
     std::printf("recall at 100%% precision: %.6g\n", loop::recall_at_full_precision(curve));
-    std::printf("%-8s %10s %10s %10s\n", swept.c_str(), "precision", "recall", "detections");
+    if (const loop::PrCurvePoint* best = loop::full_precision_point(curve))
+      std::printf("reached at %s: %.6g\n", swept.c_str(), best->parameter);
+    const int width = std::max<int>(8, static_cast<int>(swept.size()));
+    std::printf("%-*s %10s %10s %10s\n", width, swept.c_str(), "precision", "recall", "detections");
     for (const auto& p : curve)
-      std::printf("%-8.3g %10.4f %10.4f %10zu\n", p.parameter, p.result.precision, p.result.recall,
-                  p.result.detections);
+      std::printf("%-*.3g %10.4f %10.4f %10zu\n", width, p.parameter, p.result.precision,
+                  p.result.recall, p.result.detections);
   }
   std::fflush(stdout);
 
@@ -115,12 +172,21 @@ void run_evaluate(const EvaluateArguments& arguments) {
     report.curve = curve;
     report.curve_parameter = swept;
     report.recall_at_full_precision = loop::recall_at_full_precision(curve);
+    report.missed = missed;
+    report.truth = truth;
     if (run) {
       report.facts.emplace_back("vocabulary", run->vocabulary);
       report.facts.emplace_back("descriptor", run->descriptor);
       report.facts.emplace_back("frames", std::to_string(run->frames.size()));
       report.params_json = run->params_json;
       report.timing = run->timing;
+    }
+    if (inputs) {
+      StageProgress progress;
+      progress("similarity matrix", 0, 1);
+      report.similarity = loop::similarity_matrix(inputs->vocabulary, inputs->features.features);
+      progress("similarity matrix", 1, 1);
+      progress.finish();
     }
     // The run's loops by (query, match): one lookup per detection, not a scan.
     std::map<std::pair<std::size_t, std::size_t>, const loop::LoopRecord*> recorded;
@@ -153,9 +219,22 @@ void add_evaluate_command(CLI::App& app) {
                    "Index base of text pairs, 0 or 1 (default: from a \"0-based\"/\"1-based\" "
                    "comment, or 0 if an index 0 appears)")
       ->check(CLI::IsMember({0, 1}));
-  command->add_flag("--sweep", arguments->sweep,
-                    "Re-run detection over alpha (from the run record beside the CSV) for the "
-                    "precision-recall curve and the recall at 100% precision");
+  CLI::Option* sweep = command->add_flag(
+      "--sweep", arguments->sweep,
+      "Re-run detection over a parameter (from the run record beside the CSV) for the "
+      "precision-recall curve and the recall at 100% precision; without a run record, "
+      "threshold the scores");
+  command
+      ->add_option("--sweep-param", arguments->sweep_parameter,
+                   "Loop detector parameter to sweep: alpha (default), k, min_inliers, "
+                   "max_reprojection_error, max_neighbor_ratio, dislocal, ... (any numeric "
+                   "parameter of a --params file)")
+      ->needs(sweep);
+  command
+      ->add_option("--sweep-values", arguments->sweep_values,
+                   "Values to sweep, comma-separated (default: a range around the default)")
+      ->delimiter(',')
+      ->needs(sweep);
   command->add_option("--report", arguments->report, "Write an HTML report into this directory");
   command->add_option("loops", arguments->detections, "loops.csv written by detect-loops")
       ->required();

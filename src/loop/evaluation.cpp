@@ -580,6 +580,14 @@ bool GroundTruth::has_loop(std::size_t query) const {
   return !earlier_matches(query).empty();
 }
 
+std::vector<std::size_t> GroundTruth::loop_queries() const {
+  std::vector<std::size_t> queries;
+  queries.reserve(queries_with_loops_);
+  for (const std::uint32_t later : later_)
+    if (queries.empty() || queries.back() != later) queries.push_back(later);
+  return queries;
+}
+
 Span<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
   if (query >= frames_) return {};
   const auto [first, last] =

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "binbow/error.h"
+#include "binbow/loop/sweep.h"
 #include "binbow/vision/image_source.h"
 #include "core/file_io.h"
 
@@ -107,8 +108,23 @@ std::string pair_image(const ReportLoop& loop) {
   return "data:image/jpeg;base64," + base64(jpeg);
 }
 
+std::string join(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const std::string& part : parts) out += (out.empty() ? "" : ", ") + part;
+  return out;
+}
+
+// "α" for alpha; other parameters by their name.
+std::string parameter_symbol(const std::string& parameter) {
+  return parameter == "alpha" ? "α" : parameter;
+}
+
+std::string parameter_value(double value) {
+  return format("%.4g", value);
+}
+
 std::string pr_curve_svg(const LoopReport& report) {
-  const int w = 520, h = 400, left = 60, right = 20, top = 20, bottom = 50;
+  const int w = 640, h = 470, left = 60, right = 80, top = 20, bottom = 90;
   const double pw = w - left - right, ph = h - top - bottom;
   const auto x = [&](double recall) { return left + recall * pw; };
   const auto y = [&](double precision) { return top + (1 - precision) * ph; };
@@ -128,32 +144,364 @@ std::string pr_curve_svg(const LoopReport& report) {
           << left - 6 << "' y='" << y(v) + 4 << "' font-size='11' text-anchor='end'>"
           << format("%.1f", v) << "</text>";
   }
-  svg << "<text x='" << left + pw / 2 << "' y='" << h - 10
+  svg << "<text x='" << left + pw / 2 << "' y='" << top + ph + 36
       << "' font-size='13' text-anchor='middle'>recall</text><text x='15' y='" << top + ph / 2
       << "' font-size='13' text-anchor='middle' transform='rotate(-90 15 " << top + ph / 2
       << ")'>precision</text>";
-  std::vector<PrCurvePoint> points = report.curve;
-  std::stable_sort(points.begin(), points.end(), [](const auto& a, const auto& b) {
-    return a.result.recall < b.result.recall ||
-           (a.result.recall == b.result.recall && a.result.precision > b.result.precision);
-  });
+  const std::vector<PrCurvePoint> points = curve_in_recall_order(report.curve);
+  const std::string symbol = escape(parameter_symbol(report.curve_parameter));
   if (!points.empty()) {
     svg << "<polyline fill='none' stroke='#1f5fbf' stroke-width='2' points='";
     for (const auto& p : points) svg << x(p.result.recall) << ',' << y(p.result.precision) << ' ';
     svg << "'/>";
-    for (const auto& p : points)
-      svg << "<circle cx='" << x(p.result.recall) << "' cy='" << y(p.result.precision)
-          << "' r='3' fill='#1f5fbf'><title>" << escape(report.curve_parameter) << " = "
-          << format("%.3g", p.parameter) << ": precision " << format("%.3f", p.result.precision)
-          << ", recall " << format("%.3f", p.result.recall) << "</title></circle>";
+    // Points at the same place share one label naming the range of values.
+    // Labels run downwards from their point, pushed right where points are
+    // closer than a line of text, with a leader line back to the point.
+    constexpr double kLineHeight = 11;
+    double previous_label_x = -1e9;
+    for (std::size_t first = 0; first < points.size();) {
+      std::size_t last = first;
+      while (last + 1 < points.size() &&
+             points[last + 1].result.recall == points[first].result.recall &&
+             points[last + 1].result.precision == points[first].result.precision)
+        ++last;
+      const auto& p = points[first];
+      const double px = x(p.result.recall), py = y(p.result.precision);
+      double low = p.parameter, high = p.parameter;
+      for (std::size_t i = first; i <= last; ++i) {
+        low = std::min(low, points[i].parameter);
+        high = std::max(high, points[i].parameter);
+      }
+      const std::string values =
+          low == high ? parameter_value(low) : parameter_value(low) + "–" + parameter_value(high);
+      svg << "<circle cx='" << px << "' cy='" << py << "' r='3.5' fill='#1f5fbf'><title>" << symbol
+          << " = " << values << ": precision " << format("%.3f", p.result.precision) << ", recall "
+          << format("%.3f", p.result.recall) << ", " << p.result.detections
+          << " detections</title></circle>";
+      const double label_x = std::max(px, previous_label_x + kLineHeight);
+      previous_label_x = label_x;
+      svg << "<line x1='" << px << "' y1='" << py + 4 << "' x2='" << label_x << "' y2='" << py + 14
+          << "' stroke='#9ab'/><text class='pt' font-size='10' fill='#1f3f7f' transform='translate("
+          << label_x - 4 << ' ' << py + 16 << ") rotate(90)'>" << symbol << '=' << values
+          << "</text>";
+      first = last + 1;
+    }
   }
+  if (const PrCurvePoint* best = full_precision_point(report.curve))
+    svg << "<circle id='full-precision-point' cx='" << x(best->result.recall) << "' cy='"
+        << y(best->result.precision)
+        << "' r='7' fill='none' stroke='#17702b' stroke-width='2'><title>recall at 100% "
+           "precision: "
+        << format("%.3f", best->result.recall) << " at " << symbol << " = "
+        << parameter_value(best->parameter) << "</title></circle>";
   if (report.has_result)
     svg << "<circle cx='" << x(report.result.recall) << "' cy='" << y(report.result.precision)
         << "' r='6' fill='none' stroke='#d03030' stroke-width='2'><title>this run: precision "
         << format("%.3f", report.result.precision) << ", recall "
         << format("%.3f", report.result.recall) << "</title></circle>";
+  // Legend.
+  const double ly = h - 22;
+  svg << "<circle cx='" << left + 6 << "' cy='" << ly << "' r='3.5' fill='#1f5fbf'/><text x='"
+      << left + 14 << "' y='" << ly + 4 << "' font-size='11'>swept " << symbol
+      << "</text><circle cx='" << left + 110 << "' cy='" << ly
+      << "' r='6' fill='none' stroke='#d03030' stroke-width='2'/><text x='" << left + 120 << "' y='"
+      << ly + 4 << "' font-size='11'>this run</text><circle cx='" << left + 200 << "' cy='" << ly
+      << "' r='7' fill='none' stroke='#17702b' stroke-width='2'/><text x='" << left + 212 << "' y='"
+      << ly + 4 << "' font-size='11'>highest recall at 100% precision</text>";
   svg << "</svg>";
   return svg.str();
+}
+
+// What each status means for a missed loop, for the reader of the table.
+const char* status_explanation(const std::string& status) {
+  static const std::pair<const char*, const char*> explanations[] = {
+      {"loop-detected", "a loop was accepted, with the wrong image"},
+      {"no-database-results", "no earlier image outside dislocal shares a word (or no features)"},
+      {"low-normalisation-score",
+       "s(v_t, v_t−Δt) below min_normalisation_score: the frame was skipped"},
+      {"low-scores", "no candidate reached α"},
+      {"no-islands", "no island long enough"},
+      {"no-temporal-consistency", "the best island disagreed with the previous queries' islands"},
+      {"no-geometric-consistency",
+       "too few RANSAC inliers (min_inliers) for a fundamental matrix with the candidate"},
+  };
+  for (const auto& [name, text] : explanations)
+    if (status == name) return text;
+  return "";
+}
+
+// Tick spacing in frames: 1, 2 or 5 × 10^k, about `ticks` ticks over `frames`.
+std::size_t tick_step(std::size_t frames, std::size_t ticks) {
+  std::size_t step = 1;
+  while (true)
+    for (const std::size_t m : {1, 2, 5}) {
+      if (frames / (step * m) <= ticks) return step * m;
+      if (m == 5) step *= 10;
+    }
+}
+
+}  // namespace
+
+std::vector<unsigned char> similarity_png(const LoopReport& report) {
+  const SimilarityMatrix& m = report.similarity;
+  if (m.empty()) return {};
+  const int cells = static_cast<int>(m.cells);
+  const int zoom = std::max(1, 700 / cells);  // pixels per cell
+  const int side = cells * zoom;
+  const int left = 70, top = 46, bottom = 150;
+  const int width = std::max(left + side + 30, 760);
+  cv::Mat canvas(top + side + bottom, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  const auto colour = [](int r, int g, int b) { return cv::Scalar(b, g, r); };
+  const cv::Scalar ink = colour(40, 40, 40);
+  const auto text = [&](const std::string& t, cv::Point at, double size = 0.42,
+                        cv::Scalar c = cv::Scalar(40, 40, 40)) {
+    cv::putText(canvas, t, at, cv::FONT_HERSHEY_SIMPLEX, size, c, 1, cv::LINE_AA);
+  };
+  const auto text_width = [](const std::string& t, double size = 0.42) {
+    int baseline = 0;
+    return cv::getTextSize(t, cv::FONT_HERSHEY_SIMPLEX, size, 1, &baseline).width;
+  };
+
+  // Scores shown up to a high quantile, so that a few near-duplicate
+  // neighbours do not wash out the loops.
+  std::vector<float> nonzero;
+  for (float v : m.scores)
+    if (v > 0) nonzero.push_back(v);
+  float full = 1;
+  if (!nonzero.empty()) {
+    const std::size_t q = std::min(nonzero.size() - 1, nonzero.size() * 98 / 100);
+    std::nth_element(nonzero.begin(), nonzero.begin() + static_cast<long>(q), nonzero.end());
+    full = std::max(nonzero[q], 1e-6f);
+  }
+  std::vector<char> truth_cells(m.cells * m.cells, 0);
+  if (report.truth.frames() > 0)
+    for (const std::size_t q : report.truth.loop_queries()) {
+      if (q >= m.frames) break;
+      for (const std::uint32_t j : report.truth.earlier_matches(q))
+        truth_cells[m.cell(q) * m.cells + m.cell(j)] = 1;
+    }
+  const auto mix = [](const cv::Vec3b& a, const cv::Vec3b& b, double t) {
+    cv::Vec3b out;
+    for (int i = 0; i < 3; ++i) out[i] = cv::saturate_cast<uchar>(a[i] + (b[i] - a[i]) * t);
+    return out;
+  };
+  const cv::Vec3b white(255, 255, 255), black(25, 25, 25), light_blue(250, 200, 150),
+      dark_blue(110, 35, 10);
+  cv::Mat plot(side, side, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (int r = 0; r < cells; ++r)
+    for (int c = 0; c <= r; ++c) {
+      const double v = std::min(1.0, double(m.at(r, c)) / full);
+      const cv::Vec3b pixel =
+          truth_cells[r * m.cells + c] ? mix(light_blue, dark_blue, v) : mix(white, black, v);
+      plot(cv::Rect(c * zoom, r * zoom, zoom, zoom))
+          .setTo(cv::Scalar(pixel[0], pixel[1], pixel[2]));
+    }
+  plot.copyTo(canvas(cv::Rect(left, top, side, side)));
+  cv::rectangle(canvas, cv::Rect(left - 1, top - 1, side + 2, side + 2), colour(140, 140, 140));
+  cv::line(canvas, {left, top}, {left + side, top + side}, colour(190, 190, 190), 1, cv::LINE_AA);
+
+  const auto centre = [&](std::size_t query, std::size_t match) {
+    return cv::Point(left + int(m.cell(match)) * zoom + zoom / 2,
+                     top + int(m.cell(query)) * zoom + zoom / 2);
+  };
+  // Marks grow with the cells, but stay small when cells are single pixels,
+  // or thousands of loops would cover the matrix.
+  const int radius = zoom >= 4 ? zoom / 2 + 2 : 2;
+  const int stroke = zoom >= 4 ? 2 : 1;
+  const cv::Scalar green = colour(20, 170, 40), red = colour(225, 20, 20),
+                   orange = colour(255, 140, 0), unjudged = colour(170, 40, 230);
+  const bool known_truth = report.truth.frames() > 0;
+  for (const MissedLoop& miss : report.missed) {
+    if (miss.query >= m.frames) continue;
+    const int y = top + int(m.cell(miss.query)) * zoom + zoom / 2;
+    const std::vector<cv::Point> arrow = {{left - 12, y - 4}, {left - 4, y}, {left - 12, y + 4}};
+    cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
+    if (miss.match >= 0 && static_cast<std::size_t>(miss.match) < m.frames)
+      cv::drawMarker(canvas, centre(miss.query, static_cast<std::size_t>(miss.match)), orange,
+                     cv::MARKER_TILTED_CROSS, 2 * radius, stroke, cv::LINE_AA);
+  }
+  for (const ReportLoop& loop : report.loops) {
+    const Detection& d = loop.detection;
+    if (d.query >= m.frames || d.match >= m.frames) continue;
+    cv::circle(canvas, centre(d.query, d.match), radius,
+               loop.verdict == 1   ? green
+               : loop.verdict == 0 ? red
+                                   : unjudged,
+               stroke, cv::LINE_AA);
+  }
+
+  // Axes: frame numbers, query i down, earlier image j across.
+  const std::size_t step = tick_step(m.frames, 10);
+  for (std::size_t f = 0; f < m.frames; f += step) {
+    const int at = int(double(f) / double(m.bin) * zoom + zoom / 2.0);
+    const std::string label = std::to_string(f);
+    cv::line(canvas, {left + at, top + side + 1}, {left + at, top + side + 5}, ink);
+    text(label, {left + at - text_width(label) / 2, top + side + 18});
+    cv::line(canvas, {left - 16, top + at}, {left - 20, top + at}, ink);
+    text(label, {left - 24 - text_width(label), top + at + 5});
+  }
+  text("earlier image j",
+       {left + side / 2 - text_width("earlier image j", 0.5) / 2, top + side + 38}, 0.5);
+  text("query i", {8, top - 12}, 0.5);
+  text("Similarity s(v_i, v_j), i > j", {left + side / 2 - 110, 22}, 0.55);
+
+  // Legend: the score scale, then the marks.
+  int y = top + side + 62;
+  const int bar = 160;
+  for (int i = 0; i < bar; ++i) {
+    const double t = double(i) / (bar - 1);
+    const cv::Vec3b g = mix(white, black, t), b = mix(light_blue, dark_blue, t);
+    cv::line(canvas, {left + i, y - 10}, {left + i, y}, cv::Scalar(g[0], g[1], g[2]));
+    if (known_truth)
+      cv::line(canvas, {left + i, y + 6}, {left + i, y + 16}, cv::Scalar(b[0], b[1], b[2]));
+  }
+  cv::rectangle(canvas, cv::Rect(left - 1, y - 11, bar + 2, 12), colour(140, 140, 140));
+  text("0", {left - 14, y});
+  text(format(">= %.3g", full), {left + bar + 6, y});
+  if (known_truth) {
+    cv::rectangle(canvas, cv::Rect(left - 1, y + 5, bar + 2, 12), colour(140, 140, 140));
+    text("not the same place", {left + bar + 80, y});
+    text("same place (ground truth)", {left + bar + 80, y + 16});
+  }
+  y += 42;
+  int x = left;
+  if (known_truth) {
+    cv::circle(canvas, {x + 6, y - 4}, 6, green, 2, cv::LINE_AA);
+    text("true loop", {x + 18, y});
+    x += 100;
+    cv::circle(canvas, {x + 6, y - 4}, 6, red, 2, cv::LINE_AA);
+    text("false loop", {x + 18, y});
+    x += 105;
+    cv::drawMarker(canvas, {x + 6, y - 4}, orange, cv::MARKER_TILTED_CROSS, 12, 2, cv::LINE_AA);
+    text("missed loop: its best candidate", {x + 18, y});
+    x += 250;
+    const std::vector<cv::Point> arrow = {{x, y - 8}, {x + 8, y - 4}, {x, y}};
+    cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
+    text("missed loop", {x + 14, y});
+  } else {
+    cv::circle(canvas, {x + 6, y - 4}, 6, unjudged, 2, cv::LINE_AA);
+    text("loop detected (no ground truth given: evaluate --report judges them)", {x + 18, y});
+  }
+  y += 26;
+  std::string note = std::to_string(m.frames) + " frames";
+  if (m.bin > 1)
+    note += "; one cell = " + std::to_string(m.bin) + " x " + std::to_string(m.bin) +
+            " frames, their highest score";
+  if (!m.every_query) note += "; sampled query rows";
+  text(note, {left, y}, 0.4, colour(100, 100, 100));
+
+  std::vector<unsigned char> bytes;
+  cv::imencode(".png", canvas, bytes);
+  return bytes;
+}
+
+namespace {
+
+std::string similarity_section(const LoopReport& report, const std::string& directory) {
+  const std::vector<unsigned char> png = similarity_png(report);
+  const std::string path = (std::filesystem::path(directory) / "similarity.png").string();
+  detail::write_file_atomically(path, png.data(), png.size());
+  const SimilarityMatrix& m = report.similarity;
+  std::ostringstream html;
+  html << "<h2 id='similarity-matrix'>Similarity matrix</h2><figure><img id='similarity' "
+          "alt='similarity matrix of the sequence with the ground truth and the detections' "
+          "src='data:image/png;base64,"
+       << base64(png) << "'><figcaption>BoW similarity s(v<sub>i</sub>, v<sub>j</sub>) of each "
+       << "query i with every earlier image j (darker: more similar), scored with the run's "
+          "vocabulary; "
+       << (report.truth.frames() > 0
+               ? "ground-truth cells in blue; detections circled (green true, red false); "
+                 "missed ground-truth loops marked in orange (their best candidate crossed)."
+               : "detections circled in purple.");
+  if (m.bin > 1)
+    html << " Binned: a cell covers " << m.bin << " × " << m.bin
+         << " frames and shows their highest score.";
+  if (!m.every_query)
+    html << " Only every " << (m.frames + kMaxSimilarityQueries - 1) / kMaxSimilarityQueries
+         << "th query row was scored (a bound on the work).";
+  html << " Also saved as similarity.png.</figcaption></figure>\n";
+  return html.str();
+}
+
+std::string sweep_table(const LoopReport& report) {
+  const PrCurvePoint* best = full_precision_point(report.curve);
+  std::ostringstream html;
+  html << "<table id='sweep'><tr><th>" << escape(parameter_symbol(report.curve_parameter))
+       << "</th><th>precision</th><th>recall</th><th>detections</th><th>true positives</th>"
+          "<th>false positives</th></tr>";
+  for (const PrCurvePoint& p : report.curve)
+    html << "<tr" << (&p == best ? " class='best'" : "") << "><td class='n'>"
+         << parameter_value(p.parameter) << "</td><td class='n'>"
+         << format("%.4f", p.result.precision) << "</td><td class='n'>"
+         << format("%.4f", p.result.recall) << "</td><td class='n'>" << p.result.detections
+         << "</td><td class='n'>" << p.result.true_positives << "</td><td class='n'>"
+         << p.result.false_positives << "</td></tr>";
+  html << "</table>\n";
+  return html.str();
+}
+
+// "31–35 (5)": the earlier images sharing the query's place.
+std::string truth_matches(const GroundTruth& truth, std::size_t query) {
+  if (query >= truth.frames()) return "–";
+  const Span<std::uint32_t> matches = truth.earlier_matches(query);
+  if (matches.empty()) return "–";
+  const std::uint32_t first = matches[0], last = matches[matches.size() - 1];
+  return first == last ? std::to_string(first)
+                       : std::to_string(first) + "–" + std::to_string(last) + " (" +
+                             std::to_string(matches.size()) + ")";
+}
+
+std::string missed_section(const LoopReport& report) {
+  std::ostringstream html;
+  html << "<h2 id='missed-loops'>Missed loops (" << report.missed.size() << " of "
+       << report.result.queries_with_loops << " queries with a ground-truth loop)</h2>";
+  if (report.missed.empty()) {
+    html << "<p>Every ground-truth loop was found.</p>\n";
+    return html.str();
+  }
+  // Why, in a few words: the count of each status.
+  std::vector<std::pair<std::string, std::size_t>> by_status;
+  for (const MissedLoop& miss : report.missed) {
+    const std::string status = miss.status.empty() ? "unknown" : miss.status;
+    auto it = std::find_if(by_status.begin(), by_status.end(),
+                           [&](const auto& s) { return s.first == status; });
+    if (it == by_status.end())
+      by_status.emplace_back(status, 1);
+    else
+      ++it->second;
+  }
+  html << "<table id='missed-by-status'><tr><th>status</th><th>missed</th><th>meaning</th></tr>";
+  for (const auto& [status, count] : by_status)
+    html << "<tr><td class='s'>" << escape(status) << "</td><td class='n'>" << count << "</td><td>"
+         << escape(status_explanation(status)) << "</td></tr>";
+  html << "</table>";
+  const bool known_truth = report.truth.frames() > 0;
+  html << "<table id='missed'><tr><th>query</th><th>file</th>"
+       << (known_truth ? "<th>ground-truth matches</th>" : "")
+       << "<th>status</th><th>best candidate</th><th>candidate right</th><th>η</th>"
+          "<th>correspondences</th><th>inliers</th></tr>";
+  for (const MissedLoop& miss : report.missed) {
+    const char* right = miss.candidate_right == 1   ? "<span class='tp'>yes</span>"
+                        : miss.candidate_right == 0 ? "<span class='fp'>no</span>"
+                                                    : "–";
+    html << "<tr id='missed-" << miss.query << "'><td class='n'>" << miss.query << "</td><td>"
+         << escape(miss.file) << "</td>";
+    if (known_truth) html << "<td class='n'>" << truth_matches(report.truth, miss.query) << "</td>";
+    html << "<td class='s'>" << (miss.status.empty() ? "unknown" : escape(miss.status))
+         << "</td><td class='n'>" << (miss.match < 0 ? "none" : std::to_string(miss.match))
+         << "</td><td>" << right << "</td><td class='n'>"
+         << (miss.match < 0 ? "–" : format("%.3f", miss.normalised_score)) << "</td><td class='n'>"
+         << (!geometrically_checked(miss) ? "–"
+             : miss.correspondences < 0   ? "unknown"
+                                          : std::to_string(miss.correspondences))
+         << "</td><td class='n'>"
+         << (!geometrically_checked(miss) ? "–"
+             : miss.inliers < 0           ? "unknown"
+                                          : std::to_string(miss.inliers))
+         << "</td></tr>";
+  }
+  html << "</table>\n";
+  return html.str();
 }
 
 }  // namespace
@@ -170,7 +518,9 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
           "#ccc;padding:3px 8px;"
        << "text-align:left;font-size:13px}th{background:#f0f0f0}td.n{text-align:right}"
        << ".tp{color:#17702b}.fp{color:#b02020;font-weight:bold}pre{background:#f6f6f6;padding:8px}"
-       << "figure{margin:10px 0 18px}figcaption{font-size:13px}img{max-width:100%}"
+       << "figure{margin:10px 0 18px}figcaption{font-size:13px;max-width:900px}img{max-width:100%}"
+       << ".side{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}"
+       << "tr.best td{background:#e3f4e6;font-weight:bold}td.s{white-space:nowrap}"
        << "</style></head><body>\n<h1>" << escape(report.title) << "</h1>\n";
 
   if (!report.facts.empty()) {
@@ -192,12 +542,30 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
   }
   if (!report.curve.empty() || report.has_result) {
     html << "<h2>Precision–recall curve</h2>";
-    if (!report.curve.empty())
-      html << "<p>Swept: " << escape(report.curve_parameter) << " (" << report.curve.size()
-           << " points). Recall at 100% precision: "
-           << format("%.4f", report.recall_at_full_precision) << ".</p>";
-    html << pr_curve_svg(report) << "\n";
+    if (!report.curve.empty()) {
+      html << "<p id='full-precision'>Swept: " << escape(report.curve_parameter) << " ("
+           << report.curve.size() << " points), drawn in recall order. Recall at 100% precision: "
+           << format("%.4f", report.recall_at_full_precision);
+      if (const PrCurvePoint* best = full_precision_point(report.curve)) {
+        html << ", reached at " << escape(parameter_symbol(report.curve_parameter)) << " = "
+             << parameter_value(best->parameter);
+        std::vector<std::string> also;
+        for (const PrCurvePoint& p : report.curve)
+          if (&p != best && p.result.false_positives == 0 && p.result.detections > 0 &&
+              p.result.recall == best->result.recall)
+            also.push_back(parameter_value(p.parameter));
+        if (!also.empty())
+          html << " (also at "
+               << (also.size() <= 4 ? join(also) : also.front() + ", …, " + also.back()) << ")";
+      }
+      html << ".</p>";
+    }
+    html << "<div class='side'>" << pr_curve_svg(report);
+    if (!report.curve.empty()) html << sweep_table(report);
+    html << "</div>\n";
   }
+  if (!report.similarity.empty()) html << similarity_section(report, directory);
+  if (report.has_result) html << missed_section(report);
   if (!report.params_json.empty())
     html << "<h2>Parameters</h2><pre id='params'>" << escape(report.params_json) << "</pre>\n";
   if (!report.timing.empty()) {
@@ -276,7 +644,20 @@ LoopReport make_loop_report(const std::vector<SequenceFrame>& frames,
   if (truth != nullptr) {
     report.has_result = true;
     report.result = evaluate_detections(detections, *truth);
+    std::vector<FrameRecord> records;
+    records.reserve(frames.size());
+    for (const SequenceFrame& frame : frames) records.push_back(frame_record(frame));
+    report.missed = missed_loops(records, detections, *truth);
+    report.truth = *truth;
   }
+  return report;
+}
+
+LoopReport make_loop_report(const std::vector<SequenceFrame>& frames,
+                            const LoopDetectorParams& params, const GroundTruth* truth,
+                            const SimilarityMatrix& similarity) {
+  LoopReport report = make_loop_report(frames, params, truth);
+  report.similarity = similarity;
   return report;
 }
 

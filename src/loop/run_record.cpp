@@ -74,13 +74,15 @@ struct LoopRunFiles::Impl {
   }
 
   void add_frame(const SequenceFrame& f) {
-    const LoopResult& r = f.result;
-    const Json frame = {{"file", f.file},
-                        {"status", to_string(r.status)},
-                        {"match", r.has_candidate ? static_cast<long long>(r.match) : -1},
+    const FrameRecord r = frame_record(f);
+    // "correspondences" is new in version 1; readers treat it as optional.
+    const Json frame = {{"file", r.file},
+                        {"status", r.status},
+                        {"match", r.match},
                         {"score", r.score},
                         {"normalised_score", r.normalised_score},
-                        {"inliers", r.inliers.size()}};
+                        {"inliers", r.inliers},
+                        {"correspondences", r.correspondences}};
     write((frames == 0 ? "\n" : ",\n") + json_text(frame));
     ++frames;
     const std::array<double, kStageCount> stage_ms = f.stage_ms();
@@ -161,6 +163,17 @@ const std::vector<StageTiming>& LoopRunFiles::timing() const noexcept {
   return impl_->timing;
 }
 
+FrameRecord frame_record(const SequenceFrame& frame) {
+  const LoopResult& r = frame.result;
+  return {frame.file,
+          to_string(r.status),
+          r.has_candidate ? static_cast<long long>(r.match) : -1,
+          r.score,
+          r.normalised_score,
+          r.inliers.size(),
+          static_cast<long long>(r.correspondences)};
+}
+
 std::vector<StageTiming> stage_timings(const std::vector<SequenceFrame>& frames) {
   std::vector<StageTiming> timing;
   for (const char* stage : kStageNames) timing.push_back({stage, {}});
@@ -190,11 +203,18 @@ LoopRun LoopRun::load(const std::string& path) {
       run.source.max_width = source.at("max_width").get<int>();
       run.source.video_fps = source.at("video_fps").get<double>();
     }
-    for (const Json& f : j.at("frames"))
+    for (const Json& f : j.at("frames")) {
+      // Absent from records written before it was added: not known.
+      const long long correspondences =
+          f.contains("correspondences") ? f.at("correspondences").get<long long>() : -1;
+      if (correspondences < -1)
+        throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
+                                  " has a negative number of correspondences");
       run.frames.push_back({f.at("file").get<std::string>(), f.at("status").get<std::string>(),
                             f.at("match").get<long long>(), f.at("score").get<double>(),
                             f.at("normalised_score").get<double>(),
-                            f.at("inliers").get<std::size_t>()});
+                            f.at("inliers").get<std::size_t>(), correspondences});
+    }
     for (const Json& l : j.at("loops"))
       run.loops.push_back({l.at("query").get<std::size_t>(), l.at("match").get<std::size_t>(),
                            l.at("inliers").get<std::vector<std::array<float, 4>>>()});

@@ -1,6 +1,8 @@
 #include "binbow/loop/sweep.h"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <nlohmann/json.hpp>
 
@@ -19,13 +21,20 @@ std::vector<double> default_alpha_values() {
 
 namespace {
 
+[[noreturn]] void throw_not_sweepable(const std::string& parameter) {
+  std::string choices;
+  for (const std::string& name : sweepable_parameters())
+    choices += (choices.empty() ? "" : ", ") + name;
+  throw InvalidArgument("cannot sweep \"" + parameter +
+                        "\": not a numeric loop detector parameter (choices: " + choices + ")");
+}
+
 // `base` with one field set, through the parameter file's validation.
 LoopDetectorParams with_value(const LoopDetectorParams& base, const std::string& parameter,
                               double value) {
   nlohmann::json fields = nlohmann::json::parse(base.to_json());
-  if (!fields.contains(parameter) || !fields.at(parameter).is_number())
-    throw InvalidArgument("cannot sweep \"" + parameter +
-                          "\": not a numeric loop detector parameter");
+  if (!fields.contains(parameter) || !fields.at(parameter).is_number() || parameter == "frequency")
+    throw_not_sweepable(parameter);
   if (fields.at(parameter).is_number_integer()) {
     if (!(std::abs(value) <= 1e15) || value != std::trunc(value))
       throw InvalidArgument("cannot sweep \"" + parameter + "\" over " + std::to_string(value) +
@@ -44,43 +53,118 @@ LoopDetectorParams with_value(const LoopDetectorParams& base, const std::string&
 
 }  // namespace
 
-std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& vocabulary,
-                                          const GroundTruth& truth, const std::string& parameter,
+std::vector<std::string> sweepable_parameters() {
+  std::vector<std::string> names;
+  const auto fields = nlohmann::ordered_json::parse(LoopDetectorParams{}.to_json());
+  for (const auto& [key, value] : fields.items())
+    if (value.is_number() && key != "frequency") names.push_back(key);
+  return names;
+}
+
+std::vector<double> default_sweep_values(const std::string& parameter) {
+  const std::vector<std::string> names = sweepable_parameters();
+  if (std::find(names.begin(), names.end(), parameter) == names.end())
+    throw_not_sweepable(parameter);
+  if (parameter == "alpha") return default_alpha_values();
+  // Around the paper's defaults (in brackets), within each parameter's range.
+  static const std::map<std::string, std::vector<double>> ranges = {
+      {"min_normalisation_score", {0, 0.001, 0.0025, 0.005, 0.01, 0.02, 0.05, 0.1}},  // 0.005
+      {"dislocal", {0, 5, 10, 15, 20, 30, 40, 60, 100}},                              // 20
+      {"max_db_results", {1, 5, 10, 20, 50, 100, 200}},                               // 50
+      {"max_intra_island_gap", {1, 2, 3, 4, 5, 8, 12}},                               // 3
+      {"min_matches_per_island", {1, 2, 3, 4, 5, 8}},                                 // 1
+      {"k", {0, 1, 2, 3, 4, 5, 6, 8, 10}},                                            // 3
+      {"max_distance_between_islands", {0, 1, 2, 3, 4, 5, 8, 12}},                    // 3
+      {"max_distance_between_queries", {1, 2, 3, 4, 5, 8}},                           // 2
+      {"direct_index_levels", {0, 1, 2, 3, 4, 5, 6}},                                 // 2
+      {"max_verified_entries", {1, 2, 3, 4, 5, 10}},                                  // 1
+      {"max_neighbor_ratio", {0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 1}},   // 0.6
+      {"max_match_distance", {0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.75, 1}},        // 1
+      {"min_inliers", {8, 10, 12, 14, 16, 20, 25, 30, 40, 50}},                       // 12
+      {"max_reprojection_error", {0.5, 1, 1.5, 2, 2.5, 3, 4, 5, 8}},                  // 2
+      {"ransac_confidence", {0.9, 0.95, 0.99, 0.995, 0.999}},                         // 0.99
+      {"max_ransac_iterations", {50, 100, 200, 500, 1000, 2000, 5000}},               // 500
+  };
+  const auto found = ranges.find(parameter);
+  if (found == ranges.end())
+    throw InvalidArgument("no default values to sweep \"" + parameter + "\"; give them");
+  return found->second;
+}
+
+std::vector<double> sweep_values(const std::string& parameter, const std::vector<double>& given) {
+  const std::vector<double> values = given.empty() ? default_sweep_values(parameter) : given;
+  for (const double value : values) with_value(LoopDetectorParams{}, parameter, value);
+  return values;
+}
+
+const PrCurvePoint* full_precision_point(const std::vector<PrCurvePoint>& curve) {
+  const PrCurvePoint* best = nullptr;
+  for (const PrCurvePoint& p : curve)
+    if (p.result.false_positives == 0 && p.result.detections > 0 &&
+        (best == nullptr || p.result.recall >= best->result.recall))
+      best = &p;
+  return best;
+}
+
+std::vector<PrCurvePoint> curve_in_recall_order(std::vector<PrCurvePoint> curve) {
+  std::stable_sort(curve.begin(), curve.end(), [](const PrCurvePoint& a, const PrCurvePoint& b) {
+    return a.result.recall < b.result.recall ||
+           (a.result.recall == b.result.recall && a.result.precision > b.result.precision);
+  });
+  return curve;
+}
+
+RunFeatures extract_run_features(const LoopRun& run, const SweepProgress& progress) {
+  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
+  vision::ImageSource source(run.inputs, run.source);
+  RunFeatures out;
+  vision::Frame frame;
+  while (source.next(frame)) {
+    out.features.push_back(extractor->extract(frame.image));
+    out.names.push_back(frame.name);
+    if (progress) progress("extracting features", out.features.size(), run.frames.size());
+  }
+  if (out.features.size() != run.frames.size())
+    throw InvalidArgument("the inputs of the recorded run now have " +
+                          std::to_string(out.features.size()) + " frames instead of " +
+                          std::to_string(run.frames.size()) + "; run detect-loops again");
+  return out;
+}
+
+std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const RunFeatures& features,
+                                          const Vocabulary& vocabulary, const GroundTruth& truth,
+                                          const std::string& parameter,
                                           const std::vector<double>& values,
                                           const SweepProgress& progress) {
   const LoopDetectorParams base = LoopDetectorParams::from_json(run.params_json);
   std::vector<LoopDetectorParams> settings;
   for (double value : values) settings.push_back(with_value(base, parameter, value));
 
-  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
-  vision::ImageSource source(run.inputs, run.source);
-  std::vector<vision::Features> features;
-  std::vector<std::string> names;
-  vision::Frame frame;
-  while (source.next(frame)) {
-    features.push_back(extractor->extract(frame.image));
-    names.push_back(frame.name);
-    if (progress) progress("extracting features", features.size(), run.frames.size());
-  }
-  if (features.size() != run.frames.size())
-    throw InvalidArgument("the inputs of the recorded run now have " +
-                          std::to_string(features.size()) + " frames instead of " +
-                          std::to_string(run.frames.size()) + "; run detect-loops again");
-
   std::vector<PrCurvePoint> curve;
   for (std::size_t v = 0; v < values.size(); ++v) {
     LoopDetector detector(vocabulary, settings[v]);
     std::vector<Detection> detections;
-    for (std::size_t i = 0; i < features.size(); ++i) {
-      const LoopResult r = detector.process(features[i]);
+    for (std::size_t i = 0; i < features.features.size(); ++i) {
+      const LoopResult r = detector.process(features.features[i]);
       if (r.detection())
-        detections.push_back(
-            {r.query, r.match, names[i], names[r.match], r.normalised_score, r.inliers.size()});
+        detections.push_back({r.query, r.match, features.names[i], features.names[r.match],
+                              r.normalised_score, r.inliers.size()});
     }
     curve.push_back({values[v], evaluate_detections(detections, truth)});
     if (progress) progress("sweeping " + parameter, curve.size(), values.size());
   }
   return curve;
+}
+
+std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& vocabulary,
+                                          const GroundTruth& truth, const std::string& parameter,
+                                          const std::vector<double>& values,
+                                          const SweepProgress& progress) {
+  // Parameter errors before the (long) feature extraction.
+  const LoopDetectorParams base = LoopDetectorParams::from_json(run.params_json);
+  for (double value : values) with_value(base, parameter, value);
+  return sweep_parameter(run, extract_run_features(run, progress), vocabulary, truth, parameter,
+                         values, progress);
 }
 
 }  // namespace binbow::loop

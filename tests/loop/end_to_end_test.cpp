@@ -106,6 +106,7 @@ TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
   std::getline(csv, header);
   EXPECT_EQ(header, "query_index,match_index,query_file,match_file,score,inliers");
   EXPECT_TRUE(std::filesystem::exists(dir.file("run-report/index.html")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("run-report/similarity.png")));
 
   ASSERT_EQ(test::run_command(cli + " evaluate --gt " + gt + " --sweep --report " +
                                   dir.file("report") + " " + dir.file("loops.csv"),
@@ -115,6 +116,49 @@ TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
   EXPECT_EQ(std::stod(line_value(out, "precision")), 1.0) << out;
   EXPECT_GE(std::stod(line_value(out, "recall")), 0.75) << out;
   EXPECT_GE(std::stod(line_value(out, "recall at 100% precision")), 0.75) << out;
+  // Every missed ground-truth loop is listed, one line each, with its frame's status.
+  const std::size_t missed = std::stoul(line_value(out, "missed loops"));
+  EXPECT_EQ(missed, std::stoul(line_value(out, "queries with a loop")) -
+                        std::stoul(line_value(out, "queries found")))
+      << out;
+  const std::regex miss_line(
+      "\n  query [0-9]+: [a-z-]+, (no candidate|candidate [0-9]+ \\((right|wrong)\\))");
+  EXPECT_EQ(std::size_t(std::distance(std::sregex_iterator(out.begin(), out.end(), miss_line),
+                                      std::sregex_iterator())),
+            missed)
+      << out;
+  // The α the recall at 100% precision was reached at, and the table.
+  const std::string reached = line_value(out, "reached at alpha");
+  ASSERT_FALSE(reached.empty()) << out;
+  EXPECT_NE(out.find("\n" + reached + " "), std::string::npos) << "not a swept value: " << out;
+  EXPECT_NE(out.find("\nalpha     precision     recall detections\n"), std::string::npos) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("report/similarity.png")));
+
+  // Another parameter, with its default values or given ones.
+  std::string k_out;
+  ASSERT_EQ(test::run_command(
+                cli + " evaluate --gt " + gt + " --sweep --sweep-param k " + dir.file("loops.csv"),
+                &k_out),
+            0)
+      << k_out;
+  EXPECT_NE(k_out.find("\nk         precision     recall detections\n"), std::string::npos)
+      << k_out;
+  EXPECT_FALSE(line_value(k_out, "reached at k").empty()) << k_out;
+  ASSERT_EQ(test::run_command(cli + " evaluate --gt " + gt +
+                                  " --sweep --sweep-param min_inliers --sweep-values 12,30 " +
+                                  dir.file("loops.csv"),
+                              &k_out),
+            0)
+      << k_out;
+  EXPECT_NE(k_out.find("\n12 "), std::string::npos) << k_out;
+  EXPECT_NE(k_out.find("\n30 "), std::string::npos) << k_out;
+  EXPECT_EQ(k_out.find("\n20 "), std::string::npos) << k_out;
+  EXPECT_EQ(test::run_command(cli + " evaluate --gt " + gt + " --sweep --sweep-param bogus " +
+                                  dir.file("loops.csv"),
+                              &k_out),
+            1);
+  EXPECT_NE(k_out.find("binbow: error: cannot sweep \"bogus\""), std::string::npos) << k_out;
+  EXPECT_NE(k_out.find("choices: alpha"), std::string::npos) << k_out;
 
   // The same numbers from the 1-based pair list.
   std::string pairs_out;
@@ -131,7 +175,8 @@ TEST_F(RealSequence, CommandLineDetectEvaluateAndReportRendersInChromium) {
   std::stringstream html;
   html << in.rdbuf();
   for (const char* part :
-       {"<svg", "id='params'", "id='timing'", "id='detections'", "data:image/jpeg;base64,"})
+       {"<svg", "id='params'", "id='timing'", "id='detections'", "data:image/jpeg;base64,",
+        "id='missed'", "id='sweep'", "id='similarity'", "data:image/png;base64,", "α="})
     EXPECT_NE(html.str().find(part), std::string::npos) << part;
   EXPECT_EQ(html.str().find("http://"), html.str().find("http://www.w3.org/2000/svg"))
       << "the page must not fetch anything";

@@ -27,6 +27,15 @@ TEST(EvaluateCommand, MatGroundTruthAndErrors) {
   EXPECT_NEAR(test::printed_number(out, "recall"), expected.recall, 1e-5) << out;
   // Without a run record the sweep thresholds the scores (all equal here).
   EXPECT_NEAR(test::printed_number(out, "recall at 100% precision"), 0, 1e-9) << out;
+  // Without a run record, the misses are known only by the detections.
+  const double missed = test::printed_number(out, "missed loops");
+  EXPECT_EQ(missed, double(expected.queries_with_loops - expected.queries_found)) << out;
+  EXPECT_NE(out.find(": status unknown, candidate unknown\n"), std::string::npos) << out;
+  // Re-running detection over another parameter needs the record.
+  EXPECT_EQ(test::run_cli(
+                "evaluate --gt " + gt + " --sweep --sweep-param k " + dir.file("loops.csv"), &out),
+            1);
+  EXPECT_NE(out.find("binbow: error: --sweep-param k re-runs detection"), std::string::npos) << out;
 
   detections.push_back({truth.frames(), 0, "", "", 1, 12});
   write_detections_csv(dir.file("outside.csv"), detections);

@@ -64,6 +64,8 @@ class GroundTruth {
   // Earlier images sharing a place with `query`, increasing.
   Span<std::uint32_t> earlier_matches(std::size_t query) const;
   std::size_t queries_with_loops() const noexcept { return queries_with_loops_; }
+  // The queries that have a loop, increasing (queries_with_loops() of them).
+  std::vector<std::size_t> loop_queries() const;
   std::size_t pair_count() const noexcept { return earlier_.size(); }
 
  private:

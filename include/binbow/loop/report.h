@@ -1,7 +1,9 @@
 // The HTML report of detect-loops and evaluate: one self-contained page
 // (inline CSS, SVG and base64 images; nothing fetched) with the
-// precision–recall curve, the parameters, the per-stage timing, the table of
-// detections and, for each loop, the two images side by side with the inlier
+// precision–recall curve and its sweep table, the similarity matrix with the
+// ground truth and the detections over it, every missed ground-truth loop
+// and why, the parameters, the per-stage timing, the table of detections
+// and, for each loop, the two images side by side with the inlier
 // correspondences drawn.
 #pragma once
 
@@ -11,8 +13,10 @@
 #include <vector>
 
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/misses.h"
 #include "binbow/loop/run_record.h"
 #include "binbow/loop/sequence.h"
+#include "binbow/loop/similarity.h"
 
 namespace binbow::loop {
 
@@ -34,9 +38,17 @@ struct LoopReport {
   std::vector<PrCurvePoint> curve;  // empty: no curve
   std::string curve_parameter;      // what the curve sweeps ("alpha", "score")
   double recall_at_full_precision = 0;
+  // With a ground truth (has_result): the missed loops (missed_loops()),
+  // listed in the "Missed loops" table (id 'missed', a row id 'missed-<query>' each).
+  std::vector<MissedLoop> missed;
+  // Drawn as similarity.png (written beside index.html and embedded) with
+  // `truth` and the loops over it; empty: no figure.
+  SimilarityMatrix similarity;
+  GroundTruth truth;  // for the figure; frames() == 0: not known
 };
 
-// Writes DIRECTORY/index.html (creating the directory), atomically.
+// Writes DIRECTORY/index.html (creating the directory), atomically, and
+// DIRECTORY/similarity.png when the report has a similarity matrix.
 // Returns the page's path. Images that cannot be read are reported as such.
 std::string write_loop_report(const std::string& directory, const LoopReport& report);
 
@@ -45,5 +57,15 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
 // truth, each detection's verdict and precision and recall too.
 LoopReport make_loop_report(const std::vector<SequenceFrame>& frames,
                             const LoopDetectorParams& params, const GroundTruth* truth = nullptr);
+// The same with the similarity matrix of the sequence (similarity_matrix() of
+// the SequenceDetector's detector, or of the frames' features) for the figure.
+LoopReport make_loop_report(const std::vector<SequenceFrame>& frames,
+                            const LoopDetectorParams& params, const GroundTruth* truth,
+                            const SimilarityMatrix& similarity);
+
+// The similarity matrix drawn as an image with axes, a colour scale and a
+// legend: scores in grey, ground-truth cells in blue, true loops green, false
+// loops red, missed ground-truth loops orange. PNG bytes.
+std::vector<unsigned char> similarity_png(const LoopReport& report);
 
 }  // namespace binbow::loop

@@ -27,7 +27,13 @@ struct FrameRecord {
   double score = 0;
   double normalised_score = 0;
   std::size_t inliers = 0;
+  // Putative correspondences given to RANSAC (LoopResult::correspondences);
+  // -1 when not known (records written before the key existed).
+  long long correspondences = -1;
 };
+
+// What the run record keeps of a frame.
+FrameRecord frame_record(const SequenceFrame& frame);
 
 // The report draws the first kDrawnLoops loops, each with at most
 // kDrawnInliers of its inliers (spread over all of them): more make the page

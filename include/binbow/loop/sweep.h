@@ -1,6 +1,7 @@
 // Precision–recall curves by re-running detection: the run recorded beside a
 // loops.csv (LoopRun) is run again over its inputs for each value of one
-// parameter, features extracted once. What `binbow evaluate --sweep` draws.
+// parameter, features extracted once (and shared with the similarity matrix,
+// similarity.h). What `binbow evaluate --sweep [--sweep-param NAME]` draws.
 #pragma once
 
 #include <cstddef>
@@ -10,6 +11,7 @@
 
 #include "binbow/loop/evaluation.h"
 #include "binbow/loop/run_record.h"
+#include "binbow/vision/features.h"
 #include "binbow/vocabulary.h"
 
 namespace binbow::loop {
@@ -18,6 +20,31 @@ namespace binbow::loop {
 // then beyond 1 (η exceeds 1 when the loop image is more similar than the
 // previous frame).
 std::vector<double> default_alpha_values();
+
+// The LoopDetectorParams fields a sweep can set: every numeric field but
+// frequency (informative only), in to_json() order.
+std::vector<std::string> sweepable_parameters();
+// The values swept when none are given: α as default_alpha_values(), and a
+// range around the default for k, min_inliers, max_reprojection_error,
+// max_neighbor_ratio, dislocal and the other numeric fields, increasing.
+// Throws InvalidArgument naming the choices for a name that is not in
+// sweepable_parameters().
+std::vector<double> default_sweep_values(const std::string& parameter);
+// `given`, or default_sweep_values() when it is empty, checked: throws
+// InvalidArgument naming the choices for an unknown parameter, or naming a
+// value out of the parameter's range (before any work is done).
+std::vector<double> sweep_values(const std::string& parameter,
+                                 const std::vector<double>& given = {});
+
+// The point where recall_at_full_precision() is reached: the highest recall
+// with precision 1 and a detection; of several, the last in curve order (the
+// highest value of an increasing sweep: the strictest α still reaching it).
+// nullptr if there is none.
+const PrCurvePoint* full_precision_point(const std::vector<PrCurvePoint>& curve);
+
+// The curve as it is drawn: by increasing recall, then decreasing precision;
+// points equal in both keep their sweep order.
+std::vector<PrCurvePoint> curve_in_recall_order(std::vector<PrCurvePoint> curve);
 
 // Told the stage ("extracting features", "sweeping <parameter>"), the steps
 // done and the steps in that stage.
@@ -31,6 +58,21 @@ using SweepProgress =
 // range, or when the inputs no longer have the recorded number of frames.
 std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& vocabulary,
                                           const GroundTruth& truth, const std::string& parameter,
+                                          const std::vector<double>& values,
+                                          const SweepProgress& progress = {});
+
+// The features of a recorded run's frames, extracted once (as the run did)
+// for any number of sweeps and the similarity matrix.
+struct RunFeatures {
+  std::vector<vision::Features> features;  // frame i
+  std::vector<std::string> names;          // vision::Frame::name of frame i
+};
+// Throws FileError for unreadable inputs, InvalidArgument when they no longer
+// have the recorded number of frames.
+RunFeatures extract_run_features(const LoopRun& run, const SweepProgress& progress = {});
+std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const RunFeatures& features,
+                                          const Vocabulary& vocabulary, const GroundTruth& truth,
+                                          const std::string& parameter,
                                           const std::vector<double>& values,
                                           const SweepProgress& progress = {});
 
