@@ -38,6 +38,9 @@ struct LoopDetector::Impl {
   Database database;
   detail::TemporalWindow window;
   BowVector previous_bow;
+  // Images with features so far: the time axis of the temporal window when
+  // featureless frames are skipped.
+  EntryId featured_frames = 0;
   // Features of every image, one contiguous array each; entry e owns
   // [offsets[e], offsets[e + 1]).
   std::vector<Keypoint> keypoints;
@@ -175,7 +178,8 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
         if (island == nullptr) {
           result.status = LoopStatus::kNoIslands;
         } else {
-          result.consistent_queries = d.window.update(*island, entry);
+          result.consistent_queries =
+              d.window.update(*island, p.skip_featureless_frames ? d.featured_frames : entry);
           result.match = island->best_entry;
           result.normalised_score = island->best_score;
           result.score = island->best_score * factor;
@@ -225,7 +229,8 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
                                 descriptors.data + descriptors.rows * descriptors.code_size);
   }
   d.offsets.push_back(d.keypoints.size());
-  d.previous_bow = std::move(bow);
+  if (!bow.empty() || !p.skip_featureless_frames) d.previous_bow = std::move(bow);
+  if (!descriptors.empty()) ++d.featured_frames;
   result.times.insertion_ms = milliseconds_since(clock);
   return result;
 }
@@ -257,6 +262,7 @@ void LoopDetector::clear() {
   d.database.clear();
   d.window.clear();
   d.previous_bow.clear();
+  d.featured_frames = 0;
   d.keypoints.clear();
   d.descriptor_bytes.clear();
   d.offsets.assign(1, 0);

@@ -76,6 +76,7 @@ const std::vector<Field>& fields() {
       bool_field("use_normalised_score", &P::use_normalised_score),
       number_field("alpha", &P::alpha),
       number_field("min_normalisation_score", &P::min_normalisation_score),
+      bool_field("skip_featureless_frames", &P::skip_featureless_frames),
       number_field("dislocal", &P::dislocal),
       number_field("max_db_results", &P::max_db_results),
       number_field("max_intra_island_gap", &P::max_intra_island_gap),

@@ -73,6 +73,14 @@ struct LoopDetectorParams {
   // Frames with s(v_t, v_{t−Δt}) below this are skipped (status
   // kLowNormalisationScore): η would divide by a meaningless score. [0, 1000]
   double min_normalisation_score = 0.005;
+  // binbow's addition, on by default: an image without features (blurred,
+  // dark, blank) is invisible to the temporal rules. It is not the previous
+  // image v_{t−Δt} that η divides by (the latest image with features is),
+  // and it does not count in max_distance_between_queries. With false
+  // (DLoopDetector), the frame after a featureless one is skipped (its
+  // normalisation score is 0) and the temporal chain restarts, costing the
+  // k frames after it. See docs/loop-detection.md.
+  bool skip_featureless_frames = true;
 
   // --- Database query
   int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f) [0, 1e6]
