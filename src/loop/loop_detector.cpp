@@ -74,11 +74,15 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   check.max_reprojection_error = params.max_reprojection_error;
   check.confidence = params.ransac_confidence;
   check.max_iterations = params.max_ransac_iterations;
+  check.estimator = params.fundamental_estimator;
+  check.min_inlier_ratio = params.min_inlier_ratio;
+  check.min_inlier_spread = params.min_inlier_spread;
 
   MatchOptions matching;
   matching.max_neighbor_ratio = params.max_neighbor_ratio;
   matching.max_distance_fraction = params.max_match_distance;
   matching.accept_single_candidate = params.accept_single_candidate;
+  matching.mutual = params.mutual_matching;
   std::vector<Correspondence> correspondences;
   if (params.geometric_check == GeometricCheck::kDirectIndex) {
     correspondences = match_direct_index(query_descriptors, query_nodes, match_descriptors,

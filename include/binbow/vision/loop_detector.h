@@ -110,8 +110,10 @@ struct LoopDetectorParams {
   bool exhaustive_fallback = true;
   // Entries of the best island checked, best η first, until one is
   // geometrically consistent. 1 (the paper): only the island's best entry.
-  // [1, 10]
-  int max_verified_entries = 1;
+  // binbow checks a second one by default: the island, not its best entry,
+  // passed the temporal test, and the best-scoring image is not always the
+  // one with the most shared structure. [1, 10]
+  int max_verified_entries = 2;
   double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences (0, 1]
   // Largest Hamming distance of a correspondence, as a fraction of the
   // descriptor's bits. binbow's addition (see exhaustive_fallback's note).
@@ -121,10 +123,21 @@ struct LoopDetectorParams {
   // direct-index node (no second neighbour for the ratio test), as
   // DLoopDetector does. Off by default: see MatchOptions.
   bool accept_single_candidate = false;
+  // binbow's addition: a correspondence must pass the ratio test both ways
+  // (MatchOptions::mutual).
+  bool mutual_matching = false;
+  // The robust estimator. binbow's default is MAGSAC++ (OpenCV's USAC):
+  // its local optimisation finds the full inlier set where plain RANSAC
+  // (the paper, "ransac") stops at a partial one below min_inliers.
+  FundamentalEstimator fundamental_estimator = FundamentalEstimator::kUsacMagsac;
   int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix [8, 1e4]
   double max_reprojection_error = 2.0;  // pixels, RANSAC threshold [0.1, 100]
   double ransac_confidence = 0.99;      // (0, 1)
   int max_ransac_iterations = 500;      // [1, 5000]
+  // binbow's additions (FundamentalCheckParams): minimum inliers /
+  // correspondences, and minimum inlier_spread() over both images. [0, 1]
+  double min_inlier_ratio = 0;
+  double min_inlier_spread = 0;
 
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
