@@ -110,10 +110,9 @@ struct LoopDetectorParams {
   bool exhaustive_fallback = true;
   // Entries of the best island checked, best η first, until one is
   // geometrically consistent. 1 (the paper): only the island's best entry.
-  // binbow checks a second one by default: the island, not its best entry,
-  // passed the temporal test, and the best-scoring image is not always the
-  // one with the most shared structure. [1, 10]
-  int max_verified_entries = 2;
+  // More raise BRIEF recall but let false loops through (see
+  // docs/loop-detection.md). [1, 10]
+  int max_verified_entries = 1;
   double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences (0, 1]
   // Largest Hamming distance of a correspondence, as a fraction of the
   // descriptor's bits. binbow's addition (see exhaustive_fallback's note).
