@@ -9,7 +9,8 @@
 //   3. agrees with the islands of the k previous queries (temporal
 //      consistency), and
 //   4. the best entry of that island and the query have a fundamental matrix
-//      with enough RANSAC inliers (geometric consistency).
+//      with enough RANSAC inliers (geometric consistency; binbow's default
+//      estimator is MAGSAC++, see LoopDetectorParams).
 #pragma once
 
 #include <cstddef>
@@ -59,7 +60,12 @@ inline constexpr int kMaxRansacIterations = 5000;     // max_ransac_iterations
 inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  // load()
 
 // Every parameter of the detector, with its valid range in brackets. The
-// defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz;
+// defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
+// except binbow's measured departures, each switchable back:
+// accept_single_candidate, exhaustive_fallback, skip_featureless_frames and
+// fundamental_estimator (docs/loop-detection.md has their effect). The
+// DLoopDetector rules: {"accept_single_candidate": true, "exhaustive_fallback":
+// false, "skip_featureless_frames": false, "fundamental_estimator": "ransac"}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
