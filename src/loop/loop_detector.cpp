@@ -48,6 +48,9 @@ struct LoopDetector::Impl {
   Database database;
   detail::TemporalWindow window;
   BowVector previous_bow;
+  // Images with features so far: the time axis of the temporal window when
+  // featureless frames are skipped.
+  EntryId featured_frames = 0;
   // Features of every image, one contiguous array each; entry e owns
   // [offsets[e], offsets[e + 1]).
   std::vector<Keypoint> keypoints;
@@ -81,11 +84,15 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   check.max_reprojection_error = params.max_reprojection_error;
   check.confidence = params.ransac_confidence;
   check.max_iterations = params.max_ransac_iterations;
+  check.estimator = params.fundamental_estimator;
+  check.min_inlier_ratio = params.min_inlier_ratio;
+  check.min_inlier_spread = params.min_inlier_spread;
 
   MatchOptions matching;
   matching.max_neighbor_ratio = params.max_neighbor_ratio;
   matching.max_distance_fraction = params.max_match_distance;
   matching.accept_single_candidate = params.accept_single_candidate;
+  matching.mutual = params.mutual_matching;
   std::vector<Correspondence> correspondences;
   if (params.geometric_check == GeometricCheck::kDirectIndex) {
     correspondences = match_direct_index(query_descriptors, query_nodes, match_descriptors,
@@ -185,7 +192,8 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
         if (island == nullptr) {
           result.status = LoopStatus::kNoIslands;
         } else {
-          result.consistent_queries = d.window.update(*island, entry);
+          result.consistent_queries =
+              d.window.update(*island, p.skip_featureless_frames ? d.featured_frames : entry);
           result.match = island->best_entry;
           result.normalised_score = island->best_score;
           result.score = island->best_score * factor;
@@ -235,7 +243,8 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
                                 descriptors.data + descriptors.rows * descriptors.code_size);
   }
   d.offsets.push_back(d.keypoints.size());
-  d.previous_bow = std::move(bow);
+  if (!bow.empty() || !p.skip_featureless_frames) d.previous_bow = std::move(bow);
+  if (!descriptors.empty()) ++d.featured_frames;
   result.times.insertion_ms = milliseconds_since(clock);
   return result;
 }
@@ -267,6 +276,7 @@ void LoopDetector::clear() {
   d.database.clear();
   d.window.clear();
   d.previous_bow.clear();
+  d.featured_frames = 0;
   d.keypoints.clear();
   d.descriptor_bytes.clear();
   d.offsets.assign(1, 0);

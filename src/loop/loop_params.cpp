@@ -80,6 +80,7 @@ const std::vector<Field>& fields() {
       bool_field("use_normalised_score", &P::use_normalised_score),
       number_field("alpha", &P::alpha),
       number_field("min_normalisation_score", &P::min_normalisation_score),
+      bool_field("skip_featureless_frames", &P::skip_featureless_frames),
       number_field("dislocal", &P::dislocal),
       number_field("max_db_results", &P::max_db_results),
       number_field("max_intra_island_gap", &P::max_intra_island_gap),
@@ -103,10 +104,23 @@ const std::vector<Field>& fields() {
       number_field("max_neighbor_ratio", &P::max_neighbor_ratio),
       number_field("max_match_distance", &P::max_match_distance),
       bool_field("accept_single_candidate", &P::accept_single_candidate),
+      bool_field("mutual_matching", &P::mutual_matching),
+      Field{"fundamental_estimator",
+            [](P& p, const Json& v) {
+              if (!v.is_string()) throw std::string("\"fundamental_estimator\" must be a string");
+              try {
+                p.fundamental_estimator = parse_fundamental_estimator(v.get<std::string>());
+              } catch (const InvalidArgument& e) {
+                throw std::string(e.what());
+              }
+            },
+            [](const P& p) { return Json(to_string(p.fundamental_estimator)); }},
       number_field("min_inliers", &P::min_inliers),
       number_field("max_reprojection_error", &P::max_reprojection_error),
       number_field("ransac_confidence", &P::ransac_confidence),
       number_field("max_ransac_iterations", &P::max_ransac_iterations),
+      number_field("min_inlier_ratio", &P::min_inlier_ratio),
+      number_field("min_inlier_spread", &P::min_inlier_spread),
   };
   return table;
 }
@@ -244,6 +258,8 @@ void LoopDetectorParams::validate() const {
            kMaxReprojectionError);
   in_range("ransac_confidence", ransac_confidence, 0, 1, true, true);
   in_range("max_ransac_iterations", max_ransac_iterations, 1, kMaxRansacIterations);
+  in_range("min_inlier_ratio", min_inlier_ratio, 0, 1);
+  in_range("min_inlier_spread", min_inlier_spread, 0, 1);
 }
 
 LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name,

@@ -21,7 +21,10 @@ constexpr double kSmoothingSigma = 2.0;
 class BriefExtractor final : public FeatureExtractor {
  public:
   BriefExtractor(const BriefOptions& options, BriefPattern pattern)
-      : options_(options), pattern_(std::move(pattern)), radius_(pattern_.radius()) {
+      : options_(options),
+        pattern_(std::move(pattern)),
+        radius_(pattern_.radius()),
+        extent_(pattern_.extent()) {
     if (options_.fast_threshold < 0 || options_.fast_threshold > 255) {
       throw InvalidArgument("BRIEF fast_threshold must be in [0, 255], got " +
                             std::to_string(options_.fast_threshold));
@@ -36,7 +39,7 @@ class BriefExtractor final : public FeatureExtractor {
 
     std::vector<cv::KeyPoint> corners;
     cv::FAST(image, corners, options_.fast_threshold, options_.non_max_suppression);
-    const std::vector<cv::KeyPoint> kept = strongest_inside(corners, image.size());
+    const std::vector<cv::KeyPoint> kept = strongest_described(corners, image.size());
     if (kept.empty()) return features;
 
     const cv::Mat smoothed = smooth(image);
@@ -60,16 +63,23 @@ class BriefExtractor final : public FeatureExtractor {
   std::string name() const override { return "brief"; }
 
  private:
-  // Corners whose every test lies inside the image, the strongest first
-  // (stable, so equal responses keep FAST's raster order), at most max_features.
-  std::vector<cv::KeyPoint> strongest_inside(const std::vector<cv::KeyPoint>& corners,
-                                             cv::Size size) const {
+  // Every test of a keypoint at (x, y) lies inside the image (the pattern's
+  // extent on each side, not its radius: DLoopDetector's y runs from −23 to +24).
+  bool tests_inside(int x, int y, cv::Size size) const {
+    return x + extent_.min_x >= 0 && y + extent_.min_y >= 0 && x + extent_.max_x < size.width &&
+           y + extent_.max_y < size.height;
+  }
+
+  // The corners described (all with keep_border_corners, else those whose
+  // every test lies inside the image), the strongest first (stable, so equal
+  // responses keep FAST's raster order), at most max_features.
+  std::vector<cv::KeyPoint> strongest_described(const std::vector<cv::KeyPoint>& corners,
+                                                cv::Size size) const {
     std::vector<cv::KeyPoint> inside;
     inside.reserve(corners.size());
     for (const cv::KeyPoint& corner : corners) {
-      const int x = static_cast<int>(corner.pt.x);
-      const int y = static_cast<int>(corner.pt.y);
-      if (x >= radius_ && y >= radius_ && x < size.width - radius_ && y < size.height - radius_) {
+      if (options_.keep_border_corners ||
+          tests_inside(static_cast<int>(corner.pt.x), static_cast<int>(corner.pt.y), size)) {
         inside.push_back(corner);
       }
     }
@@ -106,9 +116,13 @@ class BriefExtractor final : public FeatureExtractor {
       second[i] = pattern_.y2[i] * step + pattern_.x2[i];
     }
     for (std::size_t k = 0; k < keypoints.size(); ++k) {
-      const std::uint8_t* center = smoothed.ptr<std::uint8_t>(static_cast<int>(keypoints[k].pt.y)) +
-                                   static_cast<int>(keypoints[k].pt.x);
+      const int x = static_cast<int>(keypoints[k].pt.x), y = static_cast<int>(keypoints[k].pt.y);
       std::uint8_t* out = descriptors.row(k);
+      if (!tests_inside(x, y, smoothed.size())) {
+        describe_at_border(smoothed, x, y, out);
+        continue;
+      }
+      const std::uint8_t* center = smoothed.ptr<std::uint8_t>(y) + x;
       for (std::size_t byte = 0; byte < tests / 8; ++byte) {
         unsigned value = 0;
         for (unsigned bit = 0; bit < 8; ++bit) {
@@ -120,9 +134,30 @@ class BriefExtractor final : public FeatureExtractor {
     }
   }
 
+  // A keypoint whose pattern reaches past the border: a test with a point
+  // outside the image is a 0 bit, as in DVision::BRIEF.
+  void describe_at_border(const cv::Mat& smoothed, int x, int y, std::uint8_t* out) const {
+    const auto inside = [&smoothed](int px, int py) {
+      return px >= 0 && py >= 0 && px < smoothed.cols && py < smoothed.rows;
+    };
+    for (std::size_t byte = 0; byte < pattern_.tests() / 8; ++byte) {
+      unsigned value = 0;
+      for (unsigned bit = 0; bit < 8; ++bit) {
+        const std::size_t test = byte * 8 + bit;
+        const int ax = x + pattern_.x1[test], ay = y + pattern_.y1[test];
+        const int bx = x + pattern_.x2[test], by = y + pattern_.y2[test];
+        if (inside(ax, ay) && inside(bx, by) &&
+            smoothed.at<std::uint8_t>(ay, ax) < smoothed.at<std::uint8_t>(by, bx))
+          value |= 1u << bit;
+      }
+      out[byte] = static_cast<std::uint8_t>(value);
+    }
+  }
+
   BriefOptions options_;
   BriefPattern pattern_;
   int radius_;
+  BriefPattern::Extent extent_;
 };
 
 }  // namespace

@@ -21,6 +21,23 @@ int BriefPattern::radius() const {
   return radius;
 }
 
+BriefPattern::Extent BriefPattern::extent() const {
+  Extent e;
+  for (const std::vector<int>* xs : {&x1, &x2}) {
+    for (int x : *xs) {
+      e.min_x = std::min(e.min_x, x);
+      e.max_x = std::max(e.max_x, x);
+    }
+  }
+  for (const std::vector<int>* ys : {&y1, &y2}) {
+    for (int y : *ys) {
+      e.min_y = std::min(e.min_y, y);
+      e.max_y = std::max(e.max_y, y);
+    }
+  }
+  return e;
+}
+
 namespace {
 
 int checked_offset(int value, const char* key, const std::string& path) {

@@ -13,9 +13,17 @@ struct BriefPattern {
   std::vector<int> x1, y1, x2, y2;
 
   std::size_t tests() const { return x1.size(); }
-  // Largest |offset| over all coordinates: the keypoint must be this far
-  // inside the image for every test to be inside too.
+  // Largest |offset| over all coordinates (half the described patch).
   int radius() const;
+
+  // The smallest and largest offsets of the tests, per axis: every test of a
+  // keypoint (x, y) lies inside a w × h image exactly when
+  // x + min_x ≥ 0, x + max_x < w, y + min_y ≥ 0 and y + max_y < h.
+  // DLoopDetector's pattern: x from −24 to +24, y from −23 to +24.
+  struct Extent {
+    int min_x = 0, min_y = 0, max_x = 0, max_y = 0;
+  };
+  Extent extent() const;
 };
 
 // The largest |offset| a pattern may use; keeps hostile files from asking for

@@ -1,7 +1,9 @@
 #include "binbow/vision/geometric_check.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <string>
 
@@ -141,12 +143,34 @@ void check_options(const MatchOptions& options) {
                           std::to_string(options.max_distance_fraction));
 }
 
+// The pairs of `forward` (first → second) that `backward` (second → first) also found.
+std::vector<Correspondence> mutual_pairs(std::vector<Correspondence> forward,
+                                         const std::vector<Correspondence>& backward,
+                                         std::size_t second_rows) {
+  std::vector<std::uint32_t> partner_of_second(second_rows, kNoPartner);
+  for (const Correspondence& c : backward) partner_of_second[c.first] = c.second;
+  forward.erase(std::remove_if(forward.begin(), forward.end(),
+                               [&](const Correspondence& c) {
+                                 return partner_of_second[c.second] != c.first;
+                               }),
+                forward.end());
+  return forward;
+}
+
+MatchOptions one_way(MatchOptions options) {
+  options.mutual = false;
+  return options;
+}
+
 }  // namespace
 
 std::vector<Correspondence> match_exhaustive(const DescriptorView& first,
                                              const DescriptorView& second,
                                              const MatchOptions& options) {
   check_options(options);
+  if (options.mutual)
+    return mutual_pairs(match_exhaustive(first, second, one_way(options)),
+                        match_exhaustive(second, first, one_way(options)), second.rows);
   RatioMatcher matcher(first, second, options);
   matcher.match(nullptr, first.rows, nullptr, second.rows);
   return matcher.take();
@@ -167,6 +191,11 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
   };
   if (!in_range(first_nodes, first.rows) || !in_range(second_nodes, second.rows))
     throw InvalidArgument("direct index refers to a feature past the descriptors");
+  if (options.mutual)
+    return mutual_pairs(
+        match_direct_index(first, first_nodes, second, second_nodes, one_way(options)),
+        match_direct_index(second, second_nodes, first, first_nodes, one_way(options)),
+        second.rows);
 
   RatioMatcher matcher(first, second, options);
   std::size_t i = 0, j = 0;
@@ -186,11 +215,68 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
   return matcher.take();
 }
 
+const char* to_string(FundamentalEstimator estimator) {
+  switch (estimator) {
+    case FundamentalEstimator::kRansac:
+      return "ransac";
+    case FundamentalEstimator::kUsacMagsac:
+      return "usac-magsac";
+    case FundamentalEstimator::kUsacAccurate:
+      return "usac-accurate";
+  }
+  return "?";
+}
+
+FundamentalEstimator parse_fundamental_estimator(const std::string& name) {
+  std::string n = name;
+  std::replace(n.begin(), n.end(), '_', '-');
+  std::transform(n.begin(), n.end(), n.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (n == "ransac") return FundamentalEstimator::kRansac;
+  if (n == "usac-magsac") return FundamentalEstimator::kUsacMagsac;
+  if (n == "usac-accurate") return FundamentalEstimator::kUsacAccurate;
+  throw InvalidArgument("unknown fundamental estimator \"" + name +
+                        "\" (expected ransac, usac-magsac or usac-accurate)");
+}
+
+double inlier_spread(Span<Keypoint> first, Span<Keypoint> second,
+                     const std::vector<Correspondence>& inliers) {
+  if (inliers.empty()) return 0;
+  const auto spread_in = [&inliers](Span<Keypoint> keypoints, bool use_first) {
+    float min_x = std::numeric_limits<float>::max(), min_y = min_x;
+    float max_x = std::numeric_limits<float>::lowest(), max_y = max_x;
+    for (const Keypoint& k : keypoints) {
+      min_x = std::min(min_x, k.x);
+      max_x = std::max(max_x, k.x);
+      min_y = std::min(min_y, k.y);
+      max_y = std::max(max_y, k.y);
+    }
+    const auto cell = [](float value, float low, float high) {
+      if (!(high > low)) return 0;
+      const int c = static_cast<int>((value - low) / (high - low) * kSpreadGridCells);
+      return std::clamp(c, 0, kSpreadGridCells - 1);
+    };
+    bool occupied[kSpreadGridCells * kSpreadGridCells] = {};
+    for (const Correspondence& c : inliers) {
+      const std::uint32_t index = use_first ? c.first : c.second;
+      if (index >= keypoints.size())
+        throw InvalidArgument("correspondence refers to a keypoint past the end");
+      const Keypoint& k = keypoints[index];
+      occupied[cell(k.y, min_y, max_y) * kSpreadGridCells + cell(k.x, min_x, max_x)] = true;
+    }
+    const auto cells = std::count(std::begin(occupied), std::end(occupied), true);
+    return static_cast<double>(cells) / (kSpreadGridCells * kSpreadGridCells);
+  };
+  return std::min(spread_in(first, true), spread_in(second, false));
+}
+
 FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> second,
                                          const std::vector<Correspondence>& correspondences,
                                          const FundamentalCheckParams& params) {
   if (params.min_inliers < 0 || !(params.max_reprojection_error > 0) ||
-      !(params.confidence > 0 && params.confidence < 1) || params.max_iterations <= 0)
+      !(params.confidence > 0 && params.confidence < 1) || params.max_iterations <= 0 ||
+      !(params.min_inlier_ratio >= 0 && params.min_inlier_ratio <= 1) ||
+      !(params.min_inlier_spread >= 0 && params.min_inlier_spread <= 1))
     throw InvalidArgument("fundamental check parameters out of range");
   FundamentalCheckResult result;
   const std::size_t needed = static_cast<std::size_t>(std::max(8, params.min_inliers));
@@ -206,16 +292,24 @@ FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> se
     points_second.emplace_back(second[c.second].x, second[c.second].y);
   }
   std::vector<std::uint8_t> mask;
-  const cv::Mat fundamental = cv::findFundamentalMat(
-      points_first, points_second, cv::FM_RANSAC, params.max_reprojection_error, params.confidence,
-      params.max_iterations, mask);
+  int method = cv::FM_RANSAC;
+  if (params.estimator == FundamentalEstimator::kUsacMagsac) method = cv::USAC_MAGSAC;
+  if (params.estimator == FundamentalEstimator::kUsacAccurate) method = cv::USAC_ACCURATE;
+  const cv::Mat fundamental =
+      cv::findFundamentalMat(points_first, points_second, method, params.max_reprojection_error,
+                             params.confidence, params.max_iterations, mask);
   // Several solutions (7-point) come stacked; RANSAC returns one 3x3 or none.
   if (fundamental.rows != 3 || fundamental.cols != 3 || mask.size() != correspondences.size())
     return result;
   for (std::size_t i = 0; i < mask.size(); ++i)
     if (mask[i] != 0) result.inliers.push_back(correspondences[i]);
   fundamental.convertTo(cv::Mat(3, 3, CV_64F, result.fundamental.val), CV_64F);
-  result.consistent = result.inliers.size() >= static_cast<std::size_t>(params.min_inliers);
+  result.inlier_ratio =
+      static_cast<double>(result.inliers.size()) / static_cast<double>(correspondences.size());
+  result.inlier_spread = inlier_spread(first, second, result.inliers);
+  result.consistent = result.inliers.size() >= static_cast<std::size_t>(params.min_inliers) &&
+                      result.inlier_ratio >= params.min_inlier_ratio &&
+                      result.inlier_spread >= params.min_inlier_spread;
   return result;
 }
 

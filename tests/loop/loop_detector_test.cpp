@@ -102,6 +102,35 @@ TEST(LoopDetector, NormalisationSkipIslandsTemporalConsistencyThenLoop) {
   EXPECT_EQ(detector.size(), 17u);
 }
 
+// A featureless frame (blur, darkness) in the middle of a revisit: with
+// skip_featureless_frames the next frame is normalised by the frame before
+// it and the temporal chain goes on; DLoopDetector's rule skips the next
+// frame and restarts the chain.
+TEST(LoopDetector, FeaturelessFrameDoesNotBreakTheChain) {
+  const WordImages words;
+  for (const bool skip : {true, false}) {
+    SCOPED_TRACE(skip ? "skip featureless frames" : "DLoopDetector's rule");
+    LoopDetectorParams p = small_params();
+    p.skip_featureless_frames = skip;
+    LoopDetector detector(words.vocabulary(), p);
+    for (int i = 0; i < 10; ++i) detector.process(words.place(i));
+    for (int i = 0; i <= 3; ++i) detector.process(words.place(i));  // chain of 3 after the jump
+    EXPECT_EQ(detector.process(Features{}).status, LoopStatus::kNoDatabaseResults);
+    const LoopResult after = detector.process(words.place(4));
+    const LoopResult next = detector.process(words.place(5));
+    if (skip) {
+      EXPECT_EQ(after.status, LoopStatus::kLoopDetected);
+      EXPECT_GT(after.normalisation_score, 0.005);  // s(place 4, place 3)
+      EXPECT_EQ(after.consistent_queries, 4);
+      EXPECT_EQ(next.status, LoopStatus::kLoopDetected);
+    } else {
+      EXPECT_EQ(after.status, LoopStatus::kLowNormalisationScore);
+      EXPECT_EQ(next.status, LoopStatus::kNoTemporalConsistency);
+      EXPECT_EQ(next.consistent_queries, 1);
+    }
+  }
+}
+
 TEST(LoopDetector, AlphaAndIslandLengthFilterCandidates) {
   const WordImages words;
   LoopDetectorParams p = small_params();

@@ -31,6 +31,12 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_EQ(p.min_inliers, 12);
   EXPECT_DOUBLE_EQ(p.max_neighbor_ratio, 0.6);
   EXPECT_DOUBLE_EQ(p.max_reprojection_error, 2.0);
+  // binbow's departures, each switchable (docs/loop-detection.md).
+  EXPECT_TRUE(p.skip_featureless_frames);
+  EXPECT_EQ(p.fundamental_estimator, FundamentalEstimator::kUsacMagsac);
+  EXPECT_FALSE(p.mutual_matching);
+  EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
+  EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
   const LoopDetectorParams f2 = LoopDetectorParams::for_frequency(2);
   EXPECT_EQ(f2.dislocal, 40);
   EXPECT_EQ(f2.max_db_results, 100);
@@ -44,10 +50,20 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.alpha = 0.25;
   p.geometric_check = GeometricCheck::kExhaustive;
   p.exhaustive_fallback = false;
+  p.skip_featureless_frames = false;
+  p.fundamental_estimator = FundamentalEstimator::kRansac;
+  p.mutual_matching = true;
+  p.min_inlier_ratio = 0.5;
+  p.min_inlier_spread = 0.25;
   const LoopDetectorParams q = LoopDetectorParams::from_json(p.to_json());
   EXPECT_EQ(q.to_json(), p.to_json());
   EXPECT_EQ(q.dislocal, 60);
   EXPECT_EQ(q.geometric_check, GeometricCheck::kExhaustive);
+  EXPECT_EQ(q.fundamental_estimator, FundamentalEstimator::kRansac);
+  EXPECT_NE(p.to_json().find("\"fundamental_estimator\": \"ransac\""), std::string::npos);
+  EXPECT_EQ(LoopDetectorParams::from_json(R"({"fundamental_estimator": "USAC_ACCURATE"})")
+                .fundamental_estimator,
+            FundamentalEstimator::kUsacAccurate);
 }
 
 TEST(LoopDetectorParams, FrequencyDerivesThenKeysOverride) {
@@ -113,6 +129,7 @@ TEST(LoopDetectorParams, UnknownKeysAndBadValuesAreNamed) {
   expect_error_mentions(dir.file("d.json"), R"({"k": 2.5})", "\"k\"");
   expect_error_mentions(dir.file("e.json"), R"({"min_inliers": 3})", "min_inliers");
   expect_error_mentions(dir.file("f.json"), R"({"geometric_check": "flann"})", "flann");
+  expect_error_mentions(dir.file("i.json"), R"({"fundamental_estimator": "lmeds"})", "usac-magsac");
   expect_error_mentions(dir.file("g.json"), R"({"alpha": )", "JSON");
   expect_error_mentions(dir.file("h.json"), R"([1, 2])", "object");
   EXPECT_THROW(LoopDetectorParams::load(dir.file("missing.json")), FileError);
@@ -173,15 +190,21 @@ TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
         Bound{"max_intra_island_gap", 1, 0},
         Bound{"min_matches_per_island", kMaxFrameDistance, kMaxFrameDistance + 1.0},
         Bound{"k", kMaxConsistentQueries, kMaxConsistentQueries + 1.0},
-        Bound{"max_distance_between_islands", 0, -1}, Bound{"max_distance_between_queries", 1, 0},
+        Bound{"max_distance_between_islands", 0, -1},
+        Bound{"max_distance_between_queries", 1, 0},
         Bound{"direct_index_levels", kMaxDirectIndexLevels, kMaxDirectIndexLevels + 1.0},
         Bound{"max_verified_entries", kMaxVerifiedEntries, kMaxVerifiedEntries + 1.0},
-        Bound{"max_neighbor_ratio", 1, 0}, Bound{"max_match_distance", 1, 1.5},
+        Bound{"max_neighbor_ratio", 1, 0},
+        Bound{"max_match_distance", 1, 1.5},
         Bound{"min_inliers", kMaxMinInliers, kMaxMinInliers + 1.0},
         Bound{"max_reprojection_error", kMinReprojectionError, 0.05},
         Bound{"max_reprojection_error", kMaxReprojectionError, 101},
         Bound{"ransac_confidence", 0.5, 1},
-        Bound{"max_ransac_iterations", kMaxRansacIterations, kMaxRansacIterations + 1.0}}) {
+        Bound{"max_ransac_iterations", kMaxRansacIterations, kMaxRansacIterations + 1.0},
+        Bound{"min_inlier_ratio", 1, 1.5},
+        Bound{"min_inlier_ratio", 0, -0.1},
+        Bound{"min_inlier_spread", 1, 1.5},
+        Bound{"min_inlier_spread", 0, -0.1}}) {
     SCOPED_TRACE(b.key);
     const auto json = [&](double value) {
       std::ostringstream text;

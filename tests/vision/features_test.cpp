@@ -63,6 +63,11 @@ TEST(BriefPattern, BuiltInEqualsThePatternFile) {
   EXPECT_EQ(file.x2, built_in.x2);
   EXPECT_EQ(file.y2, built_in.y2);
   EXPECT_EQ(built_in.radius(), 24);  // a 48x48 patch
+  const BriefPattern::Extent extent = built_in.extent();
+  EXPECT_EQ(extent.min_x, -24);
+  EXPECT_EQ(extent.min_y, -23);
+  EXPECT_EQ(extent.max_x, 24);
+  EXPECT_EQ(extent.max_y, 24);
 }
 
 TEST(BriefPattern, BadFilesGiveFileError) {
@@ -96,38 +101,99 @@ TEST(BriefPattern, BadFilesGiveFileError) {
   }
 }
 
-// Bit-exactness with DVision::BRIEF on real images, through the full pipeline.
+// Bit-exactness with DVision::BRIEF on real images, through the full pipeline;
+// with keep_border_corners, tests outside the image are 0 bits.
 TEST(Brief, BitExactWithTheReferenceDefinition) {
   const BriefPattern& pattern = default_brief_pattern();
-  for (const char* image_name : {"dbow2-demo-images/image1.png", "rtabmap-samples/samples/12.jpg",
-                                 "opencv-doc-samples/graf1.png"}) {
-    SCOPED_TRACE(image_name);
-    const cv::Mat image = grey(image_name);
-    BriefOptions options;
-    options.max_features = 0;  // all corners: covers the image border too
-    const Features features = make_brief_extractor(options)->extract(image);
-    ASSERT_GT(features.keypoints.size(), 150u);
-    ASSERT_EQ(features.descriptors.rows(), features.keypoints.size());
-    ASSERT_EQ(features.descriptors.code_size(), 32u);
+  for (const bool keep_border : {false, true})
+    for (const char* image_name : {"dbow2-demo-images/image1.png", "rtabmap-samples/samples/12.jpg",
+                                   "opencv-doc-samples/graf1.png"}) {
+      SCOPED_TRACE(image_name);
+      SCOPED_TRACE(keep_border ? "border corners kept" : "inside corners only");
+      const cv::Mat image = grey(image_name);
+      BriefOptions options;
+      options.max_features = 0;  // all corners: covers the image border too
+      options.keep_border_corners = keep_border;
+      const Features features = make_brief_extractor(options)->extract(image);
+      ASSERT_GT(features.keypoints.size(), 150u);
+      std::size_t at_border = 0;
+      ASSERT_EQ(features.descriptors.rows(), features.keypoints.size());
+      ASSERT_EQ(features.descriptors.code_size(), 32u);
 
-    cv::Mat smoothed;
-    cv::GaussianBlur(image, smoothed, cv::Size(9, 9), 2, 2);
-    for (std::size_t k = 0; k < features.keypoints.size(); ++k) {
-      const Keypoint& keypoint = features.keypoints[k];
-      const int x = static_cast<int>(keypoint.x), y = static_cast<int>(keypoint.y);
-      ASSERT_TRUE(x >= 24 && y >= 24 && x < image.cols - 24 && y < image.rows - 24);
-      const std::bitset<256> expected = reference_brief(smoothed, x, y, pattern);
-      // What DBoW2 writes for this descriptor, read back by the documented rule.
-      const std::vector<std::uint8_t> expected_bytes =
-          bytes_from_dbow2_string(expected.to_string());
-      ASSERT_TRUE(
-          std::equal(expected_bytes.begin(), expected_bytes.end(), features.descriptors.row(k)))
-          << "keypoint " << k << " at " << x << "," << y;
-      for (std::size_t i = 0; i < 256; ++i) {
-        ASSERT_EQ(expected[i], ((features.descriptors.row(k)[i / 8] >> (i % 8)) & 1) != 0);
+      cv::Mat smoothed;
+      cv::GaussianBlur(image, smoothed, cv::Size(9, 9), 2, 2);
+      for (std::size_t k = 0; k < features.keypoints.size(); ++k) {
+        const Keypoint& keypoint = features.keypoints[k];
+        const int x = static_cast<int>(keypoint.x), y = static_cast<int>(keypoint.y);
+        // DLoopDetector's pattern: x from -24 to +24, y from -23 to +24.
+        const bool inside = x >= 24 && y >= 23 && x < image.cols - 24 && y < image.rows - 24;
+        if (!keep_border) {
+          ASSERT_TRUE(inside) << x << "," << y;
+        }
+        at_border += inside ? 0 : 1;
+        const std::bitset<256> expected = reference_brief(smoothed, x, y, pattern);
+        // What DBoW2 writes for this descriptor, read back by the documented rule.
+        const std::vector<std::uint8_t> expected_bytes =
+            bytes_from_dbow2_string(expected.to_string());
+        ASSERT_TRUE(
+            std::equal(expected_bytes.begin(), expected_bytes.end(), features.descriptors.row(k)))
+            << "keypoint " << k << " at " << x << "," << y;
+        for (std::size_t i = 0; i < 256; ++i) {
+          ASSERT_EQ(expected[i], ((features.descriptors.row(k)[i / 8] >> (i % 8)) & 1) != 0);
+        }
+      }
+      if (keep_border) {
+        EXPECT_GT(at_border, 0u) << "no border corner was checked";
       }
     }
-  }
+}
+
+// Isolated bright dots on black are FAST corners exactly at the dots.
+cv::Mat dots(cv::Size size, const std::vector<cv::Point>& points) {
+  cv::Mat image(size, CV_8U, cv::Scalar(0));
+  for (const cv::Point& p : points) image.at<std::uint8_t>(p) = 255;
+  return image;
+}
+
+std::vector<cv::Point> keypoint_positions(const Features& features) {
+  std::vector<cv::Point> positions;
+  for (const Keypoint& k : features.keypoints)
+    positions.emplace_back(static_cast<int>(k.x), static_cast<int>(k.y));
+  std::sort(positions.begin(), positions.end(),
+            [](cv::Point a, cv::Point b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+  return positions;
+}
+
+// The margin is the pattern's extent on each side (x from -24 to +24, y from
+// -23 to +24 for the built-in pattern), not its radius on every side: corners
+// in row 23 have every test inside the image and are kept.
+TEST(Brief, MarginIsThePatternExtentPerSide) {
+  const std::vector<cv::Point> kept = {{24, 50}, {40, 75}, {50, 23}, {75, 40}};
+  const std::vector<cv::Point> dropped = {{23, 60}, {60, 22}, {60, 76}, {76, 60}};
+  std::vector<cv::Point> all = kept;
+  all.insert(all.end(), dropped.begin(), dropped.end());
+  const cv::Mat image = dots({100, 100}, all);
+  BriefOptions options;
+  options.max_features = 0;
+  EXPECT_EQ(keypoint_positions(make_brief_extractor(options)->extract(image)), kept);
+  options.keep_border_corners = true;
+  EXPECT_EQ(keypoint_positions(make_brief_extractor(options)->extract(image)).size(), all.size());
+
+  // A custom pattern's own extent: x from -5 to +3, y from -4 to +7 (FAST
+  // finds no corner within 3 pixels of the border).
+  test::TempDir dir;
+  const std::string pattern = dir.file("pattern.yml");
+  std::ofstream(pattern)
+      << "%YAML:1.0\nx1: [-5, 0, 0, 0, 0, 0, 0, 0]\ny1: [-4, 0, 0, 0, 0, 0, 0, 0]\n"
+         "x2: [3, 1, 1, 1, 1, 1, 1, 1]\ny2: [7, 1, 1, 1, 1, 1, 1, 1]\n";
+  options.pattern_file = pattern;
+  options.keep_border_corners = false;
+  const std::vector<cv::Point> custom_kept = {{5, 4}, {16, 12}};  // 16 + 3 < 20, 12 + 7 < 20
+  const std::vector<cv::Point> custom_dropped = {{4, 12}, {12, 3}, {17, 6}, {10, 13}};
+  all = custom_kept;
+  all.insert(all.end(), custom_dropped.begin(), custom_dropped.end());
+  const Features custom = make_brief_extractor(options)->extract(dots({20, 20}, all));
+  EXPECT_EQ(keypoint_positions(custom), custom_kept);
 }
 
 TEST(Brief, KeepsTheStrongestFastCornersInside) {
@@ -136,7 +202,7 @@ TEST(Brief, KeepsTheStrongestFastCornersInside) {
   cv::FAST(image, corners, 10, true);
   std::vector<float> inside;
   for (const cv::KeyPoint& corner : corners) {
-    if (corner.pt.x >= 24 && corner.pt.y >= 24 && corner.pt.x < image.cols - 24 &&
+    if (corner.pt.x >= 24 && corner.pt.y >= 23 && corner.pt.x < image.cols - 24 &&
         corner.pt.y < image.rows - 24) {
       inside.push_back(corner.response);
     }

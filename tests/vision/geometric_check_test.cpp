@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <opencv2/core/persistence.hpp>
@@ -184,6 +186,97 @@ TEST(MatchingArguments, RejectsBadArguments) {
   const FeatureVector too_many = FeatureVector::from_assignment(nodes, 6);
   EXPECT_THROW(match_direct_index(a, too_many, a, too_many), InvalidArgument);
   EXPECT_TRUE(match_exhaustive(a, DescriptorMatrix(32)).empty());
+}
+
+}  // namespace
+}  // namespace binbow::vision
+
+namespace binbow::vision {
+namespace {
+
+// Keypoints on a w x h frame; the four corners make the keypoints' box the
+// whole frame.
+std::vector<Keypoint> frame_corners_and(std::vector<Keypoint> points, float w, float h) {
+  for (const Keypoint& corner : {Keypoint{0, 0}, Keypoint{w, 0}, Keypoint{0, h}, Keypoint{w, h}})
+    points.push_back(corner);
+  return points;
+}
+
+TEST(InlierSpread, CountsGridCellsAndTakesTheWorseImage) {
+  // Image 1: inliers 0-3 in four different cells (one per quadrant); image 2:
+  // the same four inliers clustered in one cell.
+  const std::vector<Keypoint> spread =
+      frame_corners_and({{10, 10}, {390, 10}, {10, 290}, {390, 290}}, 400, 300);
+  const std::vector<Keypoint> clustered =
+      frame_corners_and({{10, 10}, {12, 11}, {14, 12}, {16, 13}}, 400, 300);
+  const Span<Keypoint> a{spread.data(), spread.size()}, b{clustered.data(), clustered.size()};
+  const std::vector<Correspondence> inliers = {{0, 0}, {1, 1}, {2, 2}, {3, 3}};
+  EXPECT_DOUBLE_EQ(inlier_spread(a, a, inliers), 4.0 / 16);
+  EXPECT_DOUBLE_EQ(inlier_spread(b, b, inliers), 1.0 / 16);
+  EXPECT_DOUBLE_EQ(inlier_spread(a, b, inliers), 1.0 / 16);
+  EXPECT_DOUBLE_EQ(inlier_spread(a, b, {}), 0);
+  EXPECT_THROW(inlier_spread(a, b, {{99, 0}}), InvalidArgument);
+  // One keypoint (a degenerate box) is one occupied cell.
+  const Keypoint single{5, 5};
+  EXPECT_DOUBLE_EQ(inlier_spread({&single, 1}, {&single, 1}, {{0, 0}}), 1.0 / 16);
+}
+
+// First-image features 0 and 1 are identical: each is distinctive towards
+// the second image (its nearest, second feature 0, is far nearer than the
+// other), but second feature 0 has two equally near partners, so the pair
+// fails the ratio test from the second image.
+TEST(MutualMatching, DropsPairsDistinctiveOneWayOnly) {
+  DescriptorMatrix first(32), second(32);
+  first.resize(3);
+  second.resize(2);
+  std::fill(first.row(0), first.row(0) + 32, 0x00);
+  std::fill(first.row(1), first.row(1) + 32, 0x00);
+  std::fill(first.row(2), first.row(2) + 32, 0xFF);
+  std::fill(second.row(0), second.row(0) + 32, 0x00);
+  std::fill(second.row(1), second.row(1) + 32, 0xFF);
+  second.row(1)[31] = 0xFE;
+  MatchOptions options;
+  EXPECT_EQ(match_exhaustive(first, second, options),
+            (std::vector<Correspondence>{{0, 0}, {2, 1}}));
+  options.mutual = true;
+  EXPECT_EQ(match_exhaustive(first, second, options), (std::vector<Correspondence>{{2, 1}}));
+}
+
+TEST(GeometricCheck, EstimatorsAreDeterministicAndFindTheScene) {
+  const ImageFeatures a = orb("graf1.png"), b = orb("graf3.png");
+  const auto matches = match_exhaustive(a.descriptors, b.descriptors);
+  for (const FundamentalEstimator estimator :
+       {FundamentalEstimator::kRansac, FundamentalEstimator::kUsacMagsac,
+        FundamentalEstimator::kUsacAccurate}) {
+    SCOPED_TRACE(to_string(estimator));
+    FundamentalCheckParams params;
+    params.estimator = estimator;
+    const FundamentalCheckResult first = check_fundamental(a.points(), b.points(), matches, params);
+    const FundamentalCheckResult again = check_fundamental(a.points(), b.points(), matches, params);
+    EXPECT_TRUE(first.consistent);
+    EXPECT_EQ(first.inliers, again.inliers);
+    EXPECT_GT(first.inlier_ratio, 0.5);
+    EXPECT_GT(first.inlier_spread, 0.25);
+    EXPECT_EQ(parse_fundamental_estimator(to_string(estimator)), estimator);
+  }
+  EXPECT_THROW(parse_fundamental_estimator("lmeds"), InvalidArgument);
+}
+
+TEST(GeometricCheck, InlierRatioAndSpreadThresholdsReject) {
+  const ImageFeatures a = orb("graf1.png"), b = orb("graf3.png");
+  const auto matches = match_exhaustive(a.descriptors, b.descriptors);
+  FundamentalCheckParams params;
+  const FundamentalCheckResult plain = check_fundamental(a.points(), b.points(), matches, params);
+  ASSERT_TRUE(plain.consistent);
+  ASSERT_LT(plain.inlier_spread, 1.0);
+  params.min_inlier_ratio = std::nextafter(plain.inlier_ratio, 2.0);
+  EXPECT_FALSE(check_fundamental(a.points(), b.points(), matches, params).consistent);
+  params.min_inlier_ratio = plain.inlier_ratio;
+  EXPECT_TRUE(check_fundamental(a.points(), b.points(), matches, params).consistent);
+  params.min_inlier_spread = 1.0;
+  EXPECT_FALSE(check_fundamental(a.points(), b.points(), matches, params).consistent);
+  params.min_inlier_spread = 1.5;
+  EXPECT_THROW(check_fundamental(a.points(), b.points(), matches, params), InvalidArgument);
 }
 
 }  // namespace

@@ -9,7 +9,8 @@
 //   3. agrees with the islands of the k previous queries (temporal
 //      consistency), and
 //   4. the best entry of that island and the query have a fundamental matrix
-//      with enough RANSAC inliers (geometric consistency).
+//      with enough RANSAC inliers (geometric consistency; binbow's default
+//      estimator is MAGSAC++, see LoopDetectorParams).
 #pragma once
 
 #include <cstddef>
@@ -59,7 +60,12 @@ inline constexpr int kMaxRansacIterations = 5000;     // max_ransac_iterations
 inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  // load()
 
 // Every parameter of the detector, with its valid range in brackets. The
-// defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz;
+// defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
+// except binbow's measured departures, each switchable back:
+// accept_single_candidate, exhaustive_fallback, skip_featureless_frames and
+// fundamental_estimator (docs/loop-detection.md has their effect). The
+// DLoopDetector rules: {"accept_single_candidate": true, "exhaustive_fallback":
+// false, "skip_featureless_frames": false, "fundamental_estimator": "ransac"}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
@@ -73,6 +79,14 @@ struct LoopDetectorParams {
   // Frames with s(v_t, v_{t−Δt}) below this are skipped (status
   // kLowNormalisationScore): η would divide by a meaningless score. [0, 1000]
   double min_normalisation_score = 0.005;
+  // binbow's addition, on by default: an image without features (blurred,
+  // dark, blank) is invisible to the temporal rules. It is not the previous
+  // image v_{t−Δt} that η divides by (the latest image with features is),
+  // and it does not count in max_distance_between_queries. With false
+  // (DLoopDetector), the frame after a featureless one is skipped (its
+  // normalisation score is 0) and the temporal chain restarts, costing the
+  // k frames after it. See docs/loop-detection.md.
+  bool skip_featureless_frames = true;
 
   // --- Database query
   int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f) [0, 1e6]
@@ -102,7 +116,8 @@ struct LoopDetectorParams {
   bool exhaustive_fallback = true;
   // Entries of the best island checked, best η first, until one is
   // geometrically consistent. 1 (the paper): only the island's best entry.
-  // [1, 10]
+  // More raise BRIEF recall but let false loops through (see
+  // docs/loop-detection.md). [1, 10]
   int max_verified_entries = 1;
   double max_neighbor_ratio = 0.6;  // nearest-neighbour ratio test of correspondences (0, 1]
   // Largest Hamming distance of a correspondence, as a fraction of the
@@ -113,10 +128,21 @@ struct LoopDetectorParams {
   // direct-index node (no second neighbour for the ratio test), as
   // DLoopDetector does. Off by default: see MatchOptions.
   bool accept_single_candidate = false;
+  // binbow's addition: a correspondence must pass the ratio test both ways
+  // (MatchOptions::mutual).
+  bool mutual_matching = false;
+  // The robust estimator. binbow's default is MAGSAC++ (OpenCV's USAC):
+  // its local optimisation finds the full inlier set where plain RANSAC
+  // (the paper, "ransac") stops at a partial one below min_inliers.
+  FundamentalEstimator fundamental_estimator = FundamentalEstimator::kUsacMagsac;
   int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix [8, 1e4]
   double max_reprojection_error = 2.0;  // pixels, RANSAC threshold [0.1, 100]
   double ransac_confidence = 0.99;      // (0, 1)
   int max_ransac_iterations = 500;      // [1, 5000]
+  // binbow's additions (FundamentalCheckParams): minimum inliers /
+  // correspondences, and minimum inlier_spread() over both images. [0, 1]
+  double min_inlier_ratio = 0;
+  double min_inlier_spread = 0;
 
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,

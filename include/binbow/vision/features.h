@@ -89,6 +89,11 @@ struct BriefOptions {
   // levels); empty: the built-in pattern, which is DLoopDetector's/VINS'
   // brief_pattern.yml (256 tests, 48×48).
   std::string pattern_file;
+  // Corners whose pattern reaches past the image border are described too,
+  // each test with a point outside the image giving a 0 bit (DLib's
+  // DVision::BRIEF, which DLoopDetector uses, does this). false: only corners
+  // whose every test lies inside the image.
+  bool keep_border_corners = false;
 };
 
 std::unique_ptr<FeatureExtractor> make_orb_extractor(const OrbOptions& options = {});

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -37,11 +38,15 @@ struct Correspondence {
 //     match is distinctive, and in repetitive scenes such matches are enough
 //     for a spurious fundamental matrix).
 // Each feature of `second` keeps at most one partner: the nearest of the
-// features that chose it. Sorted by `first`.
+// features that chose it. With `mutual`, the pair must also pass the same
+// test the other way (j's nearest feature of `first`, among the features it
+// is compared with, is i): a match that is distinctive in one image only is
+// often repeated structure in the other. Sorted by `first`.
 struct MatchOptions {
   double max_neighbor_ratio = 0.6;
   double max_distance_fraction = 1.0;  // 1: no absolute limit
   bool accept_single_candidate = false;
+  bool mutual = false;
 };
 
 // Every feature of `first` against every feature of `second`.
@@ -59,22 +64,55 @@ std::vector<Correspondence> match_direct_index(const DescriptorView& first,
                                                const FeatureVector& second_nodes,
                                                const MatchOptions& options = {});
 
+// The robust estimator of the fundamental matrix (OpenCV's cv::findFundamentalMat methods).
+enum class FundamentalEstimator : std::uint8_t {
+  kRansac,        // cv::FM_RANSAC (the paper, DLoopDetector)
+  kUsacMagsac,    // cv::USAC_MAGSAC (MAGSAC++)
+  kUsacAccurate,  // cv::USAC_ACCURATE (GC-RANSAC with local optimisation)
+};
+
+// "ransac", "usac-magsac", "usac-accurate".
+const char* to_string(FundamentalEstimator estimator);
+// Accepts the names above ('_' for '-' too); throws InvalidArgument listing them.
+FundamentalEstimator parse_fundamental_estimator(const std::string& name);
+
+// Cells per side of the grid inlier_spread() counts.
+inline constexpr int kSpreadGridCells = 4;
+
 struct FundamentalCheckParams {
+  FundamentalEstimator estimator = FundamentalEstimator::kRansac;
   int min_inliers = 12;                 // also the minimum number of correspondences tried
   double max_reprojection_error = 2.0;  // pixels, point to epipolar line (RANSAC threshold)
   double confidence = 0.99;             // RANSAC success probability
   int max_iterations = 500;             // RANSAC iterations
+  // Consistent also needs inliers / correspondences ≥ this [0, 1]: a model
+  // that explains a small part of many correspondences is likely chance.
+  double min_inlier_ratio = 0;
+  // ... and inlier_spread() ≥ this [0, 1]: support clustered on one patch
+  // (a door, a poster repeated along a corridor) constrains the epipolar
+  // geometry badly and is what repeated structure produces.
+  double min_inlier_spread = 0;
 };
 
 struct FundamentalCheckResult {
-  bool consistent = false;                         // inliers.size() ≥ min_inliers
+  bool consistent = false;                         // every test of the params passed
   cv::Matx33d fundamental = cv::Matx33d::zeros();  // maps first-image points to lines in second
   std::vector<Correspondence> inliers;  // the correspondences RANSAC kept, in input order
+  double inlier_ratio = 0;              // inliers / correspondences
+  double inlier_spread = 0;             // inlier_spread() of the inliers
 };
 
+// How widely `inliers` cover both images: each image's keypoints' bounding
+// box is cut into kSpreadGridCells × kSpreadGridCells cells, and the spread is
+// the fraction of cells holding an inlier, the smaller of the two images
+// (0 without inliers; a degenerate box counts as one cell).
+double inlier_spread(Span<Keypoint> first, Span<Keypoint> second,
+                     const std::vector<Correspondence>& inliers);
+
 // Fits a fundamental matrix x_secondᵀ F x_first = 0 to the correspondences with
-// OpenCV's RANSAC. Fewer than max(8, min_inliers) correspondences: not
-// consistent, no fit attempted. Deterministic (OpenCV seeds its RANSAC).
+// the chosen estimator. Fewer than max(8, min_inliers) correspondences: not
+// consistent, no fit attempted. Deterministic (OpenCV seeds its RANSAC, and
+// its USAC estimators start from a fixed random state).
 // Throws InvalidArgument if a correspondence indexes past a keypoint vector.
 FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> second,
                                          const std::vector<Correspondence>& correspondences,

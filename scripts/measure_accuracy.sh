@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# Precision and recall of `binbow detect-loops` on rtabmap-samples (84 frames,
+# 44 queries with a ground-truth loop) with every vocabulary the accuracy
+# targets of docs/loop-detection.md name, for one parameter file. The
+# ablation table of docs/loop-detection.md is made with it:
+#
+#   scripts/measure_accuracy.sh [-b BUILD_DIR] [-w WORK_DIR] [-p PARAMS] [-m] [VOCAB...]
+#
+# -p PARAMS  a --params file for detect-loops (JSON or YAML); default: none,
+#            the detector's defaults.
+# -m         also list the frames of each run that missed their loop, with
+#            their status (from the run record).
+# VOCAB      any of orb_default brief_default brief_lite kimera orb_L5 orb_L6
+#            (default: all). orb_L5 / orb_L6 are ORB k=10 L=5 / L=6
+#            vocabularies trained here by `binbow build-vocab` (2000 ORB per
+#            image, seed 1) on opencv-doc-samples + dbow2-demo-images, cached in
+#            WORK_DIR (default: build/measure_accuracy).
+# The shared data is read from ../shared/data (or $BINBOW_SHARED_DATA).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=build
+work=
+params=
+misses=0
+while getopts "b:w:p:m" option; do
+  case $option in
+    b) build=$OPTARG ;;
+    w) work=$OPTARG ;;
+    p) params=$(realpath "$OPTARG") ;;
+    m) misses=1 ;;
+    *) exit 2 ;;
+  esac
+done
+shift $((OPTIND - 1))
+binbow="$build/bin/binbow"
+[ -x "$binbow" ] || { echo "build binbow first: $binbow is missing" >&2; exit 1; }
+work=${work:-$build/measure_accuracy}
+mkdir -p "$work"
+shared=${BINBOW_SHARED_DATA:-../shared/data}
+samples="$shared/rtabmap-samples/samples"
+gt="$shared/rtabmap-samples/samples_GT.bmp"
+[ -d "$samples" ] && [ -f "$gt" ] || { echo "missing $samples or $gt" >&2; exit 1; }
+vocabs=("$@")
+[ ${#vocabs[@]} -gt 0 ] || vocabs=(orb_default brief_default brief_lite kimera orb_L5 orb_L6)
+
+trained_vocabulary() {  # levels -> path
+  local path="$work/orb_k10_L$1.bbw"
+  if [ ! -f "$path" ]; then
+    "$binbow" build-vocab --descriptor orb --branching 10 --levels "$1" --seed 1 \
+      --features-per-image 2000 -o "$path" "$shared/opencv-doc-samples" \
+      "$shared/dbow2-demo-images" >/dev/null 2>&1
+  fi
+  echo "$path"
+}
+
+printf '%-14s %-9s %-9s %s\n' vocabulary precision recall "found/loops (false)"
+for name in "${vocabs[@]}"; do
+  case $name in
+    orb_default) descriptor=orb vocab=data/vocab/orb_default.bbw ;;
+    brief_default) descriptor=brief vocab=data/vocab/brief_default.bbw ;;
+    brief_lite) descriptor=brief vocab=$shared/vins-lite-brief-vocab/brief_lite.voc.gz ;;
+    kimera) descriptor=orb vocab=$shared/kimera-small-voc/small_voc.yml.gz ;;
+    orb_L5) descriptor=orb vocab=$(trained_vocabulary 5) ;;
+    orb_L6) descriptor=orb vocab=$(trained_vocabulary 6) ;;
+    *) echo "unknown vocabulary $name" >&2; exit 2 ;;
+  esac
+  loops="$work/$name.csv"
+  "$binbow" detect-loops --descriptor "$descriptor" --vocab "$vocab" ${params:+--params "$params"} \
+    -o "$loops" "$samples" >/dev/null 2>&1
+  result=$("$binbow" evaluate --gt "$gt" "$loops")
+  value() { sed -n "s/^$1: //p" <<<"$result"; }
+  printf '%-14s %-9.3f %-9.3f %s/%s (%s)\n' "$name" "$(value precision)" "$(value recall)" \
+    "$(value 'queries found')" "$(value 'queries with a loop')" "$(value 'false positives')"
+  if [ $misses -eq 1 ]; then
+    python3 - "$loops.run.json" "${gt%.bmp}_pairs.txt" "$loops" <<'EOF'
+import csv, json, sys
+run = json.load(open(sys.argv[1]))
+same = set()  # 0-based (query, match) from the 1-based pair list
+for line in open(sys.argv[2]):
+    if line.strip() and not line.startswith("#"):
+        q, m = map(int, line.split()[:2])
+        same |= {(q - 1, m - 1), (m - 1, q - 1)}
+found = {int(r["query_index"]): int(r["match_index"]) for r in csv.DictReader(open(sys.argv[3]))}
+for i, frame in enumerate(run["frames"]):
+    if not any((i, j) in same for j in range(i)) or (i, found.get(i)) in same:
+        continue
+    wrong = f" FALSE match {found[i]}" if i in found else ""
+    print(f"    miss {i}: {frame.get('status')} candidate {frame.get('match', '-')}"
+          f" inliers {frame.get('inliers', '-')}{wrong}")
+EOF
+  fi
+done
