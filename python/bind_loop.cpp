@@ -6,19 +6,23 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include "binbow/loop/loop_detector.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/sequence.h"
+#include "binbow/loop/similarity.h"
 #include "binbow/vision/features.h"
 #include "binding.h"
 
@@ -364,10 +368,10 @@ vision::ImageSourceOptions source_options(long long stride, long long max_width,
 // binbow.detect_loops (binbow/__init__.py) after its arguments are resolved:
 // `descriptor` a name or a FeatureExtractor, `params` a LoopDetectorParams, a
 // parameter file's path or None, `progress` None or a callable(done, total).
-std::pair<std::vector<loop::SequenceFrame>, LoopDetectorParams> detect_loops(
-    const std::vector<std::string>& inputs, Vocabulary vocabulary, const py::object& descriptor,
-    const py::object& max_features, const py::object& params, long long stride, long long max_width,
-    double video_fps, const py::object& progress) {
+std::tuple<std::vector<loop::SequenceFrame>, LoopDetectorParams, loop::SimilarityMatrix>
+detect_loops(const std::vector<std::string>& inputs, Vocabulary vocabulary,
+             const py::object& descriptor, const py::object& max_features, const py::object& params,
+             long long stride, long long max_width, double video_fps, const py::object& progress) {
   loop::SequenceOptions options;
   options.source = source_options(stride, max_width, video_fps);
   if (const auto extractor = extractor_of(descriptor)) {
@@ -418,7 +422,12 @@ std::pair<std::vector<loop::SequenceFrame>, LoopDetectorParams> detect_loops(
     if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C stops the run
     if (!progress.is_none()) progress(frames.size(), total);
   }
-  return {std::move(frames), sequence->params()};
+  loop::SimilarityMatrix similarity;
+  if (sequence->params().geometric_check != loop::GeometricCheck::kNone) {
+    py::gil_scoped_release release;
+    similarity = loop::similarity_matrix(sequence->detector());
+  }
+  return {std::move(frames), sequence->params(), std::move(similarity)};
 }
 
 std::vector<loop::SequenceFrame> frames_of(const py::handle& results) {
@@ -438,11 +447,18 @@ std::vector<loop::SequenceFrame> frames_of(const py::handle& results) {
 std::string write_report(const Path& folder, const py::object& results,
                          const loop::GroundTruth* truth,
                          const std::optional<LoopDetectorParams>& params, const std::string& inputs,
-                         const std::string& vocabulary, const std::string& descriptor) {
+                         const std::string& vocabulary, const std::string& descriptor,
+                         const loop::SimilarityMatrix* similarity) {
   const std::vector<loop::SequenceFrame> frames = frames_of(results);
+  if (similarity != nullptr && !similarity->empty() && similarity->frames != frames.size())
+    throw py::value_error("the similarity matrix has " + std::to_string(similarity->frames) +
+                          " frames but results has " + std::to_string(frames.size()));
   py::gil_scoped_release release;
   loop::LoopReport report =
-      loop::make_loop_report(frames, params.value_or(LoopDetectorParams{}), truth);
+      similarity != nullptr
+          ? loop::make_loop_report(frames, params.value_or(LoopDetectorParams{}), truth,
+                                   *similarity)
+          : loop::make_loop_report(frames, params.value_or(LoopDetectorParams{}), truth);
   if (params) {
     char hertz[32];
     std::snprintf(hertz, sizeof hertz, "%g Hz", params->frequency);
@@ -456,6 +472,57 @@ std::string write_report(const Path& folder, const py::object& results,
   return loop::write_loop_report(folder.string(), report);
 }
 
+void bind_similarity(py::module_& m) {
+  py::class_<loop::SimilarityMatrix>(
+      m, "SimilarityMatrix",
+      "s(v_i, v_j) of every image i with every earlier image j, the figure of\n"
+      "loop-closure papers; long runs binned (bin x bin frames a cell, the highest\n"
+      "score of the cell). detect_loops' results carry it as .similarity.")
+      .def_property_readonly(
+          "scores",
+          [](const loop::SimilarityMatrix& matrix) {
+            py::array_t<float> scores({matrix.cells, matrix.cells});
+            std::copy(matrix.scores.begin(), matrix.scores.end(), scores.mutable_data());
+            return scores;
+          },
+          "float32 (cells, cells): row = query cell, column = earlier cell; upper triangle 0.")
+      .def_readonly("frames", &loop::SimilarityMatrix::frames, "Images of the sequence.")
+      .def_readonly("bin", &loop::SimilarityMatrix::bin, "Frames per cell side.")
+      .def_readonly("cells", &loop::SimilarityMatrix::cells, "Cells per side.")
+      .def_readonly("every_query", &loop::SimilarityMatrix::every_query,
+                    "Whether every query row was scored (else every bin-th one).")
+      .def(
+          "__repr__",
+          [](const loop::SimilarityMatrix& matrix) {
+            return "SimilarityMatrix(frames=" + std::to_string(matrix.frames) +
+                   ", bin=" + std::to_string(matrix.bin) +
+                   ", cells=" + std::to_string(matrix.cells) + ")";
+          },
+          "Frames, bin and cells as text.")
+      .def(py::pickle(
+          [](const loop::SimilarityMatrix& matrix) {
+            return py::make_tuple(matrix.frames, matrix.bin, matrix.cells, matrix.every_query,
+                                  py::bytes(reinterpret_cast<const char*>(matrix.scores.data()),
+                                            matrix.scores.size() * sizeof(float)));
+          },
+          [](const py::tuple& state) {
+            if (state.size() != 5) throw py::value_error("not a pickled SimilarityMatrix");
+            loop::SimilarityMatrix matrix;
+            matrix.frames = state[0].cast<std::size_t>();
+            matrix.bin = state[1].cast<std::size_t>();
+            matrix.cells = state[2].cast<std::size_t>();
+            matrix.every_query = state[3].cast<bool>();
+            const std::string bytes = state[4].cast<std::string>();
+            if (matrix.cells > loop::kMaxSimilarityCells || matrix.bin == 0 ||
+                bytes.size() != matrix.cells * matrix.cells * sizeof(float) ||
+                matrix.cells != (matrix.frames + matrix.bin - 1) / matrix.bin)
+              throw py::value_error("not a pickled SimilarityMatrix: inconsistent sizes");
+            matrix.scores.resize(matrix.cells * matrix.cells);
+            std::memcpy(matrix.scores.data(), bytes.data(), bytes.size());
+            return matrix;
+          }));
+}
+
 void bind_sequences(py::module_& m) {
   m.def("_detect_loops", &detect_loops, py::arg("inputs"), py::arg("vocabulary"),
         py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
@@ -464,13 +531,15 @@ void bind_sequences(py::module_& m) {
         "the parameters used.");
   m.def("_write_report", &write_report, py::arg("folder"), py::arg("results"),
         py::arg("ground_truth"), py::arg("params"), py::arg("inputs"), py::arg("vocabulary"),
-        py::arg("descriptor"), "binbow.write_report with the run's facts resolved (use that).");
+        py::arg("descriptor"), py::arg("similarity"),
+        "binbow.write_report with the run's facts resolved (use that).");
 }
 
 }  // namespace
 
 void bind_loop(py::module_& m) {
   bind_detection(m);
+  bind_similarity(m);
   bind_sequences(m);
 }
 

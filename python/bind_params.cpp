@@ -100,6 +100,9 @@ const std::vector<Field>& fields() {
       real_field("min_normalisation_score", &P::min_normalisation_score,
                  "Frames whose score with the previous frame is below this are skipped,\n"
                  "[0, 1000]."),
+      bool_field("skip_featureless_frames", &P::skip_featureless_frames,
+                 "An image without features neither normalises the next scores nor breaks\n"
+                 "the temporal chain (binbow's addition)."),
       int_field("dislocal", &P::dislocal,
                 "Candidates of image t are images j < t - dislocal (20 f), [0, 1e6]."),
       int_field("max_db_results", &P::max_db_results,
@@ -137,6 +140,20 @@ const std::vector<Field>& fields() {
                  "[0, 1]."),
       bool_field("accept_single_candidate", &P::accept_single_candidate,
                  "Accept a correspondence without a second neighbour (DLoopDetector does)."),
+      bool_field("mutual_matching", &P::mutual_matching,
+                 "Keep only correspondences that are each other's nearest neighbour."),
+      Field{"fundamental_estimator",
+            "The robust estimator of the fundamental matrix: \"usac-magsac\" (binbow's\n"
+            "default, MAGSAC++), \"usac-accurate\" or \"ransac\" (the paper's).",
+            [](const P& p) { return py::str(vision::to_string(p.fundamental_estimator)); },
+            [](P& p, const py::handle& value) {
+              if (!py::isinstance<py::str>(value))
+                throw py::type_error(
+                    "loop detector parameter fundamental_estimator must be a str, got " +
+                    type_name(value));
+              p.fundamental_estimator =
+                  vision::parse_fundamental_estimator(value.cast<std::string>());
+            }},
       int_field("min_inliers", &P::min_inliers,
                 "Minimum RANSAC inliers of the fundamental matrix, [8, 10000]."),
       real_field("max_reprojection_error", &P::max_reprojection_error,
@@ -144,6 +161,10 @@ const std::vector<Field>& fields() {
       real_field("ransac_confidence", &P::ransac_confidence, "RANSAC confidence, (0, 1)."),
       int_field("max_ransac_iterations", &P::max_ransac_iterations,
                 "RANSAC iterations, [1, 5000]."),
+      real_field("min_inlier_ratio", &P::min_inlier_ratio,
+                 "Minimum inliers / correspondences of the fundamental matrix, [0, 1]."),
+      real_field("min_inlier_spread", &P::min_inlier_spread,
+                 "Minimum share of the image the inliers must cover, [0, 1]."),
   };
   return table;
 }

@@ -21,6 +21,7 @@ from ._binbow import (
     LoopDetector,
     LoopDetectorParams,
     LoopResult,
+    SimilarityMatrix,
     Vocabulary,
     __version__,
     _detect_loops,
@@ -41,6 +42,7 @@ __all__ = [
     "LoopDetectorParams",
     "LoopResult",
     "LoopResults",
+    "SimilarityMatrix",
     "Vocabulary",
     "data_directories",
     "detect_loops",
@@ -202,7 +204,7 @@ def detect_loops(
                 + type(params).__name__
             )
         params = _os.fsdecode(params)
-    frames, used = _detect_loops(
+    frames, used, similarity = _detect_loops(
         paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
         callback,
     )
@@ -210,6 +212,7 @@ def detect_loops(
         printer.finish()
     results = LoopResults(frames)
     results.params = used
+    results.similarity = similarity if similarity.frames else None
     results.descriptor = name
     results.vocabulary = vocabulary
     results.vocabulary_file = vocabulary_file
@@ -224,10 +227,13 @@ class LoopResults(list):
     params: the LoopDetectorParams of the run (after a video's frame rate and
     a parameter file); descriptor: the extractor's name; vocabulary: the
     Vocabulary; vocabulary_file: its file when detect_loops loaded the default
-    one, else None; inputs: the inputs as absolute paths.
+    one, else None; inputs: the inputs as absolute paths; similarity: the
+    SimilarityMatrix of the run (None when the geometric check is "none": the
+    detector then keeps no features to score).
     """
 
     params = None
+    similarity = None
     descriptor = ""
     vocabulary = None
     vocabulary_file = None
@@ -251,5 +257,5 @@ def write_report(folder, results, ground_truth=None):
     vocabulary = run.vocabulary_file or (repr(run.vocabulary) if run.vocabulary else "")
     return _write_report(
         _os.fsdecode(folder), results, ground_truth, run.params, inputs, vocabulary,
-        run.descriptor,
+        run.descriptor, run.similarity,
     )

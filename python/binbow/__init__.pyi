@@ -164,6 +164,7 @@ class LoopDetectorParams:
     use_normalised_score: bool
     alpha: float
     min_normalisation_score: float
+    skip_featureless_frames: bool
     dislocal: int
     max_db_results: int
     max_intra_island_gap: int
@@ -178,10 +179,14 @@ class LoopDetectorParams:
     max_neighbor_ratio: float
     max_match_distance: float
     accept_single_candidate: bool
+    mutual_matching: bool
+    fundamental_estimator: Literal["usac-magsac", "usac-accurate", "ransac"]
     min_inliers: int
     max_reprojection_error: float
     ransac_confidence: float
     max_ransac_iterations: int
+    min_inlier_ratio: float
+    min_inlier_spread: float
     def __eq__(self, other: object) -> bool: ...
     def __copy__(self) -> LoopDetectorParams: ...
     def __deepcopy__(self, memo: object) -> LoopDetectorParams: ...
@@ -292,7 +297,23 @@ def evaluate(
     results: Union[Iterable[LoopResult], _StrPath], ground_truth: GroundTruth
 ) -> Evaluation: ...
 
+class SimilarityMatrix:
+    """s(v_i, v_j) of every image i with every earlier image j (binned on long runs)."""
+    @property
+    def scores(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def frames(self) -> int: ...
+    @property
+    def bin(self) -> int: ...
+    @property
+    def cells(self) -> int: ...
+    @property
+    def every_query(self) -> bool: ...
+    def __getstate__(self) -> tuple[int, int, int, bool, bytes]: ...
+    def __setstate__(self, state: tuple[int, int, int, bool, bytes]) -> None: ...
+
 class LoopResults(list[LoopResult]):
+    similarity: Optional[SimilarityMatrix]
     params: Optional[LoopDetectorParams]
     descriptor: str
     vocabulary: Optional[Vocabulary]

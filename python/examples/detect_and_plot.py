@@ -6,13 +6,13 @@
 
 Loops are found by binbow.detect_loops (the same loops as `binbow detect-loops`).
 The picture is the matrix of bag-of-words similarities of every image (rows,
-the query) with every earlier image (columns), from an image database queried
-with each image before it is added. Ground-truth loops (--gt: an image matrix,
+the query) with every earlier image (columns) that detect_loops returns with
+its results (results.similarity; long runs binned to at most 1000 x 1000 cells). Ground-truth loops (--gt: an image matrix,
 a MATLAB .mat or text pairs) are outlined, and each detection is marked: green
 when the ground truth confirms it, red when it does not, white without --gt.
 
 Needs Debian's python3-matplotlib and python3-numpy; writes a PNG without a
-display (Agg). The matrix takes N x N floats: thousands of images are fine.
+display (Agg). Folders, lists and videos alike.
 """
 import argparse
 import sys
@@ -26,31 +26,27 @@ import numpy as np  # noqa: E402
 import binbow  # noqa: E402
 
 
-def similarity_matrix(files, vocabulary, descriptor):
-    """scores[i, j]: similarity of image i with earlier image j (NaN for j >= i)."""
-    extractor = binbow.FeatureExtractor(descriptor)
-    database = binbow.Database(vocabulary, direct_index=False)
-    scores = np.full((len(files), len(files)), np.nan, dtype=np.float32)
-    for i, path in enumerate(files):
-        _, descriptors = extractor.extract(path)
-        bow = vocabulary.transform(descriptors)
-        scores[i, :i] = 0
-        for entry, score, _ in database.query(bow, max_results=max(len(database), 1)):
-            scores[i, entry] = score
-        database.add_bow(bow)
+def similarity_scores(similarity):
+    """The run's matrix with the cells above the diagonal (no earlier image) as NaN."""
+    scores = similarity.scores.copy()
+    scores[np.triu_indices(similarity.cells, k=1)] = np.nan
     return scores
 
 
-def plot(scores, scoring, results, truth, evaluation, output, title):
+def plot(similarity, scoring, results, truth, evaluation, output, title):
+    scores = similarity_scores(similarity)
     figure, axes = plt.subplots(figsize=(8, 7), dpi=120)
     finite = scores[np.isfinite(scores)]
     top = np.percentile(finite, 99.5) if finite.size else 1.0
-    shown = axes.imshow(scores, cmap="magma", vmin=0, vmax=top or 1.0, interpolation="nearest")
+    # Axes in frame indices also when long runs are binned (bin frames a cell).
+    side = similarity.cells * similarity.bin
+    shown = axes.imshow(scores, cmap="magma", vmin=0, vmax=top or 1.0, interpolation="nearest",
+                        extent=(-0.5, side - 0.5, side - 0.5, -0.5))
     figure.colorbar(shown, ax=axes, fraction=0.046, pad=0.04, label=f"similarity ({scoring} score)")
 
     if truth is not None:
-        pairs = [(j, i) for i in range(min(truth.frames, len(scores)))
-                 for j in truth.earlier_matches(i) if j < len(scores)]
+        pairs = [(j, i) for i in range(min(truth.frames, similarity.frames))
+                 for j in truth.earlier_matches(i)]
         if pairs:
             x, y = zip(*pairs)
             axes.scatter(x, y, s=22, marker="s", facecolors="none", edgecolors="#4fc3f7",
@@ -94,8 +90,8 @@ def main(argv=None):
     params = binbow.LoopDetectorParams.from_file(arguments.params) if arguments.params else None
     results = binbow.detect_loops(arguments.inputs, vocabulary=vocabulary,
                                   descriptor=arguments.descriptor, params=params, progress=True)
-    files = [r.file for r in results]
-    scores = similarity_matrix(files, vocabulary, arguments.descriptor)
+    if results.similarity is None:
+        raise ValueError('no similarity matrix: the parameters say "geometric_check": "none"')
 
     truth = evaluation = None
     title = f"{len(results)} images, {sum(r.detection for r in results)} loops detected"
@@ -103,7 +99,7 @@ def main(argv=None):
         truth = binbow.GroundTruth.load(arguments.gt, base=arguments.gt_base, frames=len(results))
         evaluation = binbow.evaluate(results, truth)
         title += f"; precision {evaluation.precision:.3f}, recall {evaluation.recall:.3f}"
-    plot(scores, vocabulary.scoring, results, truth, evaluation, arguments.output, title)
+    plot(results.similarity, vocabulary.scoring, results, truth, evaluation, arguments.output, title)
     print(title)
     print(f"wrote {arguments.output}")
     return 0

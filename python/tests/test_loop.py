@@ -59,8 +59,8 @@ def test_result_fields(results, features):
         assert f"query {r.query}" in repr(r) and "loop-detected" in repr(r)
     undetected = [r for r in results if not r.detection]
     assert all(r.inlier_points.shape == (0, 4) for r in undetected)
-    # A failed geometric check still tells how many inliers it found.
-    assert any(len(r.inliers) for r in undetected if r.status == "no-geometric-consistency")
+    # A failed geometric check still tells how many correspondences it tried.
+    assert any(r.correspondences for r in undetected if r.status == "no-geometric-consistency")
 
 
 def test_keypoint_forms_give_the_same_loops(features, results):

@@ -1,6 +1,7 @@
 """binbow.detect_loops and binbow.write_report: the CLI's detect-loops from Python."""
 import csv
 import json
+import pickle
 import re
 
 import numpy as np
@@ -171,7 +172,22 @@ def test_write_report_with_ground_truth_and_plain_lists(tmp_path, results):
     assert "Precision and recall" in text
     plain = binbow.write_report(str(tmp_path / "plain"), list(results))
     facts, text = report_facts(tmp_path / "plain" / "index.html")
-    assert facts["loops"] == "35" and "Parameters" not in text, "unknown parameters not shown"
+    assert facts["loops"] == "41" and "Parameters" not in text, "unknown parameters not shown"
     assert plain.endswith("index.html")
     with pytest.raises(TypeError, match="LoopResult"):
         binbow.write_report(tmp_path / "bad", [1, 2])
+
+
+def test_the_similarity_matrix_comes_with_the_results(tmp_path, results):
+    similarity = results.similarity
+    assert (similarity.frames, similarity.bin, similarity.cells) == (84, 1, 84)
+    scores = similarity.scores
+    assert scores.dtype == np.float32 and scores.shape == (84, 84)
+    assert not np.triu(scores).any(), "only earlier images are scored"
+    # A detected loop is among the most similar earlier images of its query.
+    loop = next(r for r in results if r.detection)
+    assert scores[loop.query, loop.match] >= np.sort(scores[loop.query])[-5] > 0
+    again = pickle.loads(pickle.dumps(similarity))
+    assert np.array_equal(again.scores, scores) and again.frames == 84
+    binbow.write_report(tmp_path / "report", results)
+    assert (tmp_path / "report" / "similarity.png").stat().st_size > 1000

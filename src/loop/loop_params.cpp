@@ -19,6 +19,7 @@ namespace binbow::loop {
 
 using vision::check_storage_text;
 using vision::parse_flat_yaml;
+using vision::parse_fundamental_estimator;
 using vision::read_regular_file;
 namespace {
 

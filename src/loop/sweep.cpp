@@ -84,6 +84,8 @@ std::vector<double> default_sweep_values(const std::string& parameter) {
       {"max_reprojection_error", {0.5, 1, 1.5, 2, 2.5, 3, 4, 5, 8}},                  // 2
       {"ransac_confidence", {0.9, 0.95, 0.99, 0.995, 0.999}},                         // 0.99
       {"max_ransac_iterations", {50, 100, 200, 500, 1000, 2000, 5000}},               // 500
+      {"min_inlier_ratio", {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}},                        // 0
+      {"min_inlier_spread", {0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4}},                     // 0
   };
   const auto found = ranges.find(parameter);
   if (found == ranges.end())

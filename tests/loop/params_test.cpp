@@ -33,7 +33,7 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_DOUBLE_EQ(p.max_reprojection_error, 2.0);
   // binbow's departures, each switchable (docs/loop-detection.md).
   EXPECT_TRUE(p.skip_featureless_frames);
-  EXPECT_EQ(p.fundamental_estimator, FundamentalEstimator::kUsacMagsac);
+  EXPECT_EQ(p.fundamental_estimator, vision::FundamentalEstimator::kUsacMagsac);
   EXPECT_FALSE(p.mutual_matching);
   EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
   EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
@@ -51,7 +51,7 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.geometric_check = GeometricCheck::kExhaustive;
   p.exhaustive_fallback = false;
   p.skip_featureless_frames = false;
-  p.fundamental_estimator = FundamentalEstimator::kRansac;
+  p.fundamental_estimator = vision::FundamentalEstimator::kRansac;
   p.mutual_matching = true;
   p.min_inlier_ratio = 0.5;
   p.min_inlier_spread = 0.25;
@@ -59,11 +59,11 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   EXPECT_EQ(q.to_json(), p.to_json());
   EXPECT_EQ(q.dislocal, 60);
   EXPECT_EQ(q.geometric_check, GeometricCheck::kExhaustive);
-  EXPECT_EQ(q.fundamental_estimator, FundamentalEstimator::kRansac);
+  EXPECT_EQ(q.fundamental_estimator, vision::FundamentalEstimator::kRansac);
   EXPECT_NE(p.to_json().find("\"fundamental_estimator\": \"ransac\""), std::string::npos);
   EXPECT_EQ(LoopDetectorParams::from_json(R"({"fundamental_estimator": "USAC_ACCURATE"})")
                 .fundamental_estimator,
-            FundamentalEstimator::kUsacAccurate);
+            vision::FundamentalEstimator::kUsacAccurate);
 }
 
 TEST(LoopDetectorParams, FrequencyDerivesThenKeysOverride) {

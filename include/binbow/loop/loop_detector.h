@@ -134,7 +134,7 @@ struct LoopDetectorParams {
   // The robust estimator. binbow's default is MAGSAC++ (OpenCV's USAC):
   // its local optimisation finds the full inlier set where plain RANSAC
   // (the paper, "ransac") stops at a partial one below min_inliers.
-  FundamentalEstimator fundamental_estimator = FundamentalEstimator::kUsacMagsac;
+  vision::FundamentalEstimator fundamental_estimator = vision::FundamentalEstimator::kUsacMagsac;
   int min_inliers = 12;                 // minimum RANSAC inliers of the fundamental matrix [8, 1e4]
   double max_reprojection_error = 2.0;  // pixels, RANSAC threshold [0.1, 100]
   double ransac_confidence = 0.99;      // (0, 1)
