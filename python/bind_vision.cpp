@@ -30,8 +30,8 @@ constexpr long long kMaxFeatures = 1000000;
 const std::vector<std::string>& option_names(const std::string& descriptor) {
   static const std::vector<std::string> orb = {"scale_factor", "levels", "fast_threshold",
                                                "edge_threshold"};
-  static const std::vector<std::string> brief = {"fast_threshold", "non_max_suppression",
-                                                 "pattern"};
+  static const std::vector<std::string> brief = {"fast_threshold", "non_max_suppression", "pattern",
+                                                 "keep_border_corners"};
   static const std::vector<std::string> none;
   if (descriptor == "orb") return orb;
   if (descriptor == "brief") return brief;
@@ -138,6 +138,8 @@ class PythonExtractor {
         options.fast_threshold = int_option(v, "fast_threshold", 0, 255);
       if (const auto v = option("non_max_suppression"))
         options.non_max_suppression = bool_option(v, "non_max_suppression");
+      if (const auto v = option("keep_border_corners"))
+        options.keep_border_corners = bool_option(v, "keep_border_corners");
       if (const auto v = option("pattern")) {
         if (!is_path(v)) throw py::type_error("pattern must be a path, got " + type_name(v));
         options.pattern_file = path_string(v);
@@ -249,8 +251,10 @@ void bind_vision(py::module_& m) {
       "max_features: the strongest keypoints kept; None: the extractor's default (ORB 1000,\n"
       "BRIEF 300, AKAZE and BRISK every keypoint found).\n"
       "Options: orb takes scale_factor, levels, fast_threshold, edge_threshold; brief takes\n"
-      "fast_threshold, non_max_suppression and pattern (a YAML/XML pattern file, as the CLI's\n"
-      "--pattern); akaze and brisk take none. An unknown option is a TypeError.\n"
+      "fast_threshold, non_max_suppression, pattern (a YAML/XML pattern file, as the CLI's\n"
+      "--pattern) and keep_border_corners (describe corners whose tests leave the image, those\n"
+      "tests giving 0 bits, as DLib's BRIEF does; default False); akaze and brisk take none.\n"
+      "An unknown option is a TypeError.\n"
       "Immutable: extract may be called from several threads at once.")
       .def(py::init([](const std::string& descriptor, const py::object& max_features,
                        const py::kwargs& options) {

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import binbow
-from conftest import SAMPLES, require_module, run_cli
+from conftest import SAMPLES, require_module, run_cli, sample_frames
 
 FRAME = SAMPLES / "samples" / "1.jpg"
 
@@ -150,3 +150,16 @@ def test_repr_pickle_and_copy():
                   copy.deepcopy(extractor)):
         assert repr(clone) == repr(extractor)
         np.testing.assert_array_equal(clone.extract(FRAME)[1], extractor.extract(FRAME)[1])
+
+
+def test_brief_keeps_border_corners_on_request():
+    path = sample_frames()[0]
+    inside = binbow.FeatureExtractor("brief", max_features=100_000)
+    border = binbow.FeatureExtractor("brief", max_features=100_000, keep_border_corners=True)
+    kept_inside, _ = inside.extract(path)
+    kept_border, _ = border.extract(path)
+    assert len(kept_border) > len(kept_inside)
+    # Every corner whose tests stay inside the image is kept by both.
+    assert {tuple(k[:2]) for k in kept_inside} <= {tuple(k[:2]) for k in kept_border}
+    with pytest.raises(TypeError, match="keep_border_corners must be a bool"):
+        binbow.FeatureExtractor("brief", keep_border_corners=1)
