@@ -99,13 +99,12 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
     return;
   }
 
-  thread_local std::vector<Branch> heap;
-  heap.clear();
+  // Branches not taken. Most are never explored (a search explores a few
+  // beyond its first descents), so they are appended unordered and the
+  // closest is looked for only when one is needed.
+  thread_local std::vector<Branch> branches;
+  branches.clear();
   std::size_t checks = 0;
-  const auto push = [&](Branch branch) {
-    heap.push_back(branch);
-    std::push_heap(heap.begin(), heap.end(), std::greater<>());
-  };
   const auto descend = [&](std::uint32_t t, std::uint32_t n) {
     const detail::WordTree& tree = trees[t];
     while (tree.nodes[n].child_count != 0) {
@@ -116,11 +115,12 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
         const std::uint32_t d =
             hamming(query, tree.centres.data() + std::size_t{c} * code_size, code_size);
         if (d < nearest_distance) {
-          if (nearest_distance != kNoWord) push(make_branch(nearest_distance, t, nearest_child));
+          if (nearest_distance != kNoWord)
+            branches.push_back(make_branch(nearest_distance, t, nearest_child));
           nearest_distance = d;
           nearest_child = c;
         } else {
-          push(make_branch(d, t, c));
+          branches.push_back(make_branch(d, t, c));
         }
       }
       n = nearest_child;
@@ -129,10 +129,11 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
     checks += tree.nodes[n].slots.size();
   };
   for (std::uint32_t t = 0; t < trees.size(); ++t) descend(t, 0);
-  while (checks < options.max_checks && !heap.empty()) {
-    std::pop_heap(heap.begin(), heap.end(), std::greater<>());
-    const Branch branch = heap.back();
-    heap.pop_back();
+  while (checks < options.max_checks && !branches.empty()) {
+    const auto closest = std::min_element(branches.begin(), branches.end());
+    const Branch branch = *closest;
+    *closest = branches.back();
+    branches.pop_back();
     descend(branch_tree(branch), branch_node(branch));
   }
 }
