@@ -295,46 +295,55 @@ void OnlineVocabulary::Impl::reinsert_into_tree(std::size_t t, std::uint32_t slo
   if (tree.nodes[n].slots.size() > options.leaf_size) split_leaf(t, n);
 }
 
-void OnlineVocabulary::Impl::split_leaf(std::size_t t, std::uint32_t leaf) {
+void OnlineVocabulary::Impl::split_leaf(std::size_t t, std::uint32_t overfull) {
   detail::WordTree& tree = trees[t];
-  std::vector<std::uint32_t> slots = std::move(tree.nodes[leaf].slots);
-  tree.nodes[leaf].slots.clear();
+  // A list, not recursion: an unlucky draw can make a tree deep.
+  std::vector<std::uint32_t> pending{overfull};
+  while (!pending.empty()) {
+    const std::uint32_t leaf = pending.back();
+    pending.pop_back();
+    std::vector<std::uint32_t> slots = std::move(tree.nodes[leaf].slots);
+    tree.nodes[leaf].slots.clear();
 
-  // Up to `branching` centres drawn at random among the words, with distinct
-  // descriptors, so every word's own centre is unique and every child gets
-  // at least its centre's word: each child is smaller than the leaf.
-  detail::SplitMix64 random(detail::child_seed(options.seed, random_draws++));
-  std::vector<std::uint32_t> pool = slots;
-  std::vector<const std::uint8_t*> centres;
-  for (std::size_t remaining = pool.size(); remaining > 0 && centres.size() < options.branching;) {
-    const std::size_t pick = random.below(remaining);
-    std::swap(pool[pick], pool[--remaining]);
-    const std::uint8_t* candidate = slot_descriptor(pool[remaining]);
-    if (std::none_of(centres.begin(), centres.end(), [&](const std::uint8_t* centre) {
-          return std::memcmp(centre, candidate, code_size) == 0;
-        }))
-      centres.push_back(candidate);
-  }
-  if (centres.size() < 2) {  // all equal: nothing to split on, the leaf stays big
-    tree.nodes[leaf].slots = std::move(slots);
-    return;
-  }
+    // Up to `branching` centres drawn at random among the words, with
+    // distinct descriptors, so every word's own centre is unique and every
+    // child gets at least its centre's word: each child is smaller than the
+    // leaf.
+    detail::SplitMix64 random(detail::child_seed(options.seed, random_draws++));
+    std::vector<std::uint32_t> pool = slots;
+    std::vector<const std::uint8_t*> centres;
+    for (std::size_t remaining = pool.size();
+         remaining > 0 && centres.size() < options.branching;) {
+      const std::size_t pick = random.below(remaining);
+      std::swap(pool[pick], pool[--remaining]);
+      const std::uint8_t* candidate = slot_descriptor(pool[remaining]);
+      if (std::none_of(centres.begin(), centres.end(), [&](const std::uint8_t* centre) {
+            return std::memcmp(centre, candidate, code_size) == 0;
+          }))
+        centres.push_back(candidate);
+    }
+    if (centres.size() < 2) {  // all equal: nothing to split on, the leaf stays big
+      tree.nodes[leaf].slots = std::move(slots);
+      continue;
+    }
 
-  const auto first = static_cast<std::uint32_t>(tree.nodes.size());
-  const auto count = static_cast<std::uint32_t>(centres.size());
-  tree.nodes.resize(tree.nodes.size() + count);
-  tree.nodes[leaf].first_child = first;
-  tree.nodes[leaf].child_count = count;
-  tree.centres.resize(tree.nodes.size() * code_size);
-  for (std::uint32_t c = 0; c < count; ++c)
-    std::memcpy(tree.centres.data() + std::size_t{first + c} * code_size, centres[c], code_size);
-  for (const std::uint32_t slot : slots) {
-    const std::uint32_t child = nearest_child(tree, leaf, slot_descriptor(slot), code_size);
-    tree.nodes[child].slots.push_back(slot);
-    leaves[std::size_t{slot} * trees.size() + t] = child;
+    const auto first = static_cast<std::uint32_t>(tree.nodes.size());
+    const auto count = static_cast<std::uint32_t>(centres.size());
+    tree.nodes.resize(tree.nodes.size() + count);
+    tree.nodes[leaf].first_child = first;
+    tree.nodes[leaf].child_count = count;
+    tree.centres.resize(tree.nodes.size() * code_size);
+    for (std::uint32_t c = 0; c < count; ++c)
+      std::memcpy(tree.centres.data() + std::size_t{first + c} * code_size, centres[c], code_size);
+    for (const std::uint32_t slot : slots) {
+      const std::uint32_t child = nearest_child(tree, leaf, slot_descriptor(slot), code_size);
+      tree.nodes[child].slots.push_back(slot);
+      leaves[std::size_t{slot} * trees.size() + t] = child;
+    }
+    // Pushed in reverse: children split in order, depth first.
+    for (std::uint32_t c = first + count; c-- > first;)
+      if (tree.nodes[c].slots.size() > options.leaf_size) pending.push_back(c);
   }
-  for (std::uint32_t c = first; c < first + count; ++c)
-    if (tree.nodes[c].slots.size() > options.leaf_size) split_leaf(t, c);
 }
 
 void OnlineVocabulary::Impl::rebuild_tree(std::size_t t) {

@@ -94,8 +94,9 @@ struct OnlineVocabulary::Impl {
   void insert_into_tree(std::size_t tree, std::uint32_t slot);
   // Moves a word whose descriptor changed to the leaf its descriptor now reaches.
   void reinsert_into_tree(std::size_t tree, std::uint32_t slot);
-  // Splits a leaf holding more than leaf_size words, recursively.
-  void split_leaf(std::size_t tree, std::uint32_t node);
+  // Splits a leaf holding more than leaf_size words, and its children as long
+  // as they do too.
+  void split_leaf(std::size_t tree, std::uint32_t leaf);
   // Puts back the purge queue and the trees from the words (after loading).
   void restore_derived_state();
   std::size_t memory_usage() const;
