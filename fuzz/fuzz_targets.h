@@ -158,6 +158,16 @@ inline void check_accepted_online(OnlineVocabulary vocabulary) {
   BowVector bow;
   FeatureVector features;
   vocabulary.transform(probe, bow, &features);
+  const bool full = vocabulary.image_count() == 0xFFFFFFFFu ||
+                    probe.rows() > OnlineVocabulary::kNoWord - vocabulary.next_word_id();
+  if (full) {  // a state at the counters' limits: add_image must refuse, not wrap
+    try {
+      vocabulary.add_image(probe);
+    } catch (const InvalidArgument&) {
+      return;
+    }
+    throw std::logic_error("add_image accepted an image beyond the counters' limits");
+  }
   const OnlineImageWords added = vocabulary.add_image(probe);
   for (const WordId word : added.words)
     if (!vocabulary.contains(word)) throw std::logic_error("add_image returned a missing word");

@@ -119,8 +119,9 @@ class OnlineVocabulary {
 
   // Adds one image: assigns (and creates) the words of its descriptors, then
   // purges the words that have expired. Throws InvalidArgument if the code
-  // size differs; the vocabulary is unchanged then. The second form reuses
-  // the capacity of `result`.
+  // size differs, after 2^32 - 1 images, or when the image has more
+  // descriptors than word ids are left (2^32 - 1 ids in all); the vocabulary
+  // is unchanged then. The second form reuses the capacity of `result`.
   OnlineImageWords add_image(const DescriptorView& descriptors);
   void add_image(const DescriptorView& descriptors, OnlineImageWords& result);
 

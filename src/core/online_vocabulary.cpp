@@ -140,8 +140,6 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
 
 std::uint32_t OnlineVocabulary::Impl::create_word(const std::uint8_t* descriptor,
                                                   std::uint32_t image) {
-  if (next_word_id == kNoWord)
-    throw InvalidArgument("OnlineVocabulary: 2^32 - 1 word ids used, no id is left");
   const WordId word = next_word_id++;
   const auto slot = static_cast<std::uint32_t>(word_count());
   descriptors.insert(descriptors.end(), descriptor, descriptor + code_size);
@@ -431,6 +429,11 @@ void OnlineVocabulary::add_image(const DescriptorView& descriptors, OnlineImageW
   check_code_size(descriptors, impl.code_size);
   if (impl.images == 0xFFFFFFFFu)
     throw InvalidArgument("OnlineVocabulary: 2^32 - 1 images added, no more can be counted");
+  // Checked before anything changes, though the image may need fewer.
+  if (descriptors.rows > kNoWord - impl.next_word_id)
+    throw InvalidArgument("OnlineVocabulary: " + std::to_string(descriptors.rows) +
+                          " descriptors could need more word ids than the " +
+                          std::to_string(kNoWord - impl.next_word_id) + " left");
   result.words.resize(descriptors.rows);
   result.purged.clear();
   result.new_words = 0;

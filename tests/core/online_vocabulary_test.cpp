@@ -422,6 +422,26 @@ TEST_F(OnlineVocabularyFile, ClearErrorsForWrongMagicVersionAndHugeCounts) {
   EXPECT_NE(rejection(bytes).find("section 'descriptors' has"), std::string::npos);
 }
 
+TEST_F(OnlineVocabularyFile, StatesAtTheCountersLimitsRefuseImagesUnchanged) {
+  const auto words = detail::load_le<std::uint32_t>(bytes_.data() + 28);
+  std::vector<std::uint8_t> bytes = bytes_;
+  // One word id left, so an image of two descriptors might need too many.
+  detail::store_le<std::uint32_t>(bytes.data() + 24, OnlineVocabulary::kNoWord - 1);
+  detail::store_le<std::uint64_t>(bytes.data() + 40, OnlineVocabulary::kNoWord - 1 - words);
+  fix_checksums(bytes);
+  OnlineVocabulary full = OnlineVocabulary::deserialize(bytes.data(), bytes.size(), "ids.bbov");
+  EXPECT_THROW(full.add_image(images_[9].slice(0, 2)), InvalidArgument);
+  EXPECT_EQ(full.serialize(), bytes);
+  EXPECT_EQ(full.add_image(images_[9].slice(0, 1)).words.size(), 1u);
+
+  bytes = bytes_;
+  detail::store_le<std::uint32_t>(bytes.data() + 20, 0xFFFFFFFFu);  // images added
+  fix_checksums(bytes);
+  OnlineVocabulary old = OnlineVocabulary::deserialize(bytes.data(), bytes.size(), "old.bbov");
+  EXPECT_THROW(old.add_image(images_[9]), InvalidArgument);
+  EXPECT_EQ(old.serialize(), bytes);
+}
+
 TEST_F(OnlineVocabularyFile, InconsistentWordsAreRejected) {
   // Word counts live in section 2, after options (48 + 3 bytes) and ids.
   const auto words = detail::load_le<std::uint32_t>(bytes_.data() + 28);
