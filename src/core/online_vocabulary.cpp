@@ -45,9 +45,10 @@ bool bit_of(const std::uint8_t* descriptor, std::size_t bit) {
 }
 
 // A branch not yet explored by a search, as one integer ordered as the
-// search takes branches: closest centre first, then by tree, then by node
-// (so the order does not depend on the heap's implementation). Distances
-// fit 14 bits (descriptors have at most 8192), trees 4, nodes 32.
+// search takes branches: closest centre first, then by tree, then by node.
+// Keys are unique, so the order never depends on where a branch sits in the
+// list. Distances fit 14 bits (descriptors have at most 8192), trees 4,
+// nodes 32.
 using Branch = std::uint64_t;
 Branch make_branch(std::uint32_t distance, std::uint32_t tree, std::uint32_t node) {
   return (std::uint64_t{distance} << 36) | (std::uint64_t{tree} << 32) | node;
