@@ -16,6 +16,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/formats.h"
+#include "binbow/online_vocabulary.h"
 #include "binbow/vocabulary.h"
 #include "core/crc32c.h"
 #include "core/little_endian.h"
@@ -144,6 +145,46 @@ inline void load_bbdb(const std::uint8_t* data, std::size_t size) {
   check_accepted_database(Database::deserialize(data, size, "fuzz"));
 }
 
+// An accepted online vocabulary survives a save/load round trip unchanged,
+// and keeps working: it transforms and adds an image.
+inline void check_accepted_online(OnlineVocabulary vocabulary) {
+  const std::vector<std::uint8_t> saved = vocabulary.serialize();
+  if (OnlineVocabulary::deserialize(saved.data(), saved.size(), "resaved").serialize() != saved)
+    throw std::logic_error("save/load round trip changed the online vocabulary");
+  const std::size_t code_size = vocabulary.code_size();
+  DescriptorMatrix probe(code_size);
+  for (const WordId word : vocabulary.words()) probe.append(vocabulary.word_descriptor(word));
+  probe.append(std::vector<std::uint8_t>(code_size, 0xA5).data());
+  BowVector bow;
+  FeatureVector features;
+  vocabulary.transform(probe, bow, &features);
+  const bool full = vocabulary.image_count() == 0xFFFFFFFFu ||
+                    probe.rows() > OnlineVocabulary::kNoWord - vocabulary.next_word_id();
+  if (full) {  // a state at the counters' limits: add_image must refuse, not wrap
+    try {
+      vocabulary.add_image(probe);
+    } catch (const InvalidArgument&) {
+      return;
+    }
+    throw std::logic_error("add_image accepted an image beyond the counters' limits");
+  }
+  const OnlineImageWords added = vocabulary.add_image(probe);
+  for (const WordId word : added.words)
+    if (!vocabulary.contains(word)) throw std::logic_error("add_image returned a missing word");
+}
+
+// .bbov: as is, then with its CRCs recomputed (its header and section table
+// are laid out as .bbdb's), so that mutations reach the checks behind them.
+inline void load_bbov(const std::uint8_t* data, std::size_t size) {
+  std::vector<std::uint8_t> fixed(data, data + size);
+  fix_bbdb_checksums(fixed);
+  try {
+    check_accepted_online(OnlineVocabulary::deserialize(fixed.data(), fixed.size(), "fuzz"));
+  } catch (const FileError&) {
+  }
+  check_accepted_online(OnlineVocabulary::deserialize(data, size, "fuzz"));
+}
+
 // gzip: the head the format sniffers read is a prefix of the whole, and
 // what gunzip accepts survives gzip and gunzip unchanged.
 inline void load_gzip(const std::uint8_t* data, std::size_t size) {
@@ -202,6 +243,7 @@ inline const Target kTargets[] = {
      [](const std::uint8_t* d, std::size_t n) { load_tree_format(VocabularyFormat::kFbow, d, n); }},
     {"bbw", load_bbw},
     {"bbdb", load_bbdb},
+    {"bbov", load_bbov},
     {"gzip", load_gzip},
     {"tar", load_tar},
 };

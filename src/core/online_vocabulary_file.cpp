@@ -1,0 +1,288 @@
+// The online vocabulary's state file (.bbov). Layout, all little-endian:
+//   header (64 bytes, CRC32C in its last 4), section table (24 bytes per
+//   section: id, CRC32C, offset, length; then the table's CRC32C), then the
+//   sections back to back in id order up to the end of the file, so that
+//   every byte is covered by a CRC. Sections, always present:
+//   0 options   1 word ids (u32 per live word, in slot order)
+//   2 word counts (u32 images, observations, first image, last image per word)
+//   3 word descriptors (code_size bytes per word)
+//   4 majority counters (one count byte per bit, for each word with two
+//     observations or more, in slot order)   5 counter totals (u8 per such word)
+// The search trees are not stored: loading rebuilds them from the words.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "binbow/error.h"
+#include "binbow/online_vocabulary.h"
+#include "core/crc32c.h"
+#include "core/file_io.h"
+#include "core/little_endian.h"
+#include "core/online_vocabulary_impl.h"
+
+namespace binbow {
+
+namespace {
+
+constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'O', 'V'};
+constexpr std::uint32_t kVersion = 1;
+constexpr std::size_t kHeaderSize = 64;
+constexpr std::size_t kSectionEntrySize = 24;
+constexpr std::size_t kOptionsSize = 48;  // before the descriptor name
+constexpr std::size_t kMaxDescriptorName = 8;
+
+enum Section : std::uint32_t {
+  kOptions = 0,
+  kWordIds,
+  kWordCounts,
+  kDescriptors,
+  kCounters,
+  kCounterTotals,
+  kSectionCount,
+};
+constexpr const char* kSectionNames[kSectionCount] = {"options",     "word ids", "word counts",
+                                                      "descriptors", "counters", "counter totals"};
+
+}  // namespace
+
+std::vector<std::uint8_t> OnlineVocabulary::serialize() const {
+  const Impl& impl = *impl_;
+  const OnlineVocabularyOptions& o = impl.options;
+  std::vector<std::uint8_t> sections[kSectionCount];
+
+  std::vector<std::uint8_t>& options = sections[kOptions];
+  detail::put_le<double>(options, o.new_word_distance);
+  detail::put_le<std::uint32_t>(options, o.purge_after_images);
+  detail::put_le<std::uint32_t>(options, o.trees);
+  detail::put_le<std::uint32_t>(options, o.branching);
+  detail::put_le<std::uint32_t>(options, o.leaf_size);
+  detail::put_le<std::uint32_t>(options, o.max_checks);
+  options.push_back(o.exact ? 1 : 0);
+  options.push_back(static_cast<std::uint8_t>(o.scoring));
+  options.resize(options.size() + 2, 0);
+  detail::put_le<std::uint64_t>(options, o.seed);
+  detail::put_le<std::uint64_t>(options, impl.random_draws);
+  options.insert(options.end(), o.descriptor.begin(), o.descriptor.end());
+
+  std::size_t with_counters = 0;
+  for (std::size_t slot = 0; slot < impl.word_count(); ++slot) {
+    const OnlineWordInfo& word = impl.info[slot];
+    detail::put_le<std::uint32_t>(sections[kWordIds], word.id);
+    detail::put_le<std::uint32_t>(sections[kWordCounts], word.images);
+    detail::put_le<std::uint32_t>(sections[kWordCounts], word.observations);
+    detail::put_le<std::uint32_t>(sections[kWordCounts], word.first_image);
+    detail::put_le<std::uint32_t>(sections[kWordCounts], word.last_image);
+    const std::uint32_t block = impl.counter_block[slot];
+    if (block == detail::kNoSlot) continue;
+    const std::uint8_t* ones = impl.counters.data() + std::size_t{block} * impl.bits;
+    sections[kCounters].insert(sections[kCounters].end(), ones, ones + impl.bits);
+    sections[kCounterTotals].push_back(impl.counter_totals[block]);
+    ++with_counters;
+  }
+  sections[kDescriptors] = impl.descriptors;
+
+  std::size_t offsets[kSectionCount];
+  std::size_t end = kHeaderSize + kSectionCount * kSectionEntrySize + 4;
+  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+    offsets[i] = end;
+    end += sections[i].size();
+  }
+  std::vector<std::uint8_t> out(end, 0);
+  std::uint8_t* h = out.data();
+  std::memcpy(h, kMagic, 8);
+  detail::store_le<std::uint32_t>(h + 8, kVersion);
+  detail::store_le<std::uint32_t>(h + 12, kHeaderSize);
+  detail::store_le<std::uint32_t>(h + 16, static_cast<std::uint32_t>(impl.code_size));
+  detail::store_le<std::uint32_t>(h + 20, impl.images);
+  detail::store_le<std::uint32_t>(h + 24, impl.next_word_id);
+  detail::store_le<std::uint32_t>(h + 28, static_cast<std::uint32_t>(impl.word_count()));
+  detail::store_le<std::uint32_t>(h + 32, static_cast<std::uint32_t>(with_counters));
+  detail::store_le<std::uint64_t>(h + 40, impl.purged_words);
+  detail::store_le<std::uint32_t>(h + 48, kSectionCount);
+  detail::store_le<std::uint32_t>(
+      h + 52, static_cast<std::uint32_t>(std::min<std::size_t>(impl.tree_rebuilds, 0xFFFFFFFFu)));
+  detail::store_le<std::uint32_t>(h + 60, detail::crc32c(h, 60));
+  std::uint8_t* table = h + kHeaderSize;
+  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+    if (!sections[i].empty())
+      std::memcpy(out.data() + offsets[i], sections[i].data(), sections[i].size());
+    std::uint8_t* e = table + i * kSectionEntrySize;
+    detail::store_le<std::uint32_t>(e, i);
+    detail::store_le<std::uint32_t>(e + 4, detail::crc32c(sections[i].data(), sections[i].size()));
+    detail::store_le<std::uint64_t>(e + 8, offsets[i]);
+    detail::store_le<std::uint64_t>(e + 16, sections[i].size());
+  }
+  const std::size_t table_size = kSectionCount * kSectionEntrySize;
+  detail::store_le<std::uint32_t>(table + table_size, detail::crc32c(table, table_size));
+  return out;
+}
+
+// Every count is checked against the length of the section that holds its
+// values before anything is allocated: a hostile header cannot make the
+// reader allocate more than the file's own size.
+OnlineVocabulary OnlineVocabulary::deserialize(const std::uint8_t* data, std::size_t size,
+                                               const std::string& name) {
+  const auto fail = [&](const std::string& problem) { throw FileError(name, problem); };
+  if (size < kHeaderSize)
+    fail("truncated: " + std::to_string(size) + " bytes, shorter than the " +
+         std::to_string(kHeaderSize) + "-byte header of an online vocabulary (.bbov)");
+  if (std::memcmp(data, kMagic, 8) != 0)
+    fail("not a binbow online vocabulary (.bbov): wrong magic bytes");
+  const auto version = detail::load_le<std::uint32_t>(data + 8);
+  if (version != kVersion)
+    fail("unsupported .bbov format version " + std::to_string(version) +
+         " (this binbow reads version " + std::to_string(kVersion) + ")");
+  if (detail::load_le<std::uint32_t>(data + 60) != detail::crc32c(data, 60))
+    fail("header checksum mismatch: the file is corrupted");
+  if (detail::load_le<std::uint32_t>(data + 12) != kHeaderSize) fail("unexpected header size");
+  const auto code_size = detail::load_le<std::uint32_t>(data + 16);
+  const auto images = detail::load_le<std::uint32_t>(data + 20);
+  const auto next_word_id = detail::load_le<std::uint32_t>(data + 24);
+  const auto word_count = detail::load_le<std::uint32_t>(data + 28);
+  const auto with_counters = detail::load_le<std::uint32_t>(data + 32);
+  const auto purged_words = detail::load_le<std::uint64_t>(data + 40);
+  const auto section_count = detail::load_le<std::uint32_t>(data + 48);
+  const auto tree_rebuilds = detail::load_le<std::uint32_t>(data + 52);
+  if (section_count != kSectionCount)
+    fail("expected " + std::to_string(kSectionCount) + " sections, the header says " +
+         std::to_string(section_count));
+  if (detail::load_le<std::uint32_t>(data + 36) != 0 ||
+      detail::load_le<std::uint32_t>(data + 56) != 0)
+    fail("reserved header bytes are not zero");
+  if (next_word_id == OnlineVocabulary::kNoWord || word_count > next_word_id ||
+      purged_words != std::uint64_t{next_word_id} - word_count || with_counters > word_count)
+    fail("inconsistent word counts in the header (" + std::to_string(word_count) + " words, " +
+         std::to_string(purged_words) + " purged, " + std::to_string(next_word_id) +
+         " ids created)");
+
+  const std::size_t table_size = kSectionCount * kSectionEntrySize;
+  if (size < kHeaderSize + table_size + 4) fail("truncated inside the section table");
+  const std::uint8_t* table = data + kHeaderSize;
+  if (detail::load_le<std::uint32_t>(table + table_size) != detail::crc32c(table, table_size))
+    fail("section table checksum mismatch: the file is corrupted");
+  const std::uint8_t* section_data[kSectionCount];
+  std::size_t section_size[kSectionCount];
+  std::size_t expected_offset = kHeaderSize + table_size + 4;
+  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+    const std::uint8_t* e = table + i * kSectionEntrySize;
+    const auto offset = detail::load_le<std::uint64_t>(e + 8);
+    const auto length = detail::load_le<std::uint64_t>(e + 16);
+    const std::string section = std::string("section '") + kSectionNames[i] + "'";
+    if (detail::load_le<std::uint32_t>(e) != i) fail("unexpected section id in the table");
+    if (offset != expected_offset) fail(section + " is not where the table says");
+    if (offset > size || length > size - offset)
+      fail(section + " lies outside the file (truncated?)");
+    if (detail::crc32c(data + offset, length) != detail::load_le<std::uint32_t>(e + 4))
+      fail("checksum mismatch in " + section + ": the file is corrupted");
+    section_data[i] = data + offset;
+    section_size[i] = static_cast<std::size_t>(length);
+    expected_offset += length;
+  }
+  if (expected_offset != size)
+    fail(std::to_string(size - expected_offset) + " unexpected bytes after the last section");
+
+  // Options: a fixed record, then the descriptor name.
+  const std::size_t options_size = section_size[kOptions];
+  if (options_size < kOptionsSize || options_size > kOptionsSize + kMaxDescriptorName)
+    fail("section 'options' has " + std::to_string(options_size) + " bytes, expected " +
+         std::to_string(kOptionsSize) + " to " + std::to_string(kOptionsSize + kMaxDescriptorName));
+  const std::uint8_t* o = section_data[kOptions];
+  OnlineVocabularyOptions options;
+  options.new_word_distance = detail::load_le<double>(o);
+  options.purge_after_images = detail::load_le<std::uint32_t>(o + 8);
+  options.trees = detail::load_le<std::uint32_t>(o + 12);
+  options.branching = detail::load_le<std::uint32_t>(o + 16);
+  options.leaf_size = detail::load_le<std::uint32_t>(o + 20);
+  options.max_checks = detail::load_le<std::uint32_t>(o + 24);
+  if (o[28] > 1 || o[29] > 5 || o[30] != 0 || o[31] != 0) fail("invalid options flags");
+  options.exact = o[28] != 0;
+  options.scoring = static_cast<Scoring>(o[29]);
+  options.seed = detail::load_le<std::uint64_t>(o + 32);
+  const auto random_draws = detail::load_le<std::uint64_t>(o + 40);
+  options.descriptor.assign(reinterpret_cast<const char*>(o + kOptionsSize),
+                            options_size - kOptionsSize);
+  std::unique_ptr<Impl> impl;
+  try {
+    impl = std::make_unique<Impl>(code_size, options);
+  } catch (const InvalidArgument& e) {
+    fail(std::string("invalid options: ") + e.what());
+  }
+
+  const auto expect_size = [&](Section s, std::uint64_t expected) {
+    if (section_size[s] != expected)
+      fail(std::string("section '") + kSectionNames[s] + "' has " +
+           std::to_string(section_size[s]) + " bytes, expected " + std::to_string(expected));
+  };
+  expect_size(kWordIds, std::uint64_t{word_count} * 4);
+  expect_size(kWordCounts, std::uint64_t{word_count} * 16);
+  expect_size(kDescriptors, std::uint64_t{word_count} * code_size);
+  expect_size(kCounters, std::uint64_t{with_counters} * code_size * 8);
+  expect_size(kCounterTotals, with_counters);
+
+  impl->images = images;
+  impl->next_word_id = next_word_id;
+  impl->purged_words = static_cast<std::size_t>(purged_words);
+  impl->tree_rebuilds = static_cast<std::size_t>(tree_rebuilds);
+  impl->random_draws = random_draws;
+  impl->descriptors.assign(section_data[kDescriptors],
+                           section_data[kDescriptors] + section_size[kDescriptors]);
+  impl->info.resize(word_count);
+  impl->counter_block.assign(word_count, detail::kNoSlot);
+  impl->leaves.assign(std::size_t{word_count} * options.trees, 0);
+  std::uint32_t block = 0;
+  for (std::uint32_t slot = 0; slot < word_count; ++slot) {
+    OnlineWordInfo& word = impl->info[slot];
+    const std::uint8_t* counts = section_data[kWordCounts] + std::size_t{slot} * 16;
+    word.id = detail::load_le<std::uint32_t>(section_data[kWordIds] + std::size_t{slot} * 4);
+    word.images = detail::load_le<std::uint32_t>(counts);
+    word.observations = detail::load_le<std::uint32_t>(counts + 4);
+    word.first_image = detail::load_le<std::uint32_t>(counts + 8);
+    word.last_image = detail::load_le<std::uint32_t>(counts + 12);
+    const std::string what = "word " + std::to_string(word.id);
+    if (word.id >= next_word_id) fail(what + " is beyond the ids created");
+    if (word.images == 0 || word.observations < word.images || word.last_image >= images ||
+        word.first_image > word.last_image || word.images - 1 > word.last_image - word.first_image)
+      fail(what + " has inconsistent counts");
+    if (options.purge_after_images > 0 && word.images == 1 &&
+        word.first_image + std::uint64_t{options.purge_after_images} < images)
+      fail(what + " should have been purged");
+    if (word.observations < 2) continue;
+    if (block == with_counters) fail("more words with counters than the header says");
+    // The counters must back the word's descriptor: a bit most descriptors
+    // have is set, a bit most lack is clear (a tie allows either).
+    const std::uint8_t* ones = section_data[kCounters] + std::size_t{block} * impl->bits;
+    const std::uint32_t total = section_data[kCounterTotals][block];
+    const std::uint8_t* descriptor = impl->slot_descriptor(slot);
+    if (total == 0 || total > 254) fail(what + " has an invalid counter total");
+    for (std::size_t b = 0; b < impl->bits; ++b) {
+      const bool set = (descriptor[b / 8] >> (b % 8)) & 1u;
+      if (ones[b] > total || (2u * ones[b] > total && !set) || (2u * ones[b] < total && set))
+        fail(what + "'s descriptor disagrees with its majority counters");
+    }
+    impl->counter_block[slot] = block++;
+  }
+  if (block != with_counters) fail("fewer words with counters than the header says");
+  impl->counters.assign(section_data[kCounters], section_data[kCounters] + section_size[kCounters]);
+  impl->counter_totals.assign(section_data[kCounterTotals],
+                              section_data[kCounterTotals] + section_size[kCounterTotals]);
+  impl->slot_of.reserve(word_count);
+  for (std::uint32_t slot = 0; slot < word_count; ++slot)
+    if (!impl->slot_of.emplace(impl->info[slot].id, slot).second)
+      fail("word " + std::to_string(impl->info[slot].id) + " appears twice");
+  impl->restore_derived_state();
+  return OnlineVocabulary(std::move(impl));
+}
+
+void OnlineVocabulary::save(const std::string& path) const {
+  const std::vector<std::uint8_t> bytes = serialize();
+  detail::write_file_atomically(path, bytes.data(), bytes.size());
+}
+
+OnlineVocabulary OnlineVocabulary::load(const std::string& path) {
+  const detail::MappedFile file(path);
+  return deserialize(file.data(), file.size(), path);
+}
+
+}  // namespace binbow
