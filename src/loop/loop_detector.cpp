@@ -62,9 +62,23 @@ struct LoopDetector::Impl {
   std::vector<detail::Island> islands;
 
   bool keeps_features() const { return params.geometric_check != GeometricCheck::kNone; }
+  // η's divisor: s(v_t, v_{t−Δt}), or 1 when the raw score is compared with α.
+  double normalisation_factor(const LoopResult& result) const {
+    return params.use_normalised_score ? result.normalisation_score : 1;
+  }
 
+  // The stages of Section V, in order; each sets result.status when the frame stops there.
+  void check_input(Span<Keypoint> image_keypoints, const DescriptorView& descriptors) const;
+  void transform(const DescriptorView& descriptors, BowVector& bow, FeatureVector& nodes) const;
+  std::vector<QueryResult> query(const BowVector& bow, LoopResult& result) const;
+  bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
+  void select_island(const std::vector<QueryResult>& found, LoopResult& result);
+  void verify_island(LoopResult& result, Span<Keypoint> query_keypoints,
+                     const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
   void verify(LoopResult& result, Span<Keypoint> query_keypoints,
               const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
+  void insert(BowVector& bow, const FeatureVector& nodes, Span<Keypoint> image_keypoints,
+              const DescriptorView& descriptors);
 };
 
 void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
@@ -129,122 +143,159 @@ LoopResult LoopDetector::process(const Features& features) {
                  features.descriptors.view());
 }
 
+void LoopDetector::Impl::check_input(Span<Keypoint> image_keypoints,
+                                     const DescriptorView& descriptors) const {
+  if (image_keypoints.size() != descriptors.rows)
+    throw InvalidArgument("loop detector: " + std::to_string(image_keypoints.size()) +
+                          " keypoints but " + std::to_string(descriptors.rows) + " descriptors");
+  if (!descriptors.empty() && descriptors.code_size != code_size)
+    throw InvalidArgument("loop detector: descriptors of " + std::to_string(descriptors.code_size) +
+                          " bytes, vocabulary has " + std::to_string(code_size));
+}
+
+void LoopDetector::Impl::transform(const DescriptorView& descriptors, BowVector& bow,
+                                   FeatureVector& nodes) const {
+  if (descriptors.empty()) return;
+  if (params.geometric_check == GeometricCheck::kDirectIndex)
+    database.vocabulary().transform(descriptors, bow, nodes,
+                                    static_cast<unsigned>(params.direct_index_levels));
+  else
+    database.vocabulary().transform(descriptors, bow);
+}
+
+// The best entries older than dislocal, and the normalisation score.
+std::vector<QueryResult> LoopDetector::Impl::query(const BowVector& bow, LoopResult& result) const {
+  // DLoopDetector's bound (DBoW2's max_id is exclusive): j < t − dislocal.
+  const EntryId newest_candidate = result.query - static_cast<EntryId>(params.dislocal) - 1;
+  std::vector<QueryResult> found =
+      database.query(bow, static_cast<std::size_t>(params.max_db_results), newest_candidate);
+  if (!found.empty()) {
+    result.has_candidate = true;
+    result.match = found.front().entry;
+    result.score = found.front().score;
+    if (params.use_normalised_score)
+      result.normalisation_score = database.vocabulary().score(bow, previous_bow);
+    const double factor = normalisation_factor(result);
+    result.normalised_score = factor > 0 ? result.score / factor : 0;
+  }
+  return found;
+}
+
+// Section V-A: a frame whose previous image shares almost nothing with it has
+// no meaningful η.
+bool LoopDetector::Impl::passes_normalisation(const std::vector<QueryResult>& found,
+                                              LoopResult& result) const {
+  if (found.empty()) {
+    result.status = LoopStatus::kNoDatabaseResults;
+    return false;
+  }
+  if (params.use_normalised_score && result.normalisation_score < params.min_normalisation_score) {
+    result.status = LoopStatus::kLowNormalisationScore;
+    return false;
+  }
+  return true;
+}
+
+// Sections V-A to V-C: candidates reaching α, their best island, and its
+// agreement with the islands of the previous queries.
+void LoopDetector::Impl::select_island(const std::vector<QueryResult>& found, LoopResult& result) {
+  const double factor = normalisation_factor(result);
+  candidates.clear();
+  for (const QueryResult& r : found) {
+    const double eta = r.score / factor;
+    if (eta >= params.alpha) candidates.push_back({r.entry, eta});
+  }
+  if (candidates.empty()) {
+    result.status = LoopStatus::kLowScores;
+    return;
+  }
+  detail::compute_islands(candidates, params.max_intra_island_gap, params.min_matches_per_island,
+                          islands);
+  const detail::Island* island = detail::best_island(islands);
+  if (island == nullptr) {
+    result.status = LoopStatus::kNoIslands;
+    return;
+  }
+  result.consistent_queries =
+      window.update(*island, params.skip_featureless_frames ? featured_frames : result.query);
+  result.match = island->best_entry;
+  result.normalised_score = island->best_score;
+  result.score = island->best_score * factor;
+  result.island_score = island->score;
+  result.island_first = island->first;
+  result.island_last = island->last;
+  result.status = result.consistent_queries > params.k ? LoopStatus::kNoGeometricConsistency
+                                                       : LoopStatus::kNoTemporalConsistency;
+}
+
+// Section V-D for the island's best entry, then (max_verified_entries > 1)
+// its other entries, best η first: the island, not its best entry, is what
+// passed the temporal test, and its other images show the same place.
+void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_keypoints,
+                                       const DescriptorView& query_descriptors,
+                                       const FeatureVector& query_nodes) {
+  verify(result, query_keypoints, query_descriptors, query_nodes);
+  if (result.detection() || params.max_verified_entries <= 1) return;
+  std::vector<detail::Candidate> others;
+  for (const detail::Candidate& c : candidates)
+    if (c.entry >= result.island_first && c.entry <= result.island_last && c.entry != result.match)
+      others.push_back(c);
+  std::stable_sort(
+      others.begin(), others.end(),
+      [](const detail::Candidate& a, const detail::Candidate& b) { return a.score > b.score; });
+  const double factor = normalisation_factor(result);
+  const std::size_t tries =
+      std::min(others.size(), static_cast<std::size_t>(params.max_verified_entries - 1));
+  for (std::size_t i = 0; i < tries && !result.detection(); ++i) {
+    LoopResult attempt = result;
+    attempt.match = others[i].entry;
+    attempt.normalised_score = others[i].score;
+    attempt.score = others[i].score * factor;
+    verify(attempt, query_keypoints, query_descriptors, query_nodes);
+    if (attempt.detection()) result = std::move(attempt);
+  }
+}
+
+void LoopDetector::Impl::insert(BowVector& bow, const FeatureVector& nodes,
+                                Span<Keypoint> image_keypoints, const DescriptorView& descriptors) {
+  database.add(bow, nodes);
+  if (keeps_features()) {
+    keypoints.insert(keypoints.end(), image_keypoints.begin(), image_keypoints.end());
+    if (!descriptors.empty())
+      descriptor_bytes.insert(descriptor_bytes.end(), descriptors.data,
+                              descriptors.data + descriptors.rows * descriptors.code_size);
+  }
+  offsets.push_back(keypoints.size());
+  if (!bow.empty() || !params.skip_featureless_frames) previous_bow = std::move(bow);
+  if (!descriptors.empty()) ++featured_frames;
+}
+
 LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView& descriptors) {
   Impl& d = *impl_;
-  const LoopDetectorParams& p = d.params;
-  if (keypoints.size() != descriptors.rows)
-    throw InvalidArgument("loop detector: " + std::to_string(keypoints.size()) + " keypoints but " +
-                          std::to_string(descriptors.rows) + " descriptors");
-  if (!descriptors.empty() && descriptors.code_size != d.code_size)
-    throw InvalidArgument("loop detector: descriptors of " + std::to_string(descriptors.code_size) +
-                          " bytes, vocabulary has " + std::to_string(d.code_size));
-
+  d.check_input(keypoints, descriptors);
   LoopResult result;
   Clock::time_point clock = Clock::now();
   BowVector bow;
   FeatureVector nodes;
-  if (!descriptors.empty()) {
-    if (p.geometric_check == GeometricCheck::kDirectIndex)
-      d.database.vocabulary().transform(descriptors, bow, nodes,
-                                        static_cast<unsigned>(p.direct_index_levels));
-    else
-      d.database.vocabulary().transform(descriptors, bow);
-  }
+  d.transform(descriptors, bow, nodes);
   result.times.transform_ms = milliseconds_since(clock);
 
-  const EntryId entry = d.database.next_entry_id();
-  result.query = entry;
+  result.query = d.database.next_entry_id();
   result.status = LoopStatus::kNoDatabaseResults;
-  if (static_cast<long long>(entry) > p.dislocal) {
-    // DLoopDetector's bound (DBoW2's max_id is exclusive): j < t − dislocal.
-    const EntryId newest_candidate = entry - static_cast<EntryId>(p.dislocal) - 1;
-    const std::vector<QueryResult> found =
-        d.database.query(bow, static_cast<std::size_t>(p.max_db_results), newest_candidate);
-    double factor = 1;
-    if (!found.empty()) {
-      result.has_candidate = true;
-      result.match = found.front().entry;
-      result.score = found.front().score;
-      if (p.use_normalised_score) {
-        factor = d.database.vocabulary().score(bow, d.previous_bow);
-        result.normalisation_score = factor;
-      }
-      result.normalised_score = factor > 0 ? result.score / factor : 0;
-    }
+  if (static_cast<long long>(result.query) > d.params.dislocal) {
+    const std::vector<QueryResult> found = d.query(bow, result);
     result.times.query_ms = milliseconds_since(clock);
-
-    if (found.empty()) {
-      result.status = LoopStatus::kNoDatabaseResults;
-    } else if (p.use_normalised_score && factor < p.min_normalisation_score) {
-      result.status = LoopStatus::kLowNormalisationScore;
-    } else {
-      d.candidates.clear();
-      for (const QueryResult& r : found) {
-        const double eta = r.score / factor;
-        if (eta >= p.alpha) d.candidates.push_back({r.entry, eta});
-      }
-      if (d.candidates.empty()) {
-        result.status = LoopStatus::kLowScores;
-      } else {
-        detail::compute_islands(d.candidates, p.max_intra_island_gap, p.min_matches_per_island,
-                                d.islands);
-        const detail::Island* island = detail::best_island(d.islands);
-        if (island == nullptr) {
-          result.status = LoopStatus::kNoIslands;
-        } else {
-          result.consistent_queries =
-              d.window.update(*island, p.skip_featureless_frames ? d.featured_frames : entry);
-          result.match = island->best_entry;
-          result.normalised_score = island->best_score;
-          result.score = island->best_score * factor;
-          result.island_score = island->score;
-          result.island_first = island->first;
-          result.island_last = island->last;
-          result.status = result.consistent_queries > p.k ? LoopStatus::kNoGeometricConsistency
-                                                          : LoopStatus::kNoTemporalConsistency;
-        }
-      }
+    if (d.passes_normalisation(found, result)) {
+      d.select_island(found, result);
       result.times.islands_ms = milliseconds_since(clock);
       if (result.status == LoopStatus::kNoGeometricConsistency) {
-        d.verify(result, keypoints, descriptors, nodes);
-        if (!result.detection() && p.max_verified_entries > 1) {
-          // The island, not its best entry, is what passed the temporal test:
-          // its other images of the same place get a chance, best η first.
-          std::vector<detail::Candidate> others;
-          for (const detail::Candidate& c : d.candidates)
-            if (c.entry >= result.island_first && c.entry <= result.island_last &&
-                c.entry != result.match)
-              others.push_back(c);
-          std::stable_sort(others.begin(), others.end(),
-                           [](const detail::Candidate& a, const detail::Candidate& b) {
-                             return a.score > b.score;
-                           });
-          const std::size_t tries =
-              std::min(others.size(), static_cast<std::size_t>(p.max_verified_entries - 1));
-          for (std::size_t i = 0; i < tries && !result.detection(); ++i) {
-            LoopResult attempt = result;
-            attempt.match = others[i].entry;
-            attempt.normalised_score = others[i].score;
-            attempt.score = others[i].score * factor;
-            d.verify(attempt, keypoints, descriptors, nodes);
-            if (attempt.detection()) result = std::move(attempt);
-          }
-        }
+        d.verify_island(result, keypoints, descriptors, nodes);
         result.times.verification_ms = milliseconds_since(clock);
       }
     }
   }
 
-  d.database.add(bow, nodes);
-  if (d.keeps_features()) {
-    d.keypoints.insert(d.keypoints.end(), keypoints.begin(), keypoints.end());
-    if (!descriptors.empty())
-      d.descriptor_bytes.insert(d.descriptor_bytes.end(), descriptors.data,
-                                descriptors.data + descriptors.rows * descriptors.code_size);
-  }
-  d.offsets.push_back(d.keypoints.size());
-  if (!bow.empty() || !p.skip_featureless_frames) d.previous_bow = std::move(bow);
-  if (!descriptors.empty()) ++d.featured_frames;
+  d.insert(bow, nodes, keypoints, descriptors);
   result.times.insertion_ms = milliseconds_since(clock);
   return result;
 }
