@@ -26,6 +26,7 @@
 #include "core/database_impl.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
+#include "core/sectioned_file.h"
 
 namespace binbow {
 
@@ -33,8 +34,7 @@ namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'D', 'B'};
 constexpr std::uint32_t kVersion = 1;
-constexpr std::size_t kHeaderSize = 64;
-constexpr std::size_t kSectionEntrySize = 24;
+constexpr std::size_t kHeaderSize = detail::kSectionedHeaderSize;
 
 enum Section : std::uint32_t {
   kVocabularyBytes = 0,
@@ -76,11 +76,6 @@ struct Header {
   std::uint64_t postings = 0;
 };
 
-struct SectionView {
-  const std::uint8_t* data = nullptr;
-  std::size_t size = 0;
-};
-
 // Header, table and section bounds of a .bbdb image, all checked. Section
 // CRCs are checked for every section with `verify_all`, else only for those
 // verified explicitly (inspect() without verification reads a few).
@@ -116,36 +111,18 @@ class Layout {
       fail("expected " + std::to_string(kSectionCount) + " sections, the header says " +
            std::to_string(section_count));
 
-    const std::size_t table_size = kSectionCount * kSectionEntrySize;
-    if (size < kHeaderSize + table_size + 4) fail("truncated inside the section table");
-    const std::uint8_t* table = data + kHeaderSize;
-    if (detail::load_le<std::uint32_t>(table + table_size) != detail::crc32c(table, table_size))
-      fail("section table checksum mismatch: the file is corrupted");
-    std::size_t expected_offset = kHeaderSize + table_size + 4;
-    for (std::uint32_t i = 0; i < kSectionCount; ++i) {
-      const std::uint8_t* e = table + i * kSectionEntrySize;
-      const auto id = detail::load_le<std::uint32_t>(e);
-      crcs_[i] = detail::load_le<std::uint32_t>(e + 4);
-      const auto offset = detail::load_le<std::uint64_t>(e + 8);
-      const auto length = detail::load_le<std::uint64_t>(e + 16);
-      if (id != i) fail("unexpected section id " + std::to_string(id));
-      if (offset != expected_offset)
-        fail(std::string("section '") + kSectionNames[i] + "' is not where the table says");
-      if (offset > size || length > size - offset)
-        fail(std::string("section '") + kSectionNames[i] + "' lies outside the file (truncated?)");
-      sections_[i] = {data + offset, static_cast<std::size_t>(length)};
-      if (verify_all) verify(static_cast<Section>(i));
-      expected_offset += length;
-    }
-    if (expected_offset != size)
-      fail(std::to_string(size - expected_offset) + " unexpected bytes after the last section");
+    const std::vector<detail::Section> sections = detail::read_section_table(
+        data, size, kSectionCount, kSectionNames, [this](const std::string& p) { fail(p); });
+    std::copy(sections.begin(), sections.end(), sections_);
+    if (verify_all)
+      for (std::uint32_t i = 0; i < kSectionCount; ++i) verify(static_cast<Section>(i));
   }
 
   [[noreturn]] void fail(const std::string& problem) const { throw FileError(name_, problem); }
   const Header& header() const { return header_; }
-  SectionView section(Section s) const { return sections_[s]; }
+  const detail::Section& section(Section s) const { return sections_[s]; }
   void verify(Section s) const {
-    if (detail::crc32c(sections_[s].data, sections_[s].size) != crcs_[s])
+    if (!detail::section_intact(sections_[s]))
       fail(std::string("checksum mismatch in section '") + kSectionNames[s] +
            "': the file is corrupted");
   }
@@ -170,8 +147,7 @@ class Layout {
  private:
   std::string name_;
   Header header_;
-  SectionView sections_[kSectionCount];
-  std::uint32_t crcs_[kSectionCount] = {};
+  detail::Section sections_[kSectionCount];
 };
 
 }  // namespace
@@ -251,39 +227,16 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
     }
   }
 
-  std::size_t offsets[kSectionCount];
-  std::size_t end = kHeaderSize + kSectionCount * kSectionEntrySize + 4;
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
-    offsets[i] = end;
-    end += sections[i].size();
-  }
-  std::vector<std::uint8_t> out(end, 0);
-  std::uint8_t* h = out.data();
-  std::memcpy(h, kMagic, 8);
-  detail::store_le<std::uint32_t>(h + 8, kVersion);
-  detail::store_le<std::uint32_t>(h + 12, kHeaderSize);
-  detail::store_le<std::uint32_t>(h + 16, next_id);
-  detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
-  detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
-                                              (include_vocabulary ? kFlagVocabulary : 0));
-  detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
-  detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
-  detail::store_le<std::uint64_t>(h + 40, posting_count);
-  detail::store_le<std::uint32_t>(h + 48, kSectionCount);
-  detail::store_le<std::uint32_t>(h + 60, detail::crc32c(h, 60));
-  std::uint8_t* table = out.data() + kHeaderSize;
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
-    if (!sections[i].empty())
-      std::memcpy(out.data() + offsets[i], sections[i].data(), sections[i].size());
-    std::uint8_t* e = table + i * kSectionEntrySize;
-    detail::store_le<std::uint32_t>(e, i);
-    detail::store_le<std::uint32_t>(e + 4, detail::crc32c(sections[i].data(), sections[i].size()));
-    detail::store_le<std::uint64_t>(e + 8, offsets[i]);
-    detail::store_le<std::uint64_t>(e + 16, sections[i].size());
-  }
-  const std::size_t table_size = kSectionCount * kSectionEntrySize;
-  detail::store_le<std::uint32_t>(table + table_size, detail::crc32c(table, table_size));
-  return out;
+  return detail::write_sectioned_file(
+      kMagic, kVersion, sections, kSectionCount, [&](std::uint8_t* h) {
+        detail::store_le<std::uint32_t>(h + 16, next_id);
+        detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
+        detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
+                                                    (include_vocabulary ? kFlagVocabulary : 0));
+        detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
+        detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
+        detail::store_le<std::uint64_t>(h + 40, posting_count);
+      });
 }
 
 namespace {
@@ -388,7 +341,7 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
 
   if (options.direct_index) {
     const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);
-    const SectionView direct_data = layout.section(kDirectData);
+    const detail::Section& direct_data = layout.section(kDirectData);
     const std::size_t available = layout.count_of(kDirectData, 4);
     impl->direct.resize(next_id);
     std::size_t cursor = 0;
@@ -430,7 +383,7 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
 
   if (layout.section(kLabelLengths).size != 0) {
     const auto label_lengths = layout.values<std::uint32_t>(kLabelLengths, next_id);
-    const SectionView bytes = layout.section(kLabelBytes);
+    const detail::Section& bytes = layout.section(kLabelBytes);
     impl->labels.resize(next_id);
     std::size_t cursor = 0;
     for (EntryId entry = 0; entry < next_id; ++entry) {
@@ -455,7 +408,7 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size,
                 hex(layout.header().vocabulary_checksum) +
                 "); load it together with the vocabulary it was built with");
   layout.verify(kVocabularyBytes);
-  const SectionView bytes = layout.section(kVocabularyBytes);
+  const detail::Section& bytes = layout.section(kVocabularyBytes);
   Vocabulary vocabulary = Vocabulary::deserialize(bytes.data, bytes.size, name + " (vocabulary)");
   return deserialize(data, size, name, std::move(vocabulary));
 }
@@ -490,7 +443,7 @@ DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {
   info.direct_index_levels_up = header.levels_up;
   info.vocabulary_included = (header.flags & kFlagVocabulary) != 0;
   info.vocabulary_checksum = header.vocabulary_checksum;
-  const SectionView description = layout.section(kDescription);
+  const detail::Section& description = layout.section(kDescription);
   info.vocabulary_description.assign(reinterpret_cast<const char*>(description.data),
                                      description.size);
   return info;

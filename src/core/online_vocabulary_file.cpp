@@ -21,6 +21,7 @@
 #include "core/file_io.h"
 #include "core/little_endian.h"
 #include "core/online_vocabulary_impl.h"
+#include "core/sectioned_file.h"
 
 namespace binbow {
 
@@ -28,8 +29,7 @@ namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'O', 'V'};
 constexpr std::uint32_t kVersion = 1;
-constexpr std::size_t kHeaderSize = 64;
-constexpr std::size_t kSectionEntrySize = 24;
+constexpr std::size_t kHeaderSize = detail::kSectionedHeaderSize;
 constexpr std::size_t kOptionsSize = 48;  // before the descriptor name
 constexpr std::size_t kMaxDescriptorName = 8;
 
@@ -83,40 +83,17 @@ std::vector<std::uint8_t> OnlineVocabulary::serialize() const {
   }
   sections[kDescriptors] = impl.descriptors;
 
-  std::size_t offsets[kSectionCount];
-  std::size_t end = kHeaderSize + kSectionCount * kSectionEntrySize + 4;
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
-    offsets[i] = end;
-    end += sections[i].size();
-  }
-  std::vector<std::uint8_t> out(end, 0);
-  std::uint8_t* h = out.data();
-  std::memcpy(h, kMagic, 8);
-  detail::store_le<std::uint32_t>(h + 8, kVersion);
-  detail::store_le<std::uint32_t>(h + 12, kHeaderSize);
-  detail::store_le<std::uint32_t>(h + 16, static_cast<std::uint32_t>(impl.code_size));
-  detail::store_le<std::uint32_t>(h + 20, impl.images);
-  detail::store_le<std::uint32_t>(h + 24, impl.next_word_id);
-  detail::store_le<std::uint32_t>(h + 28, static_cast<std::uint32_t>(impl.word_count()));
-  detail::store_le<std::uint32_t>(h + 32, static_cast<std::uint32_t>(with_counters));
-  detail::store_le<std::uint64_t>(h + 40, impl.purged_words);
-  detail::store_le<std::uint32_t>(h + 48, kSectionCount);
-  detail::store_le<std::uint32_t>(
-      h + 52, static_cast<std::uint32_t>(std::min<std::size_t>(impl.tree_rebuilds, 0xFFFFFFFFu)));
-  detail::store_le<std::uint32_t>(h + 60, detail::crc32c(h, 60));
-  std::uint8_t* table = h + kHeaderSize;
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
-    if (!sections[i].empty())
-      std::memcpy(out.data() + offsets[i], sections[i].data(), sections[i].size());
-    std::uint8_t* e = table + i * kSectionEntrySize;
-    detail::store_le<std::uint32_t>(e, i);
-    detail::store_le<std::uint32_t>(e + 4, detail::crc32c(sections[i].data(), sections[i].size()));
-    detail::store_le<std::uint64_t>(e + 8, offsets[i]);
-    detail::store_le<std::uint64_t>(e + 16, sections[i].size());
-  }
-  const std::size_t table_size = kSectionCount * kSectionEntrySize;
-  detail::store_le<std::uint32_t>(table + table_size, detail::crc32c(table, table_size));
-  return out;
+  return detail::write_sectioned_file(
+      kMagic, kVersion, sections, kSectionCount, [&](std::uint8_t* h) {
+        detail::store_le<std::uint32_t>(h + 16, static_cast<std::uint32_t>(impl.code_size));
+        detail::store_le<std::uint32_t>(h + 20, impl.images);
+        detail::store_le<std::uint32_t>(h + 24, impl.next_word_id);
+        detail::store_le<std::uint32_t>(h + 28, static_cast<std::uint32_t>(impl.word_count()));
+        detail::store_le<std::uint32_t>(h + 32, static_cast<std::uint32_t>(with_counters));
+        detail::store_le<std::uint64_t>(h + 40, impl.purged_words);
+        detail::store_le<std::uint32_t>(h + 52, static_cast<std::uint32_t>(std::min<std::size_t>(
+                                                    impl.tree_rebuilds, 0xFFFFFFFFu)));
+      });
 }
 
 // Every count is checked against the length of the section that holds its
@@ -157,31 +134,17 @@ OnlineVocabulary OnlineVocabulary::deserialize(const std::uint8_t* data, std::si
          std::to_string(purged_words) + " purged, " + std::to_string(next_word_id) +
          " ids created)");
 
-  const std::size_t table_size = kSectionCount * kSectionEntrySize;
-  if (size < kHeaderSize + table_size + 4) fail("truncated inside the section table");
-  const std::uint8_t* table = data + kHeaderSize;
-  if (detail::load_le<std::uint32_t>(table + table_size) != detail::crc32c(table, table_size))
-    fail("section table checksum mismatch: the file is corrupted");
+  const std::vector<detail::Section> table = detail::read_section_table(
+      data, size, kSectionCount, kSectionNames, [&](const std::string& p) { fail(p); });
   const std::uint8_t* section_data[kSectionCount];
   std::size_t section_size[kSectionCount];
-  std::size_t expected_offset = kHeaderSize + table_size + 4;
   for (std::uint32_t i = 0; i < kSectionCount; ++i) {
-    const std::uint8_t* e = table + i * kSectionEntrySize;
-    const auto offset = detail::load_le<std::uint64_t>(e + 8);
-    const auto length = detail::load_le<std::uint64_t>(e + 16);
-    const std::string section = std::string("section '") + kSectionNames[i] + "'";
-    if (detail::load_le<std::uint32_t>(e) != i) fail("unexpected section id in the table");
-    if (offset != expected_offset) fail(section + " is not where the table says");
-    if (offset > size || length > size - offset)
-      fail(section + " lies outside the file (truncated?)");
-    if (detail::crc32c(data + offset, length) != detail::load_le<std::uint32_t>(e + 4))
-      fail("checksum mismatch in " + section + ": the file is corrupted");
-    section_data[i] = data + offset;
-    section_size[i] = static_cast<std::size_t>(length);
-    expected_offset += length;
+    if (!detail::section_intact(table[i]))
+      fail(std::string("checksum mismatch in section '") + kSectionNames[i] +
+           "': the file is corrupted");
+    section_data[i] = table[i].data;
+    section_size[i] = table[i].size;
   }
-  if (expected_offset != size)
-    fail(std::to_string(size - expected_offset) + " unexpected bytes after the last section");
 
   // Options: a fixed record, then the descriptor name.
   const std::size_t options_size = section_size[kOptions];

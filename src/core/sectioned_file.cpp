@@ -1,0 +1,75 @@
+#include "core/sectioned_file.h"
+
+#include <cstring>
+
+#include "core/crc32c.h"
+#include "core/little_endian.h"
+
+namespace binbow::detail {
+
+std::vector<std::uint8_t> write_sectioned_file(
+    const char* magic, std::uint32_t version, const std::vector<std::uint8_t>* sections,
+    std::uint32_t count, const std::function<void(std::uint8_t* header)>& fill_header) {
+  const std::size_t table_size = count * kSectionEntrySize;
+  std::vector<std::size_t> offsets(count);
+  std::size_t end = kSectionedHeaderSize + table_size + 4;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    offsets[i] = end;
+    end += sections[i].size();
+  }
+  std::vector<std::uint8_t> out(end, 0);
+  std::uint8_t* header = out.data();
+  std::memcpy(header, magic, 8);
+  store_le<std::uint32_t>(header + 8, version);
+  store_le<std::uint32_t>(header + 12, kSectionedHeaderSize);
+  store_le<std::uint32_t>(header + 48, count);
+  fill_header(header);
+  store_le<std::uint32_t>(header + 60, crc32c(header, 60));
+  std::uint8_t* table = header + kSectionedHeaderSize;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    if (!sections[i].empty())
+      std::memcpy(out.data() + offsets[i], sections[i].data(), sections[i].size());
+    std::uint8_t* entry = table + i * kSectionEntrySize;
+    store_le<std::uint32_t>(entry, i);
+    store_le<std::uint32_t>(entry + 4, crc32c(sections[i].data(), sections[i].size()));
+    store_le<std::uint64_t>(entry + 8, offsets[i]);
+    store_le<std::uint64_t>(entry + 16, sections[i].size());
+  }
+  store_le<std::uint32_t>(table + table_size, crc32c(table, table_size));
+  return out;
+}
+
+std::vector<Section> read_section_table(const std::uint8_t* data, std::size_t size,
+                                        std::uint32_t count, const char* const* names,
+                                        const std::function<void(const std::string&)>& fail) {
+  const std::size_t table_size = count * kSectionEntrySize;
+  if (size < kSectionedHeaderSize + table_size + 4) fail("truncated inside the section table");
+  const std::uint8_t* table = data + kSectionedHeaderSize;
+  if (load_le<std::uint32_t>(table + table_size) != crc32c(table, table_size))
+    fail("section table checksum mismatch: the file is corrupted");
+  std::vector<Section> sections(count);
+  std::size_t expected_offset = kSectionedHeaderSize + table_size + 4;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint8_t* entry = table + i * kSectionEntrySize;
+    const auto id = load_le<std::uint32_t>(entry);
+    const auto offset = load_le<std::uint64_t>(entry + 8);
+    const auto length = load_le<std::uint64_t>(entry + 16);
+    const std::string section = std::string("section '") + names[i] + "'";
+    if (id != i) fail("unexpected section id " + std::to_string(id));
+    if (offset != expected_offset) fail(section + " is not where the table says");
+    if (offset > size || length > size - offset)
+      fail(section + " lies outside the file (truncated?)");
+    sections[i] = {data + offset, static_cast<std::size_t>(length),
+                   load_le<std::uint32_t>(entry + 4)};
+    expected_offset += length;
+  }
+  if (expected_offset != size)
+    fail(std::to_string(size - expected_offset) + " unexpected bytes after the last section");
+  return sections;
+}
+
+bool section_intact(const Section& section) {
+  return crc32c(section.data, section.size) == section.crc;
+}
+
+}  // namespace binbow::detail
