@@ -208,12 +208,13 @@ py::tuple frame_state(const loop::SequenceFrame& frame) {
                         r.island_last, r.consistent_queries, r.correspondences,
                         r.exhaustive_fallback_used, inliers,
                         std::array<double, 5>{t.transform_ms, t.query_ms, t.islands_ms,
-                                              t.verification_ms, t.insertion_ms});
+                                              t.verification_ms, t.insertion_ms},
+                        r.features);
 }
 
 loop::SequenceFrame frame_from_state(const py::tuple& state) {
   constexpr int kLastStatus = static_cast<int>(loop::LoopStatus::kNoGeometricConsistency);
-  if (state.size() != 19) throw py::value_error("invalid pickled binbow.LoopResult");
+  if (state.size() != 20) throw py::value_error("invalid pickled binbow.LoopResult");
   loop::SequenceFrame frame;
   frame.file = state[0].cast<std::string>();
   frame.match_file = state[1].cast<std::string>();
@@ -241,6 +242,7 @@ loop::SequenceFrame frame_from_state(const py::tuple& state) {
     r.inliers.push_back({first, second});
   const auto ms = state[18].cast<std::array<double, 5>>();
   r.times = {ms[0], ms[1], ms[2], ms[3], ms[4]};
+  r.features = state[19].cast<std::size_t>();
   return frame;
 }
 
@@ -300,6 +302,9 @@ void bind_detection(py::module_& m) {
       .def_property_readonly(
           "correspondences", [](const loop::SequenceFrame& f) { return f.result.correspondences; },
           "Putative correspondences given to RANSAC.")
+      .def_property_readonly(
+          "features", [](const loop::SequenceFrame& f) { return f.result.features; },
+          "Keypoints of the image (0: it can match nothing).")
       .def_property_readonly(
           "exhaustive_fallback_used",
           [](const loop::SequenceFrame& f) { return f.result.exhaustive_fallback_used; },

@@ -1,4 +1,6 @@
 """binbow.LoopDetector and LoopResult: the CLI's loops, strict inputs, every field."""
+import pickle
+
 import numpy as np
 import pytest
 
@@ -133,3 +135,8 @@ def test_params_are_used_and_kept(features):
     assert loops and all(len(r.inliers) == 0 for r in loops)
     with pytest.raises(TypeError):
         binbow.LoopDetector(voc, {"alpha": 0.3})
+
+
+def test_results_count_the_features_of_each_image(features, results):
+    assert [r.features for r in results] == [len(k) for k, _ in features]
+    assert pickle.loads(pickle.dumps(results[3])).features == results[3].features

@@ -281,6 +281,7 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
   result.times.transform_ms = milliseconds_since(clock);
 
   result.query = d.database.next_entry_id();
+  result.features = keypoints.size();
   result.status = LoopStatus::kNoDatabaseResults;
   if (static_cast<long long>(result.query) > d.params.dislocal) {
     const std::vector<QueryResult> found = d.query(bow, result);

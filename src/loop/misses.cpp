@@ -36,6 +36,7 @@ std::vector<MissedLoop> missed_loops(const std::vector<FrameRecord>& frames,
       miss.status = f.status;
       miss.match = f.match;
       miss.correspondences = f.correspondences;
+      miss.features = f.features;
       miss.inliers = static_cast<long long>(f.inliers);
       miss.normalised_score = f.normalised_score;
     } else if (const auto it = outcome.find(q); it != outcome.end()) {
@@ -59,22 +60,30 @@ bool geometrically_checked(const MissedLoop& miss) {
          miss.status == to_string(LoopStatus::kLoopDetected);
 }
 
-std::string format_missed_loop(const MissedLoop& miss) {
-  std::string line = "  query " + std::to_string(miss.query) + ": ";
-  line += miss.status.empty() ? "status unknown" : miss.status;
-  if (miss.match < 0) {
-    line += miss.status.empty() ? ", candidate unknown" : ", no candidate";
-    return line;
-  }
-  line += ", candidate " + std::to_string(miss.match) +
-          (miss.candidate_right == 1   ? " (right)"
-           : miss.candidate_right == 0 ? " (wrong)"
-                                       : "");
+namespace {
+
+// ", candidate 12 (right), 13 correspondences, 7 inliers" and the like.
+std::string candidate_and_check(const MissedLoop& miss) {
+  if (miss.match < 0) return miss.status.empty() ? ", candidate unknown" : ", no candidate";
+  std::string line = ", candidate " + std::to_string(miss.match) +
+                     (miss.candidate_right == 1   ? " (right)"
+                      : miss.candidate_right == 0 ? " (wrong)"
+                                                  : "");
   if (!geometrically_checked(miss)) return line + ", not checked geometrically";
   line += miss.correspondences < 0
               ? ", correspondences unknown"
               : ", " + std::to_string(miss.correspondences) + " correspondences";
   line += miss.inliers < 0 ? ", inliers unknown" : ", " + std::to_string(miss.inliers) + " inliers";
+  return line;
+}
+
+}  // namespace
+
+std::string format_missed_loop(const MissedLoop& miss) {
+  std::string line = "  query " + std::to_string(miss.query) + ": " +
+                     (miss.status.empty() ? "status unknown" : miss.status) +
+                     candidate_and_check(miss);
+  if (miss.features >= 0) line += ", " + std::to_string(miss.features) + " features";
   return line;
 }
 

@@ -478,8 +478,8 @@ std::string missed_section(const LoopReport& report) {
   const bool known_truth = report.truth.frames() > 0;
   html << "<table id='missed'><tr><th>query</th><th>file</th>"
        << (known_truth ? "<th>ground-truth matches</th>" : "")
-       << "<th>status</th><th>best candidate</th><th>candidate right</th><th>η</th>"
-          "<th>correspondences</th><th>inliers</th></tr>";
+       << "<th>features</th><th>status</th><th>best candidate</th><th>candidate right</th>"
+          "<th>η</th><th>correspondences</th><th>inliers</th></tr>";
   for (const MissedLoop& miss : report.missed) {
     const char* right = miss.candidate_right == 1   ? "<span class='tp'>yes</span>"
                         : miss.candidate_right == 0 ? "<span class='fp'>no</span>"
@@ -487,7 +487,8 @@ std::string missed_section(const LoopReport& report) {
     html << "<tr id='missed-" << miss.query << "'><td class='n'>" << miss.query << "</td><td>"
          << escape(miss.file) << "</td>";
     if (known_truth) html << "<td class='n'>" << truth_matches(report.truth, miss.query) << "</td>";
-    html << "<td class='s'>" << (miss.status.empty() ? "unknown" : escape(miss.status))
+    html << "<td class='n'>" << (miss.features < 0 ? "unknown" : std::to_string(miss.features))
+         << "</td><td class='s'>" << (miss.status.empty() ? "unknown" : escape(miss.status))
          << "</td><td class='n'>" << (miss.match < 0 ? "none" : std::to_string(miss.match))
          << "</td><td>" << right << "</td><td class='n'>"
          << (miss.match < 0 ? "–" : format("%.3f", miss.normalised_score)) << "</td><td class='n'>"

@@ -75,14 +75,15 @@ struct LoopRunFiles::Impl {
 
   void add_frame(const SequenceFrame& f) {
     const FrameRecord r = frame_record(f);
-    // "correspondences" is new in version 1; readers treat it as optional.
+    // "correspondences" and "features" are new in version 1; readers treat them as optional.
     const Json frame = {{"file", r.file},
                         {"status", r.status},
                         {"match", r.match},
                         {"score", r.score},
                         {"normalised_score", r.normalised_score},
                         {"inliers", r.inliers},
-                        {"correspondences", r.correspondences}};
+                        {"correspondences", r.correspondences},
+                        {"features", r.features}};
     write((frames == 0 ? "\n" : ",\n") + json_text(frame));
     ++frames;
     const std::array<double, kStageCount> stage_ms = f.stage_ms();
@@ -171,7 +172,8 @@ FrameRecord frame_record(const SequenceFrame& frame) {
           r.score,
           r.normalised_score,
           r.inliers.size(),
-          static_cast<long long>(r.correspondences)};
+          static_cast<long long>(r.correspondences),
+          static_cast<long long>(r.features)};
 }
 
 std::vector<StageTiming> stage_timings(const std::vector<SequenceFrame>& frames) {
@@ -210,10 +212,14 @@ LoopRun LoopRun::load(const std::string& path) {
       if (correspondences < -1)
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has a negative number of correspondences");
+      const long long features = f.contains("features") ? f.at("features").get<long long>() : -1;
+      if (features < -1)
+        throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
+                                  " has a negative number of features");
       run.frames.push_back({f.at("file").get<std::string>(), f.at("status").get<std::string>(),
                             f.at("match").get<long long>(), f.at("score").get<double>(),
                             f.at("normalised_score").get<double>(),
-                            f.at("inliers").get<std::size_t>(), correspondences});
+                            f.at("inliers").get<std::size_t>(), correspondences, features});
     }
     for (const Json& l : j.at("loops"))
       run.loops.push_back({l.at("query").get<std::size_t>(), l.at("match").get<std::size_t>(),

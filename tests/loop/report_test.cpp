@@ -77,6 +77,10 @@ TEST(MissedLoops, EveryQueryWithAGroundTruthLoopAndNoTrueDetection) {
   EXPECT_EQ(format_missed_loop(missed[0]),
             "  query 6: no-geometric-consistency, candidate 1 (right), correspondences unknown, 7 "
             "inliers");
+  // A record that knows the frame's features says how many there were.
+  frames[11].features = 0;
+  EXPECT_EQ(format_missed_loop(missed_loops(frames, detections, truth)[3]),
+            "  query 11: low-normalisation-score, no candidate, 0 features");
 }
 
 TEST(MissedLoops, WithoutARunRecordOnlyTheDetectionsAreKnown) {
@@ -269,6 +273,7 @@ TEST(RunRecord, KeepsEachFramesCorrespondencesAndReadsOlderRecords) {
     f.result.has_candidate = true;
     f.result.match = 0;
     f.result.correspondences = 13;
+    f.result.features = 26;
     f.result.inliers.resize(7);
     files.add(f);
     files.commit();
@@ -278,6 +283,7 @@ TEST(RunRecord, KeepsEachFramesCorrespondencesAndReadsOlderRecords) {
   ASSERT_EQ(run.frames.size(), 1u);
   EXPECT_EQ(run.frames[0].correspondences, 13);
   EXPECT_EQ(run.frames[0].inliers, 7u);
+  EXPECT_EQ(run.frames[0].features, 26);
 
   std::string text = read_text(record);
   const std::string key = "\"correspondences\":13,";
@@ -286,6 +292,11 @@ TEST(RunRecord, KeepsEachFramesCorrespondencesAndReadsOlderRecords) {
   older.erase(older.find(key), key.size());
   std::ofstream(record, std::ios::binary) << older;
   EXPECT_EQ(LoopRun::load(record).frames[0].correspondences, -1);
+  const std::string features_key = "\"features\":26,";
+  ASSERT_NE(older.find(features_key), std::string::npos) << older;
+  older.erase(older.find(features_key), features_key.size());
+  std::ofstream(record, std::ios::binary | std::ios::trunc) << older;
+  EXPECT_EQ(LoopRun::load(record).frames[0].features, -1);
 
   std::string negative = text;
   negative.replace(negative.find(key), key.size(), "\"correspondences\":-5,");

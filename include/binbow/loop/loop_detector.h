@@ -200,7 +200,8 @@ struct LoopStageTimes {
 
 struct LoopResult {
   LoopStatus status = LoopStatus::kNoDatabaseResults;
-  EntryId query = 0;  // entry id of the processed image (= its 0-based index)
+  EntryId query = 0;         // entry id of the processed image (= its 0-based index)
+  std::size_t features = 0;  // keypoints of the image (0: it can match nothing)
   // The loop when detected; otherwise the best candidate so far (the best
   // entry of the best island, or the best-scoring entry), if any.
   bool has_candidate = false;

@@ -24,6 +24,7 @@ struct MissedLoop {
   long long correspondences = -1;  // given to RANSAC; -1 not known
   long long inliers = -1;          // RANSAC inliers; -1 not known
   double normalised_score = 0;     // η of the candidate (0 when not known)
+  long long features = -1;         // keypoints of the query image; -1 not known
 };
 
 // The queries with an earlier ground-truth match and no true detection, in
@@ -42,7 +43,8 @@ bool geometrically_checked(const MissedLoop& miss);
 
 // One line per miss, as `binbow evaluate` prints them under "missed loops: N":
 // "  query 55: no-geometric-consistency, candidate 12 (right), 13 correspondences, 7 inliers",
-// "  query 47: no-temporal-consistency, candidate 8 (right), not checked geometrically".
+// "  query 47: no-temporal-consistency, candidate 8 (right), not checked geometrically",
+// each followed by ", N features" when the record knows them.
 std::string format_missed_loop(const MissedLoop& miss);
 
 }  // namespace binbow::loop

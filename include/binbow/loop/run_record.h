@@ -30,6 +30,7 @@ struct FrameRecord {
   // Putative correspondences given to RANSAC (LoopResult::correspondences);
   // -1 when not known (records written before the key existed).
   long long correspondences = -1;
+  long long features = -1;  // keypoints of the frame (LoopResult::features); -1 not known
 };
 
 // What the run record keeps of a frame.
