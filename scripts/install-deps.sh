@@ -10,6 +10,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev
   pybind11-dev python3-dev python3-numpy
   python3-pytest python3-opencv python3-matplotlib python3-pip python3-setuptools python3-wheel
+  python3-distributed
   clang libclang-rt-14-dev clang-format
   chromium
 )

@@ -1,0 +1,411 @@
+"""A binbow.Database split into shards held by the workers of a Dask cluster.
+
+ShardedDatabase gives the answers of one binbow.Database (same dense ids,
+same query results to the last bit, ties included) while the entries live on
+many machines. Entry `id` lives on shard `id % shards` under the shard's own
+id `id // shards`: every shard receives its entries in increasing global id
+order and never reuses an id, so the mapping is arithmetic and needs no table.
+
+Dask is imported when a ShardedDatabase is made, so `import binbow` works
+without it. See docs/distributed.md.
+"""
+
+import json
+import math
+import os
+import tempfile
+
+import numpy as _np
+
+from . import BowVector, Database, Error, Vocabulary
+
+__all__ = ["ShardedDatabase"]
+
+# Seconds a call to a shard may take before the client gives up (adding or
+# saving a large batch takes longest); ShardedDatabase(timeout=...) changes it.
+DEFAULT_TIMEOUT = 120.0
+
+_MANIFEST = "manifest.json"
+_FORMAT = "binbow-sharded-database"
+_FORMAT_VERSION = 1
+
+
+def _distributed():
+    try:
+        import distributed
+    except ImportError as error:
+        raise ImportError(
+            f"binbow.distributed needs Dask distributed ({error}): install Debian's "
+            "python3-distributed (scripts/install-deps.sh)") from error
+    return distributed
+
+
+class _Shard:
+    """The Dask actor holding one shard's binbow.Database on a worker."""
+
+    def __init__(self, vocabulary, options, path=None):
+        if path is None:
+            self.database = Database(vocabulary, **options)
+        else:
+            self.database = Database.load(path, vocabulary)
+
+    def add_many(self, items):
+        """Adds (descriptors or BowVector, label) pairs; their shard ids, in order."""
+        ids = []
+        try:
+            for item, label in items:
+                if isinstance(item, BowVector):
+                    ids.append(self.database.add_bow(item, label))
+                else:
+                    ids.append(self.database.add(item, label))
+        except Exception as error:  # reported with how far the batch got
+            return ids, error
+        return ids, None
+
+    def query(self, bow, max_results, max_entry_id):
+        return self.database.query(bow, max_results, max_entry_id)
+
+    def remove(self, entry):
+        self.database.remove(entry)
+
+    def label(self, entry):
+        return self.database.label(entry)
+
+    def set_label(self, entry, label):
+        self.database.set_label(entry, label)
+
+    def contains(self, entry):
+        return entry in self.database
+
+    def size(self):
+        return len(self.database)
+
+    def next_entry_id(self):
+        return self.database.next_entry_id
+
+    def options(self):
+        return {"direct_index": self.database.direct_index,
+                "levels_up": self.database.levels_up}
+
+    def save(self, path):
+        # Database.save writes a temporary file and renames it: atomic.
+        self.database.save(path, include_vocabulary=False)
+
+
+def _shard_size(entries, shard, shards):
+    """How many of the global ids 0..entries-1 route to `shard`."""
+    return max(0, (entries - shard + shards - 1) // shards)
+
+
+def _check_descriptors(descriptors, code_size, what):
+    """The checks Database.add makes, done before any shard adds anything."""
+    if descriptors is None:
+        return None
+    array = _np.asarray(descriptors)
+    if array.dtype != _np.uint8 or array.ndim != 2 or (array.shape[0] and
+                                                       array.shape[1] != code_size):
+        raise ValueError(
+            f"{what}: descriptors must be a uint8 array of shape (n, {code_size}) (the "
+            f"vocabulary's code size) or a BowVector, got {array.dtype} {array.shape}")
+    return _np.ascontiguousarray(array)
+
+
+def _check_bow(bow, word_count, what):
+    words = _np.asarray(bow.words)
+    if len(words) and int(words.max()) >= word_count:
+        raise ValueError(f"{what}: word {int(words.max())} is outside the vocabulary "
+                         f"({word_count} words)")
+    if not _np.all(_np.isfinite(_np.asarray(bow.values))):
+        raise ValueError(f"{what}: the BowVector has a non-finite value")
+    return bow
+
+
+class ShardedDatabase:
+    """One binbow.Database per shard on the workers of a Dask cluster.
+
+    ShardedDatabase(client, vocabulary, shards=N, timeout=120, **database_options):
+    `client` is a distributed.Client, `database_options` go to every shard's
+    binbow.Database (direct_index, levels_up). Shards are spread round-robin over
+    the cluster's workers as Dask actors. Every call to a shard gives up with
+    binbow.Error after `timeout` seconds.
+    """
+
+    def __init__(self, client, vocabulary, shards=1, timeout=DEFAULT_TIMEOUT,
+                 **database_options):
+        self._setup(client, vocabulary, shards, timeout)
+        self._entries = 0
+        self._start([(vocabulary, database_options, None)] * shards)
+
+    def _setup(self, client, vocabulary, shards, timeout):
+        distributed = _distributed()
+        if not isinstance(client, distributed.Client):
+            raise TypeError(f"ShardedDatabase: client must be a distributed.Client, "
+                            f"got {type(client).__name__}")
+        if not isinstance(vocabulary, Vocabulary):
+            raise TypeError(f"ShardedDatabase: vocabulary must be a binbow.Vocabulary, "
+                            f"got {type(vocabulary).__name__}")
+        if isinstance(shards, bool) or not isinstance(shards, int) or shards < 1:
+            raise ValueError(f"ShardedDatabase: shards must be a positive integer, got {shards!r}")
+        if not timeout > 0:
+            raise ValueError(f"ShardedDatabase: timeout must be positive seconds, got {timeout!r}")
+        self._client = client
+        self._vocabulary = vocabulary
+        self._timeout = float(timeout)
+        self._shard_count = shards
+
+    def _start(self, arguments):
+        workers = sorted(self._client.scheduler_info()["workers"])
+        if not workers:
+            raise Error("ShardedDatabase: the Dask cluster has no workers")
+        futures = [
+            self._client.submit(_Shard, *argument, actor=True, pure=False,
+                                workers=[workers[shard % len(workers)]],
+                                allow_other_workers=False)
+            for shard, argument in enumerate(arguments)
+        ]
+        self._actor_futures = futures  # keep the actors alive
+        self._shards = [self._wait(future, f"starting shard {shard}")
+                        for shard, future in enumerate(futures)]
+        self.workers = [workers[shard % len(workers)] for shard in range(len(arguments))]
+
+    def _wait(self, future, what):
+        """The result of a Dask future or actor call; binbow.Error on a time out."""
+        try:
+            return future.result(timeout=self._timeout)
+        except (TimeoutError, _distributed().TimeoutError) as error:
+            raise Error(f"ShardedDatabase: {what} took more than {self._timeout:g} s "
+                        "(timeout=): is the Dask cluster alive?") from error
+
+    def _call_all(self, what, method, arguments):
+        """Calls `method` on every shard with its own arguments (None: skip); the results."""
+        futures = {shard: getattr(self._shards[shard], method)(*argument)
+                   for shard, argument in enumerate(arguments) if argument is not None}
+        return {shard: self._wait(future, f"{what} on shard {shard}")
+                for shard, future in futures.items()}
+
+    def _locate(self, entry, what):
+        if isinstance(entry, bool) or not isinstance(entry, (int, _np.integer)):
+            raise TypeError(f"ShardedDatabase.{what}: entry must be an integer id, "
+                            f"got {type(entry).__name__}")
+        entry = int(entry)
+        if entry < 0 or entry >= self._entries:
+            raise ValueError(f"ShardedDatabase.{what}: no entry {entry} (ids are 0 to "
+                             f"{self._entries - 1})")
+        return self._shards[entry % self._shard_count], entry // self._shard_count
+
+    def _on_entry(self, method, entry, *arguments):
+        """Calls `method` for a global entry id on its shard; errors name the global id."""
+        shard, local = self._locate(entry, method)
+        what = f"ShardedDatabase.{method}({entry})"
+        try:
+            return self._wait(getattr(shard, method)(local, *arguments), what)
+        except (ValueError, TypeError) as error:
+            raise type(error)(f"{what}: on shard {entry % self._shard_count} as its entry "
+                              f"{local}: {error}") from error
+
+    def add(self, image, label=None):
+        """Adds one image (descriptors or a BowVector); its id, as Database.add gives."""
+        return self.add_many([image], None if label is None else [label])[0]
+
+    def add_many(self, images, labels=None):
+        """Adds images (descriptors or BowVectors) in order, one round trip per shard.
+
+        Returns their ids: the next ids in order, as repeated Database.add calls give.
+        Everything is checked before any shard adds anything.
+        """
+        images = list(images)
+        if labels is not None:
+            labels = list(labels)
+            if len(labels) != len(images):
+                raise ValueError(f"ShardedDatabase.add_many: {len(images)} images but "
+                                 f"{len(labels)} labels")
+        checked = []
+        for index, image in enumerate(images):
+            what = f"ShardedDatabase.add_many: image {index}"
+            if isinstance(image, BowVector):
+                checked.append(_check_bow(image, self._vocabulary.word_count, what))
+            else:
+                checked.append(_check_descriptors(image, self._vocabulary.code_size, what))
+            label = None if labels is None else labels[index]
+            if label is not None and not isinstance(label, str):
+                raise TypeError(f"{what}: label must be a str or None, got "
+                                f"{type(label).__name__}")
+        first = self._entries
+        batches = [[] for _ in range(self._shard_count)]
+        for index, image in enumerate(checked):
+            label = None if labels is None else labels[index]
+            batches[(first + index) % self._shard_count].append((image, label))
+        answers = self._call_all("add_many", "add_many",
+                                 [(batch,) if batch else None for batch in batches])
+        failures = [(shard, error) for shard, (_, error) in answers.items() if error is not None]
+        if failures:
+            shard, error = failures[0]
+            raise Error(f"ShardedDatabase.add_many: shard {shard} failed ({error}); shards "
+                        "that added their part keep it, so ids no longer match a single "
+                        "Database: load the last save") from error
+        for shard, (local_ids, _) in answers.items():
+            expected = _shard_size(first, shard, self._shard_count)
+            if local_ids and local_ids[0] != expected:
+                raise Error(f"ShardedDatabase.add_many: shard {shard} gave id {local_ids[0]}, "
+                            f"expected {expected}: another client changed it")
+        self._entries = first + len(images)
+        return list(range(first, self._entries))
+
+    def transform(self, image):
+        """The BowVector of descriptors (a BowVector is returned as is)."""
+        if isinstance(image, BowVector):
+            return _check_bow(image, self._vocabulary.word_count, "ShardedDatabase.query")
+        return self._vocabulary.transform(
+            _check_descriptors(image, self._vocabulary.code_size, "ShardedDatabase.query"))
+
+    def query(self, image, max_results=10, max_entry_id=None):
+        """Best matches as (entry, score, shared_words), best first, as Database.query.
+
+        The image (descriptors or BowVector) is transformed once here; every shard
+        returns its own top `max_results` and the lists are merged: any entry of the
+        overall top list is in its shard's top list, and scores do not depend on the
+        shard, so the result equals one Database's, ties (by increasing id) included.
+        """
+        if isinstance(max_results, bool) or not isinstance(max_results, int) or max_results < 0:
+            raise ValueError(f"ShardedDatabase.query: max_results must be a non-negative "
+                             f"integer, got {max_results!r}")
+        if max_entry_id is not None and (isinstance(max_entry_id, bool)
+                                         or not isinstance(max_entry_id, (int, _np.integer))
+                                         or max_entry_id < 0):
+            raise ValueError(f"ShardedDatabase.query: max_entry_id must be None or a "
+                             f"non-negative integer, got {max_entry_id!r}")
+        bow = self.transform(image)
+        if max_results == 0 or len(bow) == 0:
+            return []
+        n = self._shard_count
+        arguments = []
+        for shard in range(n):
+            if max_entry_id is None:
+                arguments.append((bow, max_results, None))
+            elif max_entry_id >= shard:
+                arguments.append((bow, max_results, (int(max_entry_id) - shard) // n))
+            else:
+                arguments.append(None)
+        answers = self._call_all("query", "query", arguments)
+        merged = [(shard + local * n, score, shared)
+                  for shard, results in answers.items() for local, score, shared in results]
+        return sorted(merged, key=self._ranking)[:max_results]
+
+    @property
+    def _ranking(self):
+        """Database's order: best score first (lowest for KL), NaN last, then lowest id."""
+        sign = 1 if self._vocabulary.scoring == "kl" else -1
+
+        def key(result):
+            score = result[1]
+            return (math.inf if math.isnan(score) else sign * score, result[0])
+        return key
+
+    def remove(self, entry):
+        """Removes an entry; its id is never reused. ValueError if it does not exist."""
+        self._on_entry("remove", entry)
+
+    def label(self, entry):
+        """The entry's label, None if it has none."""
+        return self._on_entry("label", entry)
+
+    def set_label(self, entry, label):
+        """Sets (or with "", removes) an entry's label."""
+        self._on_entry("set_label", entry, label)
+
+    def __contains__(self, entry):
+        try:
+            return self._on_entry("contains", entry)
+        except ValueError:
+            return False
+
+    def __len__(self):
+        return sum(self._call_all("len", "size", [()] * self._shard_count).values())
+
+    @property
+    def next_entry_id(self):
+        """The id the next add returns."""
+        return self._entries
+
+    @property
+    def shards(self):
+        """The number of shards."""
+        return self._shard_count
+
+    @property
+    def vocabulary(self):
+        """The vocabulary every shard uses."""
+        return self._vocabulary
+
+    def save(self, folder):
+        """Saves shard-<i>.bbdb per shard (written by its worker) and manifest.json.
+
+        `folder` must be reachable at the same path from the workers and the
+        client (a shared file system when they are on several machines). Every
+        file is written to a temporary name and renamed, so each is whole.
+        """
+        folder = os.path.abspath(os.fspath(folder))
+        os.makedirs(folder, exist_ok=True)
+        files = [f"shard-{shard}.bbdb" for shard in range(self._shard_count)]
+        self._call_all("save", "save", [(os.path.join(folder, name),) for name in files])
+        options = self._wait(self._shards[0].options(), "save")
+        manifest = {
+            "format": _FORMAT,
+            "version": _FORMAT_VERSION,
+            "shards": self._shard_count,
+            "routing": "entry id % shards, stored under entry id // shards",
+            "next_entry_id": self._entries,
+            "vocabulary_checksum": self._vocabulary.checksum,
+            "database_options": options,
+            "files": files,
+        }
+        descriptor, temporary = tempfile.mkstemp(prefix=".manifest-", dir=folder)
+        try:
+            with os.fdopen(descriptor, "w", encoding="utf-8") as file:
+                json.dump(manifest, file, indent=2)
+            os.replace(temporary, os.path.join(folder, _MANIFEST))
+        except BaseException:
+            os.unlink(temporary)
+            raise
+
+    @classmethod
+    def load(cls, client, folder, vocabulary, timeout=DEFAULT_TIMEOUT):
+        """A ShardedDatabase saved by save(folder); `vocabulary` must be the saved one."""
+        folder = os.path.abspath(os.fspath(folder))
+        path = os.path.join(folder, _MANIFEST)
+        try:
+            with open(path, encoding="utf-8") as file:
+                manifest = json.load(file)
+        except OSError as error:
+            raise Error(f"ShardedDatabase.load: cannot read {path}: {error}") from error
+        except ValueError as error:
+            raise Error(f"ShardedDatabase.load: {path} is not JSON: {error}") from error
+        try:
+            if manifest["format"] != _FORMAT or manifest["version"] != _FORMAT_VERSION:
+                raise Error(f"ShardedDatabase.load: {path} is not a version {_FORMAT_VERSION} "
+                            f"{_FORMAT} manifest")
+            shards = manifest["shards"]
+            entries = manifest["next_entry_id"]
+            files = manifest["files"]
+            checksum = manifest["vocabulary_checksum"]
+        except (KeyError, TypeError) as error:
+            raise Error(f"ShardedDatabase.load: {path} lacks {error}") from error
+        if (not isinstance(shards, int) or shards < 1 or not isinstance(entries, int)
+                or entries < 0 or not isinstance(files, list) or len(files) != shards
+                or not all(isinstance(name, str) and os.path.basename(name) == name
+                           for name in files)):
+            raise Error(f"ShardedDatabase.load: {path} has an invalid shards, next_entry_id "
+                        "or files field")
+        if isinstance(vocabulary, Vocabulary) and checksum != vocabulary.checksum:
+            raise Error(f"ShardedDatabase.load: {path} was saved with vocabulary checksum "
+                        f"{checksum}, this vocabulary's is {vocabulary.checksum}")
+        self = cls.__new__(cls)
+        self._setup(client, vocabulary, shards, timeout)
+        self._entries = entries
+        self._start([(vocabulary, None, os.path.join(folder, name)) for name in files])
+        found = self._call_all("load", "next_entry_id", [()] * shards)
+        for shard, next_id in found.items():
+            if next_id != _shard_size(entries, shard, shards):
+                raise Error(f"ShardedDatabase.load: {files[shard]} holds {next_id} ids, "
+                            f"{path} says {_shard_size(entries, shard, shards)}")
+        return self

@@ -1,0 +1,165 @@
+"""binbow.distributed.ShardedDatabase on a local Dask cluster of worker processes."""
+import ast
+import json
+
+import numpy as np
+import pytest
+
+import binbow
+from conftest import SOURCE_DIR, clustered, require_module, sample_frames
+
+
+@pytest.fixture(scope="module")
+def client():
+    distributed = require_module("distributed", "python3-distributed")
+    cluster = distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                       dashboard_address=None)
+    with distributed.Client(cluster) as dask_client:
+        yield dask_client
+    cluster.close()
+
+
+def sharded_module():
+    return require_module("binbow.distributed", "python3-distributed")
+
+
+def random_images(seed, count):
+    rng = np.random.default_rng(seed)
+    return [clustered(rng, 150) for _ in range(count)]
+
+
+def both(client, vocabulary, images, shards, labels=None):
+    """A single Database and a ShardedDatabase holding the same entries."""
+    single = binbow.Database(vocabulary)
+    for index, image in enumerate(images):
+        single.add(image, None if labels is None else labels[index])
+    sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=shards)
+    assert sharded.add_many(images, labels) == list(range(len(images)))
+    return single, sharded
+
+
+def assert_same_answers(single, sharded, queries, max_entry_ids=(None,)):
+    for query in queries:
+        for max_results in (1, 3, 10, 100):
+            for max_entry_id in max_entry_ids:
+                expected = single.query(query, max_results, max_entry_id)
+                assert expected, "the query should match something"
+                assert sharded.query(query, max_results, max_entry_id) == expected
+
+
+@pytest.mark.parametrize("shards", [1, 3])
+def test_queries_equal_one_database_with_ties(client, vocabulary, shards):
+    images = random_images(5, 10)
+    # Duplicates score equally: the tie order (increasing id) must cross shards.
+    images = images + [images[2], images[7], images[2], images[2]]
+    single, sharded = both(client, vocabulary, images, shards)
+    bows = [vocabulary.transform(image) for image in images]
+    tied = single.query(bows[2], 4)
+    assert [entry for entry, _, _ in tied] == [2, 10, 12, 13]
+    assert_same_answers(single, sharded, bows[:4] + [bows[7]], (None, 0, 5, 12, 100))
+    assert sharded.query(images[2], 4) == tied  # descriptors are transformed on the client
+    assert len(sharded) == len(images) and sharded.next_entry_id == len(images)
+
+
+def test_single_adds_return_dense_ids_and_bow_vectors_work(client, vocabulary):
+    images = random_images(6, 7)
+    sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=3)
+    ids = [sharded.add(vocabulary.transform(image) if i % 2 else image, label=f"n{i}")
+           for i, image in enumerate(images)]
+    assert ids == list(range(7))
+    assert [sharded.label(i) for i in ids] == [f"n{i}" for i in ids]
+    assert sharded.add(None) == 7  # an image without features still gets an id
+
+
+def test_real_descriptors(client):
+    vocabulary = binbow.Vocabulary.default("orb")
+    extractor = binbow.FeatureExtractor("orb", max_features=500)
+    images = [extractor.extract(str(frame))[1] for frame in sample_frames()[:24]]
+    single, sharded = both(client, vocabulary, images, 3)
+    assert_same_answers(single, sharded, [vocabulary.transform(images[i]) for i in (0, 11, 23)],
+                        (None, 10))
+
+
+def test_remove_and_labels(client, vocabulary):
+    images = random_images(7, 9)
+    labels = [f"place {i}" if i % 3 else None for i in range(9)]
+    single, sharded = both(client, vocabulary, images, 3, labels)
+    for entry in (1, 5, 6):
+        single.remove(entry)
+        sharded.remove(entry)
+    assert len(sharded) == 6 and 5 not in sharded and 4 in sharded and 99 not in sharded
+    assert [sharded.label(i) for i in (0, 2, 4)] == [labels[i] for i in (0, 2, 4)]
+    sharded.set_label(0, "origin")
+    assert sharded.label(0) == "origin"
+    assert_same_answers(single, sharded, [vocabulary.transform(images[i]) for i in (1, 4)])
+    with pytest.raises(ValueError, match=r"remove\(5\).*was removed"):
+        sharded.remove(5)  # already removed: the shard's Database says so
+    with pytest.raises(ValueError, match="no entry 9"):
+        sharded.label(9)
+    assert sharded.add(images[0]) == 9  # removed ids are never reused
+
+
+def test_save_and_load_round_trip(client, vocabulary, tmp_path):
+    images = random_images(8, 11)
+    single, sharded = both(client, vocabulary, images, 3, [f"l{i}" for i in range(11)])
+    sharded.remove(10)  # the last id stays used after loading
+    single.remove(10)
+    sharded.save(tmp_path)
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    assert manifest["shards"] == 3 and manifest["next_entry_id"] == 11
+    assert manifest["vocabulary_checksum"] == vocabulary.checksum
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "manifest.json", "shard-0.bbdb", "shard-1.bbdb", "shard-2.bbdb"]
+    loaded = sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert loaded.shards == 3 and len(loaded) == 10 and loaded.label(4) == "l4"
+    assert_same_answers(single, loaded, [vocabulary.transform(images[i]) for i in (0, 3, 9)])
+    assert loaded.add(images[1]) == 11
+
+
+def test_load_refuses_another_vocabulary_and_broken_manifests(client, vocabulary, tmp_path):
+    sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=2)
+    sharded.add_many(random_images(9, 3))
+    sharded.save(tmp_path)
+    other = binbow.Vocabulary.build(random_images(10, 4), branching=4, levels=2, seed=1)
+    with pytest.raises(binbow.Error, match="checksum"):
+        sharded_module().ShardedDatabase.load(client, tmp_path, other)
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    manifest["next_entry_id"] = 5
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    with pytest.raises(binbow.Error, match="shard-0.bbdb holds 2 ids"):
+        sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
+    with pytest.raises(binbow.Error, match="cannot read"):
+        sharded_module().ShardedDatabase.load(client, tmp_path / "missing", vocabulary)
+
+
+def test_bad_inputs_are_refused_before_any_shard_adds(client, vocabulary):
+    module = sharded_module()
+    sharded = module.ShardedDatabase(client, vocabulary, shards=2)
+    good = random_images(11, 1)[0]
+    with pytest.raises(ValueError, match="image 1.*uint8"):
+        sharded.add_many([good, good[:, :16]])
+    with pytest.raises(ValueError, match="outside the vocabulary"):
+        sharded.add(binbow.BowVector(np.array([vocabulary.word_count]), np.array([1.0])))
+    assert len(sharded) == 0 and sharded.add(good) == 0
+    with pytest.raises(ValueError, match="max_results"):
+        sharded.query(good, -1)
+    with pytest.raises(TypeError, match="distributed.Client"):
+        module.ShardedDatabase(object(), vocabulary)
+    with pytest.raises(ValueError, match="shards"):
+        module.ShardedDatabase(client, vocabulary, shards=0)
+
+
+def test_the_workers_hold_the_shards(client, vocabulary):
+    sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=4)
+    assert len(set(sharded.workers)) == 2  # spread over both workers
+
+
+def test_the_stubs_describe_the_runtime_api():
+    stubs = ast.parse((SOURCE_DIR / "python" / "binbow" / "distributed.pyi").read_text(encoding="utf-8"))
+    [stub] = [node for node in stubs.body if isinstance(node, ast.ClassDef)]
+    stubbed = {node.name for node in stub.body if isinstance(node, ast.FunctionDef)}
+    runtime = {name for name in vars(sharded_module().ShardedDatabase)
+               if not name.startswith("_") or name in ("__init__", "__len__", "__contains__")}
+    assert stubbed == runtime
+    assert all(getattr(sharded_module().ShardedDatabase, name).__doc__ for name in runtime
+               if name != "__init__" and not name.startswith("__"))
