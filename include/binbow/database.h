@@ -95,7 +95,9 @@ class Database {
   // entry has yet are simply not found; the direct index keeps the nodes as
   // given (the words themselves, for OnlineVocabulary::weigh). A word that
   // the caller stops using (a purged online word) keeps its postings, which
-  // no later query names: they cost memory, never a score.
+  // no later query names: they cost memory, never a score. Meant for dense
+  // ids such as OnlineVocabulary's: rows cost 4 bytes per id up to the
+  // largest one, in each segment of the index.
   static Database over_word_ids(Scoring scoring, DatabaseOptions options = {});
   Database(Database&&) noexcept;
   Database& operator=(Database&&) noexcept;
