@@ -63,6 +63,35 @@ SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
   return similarity_matrix(vocabulary, views);
 }
 
+namespace {
+
+SimilarityMatrix similarity_matrix(const OnlineVocabulary& online,
+                                   const std::vector<DescriptorView>& views) {
+  return similarity_matrix(
+      Database::over_word_ids(online.options().scoring, without_direct_index()),
+      [&](const DescriptorView& d, BowVector& bow) {
+        if (d.empty())
+          bow.clear();
+        else
+          online.transform(d, bow);
+      },
+      views);
+}
+
+}  // namespace
+
+SimilarityMatrix online_similarity_matrix(std::size_t code_size,
+                                          const std::vector<vision::Features>& features) {
+  OnlineVocabulary online(code_size);
+  std::vector<DescriptorView> views;
+  views.reserve(features.size());
+  for (const vision::Features& f : features) {
+    views.push_back(f.descriptors);
+    if (!f.descriptors.empty()) online.add_image(f.descriptors);
+  }
+  return similarity_matrix(online, views);
+}
+
 SimilarityMatrix similarity_matrix(const LoopDetector& detector) {
   if (detector.params().geometric_check == GeometricCheck::kNone)
     throw InvalidArgument(
@@ -72,17 +101,9 @@ SimilarityMatrix similarity_matrix(const LoopDetector& detector) {
   views.reserve(detector.size());
   for (std::size_t entry = 0; entry < detector.size(); ++entry)
     views.push_back(detector.descriptors(static_cast<EntryId>(entry)));
+  // With the words and IDF grown over the whole sequence.
   if (const OnlineVocabulary* online = detector.online_vocabulary())
-    // With the words and IDF grown over the whole sequence.
-    return similarity_matrix(
-        Database::over_word_ids(online->options().scoring, without_direct_index()),
-        [&](const DescriptorView& d, BowVector& bow) {
-          if (d.empty())
-            bow.clear();
-          else
-            online->transform(d, bow);
-        },
-        views);
+    return similarity_matrix(*online, views);
   return similarity_matrix(detector.database().vocabulary(), views);
 }
 
