@@ -178,8 +178,11 @@ void LoopDetector::Impl::transform(const DescriptorView& descriptors, BowVector&
   if (descriptors.empty()) return;
   if (online) {
     online->add_image(descriptors, image_words);
-    online->weigh(image_words.words.data(), image_words.words.size(), bow,
-                  params.geometric_check == GeometricCheck::kDirectIndex ? &nodes : nullptr);
+    online->weigh(image_words.words.data(), image_words.words.size(), bow);
+    // Every feature under its word, stop words (weight 0) included: the
+    // geometric check wants correspondences, not weights.
+    if (params.geometric_check == GeometricCheck::kDirectIndex)
+      nodes = FeatureVector::from_assignment(image_words.words.data(), image_words.words.size());
     return;
   }
   if (params.geometric_check == GeometricCheck::kDirectIndex)

@@ -232,8 +232,10 @@ class LoopDetector {
   // (its new words exist in no earlier image, so they cannot create
   // candidates), weighed with the IDF of the images so far, then queried and
   // inserted as with a fixed vocabulary; an entry keeps the weights it was
-  // inserted with. The geometric check's direct index pairs features that
-  // share an online word (direct_index_levels does not apply). Throws
+  // inserted with (the first image's words are in every image so far: IDF 0,
+  // so it can never be a candidate). The geometric check's direct index
+  // pairs features that share an online word, whatever its weight
+  // (direct_index_levels does not apply). Throws
   // InvalidArgument for invalid parameters or vocabulary options.
   static LoopDetector online(std::size_t code_size, OnlineVocabularyOptions vocabulary_options = {},
                              LoopDetectorParams params = {});
