@@ -112,11 +112,13 @@ std::vector<vision::Keypoint> to_keypoints(const py::handle& object, std::size_t
 class PythonLoopDetector {
  public:
   PythonLoopDetector(Vocabulary vocabulary, const LoopDetectorParams& params)
-      : detector_(std::move(vocabulary), params) {}
+      : detector_(std::move(vocabulary), params),
+        code_size_(detector_.database().vocabulary().code_size()) {}
+  PythonLoopDetector(loop::LoopDetector detector, std::size_t code_size)
+      : detector_(std::move(detector)), code_size_(code_size) {}
 
   loop::SequenceFrame process(const py::object& keypoints, const py::object& descriptors) {
-    const Descriptors d =
-        to_descriptors(descriptors, "descriptors", detector_.database().vocabulary().code_size());
+    const Descriptors d = to_descriptors(descriptors, "descriptors", code_size_);
     const std::vector<vision::Keypoint> points = to_keypoints(keypoints, d.view.rows);
     py::gil_scoped_release release;
     const std::lock_guard<std::mutex> lock(mutex_);
@@ -142,11 +144,69 @@ class PythonLoopDetector {
   // Both fixed at construction.
   const LoopDetectorParams& params() const { return detector_.params(); }
   const Vocabulary& vocabulary() const { return detector_.database().vocabulary(); }
+  bool online() const { return detector_.online_vocabulary() != nullptr; }
+  std::size_t word_count() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return online() ? detector_.online_vocabulary()->word_count()
+                    : detector_.database().vocabulary().word_count();
+  }
 
  private:
   loop::LoopDetector detector_;
+  std::size_t code_size_;
   mutable std::mutex mutex_;
 };
+
+// OnlineVocabularyOptions from LoopDetector.online's keyword arguments.
+OnlineVocabularyOptions online_options(const py::kwargs& options) {
+  OnlineVocabularyOptions o;
+  for (const auto& [key, value] : options) {
+    const std::string name = key.cast<std::string>();
+    if (name == "new_word_distance")
+      o.new_word_distance = value.cast<double>();
+    else if (name == "purge_after_images")
+      o.purge_after_images = value.cast<std::uint32_t>();
+    else if (name == "trees")
+      o.trees = value.cast<std::uint32_t>();
+    else if (name == "branching")
+      o.branching = value.cast<std::uint32_t>();
+    else if (name == "leaf_size")
+      o.leaf_size = value.cast<std::uint32_t>();
+    else if (name == "max_checks")
+      o.max_checks = value.cast<std::uint32_t>();
+    else if (name == "exact")
+      o.exact = value.cast<bool>();
+    else if (name == "seed")
+      o.seed = value.cast<std::uint64_t>();
+    else
+      throw py::type_error(
+          "LoopDetector.online: unknown vocabulary option '" + name +
+          "' (new_word_distance, purge_after_images, trees, branching, leaf_size, max_checks, "
+          "exact, seed)");
+  }
+  return o;
+}
+
+std::unique_ptr<PythonLoopDetector> online_detector(const py::object& descriptor,
+                                                    const std::optional<LoopDetectorParams>& params,
+                                                    const py::kwargs& options) {
+  OnlineVocabularyOptions o = online_options(options);
+  std::size_t code_size = 0;
+  if (py::isinstance<py::str>(descriptor)) {
+    o.descriptor = descriptor.cast<std::string>();
+    code_size = vision::make_extractor(o.descriptor, 0)->code_size();
+  } else if (PyLong_Check(descriptor.ptr()) && !PyBool_Check(descriptor.ptr())) {
+    code_size = descriptor.cast<std::size_t>();
+  } else {
+    throw py::type_error(
+        "LoopDetector.online: descriptor must be an extractor name (\"orb\", ...) or a "
+        "descriptor size in bytes, got " +
+        type_name(descriptor));
+  }
+  return std::make_unique<PythonLoopDetector>(
+      loop::LoopDetector::online(code_size, std::move(o), params.value_or(LoopDetectorParams{})),
+      code_size);
+}
 
 py::array_t<std::int64_t> inlier_array(const std::vector<vision::Correspondence>& inliers) {
   py::array_t<std::int64_t> out({static_cast<py::ssize_t>(inliers.size()), py::ssize_t{2}});
@@ -346,8 +406,19 @@ void bind_detection(py::module_& m) {
       .def("clear", &PythonLoopDetector::clear, "Forget every image; the next one is query 0.")
       .def_property_readonly("params", &PythonLoopDetector::params,
                              "The detector's parameters (a copy).")
+      .def_static("online", &online_detector, py::arg("descriptor"), py::arg("params") = py::none(),
+                  "A detector with no pre-trained vocabulary: its words grow from the images\n"
+                  "themselves (issue #14; docs/online-vocabulary.md). descriptor: an extractor\n"
+                  "name (\"orb\", \"brief\", ...) or the descriptor size in bytes; params: a\n"
+                  "LoopDetectorParams or None; keyword arguments set the online vocabulary's\n"
+                  "options: new_word_distance, purge_after_images, trees, branching, leaf_size,\n"
+                  "max_checks, exact, seed.")
       .def_property_readonly("vocabulary", &PythonLoopDetector::vocabulary,
-                             "The detector's vocabulary.");
+                             "The detector's vocabulary (empty for an online detector).")
+      .def_property_readonly("is_online", &PythonLoopDetector::online,
+                             "Whether the words grow from the images (LoopDetector.online).")
+      .def_property_readonly("word_count", &PythonLoopDetector::word_count,
+                             "Words of the vocabulary (the live online words so far).");
 }
 
 // --- Evaluation
@@ -374,9 +445,10 @@ vision::ImageSourceOptions source_options(long long stride, long long max_width,
 // `descriptor` a name or a FeatureExtractor, `params` a LoopDetectorParams, a
 // parameter file's path or None, `progress` None or a callable(done, total).
 std::tuple<std::vector<loop::SequenceFrame>, LoopDetectorParams, loop::SimilarityMatrix>
-detect_loops(const std::vector<std::string>& inputs, Vocabulary vocabulary,
+detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> vocabulary,
              const py::object& descriptor, const py::object& max_features, const py::object& params,
-             long long stride, long long max_width, double video_fps, const py::object& progress) {
+             long long stride, long long max_width, double video_fps, const py::object& progress,
+             bool online) {
   loop::SequenceOptions options;
   options.source = source_options(stride, max_width, video_fps);
   if (const auto extractor = extractor_of(descriptor)) {
@@ -407,10 +479,16 @@ detect_loops(const std::vector<std::string>& inputs, Vocabulary vocabulary,
   std::unique_ptr<loop::SequenceDetector> sequence;
   {
     py::gil_scoped_release release;
-    sequence =
-        given ? std::make_unique<loop::SequenceDetector>(inputs, std::move(vocabulary), options,
-                                                         *given)
-              : std::make_unique<loop::SequenceDetector>(inputs, std::move(vocabulary), options);
+    if (online)
+      sequence = given ? std::make_unique<loop::SequenceDetector>(inputs, OnlineVocabularyOptions{},
+                                                                  options, *given)
+                       : std::make_unique<loop::SequenceDetector>(inputs, OnlineVocabularyOptions{},
+                                                                  options);
+    else
+      sequence = given ? std::make_unique<loop::SequenceDetector>(
+                             inputs, std::move(vocabulary).value_or(Vocabulary()), options, *given)
+                       : std::make_unique<loop::SequenceDetector>(
+                             inputs, std::move(vocabulary).value_or(Vocabulary()), options);
   }
   const long long known = sequence->size();
   const py::object total = known >= 0 ? py::object(py::int_(known)) : py::object(py::none());
@@ -531,7 +609,7 @@ void bind_similarity(py::module_& m) {
 void bind_sequences(py::module_& m) {
   m.def("_detect_loops", &detect_loops, py::arg("inputs"), py::arg("vocabulary"),
         py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
-        py::arg("max_width"), py::arg("video_fps"), py::arg("progress"),
+        py::arg("max_width"), py::arg("video_fps"), py::arg("progress"), py::arg("online") = false,
         "binbow.detect_loops once its arguments are resolved (use that): the frames and\n"
         "the parameters used.");
   m.def("_write_report", &write_report, py::arg("folder"), py::arg("results"),

@@ -27,6 +27,8 @@ namespace {
 
 struct DetectLoopsArguments {
   std::string vocab;
+  bool online_vocabulary = false;
+  std::string save_vocabulary;
   std::string descriptor = kDefaultDescriptor;
   int max_features = 0;
   std::string params;
@@ -58,8 +60,10 @@ void print_status_counts(const loop::StatusCounts& counts) {
 
 void run_detect_loops(const DetectLoopsArguments& arguments) {
   // Everything that can be checked is checked before the sequence is read.
-  check_vocabulary_given(arguments.vocab, arguments.descriptor);
+  if (!arguments.online_vocabulary) check_vocabulary_given(arguments.vocab, arguments.descriptor);
   prepare_output_file("-o", arguments.output);
+  if (!arguments.save_vocabulary.empty())
+    prepare_output_file("--save-vocabulary", arguments.save_vocabulary);
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
   loop::SequenceOptions options;
   options.descriptor = arguments.descriptor;
@@ -67,11 +71,20 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   options.source = arguments.source;
   options.params_file = arguments.params;
   options.extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
-  Vocabulary vocabulary;
   loop::LoopRun run;
-  run.vocabulary = load_loop_vocabulary(arguments.vocab, arguments.descriptor,
-                                        options.extractor->code_size(), vocabulary);
-  loop::SequenceDetector sequence(arguments.inputs, std::move(vocabulary), options);
+  run.online_vocabulary = arguments.online_vocabulary;
+  std::unique_ptr<loop::SequenceDetector> detector;
+  if (arguments.online_vocabulary) {
+    detector = std::make_unique<loop::SequenceDetector>(arguments.inputs, OnlineVocabularyOptions{},
+                                                        options);
+  } else {
+    Vocabulary vocabulary;
+    run.vocabulary = load_loop_vocabulary(arguments.vocab, arguments.descriptor,
+                                          options.extractor->code_size(), vocabulary);
+    detector =
+        std::make_unique<loop::SequenceDetector>(arguments.inputs, std::move(vocabulary), options);
+  }
+  loop::SequenceDetector& sequence = *detector;
   run.descriptor = arguments.descriptor;
   run.max_features = arguments.max_features;
   run.params_json = sequence.params().to_json();
@@ -89,6 +102,14 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   progress.finish();
   if (outputs.frames() == 0) throw InvalidArgument("detect-loops: no images found in the inputs");
   outputs.commit();
+  if (!arguments.save_vocabulary.empty()) {
+    BuildOptions build;
+    build.descriptor = arguments.descriptor;
+    sequence.detector().online_vocabulary()->to_vocabulary(build).save(arguments.save_vocabulary);
+    std::fprintf(stderr, "online vocabulary: %zu words -> %s\n",
+                 sequence.detector().online_vocabulary()->word_count(),
+                 arguments.save_vocabulary.c_str());
+  }
 
   const loop::LoopDetectorParams& params = sequence.params();
   std::fprintf(stderr, "%zu frames, %zu loops -> %s\n", outputs.frames(),
@@ -112,7 +133,7 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
                     {"frames", std::to_string(outputs.frames())},
                     {"loops", std::to_string(outputs.detections().size())},
                     {"frequency", hertz(params.frequency)},
-                    {"vocabulary", run.vocabulary},
+                    {"vocabulary", run.online_vocabulary ? "online" : run.vocabulary},
                     {"descriptor", run.descriptor}};
     report.params_json = run.params_json;
     report.timing = outputs.timing();
@@ -137,9 +158,20 @@ void add_detect_loops_command(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "detect-loops",
       "Detect loop closures in an image sequence (Galvez-Lopez & Tardos 2012, Section V)");
-  command->add_option("--vocab", arguments->vocab,
-                      "Vocabulary file (any supported format); default: the bundled "
-                      "data/vocab/<descriptor>_default.bbw (orb and brief only)");
+  CLI::Option* vocab =
+      command->add_option("--vocab", arguments->vocab,
+                          "Vocabulary file (any supported format); default: the bundled "
+                          "data/vocab/<descriptor>_default.bbw (orb and brief only)");
+  CLI::Option* online =
+      command->add_flag("--online-vocabulary", arguments->online_vocabulary,
+                        "No pre-trained vocabulary: grow binary words from the sequence itself "
+                        "(docs/online-vocabulary.md)");
+  online->excludes(vocab);
+  command
+      ->add_option("--save-vocabulary", arguments->save_vocabulary,
+                   "With --online-vocabulary: after the run, export the grown words as a fixed "
+                   "vocabulary (.bbw) for later runs")
+      ->needs(online);
   add_extractor_options(command, arguments->descriptor, arguments->max_features);
   command->add_option("--params", arguments->params,
                       "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams); "

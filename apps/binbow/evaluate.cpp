@@ -65,7 +65,8 @@ struct RunInputs {
 RunInputs read_run_inputs(const loop::LoopRun& run) {
   RunInputs inputs;
   const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
-  load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), inputs.vocabulary);
+  if (!run.online_vocabulary)
+    load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), inputs.vocabulary);
   StageProgress progress;
   inputs.features =
       loop::extract_run_features(run, [&](const std::string& stage, std::size_t done,
@@ -175,7 +176,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
     report.missed = missed;
     report.truth = truth;
     if (run) {
-      report.facts.emplace_back("vocabulary", run->vocabulary);
+      report.facts.emplace_back("vocabulary", run->online_vocabulary ? "online" : run->vocabulary);
       report.facts.emplace_back("descriptor", run->descriptor);
       report.facts.emplace_back("frames", std::to_string(run->frames.size()));
       report.params_json = run->params_json;
@@ -184,7 +185,12 @@ void run_evaluate(const EvaluateArguments& arguments) {
     if (inputs) {
       StageProgress progress;
       progress("similarity matrix", 0, 1);
-      report.similarity = loop::similarity_matrix(inputs->vocabulary, inputs->features.features);
+      report.similarity =
+          run->online_vocabulary
+              ? loop::online_similarity_matrix(
+                    vision::make_extractor(run->descriptor, run->max_features)->code_size(),
+                    inputs->features.features)
+              : loop::similarity_matrix(inputs->vocabulary, inputs->features.features);
       progress("similarity matrix", 1, 1);
       progress.finish();
     }

@@ -86,6 +86,19 @@ class Database {
   // options.direct_index_levels_up > kMaxDirectIndexLevelsUp (such a
   // database could be saved but never loaded).
   explicit Database(Vocabulary vocabulary, DatabaseOptions options = {});
+  // An empty database over word ids assigned elsewhere (an OnlineVocabulary's
+  // words), with no vocabulary: BoW vectors may name any word id, and the
+  // index grows its rows as larger ids arrive (doubling, so the re-layout is
+  // amortised over the postings). Scores use `scoring`. Differences from a
+  // database over a vocabulary: add(descriptors) and serialize()/save()
+  // throw InvalidArgument; vocabulary() is empty; a query's words that no
+  // entry has yet are simply not found; the direct index keeps the nodes as
+  // given (the words themselves, for OnlineVocabulary::weigh). A word that
+  // the caller stops using (a purged online word) keeps its postings, which
+  // no later query names: they cost memory, never a score. Meant for dense
+  // ids such as OnlineVocabulary's: rows cost 4 bytes per id up to the
+  // largest one, in each segment of the index.
+  static Database over_word_ids(Scoring scoring, DatabaseOptions options = {});
   Database(Database&&) noexcept;
   Database& operator=(Database&&) noexcept;
   ~Database();
@@ -129,7 +142,8 @@ class Database {
   // per-entry state, labels), excluding the vocabulary.
   std::size_t memory_usage() const;
 
-  const Vocabulary& vocabulary() const noexcept;
+  const Vocabulary& vocabulary() const noexcept;  // empty over word ids
+  Scoring scoring() const noexcept;
   const DatabaseOptions& options() const noexcept;
 
   // binbow's database format (.bbdb): magic, version, little-endian sections

@@ -160,7 +160,9 @@ def detect_loops(
 
     inputs: a path or a list of paths of image files, folders (their images in
     natural order: 2.jpg before 10.jpg), videos (frames named "video.mp4#N") or
-    text lists of images. vocabulary: None for Vocabulary.default(descriptor).
+    text lists of images. vocabulary: None for Vocabulary.default(descriptor),
+    a Vocabulary, or "online": no pre-trained vocabulary, the words grow from
+    the sequence itself (LoopDetector.online, `detect-loops --online-vocabulary`).
     descriptor: the extractor, "orb", "brief", "akaze" or "brisk", with the
     CLI's defaults (max_features: None for the extractor's default), or a
     FeatureExtractor configured otherwise. params: a
@@ -184,7 +186,10 @@ def detect_loops(
         paths.append(_os.fsdecode(item))
     name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
     vocabulary_file = None
-    if vocabulary is None:
+    online = isinstance(vocabulary, str) and vocabulary == "online"
+    if online:
+        vocabulary = None
+    elif vocabulary is None:
         vocabulary_file = _default_vocabulary_file(name)
         vocabulary = Vocabulary.load(vocabulary_file)
     printer = None
@@ -206,7 +211,7 @@ def detect_loops(
         params = _os.fsdecode(params)
     frames, used, similarity = _detect_loops(
         paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
-        callback,
+        callback, online,
     )
     if printer is not None:
         printer.finish()
@@ -214,7 +219,7 @@ def detect_loops(
     results.params = used
     results.similarity = similarity if similarity.frames else None
     results.descriptor = name
-    results.vocabulary = vocabulary
+    results.vocabulary = "online" if online else vocabulary
     results.vocabulary_file = vocabulary_file
     results.inputs = [_os.path.normpath(_os.path.abspath(path)) for path in paths]
     return results
@@ -254,7 +259,9 @@ def write_report(folder, results, ground_truth=None):
     inputs = ""
     if run.inputs:
         inputs = run.inputs[0] + (" ..." if len(run.inputs) > 1 else "")
-    vocabulary = run.vocabulary_file or (repr(run.vocabulary) if run.vocabulary else "")
+    vocabulary = run.vocabulary_file or (
+        "online" if isinstance(run.vocabulary, str) else repr(run.vocabulary) if run.vocabulary else ""
+    )
     return _write_report(
         _os.fsdecode(folder), results, ground_truth, run.params, inputs, vocabulary,
         run.descriptor, run.similarity,

@@ -258,6 +258,24 @@ class LoopDetector:
     def params(self) -> LoopDetectorParams: ...
     @property
     def vocabulary(self) -> Vocabulary: ...
+    @staticmethod
+    def online(
+        descriptor: Union[Literal["orb", "brief", "akaze", "brisk"], str, int],
+        params: Optional[LoopDetectorParams] = None,
+        *,
+        new_word_distance: float = ...,
+        purge_after_images: int = ...,
+        trees: int = ...,
+        branching: int = ...,
+        leaf_size: int = ...,
+        max_checks: int = ...,
+        exact: bool = ...,
+        seed: int = ...,
+    ) -> LoopDetector: ...
+    @property
+    def is_online(self) -> bool: ...
+    @property
+    def word_count(self) -> int: ...
 
 class GroundTruth:
     def __init__(self, frames: int, pairs: Iterable[tuple[int, int]]) -> None: ...
@@ -318,13 +336,13 @@ class LoopResults(list[LoopResult]):
     similarity: Optional[SimilarityMatrix]
     params: Optional[LoopDetectorParams]
     descriptor: str
-    vocabulary: Optional[Vocabulary]
+    vocabulary: Union[None, Vocabulary, Literal["online"]]
     vocabulary_file: Optional[str]
     inputs: Sequence[str]
 
 def detect_loops(
     inputs: Union[_StrPath, Iterable[_StrPath]],
-    vocabulary: Optional[Vocabulary] = None,
+    vocabulary: Union[None, Vocabulary, Literal["online"]] = None,
     descriptor: Union[Literal["orb", "brief", "akaze", "brisk"], FeatureExtractor] = "orb",
     params: Union[None, LoopDetectorParams, _StrPath] = None,
     progress: Union[bool, Callable[[int, Optional[int]], object]] = False,

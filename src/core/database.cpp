@@ -434,11 +434,25 @@ void check_words(const BowVector& bow, const Vocabulary& vocabulary, const char*
         " is outside the vocabulary (" + std::to_string(vocabulary.word_count()) + " words)");
 }
 
-void check_bow(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
-  check_words(bow, vocabulary, what);
+void check_values(const BowVector& bow, const char* what) {
   for (const BowEntry& entry : bow)
     if (!std::isfinite(entry.value)) throw detail::non_finite_value(what, entry.word);
 }
+
+void check_bow(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
+  check_words(bow, vocabulary, what);
+  check_values(bow, what);
+}
+
+void check_direct_index_levels(const DatabaseOptions& options) {
+  if (options.direct_index_levels_up > kMaxDirectIndexLevelsUp)
+    throw InvalidArgument("Database: direct_index_levels_up is " +
+                          std::to_string(options.direct_index_levels_up) + ", at most " +
+                          std::to_string(kMaxDirectIndexLevelsUp) + " can be saved");
+}
+
+// Over word ids, the rows start with this many words and double as needed.
+constexpr std::size_t kInitialWordCapacity = std::size_t{1} << 16;
 
 std::string no_entry_message(EntryId entry, EntryId next) {
   if (entry >= next)
@@ -452,20 +466,113 @@ std::string no_entry_message(EntryId entry, EntryId next) {
 Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
     : vocabulary(std::move(vocabulary_in)), options(options_in) {
   if (vocabulary.empty()) throw InvalidArgument("Database: the vocabulary is empty");
-  if (options.direct_index_levels_up > kMaxDirectIndexLevelsUp)
-    throw InvalidArgument("Database: direct_index_levels_up is " +
-                          std::to_string(options.direct_index_levels_up) + ", at most " +
-                          std::to_string(kMaxDirectIndexLevelsUp) + " can be saved");
-  const std::size_t words = vocabulary.word_count();
-  while ((words - 1) >> (detail::kGroupBits + high_bits) != 0) ++high_bits;
-  row_order = detail::RowOrder(words);
+  check_direct_index_levels(options);
+  scoring = vocabulary.scoring();
+  lay_out(vocabulary.word_count());
+}
+
+Database::Impl::Impl(Scoring scoring_in, DatabaseOptions options_in)
+    : options(options_in), scoring(scoring_in), over_word_ids(true) {
+  check_direct_index_levels(options);
+  lay_out(kInitialWordCapacity);
+}
+
+void Database::Impl::lay_out(std::size_t capacity) {
+  tail_lists.assign(std::min(capacity, std::size_t{1} << detail::kGroupBits), {});
+  first_block_logs.assign(tail_lists.size(), detail::kFirstBlockLog);
+  set_word_capacity(capacity);
+}
+
+void Database::Impl::set_word_capacity(std::size_t capacity) noexcept {
+  word_capacity = capacity;
+  high_bits = 0;
+  while ((word_capacity - 1) >> (detail::kGroupBits + high_bits) != 0) ++high_bits;
+  row_order = detail::RowOrder(word_capacity);
   // Two postings per word: a segment's offsets (4 bytes per word) cost 2
   // bytes per posting; two thousand images of 1000 words for a million
   // words. Within bounds, so that small vocabularies make segments of
   // useful size and a huge one does not grow the tail that queries scan.
-  segment_postings = std::clamp(2 * words, std::size_t{1} << 16, std::size_t{1} << 22);
-  tail_lists.resize(std::min(words, std::size_t{1} << detail::kGroupBits));
-  first_block_logs.assign(tail_lists.size(), detail::kFirstBlockLog);
+  segment_postings = std::clamp(2 * word_capacity, std::size_t{1} << 16, std::size_t{1} << 22);
+}
+
+namespace {
+
+// A segment's rows (RowOrder of `old_words`) re-laid for `new_words` ≥
+// old_words into new arrays: the words keep their postings, the new words get
+// empty rows. Returns the new offsets.
+template <typename Relative>
+std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Relative* old_entries,
+                                      Relative* new_entries, float* new_weights,
+                                      std::size_t old_words, std::size_t new_words) {
+  const detail::RowOrder old_order(old_words);
+  std::vector<std::uint32_t> offsets(new_words + 1);
+  std::uint32_t at = 0;
+  std::size_t row = 0;
+  offsets[0] = 0;
+  constexpr std::size_t kGroups = std::size_t{1} << detail::kGroupBits;
+  for (std::size_t group = 0; group < std::min(new_words, kGroups); ++group) {
+    for (std::size_t word = group; word < new_words; word += kGroups) {
+      if (word < old_words) {
+        const std::uint32_t old_row = old_order.row(static_cast<WordId>(word));
+        const std::uint32_t from = segment.offsets[old_row];
+        const std::uint32_t count = segment.offsets[old_row + 1] - from;
+        std::memcpy(new_entries + at, old_entries + from, count * sizeof(Relative));
+        std::memcpy(new_weights + at, segment.weights.data() + from, count * sizeof(float));
+        at += count;
+      }
+      offsets[++row] = at;
+    }
+  }
+  return offsets;
+}
+
+// One segment's arrays for the new capacity, built before any is replaced.
+struct RelaidSegment {
+  std::vector<std::uint32_t> offsets;
+  detail::GrowableArray<std::uint16_t> entries16;
+  detail::GrowableArray<std::uint32_t> entries32;
+  detail::GrowableArray<float> weights;
+};
+
+}  // namespace
+
+void Database::Impl::grow_words(std::size_t needed) {
+  if (needed <= word_capacity) return;
+  constexpr std::size_t kWordIds = std::size_t{1} << 32;
+  if (needed > kWordIds)
+    throw InvalidArgument("Database: word id " + std::to_string(needed - 1) + " is too large");
+  const std::size_t new_words = std::min(std::max(needed, 2 * word_capacity), kWordIds);
+  // The tail's keys and lists depend on the capacity: make it a segment first.
+  freeze_tail();
+  // Everything is allocated before anything changes, so that running out of
+  // memory leaves the index as it was (with its tail frozen).
+  std::vector<RelaidSegment> relaid(segments.size());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const detail::Segment& segment = *segments[i];
+    RelaidSegment& out = relaid[i];
+    out.weights.resize(segment.postings());
+    if (segment.wide) {
+      out.entries32.resize(segment.postings());
+      out.offsets = relay_rows(segment, segment.entries32.data(), out.entries32.data(),
+                               out.weights.data(), word_capacity, new_words);
+    } else {
+      out.entries16.resize(segment.postings());
+      out.offsets = relay_rows(segment, segment.entries16.data(), out.entries16.data(),
+                               out.weights.data(), word_capacity, new_words);
+    }
+  }
+  std::vector<detail::TailList> lists(std::min(new_words, std::size_t{1} << detail::kGroupBits));
+  std::vector<std::uint8_t> block_logs(lists.size(), detail::kFirstBlockLog);
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    detail::Segment& segment = *segments[i];
+    segment.offsets.swap(relaid[i].offsets);
+    segment.entries16.swap(relaid[i].entries16);
+    segment.entries32.swap(relaid[i].entries32);
+    segment.weights.swap(relaid[i].weights);
+  }
+  tail_lists.swap(lists);
+  first_block_logs.swap(block_logs);
+  set_word_capacity(new_words);
 }
 
 EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& features) {
@@ -618,7 +725,7 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
 }
 
 void Database::Impl::freeze_tail() {
-  const std::size_t words = vocabulary.word_count();
+  const std::size_t words = word_capacity;
   const std::size_t live = tail_postings - tail_dead_postings;
   std::unique_ptr<detail::Segment> segment;
   std::vector<std::uint32_t> next;  // per word of a group: its row's next slot
@@ -749,11 +856,18 @@ std::size_t Database::Impl::segment_of(EntryId entry) const noexcept {
 Database::Database(Vocabulary vocabulary, DatabaseOptions options)
     : impl_(std::make_unique<Impl>(std::move(vocabulary), options)) {}
 Database::Database(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Database Database::over_word_ids(Scoring scoring, DatabaseOptions options) {
+  return Database(std::make_unique<Impl>(scoring, options));
+}
 Database::Database(Database&&) noexcept = default;
 Database& Database::operator=(Database&&) noexcept = default;
 Database::~Database() = default;
 
 EntryId Database::add(const DescriptorView& descriptors) {
+  if (impl_->over_word_ids)
+    throw InvalidArgument(
+        "Database::add: a database over word ids has no vocabulary to transform descriptors");
   BowVector bow;
   FeatureVector features;
   if (impl_->options.direct_index)
@@ -767,6 +881,13 @@ EntryId Database::add(const DescriptorView& descriptors) {
 }
 
 EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
+  if (impl_->over_word_ids) {
+    std::unique_lock lock(impl_->mutex);
+    if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
+    const EntryId entry = impl_->append(bow, features);
+    impl_->freeze_tail_if_full();
+    return entry;
+  }
   // The values are checked while they are added (one pass over the image).
   check_words(bow, impl_->vocabulary, "Database::add");
   if (impl_->options.direct_index && !features.empty() &&
@@ -783,13 +904,28 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
 
 std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
                                          EntryId max_entry_id) const {
-  check_bow(bow, impl_->vocabulary, "Database::query");
+  if (impl_->over_word_ids)
+    check_values(bow, "Database::query");
+  else
+    check_bow(bow, impl_->vocabulary, "Database::query");
   std::vector<QueryResult> results;
   if (bow.empty() || max_results == 0) return results;
-  const Scoring scoring = impl_->vocabulary.scoring();
+  const Scoring scoring = impl_->scoring;
   const double base = detail::score_base(scoring, bow);
 
   std::shared_lock lock(impl_->mutex);
+  // Over word ids, words beyond the capacity are in no entry yet: the index
+  // is searched for the others (base() above still counts them, for KL).
+  BowVector indexed_words;
+  const BowVector* searched = &bow;
+  if (impl_->over_word_ids && bow[bow.size() - 1].word >= impl_->word_capacity) {
+    const auto end =
+        std::lower_bound(bow.begin(), bow.end(), impl_->word_capacity,
+                         [](const BowEntry& e, std::size_t capacity) { return e.word < capacity; });
+    indexed_words = BowVector(std::vector<BowEntry>(bow.begin(), end));
+    if (indexed_words.empty()) return results;
+    searched = &indexed_words;
+  }
   const std::size_t entry_count = impl_->alive.size();
   if (entry_count == 0) return results;
   QueryScratch& buffers = scratch;
@@ -800,7 +936,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const IndexView index{impl_->segments,        impl_->tail_lists.data(), impl_->arena,
                         impl_->high_bits,       impl_->row_order,         impl_->tail_postings,
                         impl_->tail_first_entry};
-  const std::size_t touched = accumulate(scoring, index, bow, last_entry,
+  const std::size_t touched = accumulate(scoring, index, *searched, last_entry,
                                          buffers.accumulators.data(), buffers.touched.data());
 
   // Collecting the best also zeroes the accumulators for the next query;
@@ -939,6 +1075,9 @@ std::size_t Database::memory_usage() const {
 
 const Vocabulary& Database::vocabulary() const noexcept {
   return impl_->vocabulary;
+}
+Scoring Database::scoring() const noexcept {
+  return impl_->scoring;
 }
 const DatabaseOptions& Database::options() const noexcept {
   return impl_->options;

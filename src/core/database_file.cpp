@@ -153,6 +153,9 @@ class Layout {
 }  // namespace
 
 std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
+  if (impl_->over_word_ids)
+    throw InvalidArgument(
+        "Database: a database over word ids has no vocabulary and cannot be saved as .bbdb");
   std::shared_lock lock(impl_->mutex);
   const Impl& impl = *impl_;
   const auto next_id = static_cast<EntryId>(impl.alive.size());

@@ -156,6 +156,10 @@ class GrowableArray {
       throw std::bad_alloc();
     size_ = n;
   }
+  void swap(GrowableArray& other) noexcept {
+    std::swap(data_, other.data_);
+    std::swap(size_, other.size_);
+  }
   void assign(const T* values, std::size_t n) {
     resize(n);
     if (n > 0) std::memcpy(data_, values, n * sizeof(T));
@@ -242,6 +246,18 @@ struct Segment {
 // postings in increasing word order.
 struct Database::Impl {
   Impl(Vocabulary vocabulary_in, DatabaseOptions options_in);
+  // A database over caller-assigned word ids (Database::over_word_ids).
+  Impl(Scoring scoring_in, DatabaseOptions options_in);
+
+  // Sizes the tail and the rows for word ids below `word_capacity`; the
+  // index must be empty of tail postings (a new or just frozen tail).
+  void lay_out(std::size_t capacity);
+  // The capacity and what follows from it (row order, key bits, segment size).
+  void set_word_capacity(std::size_t capacity) noexcept;
+  // Over word ids: makes room for ids below `needed` (at least doubling, so
+  // that growth is amortised), freezing the tail and re-laying every
+  // segment's rows for the new capacity.
+  void grow_words(std::size_t needed);
 
   // Appends an entry whose arguments are already validated; exclusive lock held.
   EntryId append(const BowVector& bow, const FeatureVector& features);
@@ -258,8 +274,12 @@ struct Database::Impl {
   std::size_t segment_of(EntryId entry) const noexcept;
   bool is_live(EntryId entry) const noexcept { return entry < alive.size() && alive[entry] != 0; }
 
-  Vocabulary vocabulary;
+  Vocabulary vocabulary;  // empty over word ids
   DatabaseOptions options;
+  Scoring scoring = Scoring::kL1;
+  // The index's rows: the vocabulary's words, or the word-id capacity so far.
+  std::size_t word_capacity = 0;
+  bool over_word_ids = false;
   mutable detail::WriterPriorityMutex mutex;
 
   std::vector<std::unique_ptr<detail::Segment>> segments;

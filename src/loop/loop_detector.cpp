@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <string>
 
 #include "binbow/error.h"
@@ -39,13 +40,17 @@ DatabaseOptions database_options(const LoopDetectorParams& params) {
 }  // namespace
 
 struct LoopDetector::Impl {
-  Impl(Vocabulary vocabulary, const LoopDetectorParams& p)
+  Impl(Database database_in, const LoopDetectorParams& p, std::size_t code_size_in)
       : params(p),
-        database(std::move(vocabulary), database_options(p)),
-        window(p.max_distance_between_islands, p.max_distance_between_queries) {}
+        database(std::move(database_in)),
+        window(p.max_distance_between_islands, p.max_distance_between_queries),
+        code_size(code_size_in) {}
 
   LoopDetectorParams params;
   Database database;
+  // With an online vocabulary: its words, and the scratch of add_image().
+  std::optional<OnlineVocabulary> online;
+  OnlineImageWords image_words;
   detail::TemporalWindow window;
   BowVector previous_bow;
   // Images with features so far: the time axis of the temporal window when
@@ -69,7 +74,8 @@ struct LoopDetector::Impl {
 
   // The stages of Section V, in order; each sets result.status when the frame stops there.
   void check_input(Span<Keypoint> image_keypoints, const DescriptorView& descriptors) const;
-  void transform(const DescriptorView& descriptors, BowVector& bow, FeatureVector& nodes) const;
+  // Adds the image to the online vocabulary, if there is one.
+  void transform(const DescriptorView& descriptors, BowVector& bow, FeatureVector& nodes);
   std::vector<QueryResult> query(const BowVector& bow, LoopResult& result) const;
   bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
   void select_island(const std::vector<QueryResult>& found, LoopResult& result);
@@ -130,8 +136,22 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
 LoopDetector::LoopDetector(Vocabulary vocabulary, LoopDetectorParams params) {
   params.validate();
   if (vocabulary.empty()) throw InvalidArgument("loop detector needs a non-empty vocabulary");
-  impl_ = std::make_unique<Impl>(std::move(vocabulary), params);
-  impl_->code_size = impl_->database.vocabulary().code_size();
+  const std::size_t code_size = vocabulary.code_size();
+  impl_ = std::make_unique<Impl>(Database(std::move(vocabulary), database_options(params)), params,
+                                 code_size);
+}
+
+LoopDetector::LoopDetector(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+LoopDetector LoopDetector::online(std::size_t code_size, OnlineVocabularyOptions vocabulary_options,
+                                  LoopDetectorParams params) {
+  params.validate();
+  OnlineVocabulary vocabulary(code_size, std::move(vocabulary_options));
+  auto impl = std::make_unique<Impl>(
+      Database::over_word_ids(vocabulary.options().scoring, database_options(params)), params,
+      code_size);
+  impl->online.emplace(std::move(vocabulary));
+  return LoopDetector(std::move(impl));
 }
 
 LoopDetector::LoopDetector(LoopDetector&&) noexcept = default;
@@ -154,8 +174,17 @@ void LoopDetector::Impl::check_input(Span<Keypoint> image_keypoints,
 }
 
 void LoopDetector::Impl::transform(const DescriptorView& descriptors, BowVector& bow,
-                                   FeatureVector& nodes) const {
+                                   FeatureVector& nodes) {
   if (descriptors.empty()) return;
+  if (online) {
+    online->add_image(descriptors, image_words);
+    online->weigh(image_words.words.data(), image_words.words.size(), bow);
+    // Every feature under its word, stop words (weight 0) included: the
+    // geometric check wants correspondences, not weights.
+    if (params.geometric_check == GeometricCheck::kDirectIndex)
+      nodes = FeatureVector::from_assignment(image_words.words.data(), image_words.words.size());
+    return;
+  }
   if (params.geometric_check == GeometricCheck::kDirectIndex)
     database.vocabulary().transform(descriptors, bow, nodes,
                                     static_cast<unsigned>(params.direct_index_levels));
@@ -174,7 +203,7 @@ std::vector<QueryResult> LoopDetector::Impl::query(const BowVector& bow, LoopRes
     result.match = found.front().entry;
     result.score = found.front().score;
     if (params.use_normalised_score)
-      result.normalisation_score = database.vocabulary().score(bow, previous_bow);
+      result.normalisation_score = score_bow(bow, previous_bow, database.scoring());
     const double factor = normalisation_factor(result);
     result.normalised_score = factor > 0 ? result.score / factor : 0;
   }
@@ -310,6 +339,9 @@ const LoopDetectorParams& LoopDetector::params() const noexcept {
 const Database& LoopDetector::database() const noexcept {
   return impl_->database;
 }
+const OnlineVocabulary* LoopDetector::online_vocabulary() const noexcept {
+  return impl_->online ? &*impl_->online : nullptr;
+}
 
 Span<Keypoint> LoopDetector::keypoints(EntryId entry) const {
   if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
@@ -332,6 +364,7 @@ void LoopDetector::clear() {
   d.keypoints.clear();
   d.descriptor_bytes.clear();
   d.offsets.assign(1, 0);
+  if (d.online) d.online.emplace(d.online->code_size(), d.online->options());
 }
 
 }  // namespace binbow::loop

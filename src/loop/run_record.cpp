@@ -58,6 +58,7 @@ struct LoopRunFiles::Impl {
     // stays open until commit().
     write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" +
           json_text(Json(run.inputs)) + ",\"vocabulary\":" + json_text(Json(run.vocabulary)) +
+          (run.online_vocabulary ? ",\"online_vocabulary\":true" : "") +
           ",\"descriptor\":" + json_text(Json(run.descriptor)) +
           ",\"max_features\":" + std::to_string(run.max_features) +
           ",\"params\":" + json_text(Json::parse(run.params_json)) + ",\"source\":" +
@@ -196,6 +197,9 @@ LoopRun LoopRun::load(const std::string& path) {
       throw FileError(path, "not a binbow detect-loops run record (version 1)");
     run.inputs = j.at("inputs").get<std::vector<std::string>>();
     run.vocabulary = j.at("vocabulary").get<std::string>();
+    // Written only for runs without a vocabulary file.
+    if (j.contains("online_vocabulary"))
+      run.online_vocabulary = j.at("online_vocabulary").get<bool>();
     run.descriptor = j.at("descriptor").get<std::string>();
     run.max_features = j.at("max_features").get<int>();
     run.params_json = j.at("params").dump(2);

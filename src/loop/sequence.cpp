@@ -52,6 +52,11 @@ struct SequenceDetector::Impl {
           "; use a vocabulary trained on " + extractor->name() + " descriptors");
     detector = std::make_unique<LoopDetector>(std::move(vocabulary), params);
   }
+  void start(OnlineVocabularyOptions vocabulary_options, const LoopDetectorParams& params) {
+    if (vocabulary_options.descriptor.empty()) vocabulary_options.descriptor = extractor->name();
+    detector = std::make_unique<LoopDetector>(
+        LoopDetector::online(extractor->code_size(), std::move(vocabulary_options), params));
+  }
 };
 
 SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs, Vocabulary vocabulary,
@@ -68,6 +73,24 @@ SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs, Vocab
     : impl_(std::make_unique<Impl>(inputs, options)) {
   impl_->params_given = true;
   impl_->start(std::move(vocabulary), params);
+}
+
+SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs,
+                                   OnlineVocabularyOptions vocabulary_options,
+                                   const SequenceOptions& options)
+    : impl_(std::make_unique<Impl>(inputs, options)) {
+  impl_->start(std::move(vocabulary_options),
+               options.params_file.empty()
+                   ? impl_->defaults
+                   : LoopDetectorParams::load(options.params_file, impl_->defaults));
+}
+
+SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs,
+                                   OnlineVocabularyOptions vocabulary_options,
+                                   const SequenceOptions& options, const LoopDetectorParams& params)
+    : impl_(std::make_unique<Impl>(inputs, options)) {
+  impl_->params_given = true;
+  impl_->start(std::move(vocabulary_options), params);
 }
 
 SequenceDetector::SequenceDetector(SequenceDetector&&) noexcept = default;

@@ -4,10 +4,15 @@
 
 #include "binbow/database.h"
 #include "binbow/error.h"
+#include "binbow/online_vocabulary.h"
 
 namespace binbow::loop {
 
-SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
+namespace {
+
+// `transform` turns descriptors into a BoW vector of `database`'s words.
+template <typename Transform>
+SimilarityMatrix similarity_matrix(Database database, const Transform& transform,
                                    const std::vector<DescriptorView>& descriptors) {
   SimilarityMatrix m;
   m.frames = descriptors.size();
@@ -20,12 +25,9 @@ SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
 
   // One pass, as the detector runs: each image is scored against the images
   // before it (all of them, through the inverted index), then added.
-  DatabaseOptions options;
-  options.direct_index = false;
-  Database database(vocabulary, options);
   BowVector bow;
   for (std::size_t i = 0; i < m.frames; ++i) {
-    vocabulary.transform(descriptors[i], bow);
+    transform(descriptors[i], bow);
     if (i % stride == 0 && i > 0) {
       float* row = &m.scores[m.cell(i) * m.cells];
       for (const QueryResult& r : database.query(bow, i)) {
@@ -38,12 +40,56 @@ SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
   return m;
 }
 
+DatabaseOptions without_direct_index() {
+  DatabaseOptions options;
+  options.direct_index = false;
+  return options;
+}
+
+}  // namespace
+
+SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
+                                   const std::vector<DescriptorView>& descriptors) {
+  return similarity_matrix(
+      Database(vocabulary, without_direct_index()),
+      [&](const DescriptorView& d, BowVector& bow) { vocabulary.transform(d, bow); }, descriptors);
+}
+
 SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
                                    const std::vector<vision::Features>& features) {
   std::vector<DescriptorView> views;
   views.reserve(features.size());
   for (const vision::Features& f : features) views.push_back(f.descriptors);
   return similarity_matrix(vocabulary, views);
+}
+
+namespace {
+
+SimilarityMatrix similarity_matrix(const OnlineVocabulary& online,
+                                   const std::vector<DescriptorView>& views) {
+  return similarity_matrix(
+      Database::over_word_ids(online.options().scoring, without_direct_index()),
+      [&](const DescriptorView& d, BowVector& bow) {
+        if (d.empty())
+          bow.clear();
+        else
+          online.transform(d, bow);
+      },
+      views);
+}
+
+}  // namespace
+
+SimilarityMatrix online_similarity_matrix(std::size_t code_size,
+                                          const std::vector<vision::Features>& features) {
+  OnlineVocabulary online(code_size);
+  std::vector<DescriptorView> views;
+  views.reserve(features.size());
+  for (const vision::Features& f : features) {
+    views.push_back(f.descriptors);
+    if (!f.descriptors.empty()) online.add_image(f.descriptors);
+  }
+  return similarity_matrix(online, views);
 }
 
 SimilarityMatrix similarity_matrix(const LoopDetector& detector) {
@@ -55,6 +101,9 @@ SimilarityMatrix similarity_matrix(const LoopDetector& detector) {
   views.reserve(detector.size());
   for (std::size_t entry = 0; entry < detector.size(); ++entry)
     views.push_back(detector.descriptors(static_cast<EntryId>(entry)));
+  // With the words and IDF grown over the whole sequence.
+  if (const OnlineVocabulary* online = detector.online_vocabulary())
+    return similarity_matrix(*online, views);
   return similarity_matrix(detector.database().vocabulary(), views);
 }
 

@@ -142,9 +142,17 @@ std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const RunFeatures&
   std::vector<LoopDetectorParams> settings;
   for (double value : values) settings.push_back(with_value(base, parameter, value));
 
+  // A run with an online vocabulary grows its words again at every value.
+  OnlineVocabularyOptions online_options;
+  online_options.descriptor = run.descriptor;
+  const std::size_t code_size =
+      run.online_vocabulary ? vision::make_extractor(run.descriptor, run.max_features)->code_size()
+                            : 0;
   std::vector<PrCurvePoint> curve;
   for (std::size_t v = 0; v < values.size(); ++v) {
-    LoopDetector detector(vocabulary, settings[v]);
+    LoopDetector detector = run.online_vocabulary
+                                ? LoopDetector::online(code_size, online_options, settings[v])
+                                : LoopDetector(vocabulary, settings[v]);
     std::vector<Detection> detections;
     for (std::size_t i = 0; i < features.features.size(); ++i) {
       const LoopResult r = detector.process(features.features[i]);

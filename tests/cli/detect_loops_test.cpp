@@ -162,6 +162,68 @@ TEST(CliDetectLoops, ReportOfAVideoRunShowsItsFrames) {
   EXPECT_NE(page.find(video + "#"), std::string::npos);
 }
 
+TEST(CliDetectLoops, OnlineVocabularyIsRecordedReRunByTheSweepAndExportedForLaterRuns) {
+  TempDir dir;
+  const std::string loops = dir.file("loops.csv");
+  const std::string exported = dir.file("grown.bbw");
+  std::string output;
+  ASSERT_EQ(run_cli("detect-loops --online-vocabulary --save-vocabulary '" + exported + "' -o '" +
+                        loops + "' '" + samples_folder() + "'",
+                    &output),
+            0)
+      << output;
+  const nlohmann::json record = run_record(loops);
+  EXPECT_EQ(record.at("online_vocabulary"), true);
+  EXPECT_EQ(record.at("vocabulary"), "");
+  std::ifstream csv(loops);
+  const std::string detected((std::istreambuf_iterator<char>(csv)), {});
+
+  // The sweep re-runs detection with an online vocabulary too: at the
+  // recorded alpha it finds what the run found.
+  ASSERT_EQ(run_cli("evaluate --gt '" + shared_data("rtabmap-samples/samples_GT.bmp") +
+                        "' --sweep --sweep-values 0.3 '" + loops + "'",
+                    &output),
+            0)
+      << output;
+  std::smatch recall;
+  ASSERT_TRUE(std::regex_search(output, recall, std::regex("\nrecall: ([0-9.]+)"))) << output;
+  EXPECT_NE(output.find("recall at 100% precision: " + recall[1].str()), std::string::npos)
+      << output;
+
+  // Same input, same loops.
+  ASSERT_EQ(run_cli("detect-loops --online-vocabulary -o '" + dir.file("again.csv") + "' '" +
+                        samples_folder() + "'",
+                    &output),
+            0)
+      << output;
+  std::ifstream again_csv(dir.file("again.csv"));
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(again_csv)), {}), detected);
+
+  // The exported words serve as a fixed vocabulary.
+  ASSERT_EQ(run_cli("detect-loops --vocab '" + exported + "' -o '" + dir.file("fixed.csv") + "' '" +
+                        samples_folder() + "'",
+                    &output),
+            0)
+      << output;
+}
+
+TEST(CliDetectLoops, OnlineVocabularyUsageErrors) {
+  TempDir dir;
+  std::string output;
+  EXPECT_EQ(run_cli("detect-loops --online-vocabulary --vocab x.bbw -o '" + dir.file("l.csv") +
+                        "' '" + samples_folder() + "'",
+                    &output),
+            1);
+  EXPECT_NE(output.find("--vocab excludes --online-vocabulary"), std::string::npos) << output;
+  EXPECT_EQ(run_cli("detect-loops --save-vocabulary '" + dir.file("v.bbw") + "' -o '" +
+                        dir.file("l.csv") + "' '" + samples_folder() + "'",
+                    &output),
+            1);
+  EXPECT_NE(output.find("--save-vocabulary requires --online-vocabulary"), std::string::npos)
+      << output;
+  EXPECT_FALSE(std::ifstream(dir.file("l.csv")).good());
+}
+
 TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) {
   TempDir dir;
   const std::string list = write_frame_list(dir, 10);

@@ -65,8 +65,7 @@ std::size_t shared_words(const BowVector& a, const BowVector& b) {
 
 // Scores every live entry that shares a word with the query, sorts best first
 // (lowest first for KL), ties by entry id.
-std::vector<QueryResult> brute_force(const Vocabulary& vocabulary,
-                                     const std::vector<BowVector>& bows,
+std::vector<QueryResult> brute_force(Scoring scoring, const std::vector<BowVector>& bows,
                                      const std::vector<bool>& live, const BowVector& query,
                                      std::size_t max_results, EntryId max_entry_id = kAllEntries) {
   std::vector<QueryResult> all;
@@ -74,14 +73,21 @@ std::vector<QueryResult> brute_force(const Vocabulary& vocabulary,
     if (!live[id]) continue;
     const std::size_t shared = shared_words(query, bows[id]);
     if (shared == 0) continue;
-    all.push_back({id, vocabulary.score(query, bows[id]), static_cast<std::uint32_t>(shared)});
+    all.push_back({id, score_bow(query, bows[id], scoring), static_cast<std::uint32_t>(shared)});
   }
-  const bool lower_better = vocabulary.scoring() == Scoring::kKL;
+  const bool lower_better = scoring == Scoring::kKL;
   std::stable_sort(all.begin(), all.end(), [&](const QueryResult& a, const QueryResult& b) {
     return lower_better ? a.score < b.score : a.score > b.score;
   });
   if (all.size() > max_results) all.resize(max_results);
   return all;
+}
+
+std::vector<QueryResult> brute_force(const Vocabulary& vocabulary,
+                                     const std::vector<BowVector>& bows,
+                                     const std::vector<bool>& live, const BowVector& query,
+                                     std::size_t max_results, EntryId max_entry_id = kAllEntries) {
+  return brute_force(vocabulary.scoring(), bows, live, query, max_results, max_entry_id);
 }
 
 void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
@@ -311,6 +317,61 @@ BowVector random_bow(std::size_t words, std::size_t word_count, std::mt19937_64&
   std::vector<BowEntry> entries;
   for (WordId w : ids) entries.push_back({w, value(rng)});
   return BowVector(std::move(entries));
+}
+
+TEST(Database, OverWordIdsGrowsItsRowsAndQueriesEqualBruteForce) {
+  // Word ids arrive as an online vocabulary makes them: each image draws its
+  // words from all ids so far, and the ids grow from 1,000 to 600,000, so the
+  // rows grow past 65,536 (where they stop being in word order) and double
+  // several times with frozen segments, merged ones and a tail to re-lay.
+  // Queries also name ids no entry has yet.
+  for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kDotProduct}) {
+    std::mt19937_64 rng(5);
+    DatabaseOptions options;
+    options.direct_index = false;
+    Database database = Database::over_word_ids(scoring, options);
+    EXPECT_TRUE(database.vocabulary().empty());
+    EXPECT_EQ(database.scoring(), scoring);
+    std::vector<BowVector> bows;
+    std::vector<bool> live;
+    constexpr std::size_t kImages = 1200;
+    for (std::size_t i = 0; i < kImages; ++i) {
+      const std::size_t ids = 1000 + i * 500;
+      bows.push_back(random_bow(250, ids, rng));
+      live.push_back(true);
+      ASSERT_EQ(database.add(bows.back()), i);
+      if (i % 97 == 0 && live[i / 2]) {
+        database.remove(static_cast<EntryId>(i / 2));
+        live[i / 2] = false;
+      }
+      if (i % 150 == 149) {
+        const BowVector query = random_bow(300, ids + 50'000, rng);
+        const std::string context =
+            std::string(to_string(scoring)) + " after image " + std::to_string(i);
+        expect_same(database.query(query, 25), brute_force(scoring, bows, live, query, 25),
+                    context);
+        expect_same(database.query(query, 25, static_cast<EntryId>(i / 3)),
+                    brute_force(scoring, bows, live, query, 25, static_cast<EntryId>(i / 3)),
+                    context + ", max_entry_id");
+      }
+    }
+  }
+}
+
+TEST(Database, OverWordIdsHasNoVocabularyToTransformOrSave) {
+  Database database = Database::over_word_ids(Scoring::kL1);
+  std::mt19937_64 rng(1);
+  const DescriptorMatrix descriptors = test::random_descriptors(10, 32, rng);
+  EXPECT_THROW(database.add(descriptors), InvalidArgument);
+  database.add(random_bow(20, 100, rng));
+  EXPECT_THROW(database.serialize(), InvalidArgument);
+  // Nodes of the direct index are the caller's ids (words), kept as given.
+  const NodeId word = 70'000;
+  const FeatureVector features = FeatureVector::from_assignment(&word, 1);
+  BowVector bow(std::vector<BowEntry>{{word, 1.0f}});
+  const EntryId entry = database.add(bow, features);
+  EXPECT_EQ(database.feature_vector(entry), features);
+  EXPECT_EQ(database.query(bow, 5).size(), 1u);
 }
 
 TEST(Database, SegmentsOfAVocabularyOfMoreThan65536Words) {

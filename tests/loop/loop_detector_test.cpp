@@ -200,3 +200,96 @@ TEST(LoopDetector, KeepsFeaturesForVerification) {
 
 }  // namespace
 }  // namespace binbow::loop
+
+namespace binbow::loop {
+namespace {
+
+// Places as in WordImages, but of raw random descriptors (about 128 bits
+// apart, so each becomes a word of its own) that an online vocabulary must
+// learn; a revisit flips a few bits of each.
+class RandomPlaces {
+ public:
+  RandomPlaces() {
+    std::mt19937_64 rng(3);
+    descriptors_ = test::random_descriptors(10 * 41, 32, rng);
+  }
+  Features place(int i, std::mt19937_64* noise = nullptr) const {
+    Features f;
+    f.descriptors = DescriptorMatrix(32);
+    std::vector<std::size_t> rows;
+    for (int w = 0; w < 10; ++w) rows.push_back(10 * i + w);
+    for (int w = 0; w < 5; ++w) rows.push_back(10 * (i + 1) + w);
+    for (std::size_t row : rows) {
+      std::vector<std::uint8_t> d(descriptors_.row(row), descriptors_.row(row) + 32);
+      if (noise != nullptr)
+        for (int flip = 0; flip < 6; ++flip)
+          d[(*noise)() % 32] ^= std::uint8_t(1u << ((*noise)() % 8));
+      f.descriptors.append(d.data());
+      f.keypoints.push_back({float(row), float(row), 10, -1, 1, 0});
+    }
+    return f;
+  }
+
+ private:
+  DescriptorMatrix descriptors_;
+};
+
+std::vector<LoopResult> run_twice_around(LoopDetector& detector, const RandomPlaces& places) {
+  std::mt19937_64 noise(9);
+  std::vector<LoopResult> results;
+  for (int i = 0; i < 40; ++i) results.push_back(detector.process(places.place(i)));
+  for (int i = 0; i < 40; ++i) results.push_back(detector.process(places.place(i, &noise)));
+  return results;
+}
+
+TEST(OnlineLoopDetector, LearnsThePlacesOnTheFirstPassAndRecognisesThemOnTheSecond) {
+  const RandomPlaces places;
+  LoopDetector detector = LoopDetector::online(32, {}, small_params());
+  ASSERT_NE(detector.online_vocabulary(), nullptr);
+  const std::vector<LoopResult> results = run_twice_around(detector, places);
+  for (int i = 0; i < 40; ++i) EXPECT_FALSE(results[i].detection()) << "first pass, frame " << i;
+  int loops = 0;
+  for (int i = 40; i < 80; ++i) {
+    if (!results[i].detection()) continue;
+    ++loops;
+    EXPECT_NEAR(double(results[i].match), double(i - 40), 1.0) << "frame " << i;
+  }
+  // All but the first k = 3 revisits, which build temporal consistency.
+  EXPECT_GE(loops, 36);
+
+  // Same input, same output.
+  LoopDetector again = LoopDetector::online(32, {}, small_params());
+  const std::vector<LoopResult> repeated = run_twice_around(again, places);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    EXPECT_EQ(repeated[i].status, results[i].status) << i;
+    EXPECT_EQ(repeated[i].match, results[i].match) << i;
+    EXPECT_EQ(repeated[i].score, results[i].score) << i;
+  }
+
+  detector.clear();
+  EXPECT_EQ(detector.size(), 0u);
+  EXPECT_EQ(detector.online_vocabulary()->word_count(), 0u);
+}
+
+TEST(OnlineLoopDetector, DirectIndexPairsFeaturesOfTheSameWord) {
+  const RandomPlaces places;
+  LoopDetectorParams params = small_params();
+  params.geometric_check = GeometricCheck::kDirectIndex;
+  LoopDetector detector = LoopDetector::online(32, {}, params);
+  const Features first = places.place(0);
+  detector.process(first);
+  const FeatureVector nodes = detector.database().feature_vector(0);
+  OnlineImageWords expected = OnlineVocabulary(32).add_image(first.descriptors.view());
+  ASSERT_EQ(nodes.feature_count(), first.descriptors.rows());
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    for (std::uint32_t feature : nodes.features(i))
+      EXPECT_EQ(nodes.node(i), expected.words[feature]);
+  EXPECT_THROW(LoopDetector::online(0, {}, params), InvalidArgument);
+  Features wide;
+  wide.descriptors = DescriptorMatrix(2, 64);
+  wide.keypoints.resize(2);
+  EXPECT_THROW(detector.process(wide), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace binbow::loop

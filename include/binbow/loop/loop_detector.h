@@ -21,6 +21,7 @@
 
 #include "binbow/database.h"
 #include "binbow/descriptors.h"
+#include "binbow/online_vocabulary.h"
 #include "binbow/span.h"
 #include "binbow/types.h"
 #include "binbow/vision/features.h"
@@ -225,6 +226,20 @@ class LoopDetector {
  public:
   // Throws InvalidArgument for invalid parameters or an empty vocabulary.
   explicit LoopDetector(Vocabulary vocabulary, LoopDetectorParams params = {});
+  // A detector with no pre-trained vocabulary: its words grow from the
+  // sequence itself (OnlineVocabulary, for descriptors of `code_size` bytes),
+  // and its database is a Database::over_word_ids with the vocabulary
+  // options' scoring. Each image is first added to the online vocabulary
+  // (its new words exist in no earlier image, so they cannot create
+  // candidates), weighed with the IDF of the images so far, then queried and
+  // inserted as with a fixed vocabulary; an entry keeps the weights it was
+  // inserted with (the first image's words are in every image so far: IDF 0,
+  // so it can never be a candidate). The geometric check's direct index
+  // pairs features that share an online word, whatever its weight
+  // (direct_index_levels does not apply). Throws
+  // InvalidArgument for invalid parameters or vocabulary options.
+  static LoopDetector online(std::size_t code_size, OnlineVocabularyOptions vocabulary_options = {},
+                             LoopDetectorParams params = {});
   LoopDetector(LoopDetector&&) noexcept;
   LoopDetector& operator=(LoopDetector&&) noexcept;
   ~LoopDetector();
@@ -239,15 +254,19 @@ class LoopDetector {
   std::size_t size() const noexcept;  // images processed
   const LoopDetectorParams& params() const noexcept;
   const Database& database() const noexcept;
+  // The words grown so far by a detector made by online(); nullptr otherwise.
+  const OnlineVocabulary* online_vocabulary() const noexcept;
   // Features kept for the geometric check (empty with GeometricCheck::kNone).
   Span<vision::Keypoint> keypoints(EntryId entry) const;
   DescriptorView descriptors(EntryId entry) const;
 
-  // Forgets every image; the next one gets entry id 0.
+  // Forgets every image (and the words of an online vocabulary); the next
+  // one gets entry id 0.
   void clear();
 
  private:
   struct Impl;
+  explicit LoopDetector(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -71,7 +71,10 @@ std::string format_timing_table(const std::vector<StageTiming>& timing);
 
 struct LoopRun {
   std::vector<std::string> inputs;  // absolute paths
-  std::string vocabulary;           // absolute path
+  std::string vocabulary;           // absolute path; empty with online_vocabulary
+  // The run grew its words (LoopDetector::online, default vocabulary
+  // options) instead of reading a vocabulary file.
+  bool online_vocabulary = false;
   std::string descriptor;
   int max_features = 0;               // 0: the extractor's default
   std::string params_json;            // LoopDetectorParams::to_json()

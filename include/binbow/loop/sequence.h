@@ -72,6 +72,13 @@ class SequenceDetector {
                    const SequenceOptions& options = {});
   SequenceDetector(const std::vector<std::string>& inputs, Vocabulary vocabulary,
                    const SequenceOptions& options, const LoopDetectorParams& params);
+  // With no pre-trained vocabulary: LoopDetector::online for the extractor's
+  // code size (vocabulary_options.descriptor, if empty, becomes its name).
+  SequenceDetector(const std::vector<std::string>& inputs,
+                   OnlineVocabularyOptions vocabulary_options, const SequenceOptions& options = {});
+  SequenceDetector(const std::vector<std::string>& inputs,
+                   OnlineVocabularyOptions vocabulary_options, const SequenceOptions& options,
+                   const LoopDetectorParams& params);
   SequenceDetector(SequenceDetector&&) noexcept;
   SequenceDetector& operator=(SequenceDetector&&) noexcept;
   ~SequenceDetector();

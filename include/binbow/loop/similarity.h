@@ -49,5 +49,11 @@ SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
 // it keeps for the geometric check. Throws InvalidArgument when it keeps none
 // (GeometricCheck::kNone).
 SimilarityMatrix similarity_matrix(const LoopDetector& detector);
+// For a run without a pre-trained vocabulary: an online vocabulary (default
+// options, descriptors of `code_size` bytes) grown over all the images, then
+// the matrix scored with its words, as similarity_matrix(detector) does for
+// LoopDetector::online.
+SimilarityMatrix online_similarity_matrix(std::size_t code_size,
+                                          const std::vector<vision::Features>& features);
 
 }  // namespace binbow::loop

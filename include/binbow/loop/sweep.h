@@ -53,7 +53,9 @@ using SweepProgress =
 
 // For each value, the run's parameters with `parameter` (a LoopDetectorParams
 // field name, as in a --params file) set to it, detection re-run over the
-// run's inputs and evaluated against `truth`. `vocabulary` must be the run's.
+// run's inputs and evaluated against `truth`. `vocabulary` must be the run's
+// (unused, and may be empty, for a run with an online vocabulary: the words
+// grow again from the frames, with the default online vocabulary options).
 // Throws InvalidArgument for an unknown parameter or a value out of its
 // range, or when the inputs no longer have the recorded number of frames.
 std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& vocabulary,
