@@ -69,7 +69,9 @@ def test_heavy_calls_let_other_threads_run(name, many_descriptors):
     }
     iterations, seconds = main_thread_progress_during(calls[name])
     assert seconds > 0.02, f"{name} was too quick to tell: {seconds:.3f} s"
-    assert iterations > 1000, f"{name} held the GIL: {iterations} iterations in {seconds:.3f} s"
+    # Holding the GIL leaves the main thread ~0 iterations (switch interval 0.5 s);
+    # a loaded machine still gives it hundreds when the GIL is released.
+    assert iterations > 100, f"{name} held the GIL: {iterations} iterations in {seconds:.3f} s"
 
 
 def test_queries_and_adds_from_many_threads():
@@ -106,7 +108,7 @@ def test_extract_lets_other_threads_run():
     extractor = binbow.FeatureExtractor("orb", max_features=5000)
     iterations, seconds = main_thread_progress_during(lambda: extractor.extract(image))
     assert seconds > 0.02, f"extract was too quick to tell: {seconds:.3f} s"
-    assert iterations > 1000, f"extract held the GIL: {iterations} iterations in {seconds:.3f} s"
+    assert iterations > 100, f"extract held the GIL: {iterations} iterations in {seconds:.3f} s"
 
 
 def test_extractors_and_detectors_in_threads():
