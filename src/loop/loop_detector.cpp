@@ -364,7 +364,11 @@ void LoopDetector::clear() {
   d.keypoints.clear();
   d.descriptor_bytes.clear();
   d.offsets.assign(1, 0);
-  if (d.online) d.online.emplace(d.online->code_size(), d.online->options());
+  if (d.online) {
+    // Copied first: emplace destroys the old vocabulary, and its options with it.
+    const OnlineVocabularyOptions options = d.online->options();
+    d.online.emplace(d.online->code_size(), options);
+  }
 }
 
 }  // namespace binbow::loop

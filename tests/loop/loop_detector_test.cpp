@@ -269,6 +269,12 @@ TEST(OnlineLoopDetector, LearnsThePlacesOnTheFirstPassAndRecognisesThemOnTheSeco
   detector.clear();
   EXPECT_EQ(detector.size(), 0u);
   EXPECT_EQ(detector.online_vocabulary()->word_count(), 0u);
+  // Cleared, it starts over with the same vocabulary options: the same results again.
+  const std::vector<LoopResult> after_clear = run_twice_around(detector, places);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    EXPECT_EQ(after_clear[i].status, results[i].status) << i;
+    EXPECT_EQ(after_clear[i].match, results[i].match) << i;
+  }
 }
 
 TEST(OnlineLoopDetector, DirectIndexPairsFeaturesOfTheSameWord) {
