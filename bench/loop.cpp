@@ -35,15 +35,15 @@
 
 #include "bench_support.h"
 #include "binbow/formats.h"
+#include "binbow/loop/loop_detector.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
-#include "binbow/loop/loop_detector.h"
 
 namespace binbow::bench {
 namespace {
 
-using vision::Features;
 using loop::LoopDetector;
+using vision::Features;
 
 constexpr std::size_t kFeaturesPerFrame = 300;
 

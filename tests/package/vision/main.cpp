@@ -2,9 +2,9 @@
 // sequence, ORB features, the database and the loop detector.
 #include <binbow/database.h>
 #include <binbow/formats.h>
+#include <binbow/loop/loop_detector.h>
 #include <binbow/vision/features.h>
 #include <binbow/vision/image_source.h>
-#include <binbow/loop/loop_detector.h>
 
 #include <cstdio>
 #include <string>
