@@ -52,6 +52,12 @@ struct SequenceDetector::Impl {
           "; use a vocabulary trained on " + extractor->name() + " descriptors");
     detector = std::make_unique<LoopDetector>(std::move(vocabulary), params);
   }
+  // The defaults for the source's frame rate, then the parameter file's keys.
+  LoopDetectorParams params_of(const SequenceOptions& options) const {
+    return options.params_file.empty() ? defaults
+                                       : LoopDetectorParams::load(options.params_file, defaults);
+  }
+
   void start(OnlineVocabularyOptions vocabulary_options, const LoopDetectorParams& params) {
     if (vocabulary_options.descriptor.empty()) vocabulary_options.descriptor = extractor->name();
     detector = std::make_unique<LoopDetector>(
@@ -62,10 +68,7 @@ struct SequenceDetector::Impl {
 SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs, Vocabulary vocabulary,
                                    const SequenceOptions& options)
     : impl_(std::make_unique<Impl>(inputs, options)) {
-  impl_->start(std::move(vocabulary),
-               options.params_file.empty()
-                   ? impl_->defaults
-                   : LoopDetectorParams::load(options.params_file, impl_->defaults));
+  impl_->start(std::move(vocabulary), impl_->params_of(options));
 }
 
 SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs, Vocabulary vocabulary,
@@ -79,10 +82,7 @@ SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs,
                                    OnlineVocabularyOptions vocabulary_options,
                                    const SequenceOptions& options)
     : impl_(std::make_unique<Impl>(inputs, options)) {
-  impl_->start(std::move(vocabulary_options),
-               options.params_file.empty()
-                   ? impl_->defaults
-                   : LoopDetectorParams::load(options.params_file, impl_->defaults));
+  impl_->start(std::move(vocabulary_options), impl_->params_of(options));
 }
 
 SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs,
