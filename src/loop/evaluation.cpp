@@ -130,6 +130,45 @@ constexpr std::uint64_t kMaxMatInflatedBytes = std::uint64_t{1} << 30;
 constexpr std::uint64_t kMaxSparseExpansion = 64;
 constexpr std::uint64_t kMinSparseInflatedLimit = std::uint64_t{16} << 20;
 
+// Follows the chain of data elements inside one variable, from the tag of
+// its matrix at position 0: every element must end inside the matrix.
+// Positions count from the matrix's tag, in the file or in the inflated
+// stream of a compressed variable.
+class ElementChain {
+ public:
+  ElementChain(const std::string& path, std::uint64_t offset) : path_(path), offset_(offset) {}
+
+  // matio reads at most four elements after the name (a complex sparse
+  // matrix's), so the walk stops there.
+  bool done() const { return next_tag_ >= end_ || data_elements() >= 4; }
+  std::uint64_t next_tag() const { return next_tag_; }
+  // Elements after the array flags, dimensions and name.
+  std::size_t data_elements() const { return elements_ > 4 ? elements_ - 4 : 0; }
+
+  // The tag's two words, in the file's byte order already read.
+  void on_tag(std::uint32_t first, std::uint32_t second) {
+    const bool small = (first >> 16) != 0;  // a small data element: bytes in the tag
+    const std::uint64_t bytes = small ? first >> 16 : second;
+    if (elements_ == 0) {
+      end_ = 8 + bytes;
+      next_tag_ = 8;
+    } else {
+      if ((small && bytes > 4) || 8 + bytes > end_ - next_tag_)
+        throw FileError(path_, "variable at byte " + std::to_string(offset_) + ": element " +
+                                   std::to_string(elements_) + " declares " +
+                                   std::to_string(bytes) + " bytes, more than its matrix holds");
+      next_tag_ += small ? 8 : 8 + (bytes + 7) / 8 * 8;
+    }
+    ++elements_;
+  }
+
+ private:
+  const std::string& path_;
+  std::uint64_t offset_;
+  std::uint64_t next_tag_ = 0, end_ = 1;
+  std::size_t elements_ = 0;
+};
+
 struct Level5Reader {
   const std::string& path;
   bool swapped;
@@ -192,6 +231,22 @@ struct Level5Reader {
     return matrix_class;
   }
 
+  bool is_complex(const unsigned char* head) const { return (word(head + 8) & 0x0800) != 0; }
+
+  // The sub-elements a matrix needs after its array flags, dimensions and
+  // name: matio allocates a sparse matrix's row indices, column starts and
+  // values from their own tags, and reads a missing one from whatever
+  // follows the matrix (found by fuzzing: a 232-byte file whose missing
+  // column starts became a 4 GiB allocation).
+  void check_data_elements(std::uint64_t offset, std::uint32_t matrix_class, bool complex,
+                           std::size_t data_elements) const {
+    const std::size_t needed = matrix_class == kMxSparseClass ? 3 + complex : 0;
+    if (data_elements < needed)
+      fail(offset, "a sparse matrix holding " + std::to_string(data_elements) + " of the " +
+                       std::to_string(needed) +
+                       " elements it needs (row indices, column starts, values)");
+  }
+
   // Inflates a compressed variable once, keeping only its first bytes:
   // matio would read a damaged stream as zeros, or size arrays from it.
   void check_compressed(std::ifstream& in, std::uint64_t offset, std::uint64_t bytes) const {
@@ -201,6 +256,9 @@ struct Level5Reader {
     std::vector<unsigned char> input(64 << 10), output(64 << 10);
     unsigned char head[512];
     std::size_t head_size = 0;
+    ElementChain chain(path, offset);
+    unsigned char tag[8];
+    std::size_t tag_size = 0;
     std::uint64_t inflated = 0, left = bytes;
     int status = Z_OK;
     in.seekg(static_cast<std::streamoff>(offset + 8));
@@ -220,6 +278,19 @@ struct Level5Reader {
       if (status != Z_OK && status != Z_STREAM_END)
         fail(offset, "a compressed variable whose zlib stream is damaged");
       const std::size_t produced = output.size() - stream.avail_out;
+      for (std::size_t i = 0; i < produced && !chain.done();) {
+        const std::uint64_t wanted = chain.next_tag() + tag_size;  // the next tag byte
+        if (wanted >= inflated + produced) break;
+        if (wanted > inflated + i) {
+          i = static_cast<std::size_t>(wanted - inflated);
+          continue;
+        }
+        tag[tag_size++] = output[i++];
+        if (tag_size == sizeof tag) {
+          chain.on_tag(word(tag), word(tag + 4));
+          tag_size = 0;
+        }
+      }
       const std::size_t kept = std::min(produced, sizeof head - head_size);
       std::memcpy(head + head_size, output.data(), kept);
       head_size += kept;
@@ -235,6 +306,8 @@ struct Level5Reader {
     const std::uint64_t size = word(head + 4);
     if (8 + size > inflated) fail(offset, "a compressed matrix longer than its zlib stream");
     const std::uint32_t matrix_class = check_matrix_head(offset, head + 8, head_size - 8, size);
+    if (!chain.done()) fail(offset, "a compressed matrix whose last element is cut short");
+    check_data_elements(offset, matrix_class, is_complex(head + 8), chain.data_elements());
     const std::uint64_t sparse_limit =
         std::max(kMinSparseInflatedLimit, kMaxSparseExpansion * bytes);
     if (matrix_class == kMxSparseClass && inflated > sparse_limit)
@@ -288,7 +361,18 @@ void check_level5_elements(const std::string& path) {
       const auto head_size = static_cast<std::size_t>(std::min<std::uint64_t>(bytes, sizeof head));
       if (!in.read(reinterpret_cast<char*>(head), static_cast<std::streamsize>(head_size)))
         throw FileError(path, "truncated variable at byte " + std::to_string(offset));
-      reader.check_matrix_head(offset, head, head_size, bytes);
+      const std::uint32_t matrix_class = reader.check_matrix_head(offset, head, head_size, bytes);
+      ElementChain chain(path, offset);
+      while (!chain.done()) {
+        const std::uint64_t at = offset + chain.next_tag();
+        in.seekg(static_cast<std::streamoff>(at));
+        if (at + 8 > end || !in.read(reinterpret_cast<char*>(tag), 8))
+          throw FileError(path, "variable at byte " + std::to_string(offset) +
+                                    ": an element cut short at byte " + std::to_string(at));
+        chain.on_tag(reader.word(tag), reader.word(tag + 4));
+      }
+      reader.check_data_elements(offset, matrix_class, reader.is_complex(head),
+                                 chain.data_elements());
     }
     offset = type == kMiCompressed ? end : (end + 7) / 8 * 8;  // compressed ones are not padded
   }

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include <zlib.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "binbow/error.h"
@@ -156,6 +157,62 @@ TEST(GroundTruth, MatHeadsAreCheckedBeforeMatioAllocates) {
   damaged[damaged.size() - 6] ^= 0xff;  // inside the deflate stream or its checksum
   test::write_file(dir.file("damaged.mat"), damaged);
   expect_mat_error_mentioning(dir.file("damaged.mat"), "zlib stream");
+}
+
+// A compressed variable holding `matrix` (a miMATRIX element, tag included).
+std::vector<unsigned char> compressed_variable(const std::vector<unsigned char>& matrix) {
+  uLongf size = compressBound(static_cast<uLong>(matrix.size()));
+  std::vector<unsigned char> element(8 + size);
+  EXPECT_EQ(compress2(element.data() + 8, &size, matrix.data(), static_cast<uLong>(matrix.size()),
+                      Z_BEST_COMPRESSION),
+            Z_OK);
+  element.resize(8 + size);
+  element[0] = 15;  // miCOMPRESSED
+  for (int i = 0; i < 4; ++i) element[4 + i] = static_cast<unsigned char>(size >> (8 * i));
+  return element;
+}
+
+// matio allocates a sparse matrix's arrays from the sizes in their own tags
+// and reads a missing one from whatever follows. Found by fuzzing: a 232-byte
+// file whose sparse matrix ended after its row indices made matio allocate
+// 4 GiB for the column starts it read beyond the matrix.
+TEST(GroundTruth, SparseMatrixElementsAreCheckedBeforeMatioAllocates) {
+  TempDir dir;
+  test::write_file(
+      dir.file("found.mat"),
+      test::read_file(test::source_path("fuzz/corpus/gt_mat/sparse_missing_column_starts")));
+  expect_mat_error_mentioning(dir.file("found.mat"), "1 of the 3 elements it needs");
+
+  // sparse.mat: header (128 bytes), then one miMATRIX whose row indices'
+  // tag stands at 0xb0 and whose column starts begin at 0xc8.
+  const auto sparse = test::read_file(test::source_path("fuzz/corpus/gt_mat/sparse.mat"));
+  ASSERT_EQ(sparse.size(), 0x118u);
+  auto long_rows = sparse;
+  long_rows[0xb7] = 0x7f;  // the row indices declare 2 GiB
+  test::write_file(dir.file("rows.mat"), long_rows);
+  expect_mat_error_mentioning(dir.file("rows.mat"), "more than its matrix holds");
+
+  // The same matrix cut after its row indices, plain and compressed.
+  std::vector<unsigned char> cut(sparse.begin(), sparse.begin() + 0xc8);
+  cut[0x84] = 0xc8 - 0x88;  // the matrix's byte count
+  test::write_file(dir.file("cut.mat"), cut);
+  expect_mat_error_mentioning(dir.file("cut.mat"), "1 of the 3 elements it needs");
+  auto cut_zlib = std::vector<unsigned char>(sparse.begin(), sparse.begin() + 128);
+  const auto element = compressed_variable({cut.begin() + 128, cut.end()});
+  cut_zlib.insert(cut_zlib.end(), element.begin(), element.end());
+  test::write_file(dir.file("cut_zlib.mat"), cut_zlib);
+  expect_mat_error_mentioning(dir.file("cut_zlib.mat"), "1 of the 3 elements it needs");
+
+  // Recompressed whole, the matrix still loads: the check is not the refusal.
+  auto whole_zlib = std::vector<unsigned char>(sparse.begin(), sparse.begin() + 128);
+  const auto whole = compressed_variable({sparse.begin() + 128, sparse.end()});
+  whole_zlib.insert(whole_zlib.end(), whole.begin(), whole.end());
+  test::write_file(dir.file("whole_zlib.mat"), whole_zlib);
+  const auto recompressed = GroundTruth::load(dir.file("whole_zlib.mat"));
+  const auto plain = GroundTruth::load(test::source_path("fuzz/corpus/gt_mat/sparse.mat"));
+  EXPECT_EQ(recompressed.frames(), plain.frames());
+  EXPECT_EQ(recompressed.loop_queries(), plain.loop_queries());
+  EXPECT_EQ(recompressed.pair_count(), plain.pair_count());
 }
 
 TEST(Detections, CsvRoundTripWithAwkwardNames) {
