@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -136,14 +137,20 @@ constexpr std::uint64_t kMinSparseInflatedLimit = std::uint64_t{16} << 20;
 // stream of a compressed variable.
 class ElementChain {
  public:
+  struct Element {
+    std::uint32_t type = 0;
+    std::uint64_t bytes = 0;
+  };
+
   ElementChain(const std::string& path, std::uint64_t offset) : path_(path), offset_(offset) {}
 
   // matio reads at most four elements after the name (a complex sparse
   // matrix's), so the walk stops there.
-  bool done() const { return next_tag_ >= end_ || data_elements() >= 4; }
+  bool done() const { return next_tag_ >= end_ || data_elements() >= data_.size(); }
   std::uint64_t next_tag() const { return next_tag_; }
   // Elements after the array flags, dimensions and name.
   std::size_t data_elements() const { return elements_ > 4 ? elements_ - 4 : 0; }
+  const Element& data_element(std::size_t i) const { return data_[i]; }
 
   // The tag's two words, in the file's byte order already read.
   void on_tag(std::uint32_t first, std::uint32_t second) {
@@ -158,6 +165,7 @@ class ElementChain {
                                    std::to_string(elements_) + " declares " +
                                    std::to_string(bytes) + " bytes, more than its matrix holds");
       next_tag_ += small ? 8 : 8 + (bytes + 7) / 8 * 8;
+      if (data_elements() < data_.size()) data_[data_elements()] = {first & 0xffff, bytes};
     }
     ++elements_;
   }
@@ -167,7 +175,30 @@ class ElementChain {
   std::uint64_t offset_;
   std::uint64_t next_tag_ = 0, end_ = 1;
   std::size_t elements_ = 0;
+  std::array<Element, 4> data_{};
 };
+
+// The bytes of one number of a level-5 numeric data type; 0 for the others.
+std::uint64_t mat_number_bytes(std::uint32_t type) {
+  switch (type) {
+    case 1:
+    case 2:
+      return 1;  // miINT8, miUINT8
+    case 3:
+    case 4:
+      return 2;  // miINT16, miUINT16
+    case 5:
+    case 6:
+    case 7:
+      return 4;  // miINT32, miUINT32, miSINGLE
+    case 9:
+    case 12:
+    case 13:
+      return 8;  // miDOUBLE, miINT64, miUINT64
+    default:
+      return 0;
+  }
+}
 
 struct Level5Reader {
   const std::string& path;
@@ -233,18 +264,33 @@ struct Level5Reader {
 
   bool is_complex(const unsigned char* head) const { return (word(head + 8) & 0x0800) != 0; }
 
-  // The sub-elements a matrix needs after its array flags, dimensions and
-  // name: matio allocates a sparse matrix's row indices, column starts and
-  // values from their own tags, and reads a missing one from whatever
-  // follows the matrix (found by fuzzing: a 232-byte file whose missing
-  // column starts became a 4 GiB allocation).
-  void check_data_elements(std::uint64_t offset, std::uint32_t matrix_class, bool complex,
-                           std::size_t data_elements) const {
-    const std::size_t needed = matrix_class == kMxSparseClass ? 3 + complex : 0;
-    if (data_elements < needed)
-      fail(offset, "a sparse matrix holding " + std::to_string(data_elements) + " of the " +
+  // The elements a sparse matrix needs after its array flags, dimensions and
+  // name. matio allocates its row indices, column starts and values from
+  // their own tags; it reads a missing one from whatever follows the matrix
+  // (found by fuzzing: a 232-byte file whose missing column starts became a
+  // 4 GiB allocation), and it steps over an element by the numbers it read,
+  // not by the bytes its tag declares, so a type or size that disagrees
+  // sends it reading the next tag from inside the data (found next: row
+  // indices typed as bytes, then 1.7 GB of values).
+  void check_sparse_elements(std::uint64_t offset, bool complex, const ElementChain& chain) const {
+    const std::size_t needed = complex ? 4 : 3;
+    if (chain.data_elements() < needed)
+      fail(offset, "a sparse matrix holding " + std::to_string(chain.data_elements()) + " of the " +
                        std::to_string(needed) +
                        " elements it needs (row indices, column starts, values)");
+    for (std::size_t i = 0; i < needed; ++i) {
+      const auto& element = chain.data_element(i);
+      const std::uint64_t number_bytes = mat_number_bytes(element.type);
+      const bool index = i < 2;
+      if (number_bytes == 0 || (index && number_bytes != 4) || element.bytes % number_bytes != 0)
+        fail(offset, std::string("a sparse matrix whose ") +
+                         (i == 0   ? "row indices"
+                          : i == 1 ? "column starts"
+                                   : "values") +
+                         " have type " + std::to_string(element.type) + " and " +
+                         std::to_string(element.bytes) + " bytes" +
+                         (index ? " (32-bit integers expected)" : ""));
+    }
   }
 
   // Inflates a compressed variable once, keeping only its first bytes:
@@ -307,7 +353,7 @@ struct Level5Reader {
     if (8 + size > inflated) fail(offset, "a compressed matrix longer than its zlib stream");
     const std::uint32_t matrix_class = check_matrix_head(offset, head + 8, head_size - 8, size);
     if (!chain.done()) fail(offset, "a compressed matrix whose last element is cut short");
-    check_data_elements(offset, matrix_class, is_complex(head + 8), chain.data_elements());
+    if (matrix_class == kMxSparseClass) check_sparse_elements(offset, is_complex(head + 8), chain);
     const std::uint64_t sparse_limit =
         std::max(kMinSparseInflatedLimit, kMaxSparseExpansion * bytes);
     if (matrix_class == kMxSparseClass && inflated > sparse_limit)
@@ -371,8 +417,8 @@ void check_level5_elements(const std::string& path) {
                                     ": an element cut short at byte " + std::to_string(at));
         chain.on_tag(reader.word(tag), reader.word(tag + 4));
       }
-      reader.check_data_elements(offset, matrix_class, reader.is_complex(head),
-                                 chain.data_elements());
+      if (matrix_class == kMxSparseClass)
+        reader.check_sparse_elements(offset, reader.is_complex(head), chain);
     }
     offset = type == kMiCompressed ? end : (end + 7) / 8 * 8;  // compressed ones are not padded
   }

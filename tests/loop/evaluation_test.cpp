@@ -192,6 +192,17 @@ TEST(GroundTruth, SparseMatrixElementsAreCheckedBeforeMatioAllocates) {
   test::write_file(dir.file("rows.mat"), long_rows);
   expect_mat_error_mentioning(dir.file("rows.mat"), "more than its matrix holds");
 
+  // Found next by fuzzing: column starts typed as bytes, so matio read the
+  // values' tag from inside them and allocated 1.7 GB.
+  auto byte_columns = sparse;
+  byte_columns[0xc8] = 1;  // miINT8
+  test::write_file(dir.file("bytes.mat"), byte_columns);
+  expect_mat_error_mentioning(dir.file("bytes.mat"), "column starts have type 1");
+  auto odd_values = sparse;
+  odd_values[0xf4] = 0x1f;  // 31 bytes of doubles
+  test::write_file(dir.file("odd.mat"), odd_values);
+  expect_mat_error_mentioning(dir.file("odd.mat"), "values have type 9 and 31 bytes");
+
   // The same matrix cut after its row indices, plain and compressed.
   std::vector<unsigned char> cut(sparse.begin(), sparse.begin() + 0xc8);
   cut[0x84] = 0xc8 - 0x88;  // the matrix's byte count
