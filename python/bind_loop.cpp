@@ -421,19 +421,23 @@ void bind_detection(py::module_& m) {
                              "Words of the vocabulary (the live online words so far).");
 }
 
-// --- Evaluation
-
 // --- Sequences: detect_loops and write_report, faces of loop::SequenceDetector
 // and loop::make_loop_report.
 
-// As the CLI's --stride, --max-width and --video-fps accept.
+// The bounds ImageSource checks, as ValueErrors naming the keyword and
+// before the narrowing casts.
 vision::ImageSourceOptions source_options(long long stride, long long max_width, double video_fps) {
-  if (stride < 1 || stride > 1000000)
-    throw py::value_error("stride must be in [1, 1000000], got " + std::to_string(stride));
-  if (max_width < 0 || max_width > 1000000)
-    throw py::value_error("max_width must be in [0, 1000000], got " + std::to_string(max_width));
-  if (!(video_fps >= 0 && video_fps <= 1000))
-    throw py::value_error("video_fps must be in [0, 1000], got " + std::to_string(video_fps));
+  const auto stride_limit = static_cast<long long>(vision::kMaxStride);
+  if (stride < 1 || stride > stride_limit)
+    throw py::value_error("stride must be in [1, " + std::to_string(stride_limit) + "], got " +
+                          std::to_string(stride));
+  if (max_width < 0 || max_width > vision::kMaxFrameWidth)
+    throw py::value_error("max_width must be in [0, " + std::to_string(vision::kMaxFrameWidth) +
+                          "], got " + std::to_string(max_width));
+  if (!(video_fps >= 0 && video_fps <= vision::kMaxVideoFps))
+    throw py::value_error("video_fps must be in [0, " +
+                          std::to_string(static_cast<int>(vision::kMaxVideoFps)) + "], got " +
+                          std::to_string(video_fps));
   vision::ImageSourceOptions source;
   source.stride = static_cast<std::size_t>(stride);
   source.max_width = static_cast<int>(max_width);

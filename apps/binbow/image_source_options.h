@@ -10,17 +10,17 @@ namespace binbow::cli {
 
 inline void add_image_source_options(CLI::App* command, vision::ImageSourceOptions& options) {
   command->add_option("--stride", options.stride, "Keep every N-th frame of the input sequence")
-      ->check(CLI::Range(1, 1000000))
+      ->check(CLI::Range(std::size_t{1}, vision::kMaxStride))
       ->capture_default_str();
   command
       ->add_option("--max-width", options.max_width,
                    "Downscale wider frames to this width, keeping the aspect (0: full size)")
-      ->check(CLI::Range(0, 1000000))
+      ->check(CLI::Range(0, vision::kMaxFrameWidth))
       ->capture_default_str();
   command
       ->add_option("--video-fps", options.video_fps,
                    "Videos: sample at most this many frames per second (0: every frame)")
-      ->check(CLI::Range(0.0, 1000.0))
+      ->check(CLI::Range(0.0, vision::kMaxVideoFps))
       ->capture_default_str();
   command
       ->add_option("--max-pixels", options.max_pixels,

@@ -396,7 +396,14 @@ ImageSource::ImageSource(const std::vector<std::string>& inputs, ImageSourceOpti
     : impl_(std::make_unique<Impl>()) {
   if (inputs.empty()) throw InvalidArgument("ImageSource: no inputs given");
   if (options.stride == 0) options.stride = 1;
-  if (options.max_width < 0) throw InvalidArgument("ImageSource: max_width must be >= 0");
+  if (options.stride > kMaxStride)
+    throw InvalidArgument("ImageSource: stride must be at most " + std::to_string(kMaxStride));
+  if (options.max_width < 0 || options.max_width > kMaxFrameWidth)
+    throw InvalidArgument("ImageSource: max_width must be in [0, " +
+                          std::to_string(kMaxFrameWidth) + "]");
+  if (!(options.video_fps >= 0 && options.video_fps <= kMaxVideoFps))
+    throw InvalidArgument("ImageSource: video_fps must be in [0, " +
+                          std::to_string(static_cast<int>(kMaxVideoFps)) + "]");
   if (options.max_pixels == 0) throw InvalidArgument("ImageSource: max_pixels must be >= 1");
   impl_->options = options;
   for (const std::string& input : inputs) impl_->add(input, nullptr);

@@ -396,6 +396,26 @@ TEST(ImageSource, SeveralInputsInOrder) {
   EXPECT_EQ(filename(names[1]), "x.png");
 }
 
+// The bounds the CLI's flags and Python's detect_loops share.
+TEST(ImageSource, OptionsOutOfRangeAreInvalidArguments) {
+  const std::string image = test::shared_data("opencv-doc-samples/box.png");
+  const auto with = [&](auto change) {
+    ImageSourceOptions options;
+    change(options);
+    return [&image, options] { ImageSource source({image}, options); };
+  };
+  EXPECT_NO_THROW(with([](ImageSourceOptions& o) {
+    o.stride = kMaxStride, o.max_width = kMaxFrameWidth, o.video_fps = kMaxVideoFps;
+  })());
+  EXPECT_THROW(with([](ImageSourceOptions& o) { o.stride = kMaxStride + 1; })(), InvalidArgument);
+  EXPECT_THROW(with([](ImageSourceOptions& o) { o.max_width = -1; })(), InvalidArgument);
+  EXPECT_THROW(with([](ImageSourceOptions& o) { o.max_width = kMaxFrameWidth + 1; })(),
+               InvalidArgument);
+  EXPECT_THROW(with([](ImageSourceOptions& o) { o.video_fps = -0.5; })(), InvalidArgument);
+  EXPECT_THROW(with([](ImageSourceOptions& o) { o.video_fps = kMaxVideoFps * 2; })(),
+               InvalidArgument);
+}
+
 TEST(ImageSource, BadInputsGiveFileErrorNamingThem) {
   TempDir dir;
   EXPECT_THROW(ImageSource({}), InvalidArgument);

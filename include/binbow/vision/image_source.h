@@ -25,6 +25,12 @@ struct Frame {
 inline constexpr std::uint64_t kDefaultMaxImagePixels = 100'000'000;
 // Image files are read whole before decoding; larger files are refused.
 inline constexpr std::uint64_t kMaxImageFileBytes = std::uint64_t{2} << 30;
+// The largest ImageSourceOptions::stride, max_width and video_fps that
+// ImageSource accepts (InvalidArgument beyond); the CLI's flags and Python's
+// detect_loops check the same bounds.
+inline constexpr std::size_t kMaxStride = 1'000'000;
+inline constexpr int kMaxFrameWidth = 1'000'000;
+inline constexpr double kMaxVideoFps = 1000;
 
 struct ImageSourceOptions {
   std::size_t stride =
