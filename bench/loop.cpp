@@ -268,12 +268,14 @@ void BM_DetectOnline(benchmark::State& state) {
   std::vector<double> ms, cpu_ms;
   std::size_t loops = 0;
   std::size_t stored_bytes = 0;
+  StageTimes stages;
   std::unique_ptr<LoopDetector> detector;
   for (auto _ : state) {
     state.PauseTiming();
     detector = std::make_unique<LoopDetector>(LoopDetector::online(32));
     ms.clear();
     cpu_ms.clear();
+    stages = {};
     loops = 0;
     stored_bytes = 0;
     for (std::size_t i = 0; i < frames; ++i) {
@@ -288,6 +290,7 @@ void BM_DetectOnline(benchmark::State& state) {
       cpu_ms.push_back(thread_cpu_ms() - cpu_start);
       state.PauseTiming();
       loops += r.detection();
+      stages.add(r.times);
       stored_bytes +=
           detector->keypoints(r.query).size() * sizeof(vision::Keypoint) +
           detector->descriptors(r.query).rows * detector->descriptors(r.query).code_size;
@@ -298,6 +301,7 @@ void BM_DetectOnline(benchmark::State& state) {
   report(state, ms, loops);
   state.counters["mean_ms"] = std::accumulate(ms.begin(), ms.end(), 0.0) / ms.size();
   state.counters["last_median_ms"] = median(last);
+  stages.report(state);
   state.counters["cpu_median_ms"] = median(cpu_ms);
   state.counters["cpu_mean_ms"] =
       std::accumulate(cpu_ms.begin(), cpu_ms.end(), 0.0) / cpu_ms.size();
