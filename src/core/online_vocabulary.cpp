@@ -132,11 +132,16 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
   const auto consider = [&](const std::uint32_t* slots, std::size_t count) {
     found.resize(std::max(found.size(), count));
     distances(query, descriptors.data(), slots, count, code_size, found.data());
+    // The smallest distance first (a loop without branches), then the words
+    // at it: most leaves hold nothing nearer than the best so far.
+    std::uint32_t nearest = kNoWord;
+    for (std::size_t i = 0; i < count; ++i) nearest = std::min(nearest, found[i]);
+    if (nearest > best_distance) return;
     for (std::size_t i = 0; i < count; ++i) {
-      const std::uint32_t d = found[i];
+      if (found[i] != nearest) continue;
       const std::uint32_t slot = slots != nullptr ? slots[i] : static_cast<std::uint32_t>(i);
-      if (d < best_distance || (d == best_distance && info[slot].id < best_word)) {
-        best_distance = d;
+      if (nearest < best_distance || info[slot].id < best_word) {
+        best_distance = nearest;
         best_slot = slot;
         best_word = info[slot].id;
       }
