@@ -154,11 +154,10 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
 
   // Branches not taken, in buckets by distance to their centre (distances
   // are small integers): a search pushes hundreds of branches and takes a
-  // few dozen, so a push must cost nothing; a heap's pushes, and before it
-  // a linear scan per take, were most of the search's time.
+  // few dozen, so a push must cost nothing. A linear scan per branch taken
+  // was most of the search's time; a binary heap's pushes still cost half.
   thread_local BranchQueue branches;
   branches.reset(bits);
-  const auto push_branch = [&](Branch branch) { branches.push(branch); };
   std::size_t checks = 0;
   std::uint32_t child_distances[64];  // branching ≤ 64
   const auto descend = [&](std::uint32_t t, std::uint32_t n) {
@@ -171,7 +170,7 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
       for (std::uint32_t c = 1; c < node.child_count; ++c)
         if (child_distances[c] < child_distances[nearest]) nearest = c;
       for (std::uint32_t c = 0; c < node.child_count; ++c)
-        if (c != nearest) push_branch(make_branch(child_distances[c], t, node.first_child + c));
+        if (c != nearest) branches.push(make_branch(child_distances[c], t, node.first_child + c));
       n = node.first_child + nearest;
     }
     consider(tree.nodes[n].slots.data(), tree.nodes[n].slots.size());
