@@ -19,12 +19,31 @@
 //
 // Counters: median_ms, p90_ms, max_ms per frame over the 84 real frames
 // (the Google Benchmark time column is the mean), loops detected.
+//
+//   BM_DetectOnline:      LoopDetector::online (no pre-trained vocabulary,
+//                         default options) over a stream of 1,000 or 10,000
+//                         frames of 1,000 real ORB features, every frame
+//                         timed (process() only: features are extracted
+//                         beforehand). The stream cycles through the 84
+//                         rtabmap-samples frames (ORB, 1,000 features, their
+//                         real keypoints); every pass after the first flips
+//                         20 random bits (seeded by frame) of every
+//                         descriptor, so each frame is distinct and a revisit
+//                         of an earlier place, and the vocabulary keeps
+//                         creating and purging words as in a long run.
+//                         Counters: median_ms and mean_ms per frame over the
+//                         whole stream, last_median_ms over its last 10%,
+//                         cpu_median_ms and cpu_mean_ms (the thread's CPU
+//                         time: what a shared machine's wall clock inflates),
+//                         memory per frame (vocabulary, database, stored
+//                         features) at the end, live words, largest word id.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -36,6 +55,7 @@
 #include "bench_support.h"
 #include "binbow/formats.h"
 #include "binbow/loop/loop_detector.h"
+#include "binbow/online_vocabulary.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
 
@@ -207,6 +227,94 @@ void BM_FeaturesAndDetect(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * frames_640x480().size()));
   report(state, ms, loops);
 }
+
+const std::vector<Features>& real_orb_features() {
+  static const std::vector<Features> features = [] {
+    const auto orb = vision::make_extractor("orb", 1000);
+    std::vector<Features> result;
+    vision::ImageSource source({std::string(BINBOW_SHARED_DATA_DIR) + "/rtabmap-samples/samples"});
+    vision::Frame frame;
+    while (source.next(frame)) result.push_back(orb->extract(frame.image));
+    return result;
+  }();
+  return features;
+}
+
+double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
+
+// Frame `index` of the endless stream described at the top of the file.
+Features online_stream_frame(std::size_t index) {
+  const std::vector<Features>& real = real_orb_features();
+  Features frame = real[index % real.size()];
+  if (index < real.size()) return frame;
+  std::mt19937_64 rng(index);
+  const std::size_t bits = frame.descriptors.code_size() * 8;
+  for (std::size_t r = 0; r < frame.descriptors.rows(); ++r) {
+    std::uint8_t* row = frame.descriptors.row(r);
+    for (int flip = 0; flip < 20; ++flip) {
+      const std::size_t bit = rng() % bits;
+      row[bit / 8] ^= static_cast<std::uint8_t>(1u << (bit % 8));
+    }
+  }
+  return frame;
+}
+
+void BM_DetectOnline(benchmark::State& state) {
+  const auto frames = static_cast<std::size_t>(state.range(0));
+  std::vector<double> ms, cpu_ms;
+  std::size_t loops = 0;
+  std::size_t stored_bytes = 0;
+  StageTimes stages;
+  std::unique_ptr<LoopDetector> detector;
+  for (auto _ : state) {
+    state.PauseTiming();
+    detector = std::make_unique<LoopDetector>(LoopDetector::online(32));
+    ms.clear();
+    cpu_ms.clear();
+    stages = {};
+    loops = 0;
+    stored_bytes = 0;
+    for (std::size_t i = 0; i < frames; ++i) {
+      const Features f = online_stream_frame(i);
+      state.ResumeTiming();
+      const double cpu_start = thread_cpu_ms();
+      const auto start = std::chrono::steady_clock::now();
+      const loop::LoopResult r = detector->process(f);
+      ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count());
+      cpu_ms.push_back(thread_cpu_ms() - cpu_start);
+      state.PauseTiming();
+      loops += r.detection();
+      stages.add(r.times);
+      stored_bytes +=
+          detector->keypoints(r.query).size() * sizeof(vision::Keypoint) +
+          detector->descriptors(r.query).rows * detector->descriptors(r.query).code_size;
+    }
+    state.ResumeTiming();
+  }
+  const std::vector<double> last(ms.end() - static_cast<std::ptrdiff_t>(ms.size() / 10), ms.end());
+  report(state, ms, loops);
+  state.counters["mean_ms"] = std::accumulate(ms.begin(), ms.end(), 0.0) / ms.size();
+  state.counters["last_median_ms"] = median(last);
+  stages.report(state);
+  state.counters["cpu_median_ms"] = median(cpu_ms);
+  state.counters["cpu_mean_ms"] =
+      std::accumulate(cpu_ms.begin(), cpu_ms.end(), 0.0) / cpu_ms.size();
+  const OnlineVocabularyStats words = detector->online_vocabulary()->stats();
+  const double n = static_cast<double>(frames);
+  state.counters["vocab_B_per_frame"] = static_cast<double>(words.memory_bytes) / n;
+  state.counters["db_B_per_frame"] = static_cast<double>(detector->database().memory_usage()) / n;
+  state.counters["features_B_per_frame"] = static_cast<double>(stored_bytes) / n;
+  state.counters["words"] = static_cast<double>(words.words);
+  state.counters["next_word_id"] = static_cast<double>(words.next_word_id);
+}
+// Arg: frames in the stream.
+BENCHMARK(BM_DetectOnline)->Arg(1000)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // Args: vocabulary (0 brief_lite, 1 paper-sized 1M words), database frames.
 BENCHMARK(BM_Detect)

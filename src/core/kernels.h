@@ -29,6 +29,13 @@ struct Kernels {
   void (*nearest)(const std::uint8_t* queries, std::size_t n, const std::uint8_t* candidates,
                   std::size_t count, std::size_t code_size, std::uint32_t* best_index,
                   std::uint32_t* best_distance);
+  // The distance of one query to each of `count` rows: rows + r × code_size
+  // for r = 0..count-1, or for r = indices[i] when indices is not null
+  // (rows scattered in a matrix, e.g. the words of an online-vocabulary
+  // leaf). distances[i] receives the i-th.
+  void (*distances)(const std::uint8_t* query, const std::uint8_t* rows,
+                    const std::uint32_t* indices, std::size_t count, std::size_t code_size,
+                    std::uint32_t* distances);
   // Greedy descent of n descriptors from the root: words[i] receives the word.
   // When level_nodes is not null, level_nodes[i] receives the node at depth
   // `level_depth` on the path, or the leaf if it is shallower.

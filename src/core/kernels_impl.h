@@ -259,6 +259,31 @@ void nearest(const std::uint8_t* queries, std::size_t n, const std::uint8_t* can
   }
 }
 
+template <std::size_t N>
+void distances_impl(const std::uint8_t* query, const std::uint8_t* rows,
+                    const std::uint32_t* indices, std::size_t count, std::size_t code_size,
+                    std::uint32_t* out) {
+  const Distance<N> distance{code_size};
+  if (indices == nullptr) {
+    for (std::size_t i = 0; i < count; ++i) out[i] = distance(query, rows + i * code_size);
+  } else {
+    for (std::size_t i = 0; i < count; ++i)
+      out[i] = distance(query, rows + std::size_t{indices[i]} * code_size);
+  }
+}
+
+void distances(const std::uint8_t* query, const std::uint8_t* rows, const std::uint32_t* indices,
+               std::size_t count, std::size_t code_size, std::uint32_t* out) {
+  switch (code_size) {
+    case 32:
+      return distances_impl<32>(query, rows, indices, count, code_size, out);
+    case 64:
+      return distances_impl<64>(query, rows, indices, count, code_size, out);
+    default:
+      return distances_impl<0>(query, rows, indices, count, code_size, out);
+  }
+}
+
 void descend(const TreeView& tree, const std::uint8_t* queries, std::size_t n, std::uint32_t* words,
              std::uint32_t* level_nodes, std::uint32_t level_depth) {
   switch (tree.code_size) {
@@ -274,7 +299,7 @@ void descend(const TreeView& tree, const std::uint8_t* queries, std::size_t n, s
 }  // namespace
 
 const Kernels& get() {
-  static const Kernels kernels{BINBOW_KERNEL_NAME, &hamming, &nearest, &descend};
+  static const Kernels kernels{BINBOW_KERNEL_NAME, &hamming, &nearest, &distances, &descend};
   return kernels;
 }
 

@@ -60,6 +60,45 @@ std::uint32_t branch_node(Branch branch) {
   return static_cast<std::uint32_t>(branch);
 }
 
+std::uint32_t branch_distance(Branch branch) {
+  return static_cast<std::uint32_t>(branch >> 36);
+}
+
+// The branches of one search, taken smallest key first: a bucket per
+// distance, each unordered (it holds a few branches; the smallest is looked
+// for when one is taken).
+class BranchQueue {
+ public:
+  // Empty, for distances up to `bits`.
+  void reset(std::size_t bits) {
+    if (buckets_.size() < bits + 1) buckets_.resize(bits + 1);
+    for (std::size_t d = lowest_; d <= highest_ && d < buckets_.size(); ++d) buckets_[d].clear();
+    lowest_ = buckets_.size();
+    highest_ = 0;
+  }
+  void push(Branch branch) {
+    const std::uint32_t d = branch_distance(branch);
+    buckets_[d].push_back(branch);
+    lowest_ = std::min<std::size_t>(lowest_, d);
+    highest_ = std::max<std::size_t>(highest_, d);
+  }
+  bool pop(Branch& branch) {
+    while (lowest_ <= highest_ && buckets_[lowest_].empty()) ++lowest_;
+    if (lowest_ > highest_) return false;
+    std::vector<Branch>& bucket = buckets_[lowest_];
+    const auto smallest = std::min_element(bucket.begin(), bucket.end());
+    branch = *smallest;
+    *smallest = bucket.back();
+    bucket.pop_back();
+    return true;
+  }
+
+ private:
+  std::vector<std::vector<Branch>> buckets_;
+  std::size_t lowest_ = 0;   // no branch below it
+  std::size_t highest_ = 0;  // nor above it
+};
+
 void check_code_size(const DescriptorView& descriptors, std::size_t code_size) {
   if (descriptors.rows > 0 && descriptors.code_size != code_size)
     throw InvalidArgument("descriptors have " + std::to_string(descriptors.code_size) +
@@ -86,57 +125,61 @@ void OnlineVocabulary::Impl::nearest(const std::uint8_t* query, std::uint32_t& b
   best_slot = detail::kNoSlot;
   best_distance = kNoWord;
   WordId best_word = kNoWord;
-  const auto hamming = detail::kernels().hamming;
-  const auto consider = [&](std::uint32_t slot) {
-    const std::uint32_t d = hamming(query, slot_descriptor(slot), code_size);
-    if (d < best_distance || (d == best_distance && info[slot].id < best_word)) {
-      best_distance = d;
-      best_slot = slot;
-      best_word = info[slot].id;
+  // One kernel call per leaf or set of children, not one per row: the call
+  // through the kernel table cost as much as the distance itself.
+  const auto distances = detail::kernels().distances;
+  thread_local std::vector<std::uint32_t> found;
+  const auto consider = [&](const std::uint32_t* slots, std::size_t count) {
+    found.resize(std::max(found.size(), count));
+    distances(query, descriptors.data(), slots, count, code_size, found.data());
+    // The smallest distance first (a loop without branches), then the words
+    // at it: most leaves hold nothing nearer than the best so far.
+    std::uint32_t nearest = kNoWord;
+    for (std::size_t i = 0; i < count; ++i) nearest = std::min(nearest, found[i]);
+    if (nearest > best_distance) return;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (found[i] != nearest) continue;
+      const std::uint32_t slot = slots != nullptr ? slots[i] : static_cast<std::uint32_t>(i);
+      if (nearest < best_distance || info[slot].id < best_word) {
+        best_distance = nearest;
+        best_slot = slot;
+        best_word = info[slot].id;
+      }
     }
   };
   if (options.exact) {
-    for (std::uint32_t slot = 0; slot < word_count(); ++slot) consider(slot);
+    consider(nullptr, word_count());
     return;
   }
 
-  // Branches not taken. Most are never explored (a search explores a few
-  // beyond its first descents), so they are appended unordered and the
-  // closest is looked for only when one is needed.
-  thread_local std::vector<Branch> branches;
-  branches.clear();
+  // Branches not taken, in buckets by distance to their centre (distances
+  // are small integers): a search pushes hundreds of branches and takes a
+  // few dozen, so a push must cost nothing. A linear scan per branch taken
+  // was most of the search's time; a binary heap's pushes still cost half.
+  thread_local BranchQueue branches;
+  branches.reset(bits);
   std::size_t checks = 0;
+  std::uint32_t child_distances[64];  // branching ≤ 64
   const auto descend = [&](std::uint32_t t, std::uint32_t n) {
     const detail::WordTree& tree = trees[t];
     while (tree.nodes[n].child_count != 0) {
       const detail::WordTree::Node& node = tree.nodes[n];
-      std::uint32_t nearest_child = node.first_child;
-      std::uint32_t nearest_distance = kNoWord;
-      for (std::uint32_t c = node.first_child; c < node.first_child + node.child_count; ++c) {
-        const std::uint32_t d =
-            hamming(query, tree.centres.data() + std::size_t{c} * code_size, code_size);
-        if (d < nearest_distance) {
-          if (nearest_distance != kNoWord)
-            branches.push_back(make_branch(nearest_distance, t, nearest_child));
-          nearest_distance = d;
-          nearest_child = c;
-        } else {
-          branches.push_back(make_branch(d, t, c));
-        }
-      }
-      n = nearest_child;
+      distances(query, tree.centres.data() + std::size_t{node.first_child} * code_size, nullptr,
+                node.child_count, code_size, child_distances);
+      std::uint32_t nearest = 0;
+      for (std::uint32_t c = 1; c < node.child_count; ++c)
+        if (child_distances[c] < child_distances[nearest]) nearest = c;
+      for (std::uint32_t c = 0; c < node.child_count; ++c)
+        if (c != nearest) branches.push(make_branch(child_distances[c], t, node.first_child + c));
+      n = node.first_child + nearest;
     }
-    for (const std::uint32_t slot : tree.nodes[n].slots) consider(slot);
+    consider(tree.nodes[n].slots.data(), tree.nodes[n].slots.size());
     checks += tree.nodes[n].slots.size();
   };
   for (std::uint32_t t = 0; t < trees.size(); ++t) descend(t, 0);
-  while (checks < options.max_checks && !branches.empty()) {
-    const auto closest = std::min_element(branches.begin(), branches.end());
-    const Branch branch = *closest;
-    *closest = branches.back();
-    branches.pop_back();
+  Branch branch;
+  while (checks < options.max_checks && branches.pop(branch))
     descend(branch_tree(branch), branch_node(branch));
-  }
 }
 
 std::uint32_t OnlineVocabulary::Impl::create_word(const std::uint8_t* descriptor,
@@ -180,17 +223,23 @@ bool OnlineVocabulary::Impl::join_word(std::uint32_t slot, const std::uint8_t* d
   }
   std::uint8_t* ones = counters.data() + std::size_t{block} * bits;
   const std::uint32_t total = ++counter_totals[block];
+  // A byte at a time, its eight bits without branches: this runs for most
+  // descriptors of every image.
   bool changed = false;
-  for (std::size_t b = 0; b < bits; ++b) {
-    ones[b] = static_cast<std::uint8_t>(ones[b] + bit_of(descriptor, b));
-    const std::uint32_t twice = 2u * ones[b];
-    const auto mask = static_cast<std::uint8_t>(1u << (b % 8));
-    const std::uint8_t before = current[b / 8];
-    if (twice > total)
-      current[b / 8] |= mask;
-    else if (twice < total)
-      current[b / 8] &= static_cast<std::uint8_t>(~mask);
-    changed |= current[b / 8] != before;
+  for (std::size_t byte = 0; byte < code_size; ++byte) {
+    std::uint8_t* byte_ones = ones + 8 * byte;
+    const std::uint32_t votes = descriptor[byte];
+    std::uint32_t set = 0;
+    std::uint32_t clear = 0;
+    for (std::uint32_t k = 0; k < 8; ++k) {
+      byte_ones[k] = static_cast<std::uint8_t>(byte_ones[k] + ((votes >> k) & 1u));
+      const std::uint32_t twice = 2u * byte_ones[k];
+      set |= std::uint32_t{twice > total} << k;
+      clear |= std::uint32_t{twice < total} << k;
+    }
+    const std::uint8_t before = current[byte];
+    current[byte] = static_cast<std::uint8_t>((before | set) & ~clear);
+    changed |= current[byte] != before;
   }
   if (total == kCounterLimit) {
     for (std::size_t b = 0; b < bits; ++b) ones[b] = static_cast<std::uint8_t>(ones[b] / 2);
@@ -254,19 +303,11 @@ namespace {
 // The child of inner node `node` whose centre is nearest (lowest on ties).
 std::uint32_t nearest_child(const detail::WordTree& tree, std::uint32_t node,
                             const std::uint8_t* descriptor, std::size_t code_size) {
-  const auto hamming = detail::kernels().hamming;
   const std::uint32_t first = tree.nodes[node].first_child;
-  std::uint32_t best = first;
-  std::uint32_t best_distance = OnlineVocabulary::kNoWord;
-  for (std::uint32_t c = first; c < first + tree.nodes[node].child_count; ++c) {
-    const std::uint32_t d =
-        hamming(descriptor, tree.centres.data() + std::size_t{c} * code_size, code_size);
-    if (d < best_distance) {
-      best_distance = d;
-      best = c;
-    }
-  }
-  return best;
+  std::uint32_t index = 0;
+  detail::kernels().nearest(descriptor, 1, tree.centres.data() + std::size_t{first} * code_size,
+                            tree.nodes[node].child_count, code_size, &index, nullptr);
+  return first + index;
 }
 }  // namespace
 

@@ -1,6 +1,7 @@
 // Every kernel set the CPU supports (portable, popcnt, AVX-512) against a
-// bit-counting reference: distances, nearest rows and the batched descent,
-// with ties, odd child counts and every code size path.
+// bit-counting reference: distances (one pair, one query to many rows),
+// nearest rows and the batched descent, with ties, odd child counts and every
+// code size path.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -118,6 +119,30 @@ TEST(Kernels, DistancesAndNearestRowsEqualBitCounting) {
                   test::bit_distance(query, rows.data() + expected * code_size, code_size));
         EXPECT_EQ(kernels->hamming(query, rows.data(), code_size),
                   test::bit_distance(query, rows.data(), code_size));
+      }
+    }
+  }
+}
+
+TEST(Kernels, DistancesToContiguousAndIndexedRowsEqualBitCounting) {
+  std::mt19937_64 rng(4);
+  for (const detail::Kernels* kernels : detail::supported_kernels()) {
+    for (std::size_t code_size : {5, 20, 32, 64, 96}) {
+      const std::size_t count = 1 + rng() % 40;
+      const auto rows = random_bytes(rng, count * code_size);
+      const auto query = random_bytes(rng, code_size);
+      std::vector<std::uint32_t> contiguous(count), indexed(count), indices(count);
+      for (auto& index : indices) index = static_cast<std::uint32_t>(rng() % count);
+      kernels->distances(query.data(), rows.data(), nullptr, count, code_size, contiguous.data());
+      kernels->distances(query.data(), rows.data(), indices.data(), count, code_size,
+                         indexed.data());
+      for (std::size_t i = 0; i < count; ++i) {
+        EXPECT_EQ(contiguous[i],
+                  test::bit_distance(query.data(), rows.data() + i * code_size, code_size))
+            << kernels->name << " code size " << code_size;
+        EXPECT_EQ(indexed[i],
+                  test::bit_distance(query.data(), rows.data() + indices[i] * code_size, code_size))
+            << kernels->name << " code size " << code_size;
       }
     }
   }
