@@ -307,6 +307,16 @@ DescriptorView LoopDetector::descriptors(EntryId entry) const {
   return {impl_->descriptor_bytes.data() + begin * impl_->code_size, end - begin, impl_->code_size};
 }
 
+void LoopDetector::set_label(EntryId entry, std::string label) {
+  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
+  impl_->database.set_label(entry, std::move(label));
+}
+
+std::string LoopDetector::label(EntryId entry) const {
+  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
+  return impl_->database.label(entry);
+}
+
 void LoopDetector::clear() {
   Impl& d = *impl_;
   d.database.clear();

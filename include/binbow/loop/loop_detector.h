@@ -279,6 +279,13 @@ class LoopDetector {
   // Features kept for the geometric check (empty with GeometricCheck::kNone).
   Span<vision::Keypoint> keypoints(EntryId entry) const;
   DescriptorView descriptors(EntryId entry) const;
+  // An optional name per image (SequenceDetector records the frame's file),
+  // kept in the database and so saved with the state: after a resume, a loop
+  // with an image of an earlier session can still name it. label() is empty
+  // for an image without one; both throw InvalidArgument for an image not
+  // processed.
+  void set_label(EntryId entry, std::string label);
+  std::string label(EntryId entry) const;
 
   // Forgets every image (and the words of an online vocabulary); the next
   // one gets entry id 0.
