@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -14,6 +15,7 @@
 #include "binbow/loop/loop_detector.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
+#include "core/crc32c.h"
 #include "core/little_endian.h"
 #include "support/test_support.h"
 
@@ -287,6 +289,57 @@ TEST(LoopDetectorState, DamagedFilesAreRefused) {
               LoopDetector::deserialize(vocabulary_bytes.data(), vocabulary_bytes.size(), "v");
             }).find("not a binbow loop detector state"),
             std::string::npos);
+}
+
+// Content that passes every CRC (recomputed) but disagrees with itself: the
+// direct index would make the geometric check read past a frame's features.
+TEST(LoopDetectorState, InconsistentContentIsRefusedEvenWithValidChecksums) {
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  for (std::size_t i = 0; i < 3; ++i) fixed.process(sample_features("orb")[i]);
+  const std::vector<std::uint8_t> bytes = fixed.serialize();
+  const auto sections = sections_of(bytes);
+  const auto rewritten = [&](std::size_t section, const std::function<void(std::uint8_t*)>& edit) {
+    std::vector<std::uint8_t> out = bytes;
+    const auto [offset, length] = sections[section];
+    edit(out.data() + offset);
+    std::uint8_t* entry = out.data() + 64 + 24 * section;
+    binbow::detail::store_le<std::uint32_t>(entry + 4,
+                                            binbow::detail::crc32c(out.data() + offset, length));
+    binbow::detail::store_le<std::uint32_t>(
+        out.data() + 64 + 24 * sections.size(),
+        binbow::detail::crc32c(out.data() + 64, 24 * sections.size()));
+    return out;
+  };
+  const auto problem = [&](const std::vector<std::uint8_t>& data) {
+    return load_problem(
+        [&] { LoopDetector::deserialize(data.data(), data.size(), "crafted.bbld", orb); });
+  };
+  ASSERT_EQ(problem(rewritten(5, [](std::uint8_t*) {})), "loaded");
+  // Ten features moved from frame 0 to frame 1: the same total.
+  const auto moved = rewritten(5, [](std::uint8_t* counts) {
+    binbow::detail::store_le<std::uint32_t>(counts,
+                                            binbow::detail::load_le<std::uint32_t>(counts) - 10);
+    binbow::detail::store_le<std::uint32_t>(
+        counts + 4, binbow::detail::load_le<std::uint32_t>(counts + 4) + 10);
+  });
+  EXPECT_NE(problem(moved).find("direct index of frame 0"), std::string::npos) << problem(moved);
+  // A keypoint at NaN.
+  const auto nan = rewritten(6, [](std::uint8_t* keypoints) {
+    binbow::detail::store_le<float>(keypoints, std::numeric_limits<float>::quiet_NaN());
+  });
+  EXPECT_NE(problem(nan).find("non-finite"), std::string::npos) << problem(nan);
+  // The previous BoW vector out of order.
+  const auto unsorted = rewritten(
+      2, [](std::uint8_t* bow) { binbow::detail::store_le<std::uint32_t>(bow, 0xFFFFFFF0u); });
+  EXPECT_NE(problem(unsorted).find("previous BoW vector"), std::string::npos) << problem(unsorted);
+  // Parameters out of range go through LoopDetectorParams' own validation.
+  const auto params = rewritten(0, [](std::uint8_t* json) {
+    const std::string text(reinterpret_cast<char*>(json), 20);
+    const std::size_t at = text.find('{');
+    json[at] = '[';
+  });
+  EXPECT_NE(problem(params), "loaded");
 }
 
 TEST(LoopDetectorState, FeaturelessAndNoGeometricCheckStatesRoundTrip) {
