@@ -441,7 +441,7 @@ void bind_detection(py::module_& m) {
       .def_static("load", &PythonLoopDetector::load, py::arg("path"),
                   py::arg("vocabulary") = py::none(), py::call_guard<py::gil_scoped_release>(),
                   "Resume a detector saved by save(): vocabulary None for an online detector,\n"
-                  "else the vocabulary it ran with (another one raises FileError). The next\n"
+                  "else the vocabulary it ran with (another one raises OSError). The next\n"
                   "image continues its numbering and gets the results the saved detector\n"
                   "would have given (see docs/online-vocabulary.md for online approximate\n"
                   "search).");

@@ -301,7 +301,7 @@ class LoopDetector {
   // images with features) and, for a detector made by online(), its
   // OnlineVocabulary. A fixed vocabulary is not embedded: the file records its
   // checksum, word count, levels and code size, and load() must be given the
-  // same vocabulary. Layout (docs/formats.md): binbow's sectioned container
+  // same vocabulary. Layout (docs/loop-detection.md): binbow's sectioned container
   // (magic "BINBOWLD", version, CRC32C of the header, of the section table and
   // of every section, little-endian), sections: parameters (JSON, as
   // LoopDetectorParams::to_json), temporal state, previous BoW vector, the
