@@ -110,6 +110,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   options.extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
   loop::LoopRun run;
   run.online_vocabulary = arguments.online_vocabulary;
+  run.online_options = arguments.online_options;
   std::unique_ptr<loop::SequenceDetector> detector;
   if (arguments.online_vocabulary) {
     if (!arguments.resume_state.empty())
@@ -130,9 +131,16 @@ void run_detect_loops(DetectLoopsArguments arguments) {
       detector = std::make_unique<loop::SequenceDetector>(arguments.inputs, std::move(vocabulary),
                                                           options);
   }
-  if (!arguments.resume_state.empty())
+  if (!arguments.resume_state.empty()) {
     std::fprintf(stderr, "resuming after %zu frames from %s\n", saved.frames,
                  arguments.resume_state.c_str());
+    run.resumed_from = absolute(arguments.resume_state);
+    run.resumed_frames = saved.frames;
+    if (saved.online) {
+      const OnlineVocabulary* words = detector->detector().online_vocabulary();
+      run.online_options = words->options();
+    }
+  }
   loop::SequenceDetector& sequence = *detector;
   run.descriptor = arguments.descriptor;
   run.max_features = arguments.max_features;

@@ -276,6 +276,18 @@ TEST(CliDetectLoops, SaveStateThenResumeStateEqualsOneRun) {
     const std::string header = one_run.substr(0, one_run.find('\n') + 1);
     EXPECT_GT(std::count(second_run.begin(), second_run.end(), '\n'), 20);
     EXPECT_EQ(first_run + second_run.substr(header.size()), one_run);
+    const nlohmann::json record = run_record(dir.file("second.csv"));
+    EXPECT_EQ(record.at("resumed_frames"), 42);
+    EXPECT_EQ(record.value("online_vocabulary", false), kind == "online");
+    // Its indices are the whole sequence's: evaluated against the whole
+    // ground truth from loops.csv alone (the record cannot re-run it).
+    ASSERT_EQ(run_cli("evaluate --sweep --gt '" + shared_data("rtabmap-samples/samples_GT.bmp") +
+                          "' '" + dir.file("second.csv") + "'",
+                      &output),
+              0)
+        << output;
+    EXPECT_NE(output.find("resumed from"), std::string::npos) << output;
+    EXPECT_NE(output.find("false positives: 0"), std::string::npos) << output;
   }
 }
 
@@ -354,6 +366,12 @@ TEST(CliDetectLoops, OnlineVocabularyOptionsReachTheVocabulary) {
   EXPECT_GT(test::printed_number(strict, "online vocabulary"),
             test::printed_number(loose, "online vocabulary"))
       << loose << strict;
+  // Recorded, so that evaluate --sweep re-runs with them.
+  const nlohmann::json options = run_record(dir.file("b.csv")).at("online_options");
+  EXPECT_EQ(options.at("new_word_distance"), 0.1);
+  EXPECT_EQ(options.at("purge_after_images"), 0);
+  EXPECT_EQ(options.at("scoring"), "l2");
+  EXPECT_EQ(options.at("exact"), true);
 }
 
 TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) {
