@@ -263,6 +263,10 @@ TEST(CliDetectLoops, SaveStateThenResumeStateEqualsOneRun) {
               0)
         << output;
     EXPECT_NE(output.find("state: 42 frames -> " + state), std::string::npos) << output;
+    ASSERT_EQ(run_cli("info '" + state + "'", &output), 0) << output;
+    EXPECT_NE(output.find("kind: loop detector state\n"), std::string::npos) << output;
+    EXPECT_NE(output.find("vocabulary: " + kind + "\n"), std::string::npos) << output;
+    EXPECT_NE(output.find("frames: 42\n"), std::string::npos) << output;
     // Neither the kind nor the descriptor needs repeating.
     ASSERT_EQ(run_cli("detect-loops --resume-state '" + state + "' -o '" + dir.file("second.csv") +
                           "' '" + second + "'",
