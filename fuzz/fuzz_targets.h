@@ -110,6 +110,27 @@ inline void fix_bbdb_checksums(std::vector<std::uint8_t>& bytes) {
   store_le<std::uint32_t>(data + 60, crc32c(data, 60));
 }
 
+// fix_bbdb_checksums for a sectioned file whose sections `nested` are
+// sectioned files too (a .bbld's database and online vocabulary): theirs first.
+inline void fix_nested_checksums(std::vector<std::uint8_t>& bytes,
+                                 const std::vector<std::uint32_t>& nested) {
+  constexpr std::size_t kHeaderSize = 64;
+  if (bytes.size() < kHeaderSize) return;
+  const auto sections = detail::load_le<std::uint32_t>(bytes.data() + 48);
+  for (const std::uint32_t section : nested) {
+    if (section >= sections || bytes.size() < kHeaderSize + (section + 1) * 24) continue;
+    const std::uint8_t* entry = bytes.data() + kHeaderSize + section * 24;
+    const auto offset = detail::load_le<std::uint64_t>(entry + 8);
+    const auto length = detail::load_le<std::uint64_t>(entry + 16);
+    if (offset > bytes.size() || length > bytes.size() - offset) continue;
+    std::vector<std::uint8_t> inner(bytes.begin() + static_cast<std::ptrdiff_t>(offset),
+                                    bytes.begin() + static_cast<std::ptrdiff_t>(offset + length));
+    fix_bbdb_checksums(inner);
+    std::copy(inner.begin(), inner.end(), bytes.begin() + static_cast<std::ptrdiff_t>(offset));
+  }
+  fix_bbdb_checksums(bytes);
+}
+
 // An accepted database answers queries, returns its direct index and
 // survives a save/load round trip unchanged.
 inline void check_accepted_database(const Database& database) {

@@ -154,6 +154,87 @@ inline void load_loop_run(const std::uint8_t* data, std::size_t size) {
   (void)loop::LoopDetectorParams::from_json(run.params_json, "the run record's params");
 }
 
+// The fixed vocabulary of the .bbld seeds: 4-byte descriptors, 2 levels of 3
+// (built the same way every run, so its checksum is the seeds').
+inline const Vocabulary& bbld_vocabulary() {
+  static const Vocabulary vocabulary = [] {
+    std::vector<DescriptorMatrix> images(4, DescriptorMatrix(4));
+    std::uint32_t state = 12345;
+    for (DescriptorMatrix& image : images)
+      for (int row = 0; row < 12; ++row) {
+        std::uint8_t code[4];
+        for (std::uint8_t& byte : code) {
+          state = state * 1103515245u + 12345u;
+          byte = static_cast<std::uint8_t>(state >> 24);
+        }
+        image.append(code);
+      }
+    std::vector<DescriptorView> views(images.begin(), images.end());
+    BuildOptions options;
+    options.branching = 3;
+    options.levels = 2;
+    options.seed = 7;
+    options.threads = 1;
+    return Vocabulary::build(views, options);
+  }();
+  return vocabulary;
+}
+
+// A probe image for an accepted detector: `rows` descriptors of its size
+// (the last stored image's, so that candidates and matching are reached),
+// with keypoints spread over a 100 x 100 image.
+inline vision::Features bbld_probe(const loop::LoopDetector& detector, std::size_t code_size) {
+  vision::Features probe;
+  probe.descriptors = DescriptorMatrix(code_size);
+  const DescriptorView last = detector.size() > 0
+                                  ? detector.descriptors(static_cast<EntryId>(detector.size() - 1))
+                                  : DescriptorView{};
+  for (std::size_t row = 0; row < 12; ++row) {
+    std::vector<std::uint8_t> code(code_size, static_cast<std::uint8_t>(row * 37));
+    if (row < last.rows) std::memcpy(code.data(), last.row(row), code_size);
+    probe.descriptors.append(code.data());
+    probe.keypoints.push_back({float(row * 7 % 100), float(row * 13 % 100), 7, -1, 1, 0});
+  }
+  return probe;
+}
+
+// An accepted state saves back to the same bytes, and processes images.
+inline void check_accepted_detector(loop::LoopDetector detector, std::size_t code_size) {
+  const std::vector<std::uint8_t> saved = detector.serialize();
+  const bool online = detector.online_vocabulary() != nullptr;
+  const loop::LoopDetector again =
+      online ? loop::LoopDetector::deserialize(saved.data(), saved.size(), "resaved")
+             : loop::LoopDetector::deserialize(saved.data(), saved.size(), "resaved",
+                                               bbld_vocabulary());
+  if (again.serialize() != saved) throw std::logic_error("save/load round trip changed the state");
+  const std::size_t frames = detector.size();
+  for (int i = 0; i < 2; ++i) {
+    const loop::LoopResult result = detector.process(bbld_probe(detector, code_size));
+    if (result.query != frames + i) throw std::logic_error("a resumed detector renumbered frames");
+  }
+}
+
+// .bbld: as is, then with the CRCs of the embedded .bbdb and .bbov and its
+// own recomputed, so that mutations reach the checks behind them. The flags
+// (byte 16) say online (no vocabulary) or fixed (bbld_vocabulary()).
+inline void load_bbld(const std::uint8_t* data, std::size_t size) {
+  const auto load = [](const std::uint8_t* bytes, std::size_t n) {
+    const bool online = n > 16 && (bytes[16] & 1) != 0;
+    const std::size_t code_size = n >= 24 ? detail::load_le<std::uint32_t>(bytes + 20) : 0;
+    check_accepted_detector(
+        online ? loop::LoopDetector::deserialize(bytes, n, "fuzz")
+               : loop::LoopDetector::deserialize(bytes, n, "fuzz", bbld_vocabulary()),
+        code_size);
+  };
+  std::vector<std::uint8_t> fixed(data, data + size);
+  fix_nested_checksums(fixed, {3, 4});
+  try {
+    load(fixed.data(), fixed.size());
+  } catch (const FileError&) {
+  }
+  load(data, size);
+}
+
 inline const Target kVisionTargets[] = {
     {"params_json", load_params_json},
     {"params_yaml", load_params_yaml},
@@ -163,6 +244,7 @@ inline const Target kVisionTargets[] = {
     {"gt_pairs", [](const std::uint8_t* d, std::size_t n) { load_ground_truth(d, n, ".txt"); }},
     {"loops_csv", load_loops_csv},
     {"loop_run", load_loop_run},
+    {"bbld", load_bbld},
 };
 
 }  // namespace binbow::fuzz

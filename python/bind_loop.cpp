@@ -116,6 +116,20 @@ class PythonLoopDetector {
         code_size_(detector_.database().vocabulary().code_size()) {}
   PythonLoopDetector(loop::LoopDetector detector, std::size_t code_size)
       : detector_(std::move(detector)), code_size_(code_size) {}
+  // A saved state (.bbld): online without a vocabulary, else with the one it ran with.
+  static std::unique_ptr<PythonLoopDetector> load(const Path& path,
+                                                  const std::optional<Vocabulary>& vocabulary) {
+    loop::LoopDetector detector = vocabulary ? loop::LoopDetector::load(path.string(), *vocabulary)
+                                             : loop::LoopDetector::load(path.string());
+    const std::size_t code_size = detector.online_vocabulary() != nullptr
+                                      ? detector.online_vocabulary()->code_size()
+                                      : detector.database().vocabulary().code_size();
+    return std::make_unique<PythonLoopDetector>(std::move(detector), code_size);
+  }
+  void save(const Path& path) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    detector_.save(path.string());
+  }
 
   loop::SequenceFrame process(const py::object& keypoints, const py::object& descriptors) {
     const Descriptors d = to_descriptors(descriptors, "descriptors", code_size_);
@@ -418,7 +432,19 @@ void bind_detection(py::module_& m) {
       .def_property_readonly("is_online", &PythonLoopDetector::online,
                              "Whether the words grow from the images (LoopDetector.online).")
       .def_property_readonly("word_count", &PythonLoopDetector::word_count,
-                             "Words of the vocabulary (the live online words so far).");
+                             "Words of the vocabulary (the live online words so far).")
+      .def("save", &PythonLoopDetector::save, py::arg("path"),
+           py::call_guard<py::gil_scoped_release>(),
+           "Save the whole state as .bbld (atomically), to resume later with\n"
+           "LoopDetector.load: the images so far, the temporal state and an online\n"
+           "detector's words; a fixed vocabulary is recorded by checksum, not embedded.")
+      .def_static("load", &PythonLoopDetector::load, py::arg("path"),
+                  py::arg("vocabulary") = py::none(), py::call_guard<py::gil_scoped_release>(),
+                  "Resume a detector saved by save(): vocabulary None for an online detector,\n"
+                  "else the vocabulary it ran with (another one raises OSError). The next\n"
+                  "image continues its numbering and gets the results the saved detector\n"
+                  "would have given (see docs/online-vocabulary.md for online approximate\n"
+                  "search).");
 }
 
 // --- Sequences: detect_loops and write_report, faces of loop::SequenceDetector

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds every libFuzzer target (fuzz/fuzz_*.cpp) with clang, AddressSanitizer
-# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 15; 18
+# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 15; 19
 # targets) on its corpus fuzz/corpus/<name>/ and prints the coverage reached.
 # Fails if any target crashes, leaks, hangs, exceeds 2 GiB, or makes a single
 # allocation over 512 MiB (inputs are at most a few KiB, see max_len_of: such
@@ -43,7 +43,7 @@ max_len_of() {
   case "$1" in
     gt_pairs) echo 1024 ;;
     params_json | params_yaml | gt_mat | loops_csv) echo 2048 ;;
-    orbslam_text | dbow2_yaml | gzip | tar | loop_run) echo 8192 ;;
+    orbslam_text | dbow2_yaml | gzip | tar | loop_run | bbld) echo 8192 ;;
     *) echo 4096 ;;
   esac
 }

@@ -29,6 +29,13 @@ struct DetectLoopsArguments {
   std::string vocab;
   bool online_vocabulary = false;
   std::string save_vocabulary;
+  OnlineVocabularyOptions online_options;
+  std::string scoring;
+  std::string save_state;
+  std::string resume_state;
+  // Whether the options a saved state can answer were given.
+  bool descriptor_given = false;
+  bool vocab_given = false;
   std::string descriptor = kDefaultDescriptor;
   int max_features = 0;
   std::string params;
@@ -58,12 +65,42 @@ void print_status_counts(const loop::StatusCounts& counts) {
                  counts[value]);
 }
 
-void run_detect_loops(const DetectLoopsArguments& arguments) {
+// With --resume-state, what the command line leaves open comes from the
+// saved state (its kind, its descriptor); what it says must agree with it.
+void adopt_saved_state(DetectLoopsArguments& arguments, const loop::LoopDetectorFileInfo& saved) {
+  const std::string& path = arguments.resume_state;
+  if (saved.online && arguments.vocab_given)
+    throw CLI::ValidationError("--resume-state " + path +
+                               " holds an online vocabulary's state; --vocab conflicts with it "
+                               "(use --online-vocabulary or nothing)");
+  if (!saved.online && arguments.online_vocabulary)
+    throw CLI::ValidationError("--resume-state " + path +
+                               " holds a fixed vocabulary's state; --online-vocabulary conflicts "
+                               "with it (give the vocabulary it was run with, --vocab)");
+  arguments.online_vocabulary = saved.online;
+  if (!saved.descriptor.empty()) {
+    if (arguments.descriptor_given && arguments.descriptor != saved.descriptor)
+      throw CLI::ValidationError("--resume-state " + path + " was run with " + saved.descriptor +
+                                 " descriptors; --descriptor " + arguments.descriptor +
+                                 " conflicts with it");
+    arguments.descriptor = saved.descriptor;
+  }
+}
+
+void run_detect_loops(DetectLoopsArguments arguments) {
   // Everything that can be checked is checked before the sequence is read.
+  loop::LoopDetectorFileInfo saved;
+  if (!arguments.resume_state.empty()) {
+    saved = loop::LoopDetector::inspect(arguments.resume_state);
+    adopt_saved_state(arguments, saved);
+  }
+  if (!arguments.scoring.empty())
+    arguments.online_options.scoring = parse_scoring(arguments.scoring);
   if (!arguments.online_vocabulary) check_vocabulary_given(arguments.vocab, arguments.descriptor);
   prepare_output_file("-o", arguments.output);
   if (!arguments.save_vocabulary.empty())
     prepare_output_file("--save-vocabulary", arguments.save_vocabulary);
+  if (!arguments.save_state.empty()) prepare_output_file("--save-state", arguments.save_state);
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
   loop::SequenceOptions options;
   options.descriptor = arguments.descriptor;
@@ -73,16 +110,36 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   options.extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
   loop::LoopRun run;
   run.online_vocabulary = arguments.online_vocabulary;
+  run.online_options = arguments.online_options;
   std::unique_ptr<loop::SequenceDetector> detector;
   if (arguments.online_vocabulary) {
-    detector = std::make_unique<loop::SequenceDetector>(arguments.inputs, OnlineVocabularyOptions{},
-                                                        options);
+    if (!arguments.resume_state.empty())
+      detector = std::make_unique<loop::SequenceDetector>(
+          arguments.inputs, loop::LoopDetector::load(arguments.resume_state), options);
+    else
+      detector = std::make_unique<loop::SequenceDetector>(arguments.inputs,
+                                                          arguments.online_options, options);
   } else {
     Vocabulary vocabulary;
     run.vocabulary = load_loop_vocabulary(arguments.vocab, arguments.descriptor,
                                           options.extractor->code_size(), vocabulary);
-    detector =
-        std::make_unique<loop::SequenceDetector>(arguments.inputs, std::move(vocabulary), options);
+    if (!arguments.resume_state.empty())
+      detector = std::make_unique<loop::SequenceDetector>(
+          arguments.inputs, loop::LoopDetector::load(arguments.resume_state, std::move(vocabulary)),
+          options);
+    else
+      detector = std::make_unique<loop::SequenceDetector>(arguments.inputs, std::move(vocabulary),
+                                                          options);
+  }
+  if (!arguments.resume_state.empty()) {
+    std::fprintf(stderr, "resuming after %zu frames from %s\n", saved.frames,
+                 arguments.resume_state.c_str());
+    run.resumed_from = absolute(arguments.resume_state);
+    run.resumed_frames = saved.frames;
+    if (saved.online) {
+      const OnlineVocabulary* words = detector->detector().online_vocabulary();
+      run.online_options = words->options();
+    }
   }
   loop::SequenceDetector& sequence = *detector;
   run.descriptor = arguments.descriptor;
@@ -102,6 +159,11 @@ void run_detect_loops(const DetectLoopsArguments& arguments) {
   progress.finish();
   if (outputs.frames() == 0) throw InvalidArgument("detect-loops: no images found in the inputs");
   outputs.commit();
+  if (!arguments.save_state.empty()) {
+    sequence.detector().save(arguments.save_state);
+    std::fprintf(stderr, "state: %zu frames -> %s\n", sequence.detector().size(),
+                 arguments.save_state.c_str());
+  }
   if (!arguments.save_vocabulary.empty()) {
     BuildOptions build;
     build.descriptor = arguments.descriptor;
@@ -172,11 +234,66 @@ void add_detect_loops_command(CLI::App& app) {
                    "With --online-vocabulary: after the run, export the grown words as a fixed "
                    "vocabulary (.bbw) for later runs")
       ->needs(online);
+  // OnlineVocabularyOptions, one flag per field (docs/online-vocabulary.md).
+  const OnlineVocabularyOptions defaults;
+  std::vector<CLI::Option*> online_options = {
+      command
+          ->add_option("--new-word-distance", arguments->online_options.new_word_distance,
+                       "With --online-vocabulary: a descriptor farther than this fraction of its "
+                       "bits from every word becomes a new word")
+          ->check(CLI::Range(0.0, 1.0))
+          ->capture_default_str(),
+      command
+          ->add_option("--purge-after-images", arguments->online_options.purge_after_images,
+                       "With --online-vocabulary: purge a word seen in a single image after "
+                       "this many further images (0: never)")
+          ->capture_default_str(),
+      command
+          ->add_option("--trees", arguments->online_options.trees,
+                       "With --online-vocabulary: search trees [1, 16]")
+          ->capture_default_str(),
+      command
+          ->add_option("--branching", arguments->online_options.branching,
+                       "With --online-vocabulary: branching of the search trees [2, 64]")
+          ->capture_default_str(),
+      command
+          ->add_option("--leaf-size", arguments->online_options.leaf_size,
+                       "With --online-vocabulary: words of a search-tree leaf before it splits "
+                       "[1, 4096]")
+          ->capture_default_str(),
+      command
+          ->add_option("--max-checks", arguments->online_options.max_checks,
+                       "With --online-vocabulary: words compared per search at most (more: "
+                       "closer to exact, slower)")
+          ->capture_default_str(),
+      command->add_flag("--exact", arguments->online_options.exact,
+                        "With --online-vocabulary: exact nearest-word search (slower)"),
+      command
+          ->add_option("--scoring", arguments->scoring,
+                       "With --online-vocabulary: l1, l2, chi-square, kl, bhattacharyya or "
+                       "dot-product")
+          ->default_str(to_string(defaults.scoring)),
+      command
+          ->add_option("--seed", arguments->online_options.seed,
+                       "With --online-vocabulary: seed of the search trees' random centres")
+          ->capture_default_str()};
+  for (CLI::Option* option : online_options) option->needs(online);
   add_extractor_options(command, arguments->descriptor, arguments->max_features);
-  command->add_option("--params", arguments->params,
-                      "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams); "
-                      "keys it omits keep their defaults, whose frame counts (dislocal, ...) "
-                      "follow the frames processed per second of a video");
+  CLI::Option* params =
+      command->add_option("--params", arguments->params,
+                          "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams); "
+                          "keys it omits keep their defaults, whose frame counts (dislocal, ...) "
+                          "follow the frames processed per second of a video");
+  command->add_option("--save-state", arguments->save_state,
+                      "After the run, save the detector's whole state (.bbld) for "
+                      "--resume-state");
+  CLI::Option* resume =
+      command->add_option("--resume-state", arguments->resume_state,
+                          "Start from a state saved by --save-state: its frames, parameters and "
+                          "vocabulary kind (an online one's words too); new frames continue its "
+                          "numbering. A fixed vocabulary must be the one it was run with");
+  resume->excludes(params);
+  for (CLI::Option* option : online_options) resume->excludes(option);
   command->add_option("--report", arguments->report, "Write an HTML report into this directory");
   command->add_flag("--timing", arguments->timing,
                     "Print mean, median and max milliseconds per frame of each stage");
@@ -190,7 +307,12 @@ void add_detect_loops_command(CLI::App& app) {
                    "Image files, directories, videos or text lists of images")
       ->required();
   add_image_source_options(command, arguments->source);
-  command->callback([arguments] { run_detect_loops(*arguments); });
+  command->callback([arguments, command] {
+    DetectLoopsArguments given = *arguments;
+    given.descriptor_given = command->count("--descriptor") > 0;
+    given.vocab_given = command->count("--vocab") > 0;
+    run_detect_loops(std::move(given));
+  });
 }
 
 }  // namespace binbow::cli

@@ -86,6 +86,15 @@ void run_evaluate(const EvaluateArguments& arguments) {
   std::unique_ptr<loop::LoopRun> run;
   if (std::filesystem::exists(run_path))
     run = std::make_unique<loop::LoopRun>(loop::LoopRun::load(run_path));
+  if (run && !run->resumed_from.empty()) {
+    // Its frames start after the state's, which the record cannot re-run.
+    std::fprintf(stderr,
+                 "note: %s resumed from %s after %zu frames; evaluating %s alone, without its "
+                 "run record\n",
+                 arguments.detections.c_str(), run->resumed_from.c_str(), run->resumed_frames,
+                 arguments.detections.c_str());
+    run.reset();
+  }
   if (arguments.sweep && !run && arguments.sweep_parameter != "alpha")
     throw InvalidArgument("--sweep-param " + arguments.sweep_parameter +
                           " re-runs detection, which needs the run record " + run_path +
@@ -189,7 +198,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
           run->online_vocabulary
               ? loop::online_similarity_matrix(
                     vision::make_extractor(run->descriptor, run->max_features)->code_size(),
-                    inputs->features.features)
+                    inputs->features.features, run->online_options)
               : loop::similarity_matrix(inputs->vocabulary, inputs->features.features);
       progress("similarity matrix", 1, 1);
       progress.finish();

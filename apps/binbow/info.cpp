@@ -1,9 +1,13 @@
-// `binbow info FILE`: what a vocabulary (any readable format) or database holds,
-// as `key: value` lines.
+// `binbow info FILE`: what a vocabulary (any readable format), database or
+// loop detector state holds, as `key: value` lines.
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "binbow/formats.h"
+#include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
 
@@ -24,10 +28,35 @@ void print_vocabulary(const Vocabulary& v) {
   std::printf("checksum: %08x\n", v.checksum());
 }
 
+// A loop detector state (.bbld): what to resume it with. False for any other file.
+bool print_loop_state_info(const std::string& path) {
+  // Only a regular file is opened here: a FIFO would block (the readers
+  // below refuse it with a clear error).
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return false;
+  char magic[8] = {};
+  std::ifstream in(path, std::ios::binary);
+  if (!in.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWLD", 8) != 0) return false;
+  const loop::LoopDetectorFileInfo info = loop::LoopDetector::inspect(path);
+  std::printf("kind: loop detector state\n");
+  std::printf("version: %u\n", info.version);
+  std::printf("vocabulary: %s\n", info.online ? "online" : "fixed");
+  std::printf("descriptor: %s\n", info.descriptor.empty() ? "unknown" : info.descriptor.c_str());
+  std::printf("descriptor_bits: %zu\n", info.code_size * 8);
+  std::printf("frames: %zu\n", info.frames);
+  if (!info.online) {
+    std::printf("vocabulary_checksum: %08x\n", info.vocabulary_checksum);
+    std::printf("vocabulary_words: %zu\n", info.vocabulary_words);
+    std::printf("vocabulary_levels: %u\n", info.vocabulary_levels);
+  }
+  return true;
+}
+
 }  // namespace
 
 void add_info_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("info", "Describe a vocabulary or database file");
+  auto* cmd =
+      app.add_subcommand("info", "Describe a vocabulary, database or loop detector state file");
   auto path = std::make_shared<std::string>();
   auto header_only = std::make_shared<bool>(false);
   cmd->add_option("FILE", *path, "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database")
@@ -35,6 +64,7 @@ void add_info_command(CLI::App& app) {
   cmd->add_flag("--header-only", *header_only,
                 "Database: read the header only, without checking the whole file");
   cmd->callback([path, header_only] {
+    if (print_loop_state_info(*path)) return;
     if (print_database_info(*path, !*header_only)) return;
     const VocabularyFormat format = detect_vocabulary_format(*path);
     const Vocabulary vocabulary = load_vocabulary(*path, format);

@@ -90,8 +90,12 @@ class Database {
   // words), with no vocabulary: BoW vectors may name any word id, and the
   // index grows its rows as larger ids arrive (doubling, so the re-layout is
   // amortised over the postings). Scores use `scoring`. Differences from a
-  // database over a vocabulary: add(descriptors) and serialize()/save()
-  // throw InvalidArgument; vocabulary() is empty; a query's words that no
+  // database over a vocabulary: add(descriptors) throws InvalidArgument;
+  // save() and serialize() record the scoring and the index's word-id
+  // capacity instead of a vocabulary (include_vocabulary is ignored), and
+  // load() without a vocabulary restores it (ids much sparser than the
+  // postings, beyond 2^16 + 4 per byte of the file, are refused as
+  // hostile); vocabulary() is empty; a query's words that no
   // entry has yet are simply not found; the direct index keeps the nodes as
   // given (the words themselves, for OnlineVocabulary::weigh). A word that
   // the caller stops using (a purged online word) keeps its postings, which

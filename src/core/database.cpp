@@ -452,7 +452,6 @@ void check_direct_index_levels(const DatabaseOptions& options) {
 }
 
 // Over word ids, the rows start with this many words and double as needed.
-constexpr std::size_t kInitialWordCapacity = std::size_t{1} << 16;
 
 std::string no_entry_message(EntryId entry, EntryId next) {
   if (entry >= next)
@@ -474,7 +473,7 @@ Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
 Database::Impl::Impl(Scoring scoring_in, DatabaseOptions options_in)
     : options(options_in), scoring(scoring_in), over_word_ids(true) {
   check_direct_index_levels(options);
-  lay_out(kInitialWordCapacity);
+  lay_out(detail::kInitialWordCapacity);
 }
 
 void Database::Impl::lay_out(std::size_t capacity) {

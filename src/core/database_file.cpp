@@ -10,6 +10,9 @@
 //   9 direct index data (per entry: nodes, node end offsets, feature indices)
 //  10 label lengths (u32 per id)  11 label bytes
 // Removed entries keep their id (state 0) and have no postings.
+// A database over word ids (flag 4, Database::over_word_ids) has no
+// vocabulary: its checksum (32) is 0, section 1 and 2 are empty, the scoring
+// is at 36 (u32) and the word-id capacity of its index at 52 (u64).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -58,6 +61,17 @@ constexpr const char* kSectionNames[kSectionCount] = {
 
 constexpr std::uint32_t kFlagDirectIndex = 1;
 constexpr std::uint32_t kFlagVocabulary = 2;
+constexpr std::uint32_t kFlagOverWordIds = 4;
+// The word-id capacity an over-word-ids database starts with and the most it
+// can reach (Database::Impl::grow_words).
+constexpr std::uint64_t kMaxWordCapacity = std::uint64_t{1} << 32;
+
+// The largest word-id capacity an over-word-ids index reaches when its
+// largest word id is `word_end` - 1: growth takes max(needed, twice the
+// capacity), starting at kInitialWordCapacity.
+std::uint64_t largest_capacity(std::uint64_t word_end) {
+  return std::clamp<std::uint64_t>(2 * word_end, detail::kInitialWordCapacity, kMaxWordCapacity);
+}
 
 template <class T>
 void append_values(std::vector<std::uint8_t>& out, const T* values, std::size_t count) {
@@ -74,6 +88,9 @@ struct Header {
   std::uint32_t levels_up = 0;
   std::uint32_t vocabulary_checksum = 0;
   std::uint64_t postings = 0;
+  Scoring scoring = Scoring::kL1;   // over word ids only
+  std::uint64_t word_capacity = 0;  // over word ids only
+  bool over_word_ids() const { return (flags & kFlagOverWordIds) != 0; }
 };
 
 // Header, table and section bounds of a .bbdb image, all checked. Section
@@ -82,7 +99,7 @@ struct Header {
 class Layout {
  public:
   Layout(const std::uint8_t* data, std::size_t size, const std::string& name, bool verify_all)
-      : name_(name) {
+      : name_(name), size_(size) {
     if (size < kHeaderSize)
       fail("truncated: " + std::to_string(size) + " bytes, shorter than the " +
            std::to_string(kHeaderSize) + "-byte header of a .bbdb database");
@@ -101,8 +118,16 @@ class Layout {
     header_.vocabulary_checksum = detail::load_le<std::uint32_t>(data + 32);
     header_.postings = detail::load_le<std::uint64_t>(data + 40);
     const auto section_count = detail::load_le<std::uint32_t>(data + 48);
-    if (header_.flags > (kFlagDirectIndex | kFlagVocabulary))
+    if (header_.flags > (kFlagDirectIndex | kFlagVocabulary | kFlagOverWordIds))
       fail("unknown flags " + std::to_string(header_.flags));
+    if (header_.over_word_ids()) {
+      const auto scoring = detail::load_le<std::uint32_t>(data + 36);
+      if ((header_.flags & kFlagVocabulary) != 0 || header_.vocabulary_checksum != 0 ||
+          scoring > static_cast<std::uint32_t>(Scoring::kDotProduct))
+        fail("inconsistent header of a database over word ids");
+      header_.scoring = static_cast<Scoring>(scoring);
+      header_.word_capacity = detail::load_le<std::uint64_t>(data + 52);
+    }
     if (header_.levels_up > kMaxDirectIndexLevelsUp)
       fail("direct index level " + std::to_string(header_.levels_up) + " is out of range");
     if (header_.live_entries > header_.next_entry_id || header_.next_entry_id == kAllEntries)
@@ -120,6 +145,7 @@ class Layout {
 
   [[noreturn]] void fail(const std::string& problem) const { throw FileError(name_, problem); }
   const Header& header() const { return header_; }
+  std::size_t file_size() const { return size_; }
   const detail::Section& section(Section s) const { return sections_[s]; }
   void verify(Section s) const {
     if (!detail::section_intact(sections_[s]))
@@ -146,6 +172,7 @@ class Layout {
 
  private:
   std::string name_;
+  std::size_t size_;
   Header header_;
   detail::Section sections_[kSectionCount];
 };
@@ -153,21 +180,20 @@ class Layout {
 }  // namespace
 
 std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
-  if (impl_->over_word_ids)
-    throw InvalidArgument(
-        "Database: a database over word ids has no vocabulary and cannot be saved as .bbdb");
   std::shared_lock lock(impl_->mutex);
   const Impl& impl = *impl_;
+  include_vocabulary = include_vocabulary && !impl.over_word_ids;
   const auto next_id = static_cast<EntryId>(impl.alive.size());
   std::vector<std::uint8_t> sections[kSectionCount];
   if (include_vocabulary) sections[kVocabularyBytes] = impl.vocabulary.serialize();
   const std::string description = impl.vocabulary.description();
-  sections[kDescription].assign(description.begin(), description.end());
+  if (!impl.over_word_ids) sections[kDescription].assign(description.begin(), description.end());
   sections[kEntryStates] = impl.alive;
 
   // Live postings only, words in increasing order.
   std::uint64_t posting_count = 0;
-  const std::size_t word_count = impl.vocabulary.word_count();
+  const std::size_t word_count = impl.word_capacity;
+  std::uint64_t largest_word_end = 0;  // 1 + the largest word with a posting
   for (WordId word = 0; word < word_count; ++word) {
     // Segments first, oldest first, then the tail: entry ids increase.
     const detail::TailList list = impl.tail_lists[detail::group_of(word)];
@@ -187,6 +213,7 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
     for (std::uint32_t i = 0; i < list.size; ++i)
       if (in_tail(i)) live += impl.alive[tail_entry(i)];
     if (live == 0) continue;
+    largest_word_end = std::uint64_t{word} + 1;
     detail::put_le<std::uint32_t>(sections[kWords], word);
     detail::put_le<std::uint32_t>(sections[kListLengths], live);
     const auto put_posting = [&](EntryId entry, float weight) {
@@ -235,10 +262,21 @@ std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
         detail::store_le<std::uint32_t>(h + 16, next_id);
         detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
         detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
-                                                    (include_vocabulary ? kFlagVocabulary : 0));
+                                                    (include_vocabulary ? kFlagVocabulary : 0) |
+                                                    (impl.over_word_ids ? kFlagOverWordIds : 0));
         detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
-        detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
         detail::store_le<std::uint64_t>(h + 40, posting_count);
+        if (!impl.over_word_ids) {
+          detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
+          return;
+        }
+        detail::store_le<std::uint32_t>(h + 36, static_cast<std::uint32_t>(impl.scoring));
+        // Within what the postings justify (largest_capacity), which the
+        // capacity exceeds only when the entries with the largest words were
+        // removed: the index keeps its shape, and a reader can bound it.
+        detail::store_le<std::uint64_t>(
+            h + 52,
+            std::min<std::uint64_t>(impl.word_capacity, largest_capacity(largest_word_end)));
       });
 }
 
@@ -250,27 +288,17 @@ std::string hex(std::uint32_t value) {
   return text;
 }
 
-}  // namespace
-
 // Every count below is checked against the length of the section it comes
 // from before anything is allocated, so a hostile file cannot make the
-// reader allocate more than its own size justifies.
-Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
-                               Vocabulary vocabulary) {
-  const Layout layout(data, size, name, true);
+// reader allocate more than its own size justifies. `impl` is empty, laid
+// out for the file's words; a template only so that it can name the private
+// Database::Impl.
+template <class DatabaseImpl>
+void read_index(const Layout& layout, DatabaseImpl* impl) {
   const Header& header = layout.header();
-  if (vocabulary.empty()) layout.fail("the vocabulary given to load the database is empty");
-  if (vocabulary.checksum() != header.vocabulary_checksum)
-    layout.fail("the database was built with a different vocabulary (checksum " +
-                hex(header.vocabulary_checksum) + ", the given vocabulary has " +
-                hex(vocabulary.checksum()) + ")");
-
-  DatabaseOptions options;
-  options.direct_index = (header.flags & kFlagDirectIndex) != 0;
-  options.direct_index_levels_up = header.levels_up;
-  auto impl = std::make_unique<Impl>(std::move(vocabulary), options);
-  const std::size_t word_count = impl->vocabulary.word_count();
-  const std::size_t node_count = impl->vocabulary.node_count();
+  const std::size_t word_count = impl->word_capacity;
+  const std::uint64_t node_count =
+      impl->over_word_ids ? kMaxWordCapacity : impl->vocabulary.node_count();
   const EntryId next_id = header.next_entry_id;
 
   impl->alive = layout.values<std::uint8_t>(kEntryStates, next_id);
@@ -342,7 +370,7 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
   }
   impl->tail_first_entry = next_id;
 
-  if (options.direct_index) {
+  if (impl->options.direct_index) {
     const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);
     const detail::Section& direct_data = layout.section(kDirectData);
     const std::size_t available = layout.count_of(kDirectData, 4);
@@ -400,12 +428,72 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
   } else if (layout.section(kLabelBytes).size != 0) {
     layout.fail("label bytes without label lengths");
   }
+}
+
+DatabaseOptions options_of(const Header& header) {
+  DatabaseOptions options;
+  options.direct_index = (header.flags & kFlagDirectIndex) != 0;
+  options.direct_index_levels_up = header.levels_up;
+  return options;
+}
+
+}  // namespace
+
+Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
+                               Vocabulary vocabulary) {
+  const Layout layout(data, size, name, true);
+  const Header& header = layout.header();
+  if (header.over_word_ids())
+    layout.fail(
+        "the database is over word ids (an online vocabulary's) and has no vocabulary; load it "
+        "without one");
+  if (vocabulary.empty()) layout.fail("the vocabulary given to load the database is empty");
+  if (vocabulary.checksum() != header.vocabulary_checksum)
+    layout.fail("the database was built with a different vocabulary (checksum " +
+                hex(header.vocabulary_checksum) + ", the given vocabulary has " +
+                hex(vocabulary.checksum()) + ")");
+  auto impl = std::make_unique<Impl>(std::move(vocabulary), options_of(header));
+  read_index(layout, impl.get());
   return Database(std::move(impl));
 }
+
+namespace {
+
+// A database over word ids: its capacity is checked against its words before
+// the index is laid out for it.
+template <class DatabaseImpl>
+void read_word_id_index(const Layout& layout, DatabaseImpl* impl) {
+  const Header& header = layout.header();
+  const detail::Section& words = layout.section(kWords);
+  const std::uint64_t word_end =
+      words.size >= 4
+          ? std::uint64_t{detail::load_le<std::uint32_t>(words.data + words.size - 4)} + 1
+          : 0;
+  // Rows cost 4 bytes per word id in memory: ids far sparser than the
+  // postings that name them (16 bytes each in the file) are refused, so
+  // that a small file cannot claim billions of rows.
+  if (word_end > detail::kInitialWordCapacity + 4 * std::uint64_t{layout.file_size()})
+    layout.fail("word ids up to " + std::to_string(word_end - 1) +
+                " are too sparse for a file of " + std::to_string(layout.file_size()) + " bytes");
+  if (header.word_capacity < std::max<std::uint64_t>(word_end, detail::kInitialWordCapacity) ||
+      header.word_capacity > largest_capacity(word_end))
+    layout.fail("word-id capacity " + std::to_string(header.word_capacity) +
+                " does not fit its words (the largest ends at " + std::to_string(word_end) + ")");
+  impl->lay_out(static_cast<std::size_t>(header.word_capacity));
+  read_index(layout, impl);
+}
+
+}  // namespace
 
 Database Database::deserialize(const std::uint8_t* data, std::size_t size,
                                const std::string& name) {
   const Layout layout(data, size, name, false);
+  if (layout.header().over_word_ids()) {
+    for (std::uint32_t i = 0; i < kSectionCount; ++i) layout.verify(static_cast<Section>(i));
+    auto impl = std::make_unique<Impl>(layout.header().scoring, options_of(layout.header()));
+    read_word_id_index(layout, impl.get());
+    return Database(std::move(impl));
+  }
   if ((layout.header().flags & kFlagVocabulary) == 0)
     layout.fail("the database does not include its vocabulary (checksum " +
                 hex(layout.header().vocabulary_checksum) +
@@ -434,7 +522,7 @@ Database Database::load(const std::string& path, Vocabulary vocabulary) {
 DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {
   const detail::MappedFile file(path);
   const Layout layout(file.data(), file.size(), path, verify);
-  if (verify && (layout.header().flags & kFlagVocabulary) != 0)
+  if (verify && ((layout.header().flags & kFlagVocabulary) != 0 || layout.header().over_word_ids()))
     deserialize(file.data(), file.size(), path);
   layout.verify(kDescription);
   const Header& header = layout.header();

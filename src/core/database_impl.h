@@ -28,6 +28,8 @@ namespace binbow::detail {
 // are 65,536 ids apart: sibling leaves of the vocabulary tree, which similar
 // descriptors reach, fall in different groups.
 constexpr unsigned kGroupBits = 16;
+// The word-id capacity a database over word ids starts with.
+constexpr std::size_t kInitialWordCapacity = std::size_t{1} << 16;
 constexpr std::uint32_t group_of(WordId word) noexcept {
   return word & ((1u << kGroupBits) - 1);
 }

@@ -50,6 +50,22 @@ class TemporalWindow {
   int consistent() const { return consistent_; }
   void clear() { consistent_ = 0; }
 
+  // What update() reads of the past (the last island's extent, not its
+  // scores): saved and restored with the detector's state.
+  struct State {
+    int consistent = 0;
+    EntryId last_first = 0, last_last = 0;
+    EntryId last_query = 0;
+  };
+  State state() const { return {consistent_, last_island_.first, last_island_.last, last_query_}; }
+  void restore(const State& state) {
+    consistent_ = state.consistent;
+    last_island_ = Island{};
+    last_island_.first = state.last_first;
+    last_island_.last = state.last_last;
+    last_query_ = state.last_query;
+  }
+
  private:
   int max_island_distance_;
   int max_query_distance_;

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "binbow/error.h"
-#include "loop/islands.h"
+#include "loop/loop_detector_impl.h"
 
 namespace binbow::loop {
 
@@ -30,62 +30,14 @@ double milliseconds_since(Clock::time_point& start) {
   return ms;
 }
 
-DatabaseOptions database_options(const LoopDetectorParams& params) {
+}  // namespace
+
+DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
   DatabaseOptions options;
   options.direct_index = params.geometric_check == GeometricCheck::kDirectIndex;
   options.direct_index_levels_up = static_cast<unsigned>(std::max(0, params.direct_index_levels));
   return options;
 }
-
-}  // namespace
-
-struct LoopDetector::Impl {
-  Impl(Database database_in, const LoopDetectorParams& p, std::size_t code_size_in)
-      : params(p),
-        database(std::move(database_in)),
-        window(p.max_distance_between_islands, p.max_distance_between_queries),
-        code_size(code_size_in) {}
-
-  LoopDetectorParams params;
-  Database database;
-  // With an online vocabulary: its words, and the scratch of add_image().
-  std::optional<OnlineVocabulary> online;
-  OnlineImageWords image_words;
-  detail::TemporalWindow window;
-  BowVector previous_bow;
-  // Images with features so far: the time axis of the temporal window when
-  // featureless frames are skipped.
-  EntryId featured_frames = 0;
-  // Features of every image, one contiguous array each; entry e owns
-  // [offsets[e], offsets[e + 1]).
-  std::vector<Keypoint> keypoints;
-  std::vector<std::uint8_t> descriptor_bytes;
-  std::vector<std::size_t> offsets{0};
-  std::size_t code_size = 0;
-  // Scratch reused across frames.
-  std::vector<detail::Candidate> candidates;
-  std::vector<detail::Island> islands;
-
-  bool keeps_features() const { return params.geometric_check != GeometricCheck::kNone; }
-  // η's divisor: s(v_t, v_{t−Δt}), or 1 when the raw score is compared with α.
-  double normalisation_factor(const LoopResult& result) const {
-    return params.use_normalised_score ? result.normalisation_score : 1;
-  }
-
-  // The stages of Section V, in order; each sets result.status when the frame stops there.
-  void check_input(Span<Keypoint> image_keypoints, const DescriptorView& descriptors) const;
-  // Adds the image to the online vocabulary, if there is one.
-  void transform(const DescriptorView& descriptors, BowVector& bow, FeatureVector& nodes);
-  std::vector<QueryResult> query(const BowVector& bow, LoopResult& result) const;
-  bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
-  void select_island(const std::vector<QueryResult>& found, LoopResult& result);
-  void verify_island(LoopResult& result, Span<Keypoint> query_keypoints,
-                     const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
-  void verify(LoopResult& result, Span<Keypoint> query_keypoints,
-              const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
-  void insert(BowVector& bow, const FeatureVector& nodes, Span<Keypoint> image_keypoints,
-              const DescriptorView& descriptors);
-};
 
 void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
                                 const DescriptorView& query_descriptors,
@@ -137,8 +89,8 @@ LoopDetector::LoopDetector(Vocabulary vocabulary, LoopDetectorParams params) {
   params.validate();
   if (vocabulary.empty()) throw InvalidArgument("loop detector needs a non-empty vocabulary");
   const std::size_t code_size = vocabulary.code_size();
-  impl_ = std::make_unique<Impl>(Database(std::move(vocabulary), database_options(params)), params,
-                                 code_size);
+  impl_ = std::make_unique<Impl>(Database(std::move(vocabulary), detail::database_options(params)),
+                                 params, code_size);
 }
 
 LoopDetector::LoopDetector(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -148,8 +100,8 @@ LoopDetector LoopDetector::online(std::size_t code_size, OnlineVocabularyOptions
   params.validate();
   OnlineVocabulary vocabulary(code_size, std::move(vocabulary_options));
   auto impl = std::make_unique<Impl>(
-      Database::over_word_ids(vocabulary.options().scoring, database_options(params)), params,
-      code_size);
+      Database::over_word_ids(vocabulary.options().scoring, detail::database_options(params)),
+      params, code_size);
   impl->online.emplace(std::move(vocabulary));
   return LoopDetector(std::move(impl));
 }
@@ -353,6 +305,16 @@ DescriptorView LoopDetector::descriptors(EntryId entry) const {
   if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
   const std::size_t begin = impl_->offsets[entry], end = impl_->offsets[entry + 1];
   return {impl_->descriptor_bytes.data() + begin * impl_->code_size, end - begin, impl_->code_size};
+}
+
+void LoopDetector::set_label(EntryId entry, std::string label) {
+  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
+  impl_->database.set_label(entry, std::move(label));
+}
+
+std::string LoopDetector::label(EntryId entry) const {
+  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
+  return impl_->database.label(entry);
 }
 
 void LoopDetector::clear() {

@@ -58,7 +58,23 @@ struct LoopRunFiles::Impl {
     // stays open until commit().
     write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" +
           json_text(Json(run.inputs)) + ",\"vocabulary\":" + json_text(Json(run.vocabulary)) +
-          (run.online_vocabulary ? ",\"online_vocabulary\":true" : "") +
+          (run.online_vocabulary
+               ? ",\"online_vocabulary\":true,\"online_options\":" +
+                     Json{{"new_word_distance", run.online_options.new_word_distance},
+                          {"purge_after_images", run.online_options.purge_after_images},
+                          {"trees", run.online_options.trees},
+                          {"branching", run.online_options.branching},
+                          {"leaf_size", run.online_options.leaf_size},
+                          {"max_checks", run.online_options.max_checks},
+                          {"exact", run.online_options.exact},
+                          {"scoring", to_string(run.online_options.scoring)},
+                          {"seed", run.online_options.seed}}
+                         .dump()
+               : "") +
+          (run.resumed_from.empty()
+               ? ""
+               : ",\"resumed_from\":" + json_text(Json(run.resumed_from)) +
+                     ",\"resumed_frames\":" + std::to_string(run.resumed_frames)) +
           ",\"descriptor\":" + json_text(Json(run.descriptor)) +
           ",\"max_features\":" + std::to_string(run.max_features) +
           ",\"params\":" + json_text(Json::parse(run.params_json)) + ",\"source\":" +
@@ -200,6 +216,27 @@ LoopRun LoopRun::load(const std::string& path) {
     // Written only for runs without a vocabulary file.
     if (j.contains("online_vocabulary"))
       run.online_vocabulary = j.at("online_vocabulary").get<bool>();
+    if (j.contains("online_options")) {  // absent before the CLI had flags for them: defaults
+      const Json& o = j.at("online_options");
+      OnlineVocabularyOptions& options = run.online_options;
+      options.new_word_distance = o.at("new_word_distance").get<double>();
+      options.purge_after_images = o.at("purge_after_images").get<std::uint32_t>();
+      options.trees = o.at("trees").get<std::uint32_t>();
+      options.branching = o.at("branching").get<std::uint32_t>();
+      options.leaf_size = o.at("leaf_size").get<std::uint32_t>();
+      options.max_checks = o.at("max_checks").get<std::uint32_t>();
+      options.exact = o.at("exact").get<bool>();
+      try {
+        options.scoring = parse_scoring(o.at("scoring").get<std::string>());
+      } catch (const InvalidArgument& e) {
+        throw FileError(path, std::string("online_options: ") + e.what());
+      }
+      options.seed = o.at("seed").get<std::uint64_t>();
+    }
+    if (j.contains("resumed_from")) {
+      run.resumed_from = j.at("resumed_from").get<std::string>();
+      run.resumed_frames = j.at("resumed_frames").get<std::size_t>();
+    }
     run.descriptor = j.at("descriptor").get<std::string>();
     run.max_features = j.at("max_features").get<int>();
     run.params_json = j.at("params").dump(2);

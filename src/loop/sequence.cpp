@@ -1,7 +1,9 @@
 #include "binbow/loop/sequence.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "binbow/error.h"
 
@@ -22,6 +24,31 @@ std::shared_ptr<const vision::FeatureExtractor> extractor_of(const SequenceOptio
   return vision::make_extractor(options.descriptor, options.max_features);
 }
 
+// A frame's label in the detector: its file, and its scale when not 1.
+std::string frame_label(const std::string& file, double scale) {
+  if (scale == 1) return file;
+  char text[40];
+  std::snprintf(text, sizeof text, "\t%.17g", scale);
+  return file + text;
+}
+
+// The file and scale of a frame_label(); a label without a scale (or not
+// made by frame_label) is a file at scale 1.
+void parse_frame_label(const std::string& label, std::string& file, double& scale) {
+  const std::size_t tab = label.rfind('\t');
+  if (tab != std::string::npos) {
+    char* end = nullptr;
+    const double value = std::strtod(label.c_str() + tab + 1, &end);
+    if (end != label.c_str() + tab + 1 && *end == '\0' && value > 0 && std::isfinite(value)) {
+      file = label.substr(0, tab);
+      scale = value;
+      return;
+    }
+  }
+  file = label;
+  scale = 1;
+}
+
 LoopDetectorParams defaults_for(double frame_rate) {
   return frame_rate > 0 ? LoopDetectorParams::for_frequency(frame_rate) : LoopDetectorParams{};
 }
@@ -38,9 +65,13 @@ struct SequenceDetector::Impl {
   std::shared_ptr<const vision::FeatureExtractor> extractor;
   LoopDetectorParams defaults;
   bool params_given = false;
+  bool resumed = false;  // from a saved detector, which brought its parameters
   std::unique_ptr<LoopDetector> detector;
-  std::vector<std::string> files;  // of every frame: a loop's match_file
-  std::vector<double> scales;      // Frame::scale of every frame, for inliers in file pixels
+  // Of every frame of this session (entry ids from first_entry on): a
+  // loop's match_file, and Frame::scale for inliers in file pixels.
+  std::vector<std::string> files;
+  std::vector<double> scales;
+  EntryId first_entry = 0;
   StatusCounts status_counts{};
   vision::Frame frame;
 
@@ -93,6 +124,21 @@ SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs,
   impl_->start(std::move(vocabulary_options), params);
 }
 
+SequenceDetector::SequenceDetector(const std::vector<std::string>& inputs, LoopDetector detector,
+                                   const SequenceOptions& options)
+    : impl_(std::make_unique<Impl>(inputs, options)) {
+  const std::size_t code_size = detector.online_vocabulary() != nullptr
+                                    ? detector.online_vocabulary()->code_size()
+                                    : detector.database().vocabulary().code_size();
+  if (code_size != impl_->extractor->code_size())
+    throw InvalidArgument("the saved detector's descriptors have " + std::to_string(code_size) +
+                          " bytes but " + impl_->extractor->name() + " descriptors have " +
+                          std::to_string(impl_->extractor->code_size()));
+  impl_->resumed = true;
+  impl_->first_entry = static_cast<EntryId>(detector.size());
+  impl_->detector = std::make_unique<LoopDetector>(std::move(detector));
+}
+
 SequenceDetector::SequenceDetector(SequenceDetector&&) noexcept = default;
 SequenceDetector& SequenceDetector::operator=(SequenceDetector&&) noexcept = default;
 SequenceDetector::~SequenceDetector() = default;
@@ -108,15 +154,22 @@ bool SequenceDetector::next(SequenceFrame& out) {
   out.file = d.frame.name;
   d.files.push_back(d.frame.name);
   d.scales.push_back(d.frame.scale);
+  d.detector->set_label(out.result.query, frame_label(d.frame.name, d.frame.scale));
   ++d.status_counts[static_cast<std::size_t>(out.result.status)];
 
   out.match_file.clear();
   out.inlier_points.clear();
   if (out.result.detection()) {
-    out.match_file = d.files[out.result.match];
+    double scale = 1;
+    if (out.result.match >= d.first_entry) {
+      out.match_file = d.files[out.result.match - d.first_entry];
+      scale = d.scales[out.result.match - d.first_entry];
+    } else {
+      parse_frame_label(d.detector->label(out.result.match), out.match_file, scale);
+    }
     const Span<vision::Keypoint> match_points = d.detector->keypoints(out.result.match);
     const auto query_scale = static_cast<float>(d.frame.scale);
-    const auto match_scale = static_cast<float>(d.scales[out.result.match]);
+    const auto match_scale = static_cast<float>(scale);
     out.inlier_points.reserve(out.result.inliers.size());
     for (const vision::Correspondence& c : out.result.inliers) {
       const vision::Keypoint& q = features.keypoints[c.first];
@@ -133,6 +186,7 @@ const LoopDetectorParams& SequenceDetector::params() const noexcept {
 }
 
 std::string SequenceDetector::frequency_origin() const {
+  if (impl_->resumed) return "the saved state";
   if (impl_->params_given) return "the parameters given";
   if (params().frequency != impl_->defaults.frequency) return "--params";
   if (impl_->source.frame_rate() > 0) return "video frames processed per second";

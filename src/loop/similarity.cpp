@@ -81,8 +81,9 @@ SimilarityMatrix similarity_matrix(const OnlineVocabulary& online,
 }  // namespace
 
 SimilarityMatrix online_similarity_matrix(std::size_t code_size,
-                                          const std::vector<vision::Features>& features) {
-  OnlineVocabulary online(code_size);
+                                          const std::vector<vision::Features>& features,
+                                          const OnlineVocabularyOptions& options) {
+  OnlineVocabulary online(code_size, options);
   std::vector<DescriptorView> views;
   views.reserve(features.size());
   for (const vision::Features& f : features) {

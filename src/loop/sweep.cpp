@@ -143,7 +143,7 @@ std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const RunFeatures&
   for (double value : values) settings.push_back(with_value(base, parameter, value));
 
   // A run with an online vocabulary grows its words again at every value.
-  OnlineVocabularyOptions online_options;
+  OnlineVocabularyOptions online_options = run.online_options;
   online_options.descriptor = run.descriptor;
   const std::size_t code_size =
       run.online_vocabulary ? vision::make_extractor(run.descriptor, run.max_features)->code_size()

@@ -224,6 +224,160 @@ TEST(CliDetectLoops, OnlineVocabularyUsageErrors) {
   EXPECT_FALSE(std::ifstream(dir.file("l.csv")).good());
 }
 
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// Frames [first, last] of the corridor as a list file.
+std::string write_frame_range(const TempDir& dir, const std::string& name, int first, int last) {
+  const std::string path = dir.file(name);
+  std::ofstream list(path);
+  for (int i = first; i <= last; ++i) list << samples_folder() << "/" << i << ".jpg\n";
+  return path;
+}
+
+// --save-state after frames 1..42, --resume-state for 43..84: the loops of
+// the two runs are the uninterrupted run's, numbered and named alike (the
+// second run's matches are frames of the first).
+TEST(CliDetectLoops, SaveStateThenResumeStateEqualsOneRun) {
+  TempDir dir;
+  const std::string first = write_frame_range(dir, "first.txt", 1, 42);
+  const std::string second = write_frame_range(dir, "second.txt", 43, 84);
+  const std::string all = write_frame_range(dir, "all.txt", 1, 84);
+  for (const std::string kind : {"fixed", "online"}) {
+    SCOPED_TRACE(kind);
+    const std::string vocabulary = kind == "online" ? " --online-vocabulary" : "";
+    const std::string state = dir.file(kind + ".bbld");
+    std::string output;
+    ASSERT_EQ(run_cli("detect-loops" + vocabulary + (kind == "online" ? " --exact" : "") + " -o '" +
+                          dir.file("all.csv") + "' '" + all + "'",
+                      &output),
+              0)
+        << output;
+    ASSERT_EQ(run_cli("detect-loops" + vocabulary + (kind == "online" ? " --exact" : "") +
+                          " --save-state '" + state + "' -o '" + dir.file("first.csv") + "' '" +
+                          first + "'",
+                      &output),
+              0)
+        << output;
+    EXPECT_NE(output.find("state: 42 frames -> " + state), std::string::npos) << output;
+    ASSERT_EQ(run_cli("info '" + state + "'", &output), 0) << output;
+    EXPECT_NE(output.find("kind: loop detector state\n"), std::string::npos) << output;
+    EXPECT_NE(output.find("vocabulary: " + kind + "\n"), std::string::npos) << output;
+    EXPECT_NE(output.find("frames: 42\n"), std::string::npos) << output;
+    // Neither the kind nor the descriptor needs repeating.
+    ASSERT_EQ(run_cli("detect-loops --resume-state '" + state + "' -o '" + dir.file("second.csv") +
+                          "' '" + second + "'",
+                      &output),
+              0)
+        << output;
+    EXPECT_NE(output.find("resuming after 42 frames"), std::string::npos) << output;
+    const std::string one_run = read_text(dir.file("all.csv"));
+    const std::string first_run = read_text(dir.file("first.csv"));
+    const std::string second_run = read_text(dir.file("second.csv"));
+    const std::string header = one_run.substr(0, one_run.find('\n') + 1);
+    EXPECT_GT(std::count(second_run.begin(), second_run.end(), '\n'), 20);
+    EXPECT_EQ(first_run + second_run.substr(header.size()), one_run);
+    const nlohmann::json record = run_record(dir.file("second.csv"));
+    EXPECT_EQ(record.at("resumed_frames"), 42);
+    EXPECT_EQ(record.value("online_vocabulary", false), kind == "online");
+    // Its indices are the whole sequence's: evaluated against the whole
+    // ground truth from loops.csv alone (the record cannot re-run it).
+    ASSERT_EQ(run_cli("evaluate --sweep --gt '" + shared_data("rtabmap-samples/samples_GT.bmp") +
+                          "' '" + dir.file("second.csv") + "'",
+                      &output),
+              0)
+        << output;
+    EXPECT_NE(output.find("resumed from"), std::string::npos) << output;
+    EXPECT_NE(output.find("false positives: 0"), std::string::npos) << output;
+  }
+}
+
+TEST(CliDetectLoops, ResumeStateUsageErrors) {
+  TempDir dir;
+  const std::string frames = write_frame_list(dir, 3);
+  const std::string fixed = dir.file("fixed.bbld");
+  const std::string online = dir.file("online.bbld");
+  std::string output;
+  ASSERT_EQ(run_cli("detect-loops --save-state '" + fixed + "' -o '" + dir.file("a.csv") + "' '" +
+                        frames + "'",
+                    &output),
+            0)
+      << output;
+  ASSERT_EQ(run_cli("detect-loops --online-vocabulary --descriptor brief --save-state '" + online +
+                        "' -o '" + dir.file("b.csv") + "' '" + frames + "'",
+                    &output),
+            0)
+      << output;
+  const auto expect_usage_error = [&](const std::string& arguments, const std::string& message) {
+    EXPECT_EQ(
+        run_cli("detect-loops " + arguments + " -o '" + dir.file("l.csv") + "' '" + frames + "'",
+                &output),
+        1)
+        << arguments;
+    EXPECT_NE(output.find(message), std::string::npos) << output;
+    EXPECT_NE(output.find("for usage"), std::string::npos) << output;
+  };
+  expect_usage_error("--resume-state '" + fixed + "' --online-vocabulary",
+                     "holds a fixed vocabulary's state; --online-vocabulary conflicts with it");
+  expect_usage_error("--resume-state '" + online + "' --vocab x.bbw",
+                     "holds an online vocabulary's state; --vocab conflicts with it");
+  expect_usage_error("--resume-state '" + online + "' --descriptor orb",
+                     "was run with brief descriptors; --descriptor orb conflicts with it");
+  expect_usage_error("--resume-state '" + fixed + "' --params p.json",
+                     "--params excludes --resume-state");
+  expect_usage_error("--resume-state '" + online + "' --online-vocabulary --trees 2",
+                     "--trees excludes --resume-state");
+  for (const std::string option :
+       {"--new-word-distance 0.2", "--purge-after-images 3", "--trees 2", "--branching 4",
+        "--leaf-size 8", "--max-checks 9", "--exact", "--scoring l2", "--seed 3"})
+    expect_usage_error(option,
+                       option.substr(0, option.find(' ')) + " requires --online-vocabulary");
+  EXPECT_FALSE(std::ifstream(dir.file("l.csv")).good());
+  // An ORB vocabulary that is not the state's: the library's error names both.
+  const std::string other = dir.file("other.bbw");
+  ASSERT_EQ(run_cli("detect-loops --online-vocabulary --save-vocabulary '" + other + "' -o '" +
+                        dir.file("c.csv") + "' '" + frames + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_EQ(run_cli("detect-loops --resume-state '" + fixed + "' --vocab '" + other + "' -o '" +
+                        dir.file("l.csv") + "' '" + frames + "'",
+                    &output),
+            1);
+  EXPECT_NE(output.find("different vocabulary"), std::string::npos) << output;
+}
+
+// The online vocabulary's options reach it: a stricter new-word distance
+// makes more words, which --save-vocabulary's summary counts.
+TEST(CliDetectLoops, OnlineVocabularyOptionsReachTheVocabulary) {
+  TempDir dir;
+  const std::string frames = write_frame_list(dir, 6);
+  std::string loose, strict;
+  ASSERT_EQ(run_cli("detect-loops --online-vocabulary --new-word-distance 0.4 --save-vocabulary '" +
+                        dir.file("a.bbw") + "' -o '" + dir.file("a.csv") + "' '" + frames + "'",
+                    &loose),
+            0)
+      << loose;
+  ASSERT_EQ(run_cli("detect-loops --online-vocabulary --new-word-distance 0.1 --purge-after-images "
+                    "0 --scoring l2 --exact --save-vocabulary '" +
+                        dir.file("b.bbw") + "' -o '" + dir.file("b.csv") + "' '" + frames + "'",
+                    &strict),
+            0)
+      << strict;
+  EXPECT_GT(test::printed_number(strict, "online vocabulary"),
+            test::printed_number(loose, "online vocabulary"))
+      << loose << strict;
+  // Recorded, so that evaluate --sweep re-runs with them.
+  const nlohmann::json options = run_record(dir.file("b.csv")).at("online_options");
+  EXPECT_EQ(options.at("new_word_distance"), 0.1);
+  EXPECT_EQ(options.at("purge_after_images"), 0);
+  EXPECT_EQ(options.at("scoring"), "l2");
+  EXPECT_EQ(options.at("exact"), true);
+}
+
 TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) {
   TempDir dir;
   const std::string list = write_frame_list(dir, 10);

@@ -1,6 +1,7 @@
 // .bbdb: save → load → identical queries; damaged files rejected clearly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <string>
 #include <vector>
@@ -8,6 +9,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
+#include "core/crc32c.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -173,6 +175,97 @@ TEST(DatabaseFile, DamagedFilesAreRejected) {
 
 // A damaged body (here: a weight turned NaN, CRCs recomputed; or a byte
 // flipped) passes the header, so inspect checks the whole file unless told not to.
+// Sorted random BoW vectors over ids [0, ids).
+BowVector random_word_bow(std::size_t words, std::size_t ids, std::mt19937_64& rng) {
+  std::vector<BowEntry> entries;
+  for (std::size_t i = 0; i < words; ++i)
+    entries.push_back({static_cast<WordId>(rng() % ids), 0.01f + static_cast<float>(rng() % 100)});
+  std::sort(entries.begin(), entries.end(),
+            [](const BowEntry& a, const BowEntry& b) { return a.word < b.word; });
+  entries.erase(std::unique(entries.begin(), entries.end(),
+                            [](const BowEntry& a, const BowEntry& b) { return a.word == b.word; }),
+                entries.end());
+  return BowVector(std::move(entries));
+}
+
+// A database over word ids (an online vocabulary's) saves its scoring and
+// the word-id capacity its index grew to, and continues after load exactly as
+// the saved one does.
+TEST(DatabaseFile, OverWordIdsRoundTrip) {
+  std::mt19937_64 rng(9);
+  Database database = Database::over_word_ids(Scoring::kKL, {true, 0});
+  std::vector<BowVector> later;
+  for (std::size_t i = 0; i < 400; ++i) {
+    // Ids up to 150,000: the capacity doubles past 2^16 to 150,000, then 300,000.
+    const BowVector bow = random_word_bow(60, 1000 + i * 400, rng);
+    std::vector<NodeId> words;
+    for (const BowEntry& e : bow) words.push_back(e.word);
+    database.add(bow, FeatureVector::from_assignment(words.data(), words.size()));
+    if (i % 50 == 7) database.remove(static_cast<EntryId>(i - 3));
+  }
+  for (int i = 0; i < 20; ++i) later.push_back(random_word_bow(60, 300'000, rng));
+  const std::vector<std::uint8_t> bytes = database.serialize();
+  Database loaded = Database::deserialize(bytes.data(), bytes.size(), "words.bbdb");
+  EXPECT_TRUE(loaded.vocabulary().empty());
+  EXPECT_EQ(loaded.scoring(), Scoring::kKL);
+  EXPECT_EQ(loaded.serialize(), bytes) << "the capacity and the index round-trip";
+  for (EntryId id = 0; id < database.next_entry_id(); ++id) {
+    ASSERT_EQ(loaded.contains(id), database.contains(id));
+    if (database.contains(id)) {
+      EXPECT_EQ(loaded.feature_vector(id), database.feature_vector(id));
+    }
+  }
+  for (const BowVector& bow : later) {
+    EXPECT_EQ(loaded.query(bow, 30), database.query(bow, 30));
+    EXPECT_EQ(loaded.add(bow), database.add(bow));
+  }
+  EXPECT_EQ(loaded.serialize(), database.serialize()) << "both grew the same way";
+
+  test::TempDir dir;
+  const std::string path = dir.file("words.bbdb");
+  database.save(path);
+  EXPECT_EQ(Database::load(path).serialize(), database.serialize());
+  try {
+    Database::load(path, test_vocabulary());
+    FAIL() << "a database over word ids has no vocabulary to check";
+  } catch (const FileError& e) {
+    EXPECT_NE(e.problem().find("over word ids"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(Database::inspect(path).entries, database.size());
+}
+
+// Header fields of a database over word ids, rewritten with a valid header
+// CRC: a capacity its words do not justify is refused before the index is
+// laid out for it.
+TEST(DatabaseFile, OverWordIdsCapacityIsBounded) {
+  std::mt19937_64 rng(2);
+  Database database = Database::over_word_ids(Scoring::kL1, {false, 0});
+  database.add(random_word_bow(30, 5000, rng));
+  const std::vector<std::uint8_t> bytes = database.serialize();
+  const auto with_header_field = [&](std::size_t at, std::uint64_t value, std::size_t width) {
+    std::vector<std::uint8_t> changed = bytes;
+    for (std::size_t i = 0; i < width; ++i)
+      changed[at + i] = static_cast<std::uint8_t>(value >> (8 * i));
+    const std::uint32_t crc = detail::crc32c(changed.data(), 60);
+    for (std::size_t i = 0; i < 4; ++i) changed[60 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+    return changed;
+  };
+  const auto problem = [](const std::vector<std::uint8_t>& data) -> std::string {
+    try {
+      Database::deserialize(data.data(), data.size(), "hostile.bbdb");
+    } catch (const FileError& e) {
+      return e.problem();
+    }
+    return "loaded";
+  };
+  EXPECT_EQ(problem(with_header_field(52, 65536, 8)), "loaded");
+  EXPECT_NE(problem(with_header_field(52, std::uint64_t{1} << 32, 8)).find("capacity"),
+            std::string::npos);
+  EXPECT_NE(problem(with_header_field(52, 100, 8)).find("capacity"), std::string::npos);
+  EXPECT_NE(problem(with_header_field(36, 9, 4)).find("inconsistent header"), std::string::npos);
+  EXPECT_NE(problem(with_header_field(32, 1234, 4)).find("inconsistent header"), std::string::npos);
+}
+
 TEST(DatabaseFile, InspectVerifiesTheWholeFileByDefault) {
   const Fixture fixture(12);
   test::TempDir dir;

@@ -358,13 +358,12 @@ TEST(Database, OverWordIdsGrowsItsRowsAndQueriesEqualBruteForce) {
   }
 }
 
-TEST(Database, OverWordIdsHasNoVocabularyToTransformOrSave) {
+TEST(Database, OverWordIdsHasNoVocabularyToTransform) {
   Database database = Database::over_word_ids(Scoring::kL1);
   std::mt19937_64 rng(1);
   const DescriptorMatrix descriptors = test::random_descriptors(10, 32, rng);
   EXPECT_THROW(database.add(descriptors), InvalidArgument);
   database.add(random_bow(20, 100, rng));
-  EXPECT_THROW(database.serialize(), InvalidArgument);
   // Nodes of the direct index are the caller's ids (words), kept as given.
   const NodeId word = 70'000;
   const FeatureVector features = FeatureVector::from_assignment(&word, 1);

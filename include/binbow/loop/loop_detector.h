@@ -222,6 +222,26 @@ struct LoopResult {
   bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }
 };
 
+// What the header and the small sections of a .bbld state file say
+// (LoopDetector::inspect): enough to choose how to load it.
+struct LoopDetectorFileInfo {
+  std::uint32_t version = 0;
+  // An online vocabulary's state (LoopDetector::load(path)); otherwise a fixed
+  // vocabulary's (LoopDetector::load(path, vocabulary)).
+  bool online = false;
+  std::size_t code_size = 0;  // bytes per descriptor
+  // The extractor recorded by the vocabulary ("orb", "brief", ...; "" when
+  // the vocabulary does not say).
+  std::string descriptor;
+  std::size_t frames = 0;  // images processed: the next one gets this entry id
+  // The fixed vocabulary the state needs (zeros when online): its checksum()
+  // (what load() compares), word_count() and levels().
+  std::uint32_t vocabulary_checksum = 0;
+  std::size_t vocabulary_words = 0;
+  std::uint32_t vocabulary_levels = 0;
+  LoopDetectorParams params;
+};
+
 class LoopDetector {
  public:
   // Throws InvalidArgument for invalid parameters or an empty vocabulary.
@@ -259,10 +279,62 @@ class LoopDetector {
   // Features kept for the geometric check (empty with GeometricCheck::kNone).
   Span<vision::Keypoint> keypoints(EntryId entry) const;
   DescriptorView descriptors(EntryId entry) const;
+  // An optional name per image (SequenceDetector records the frame's file),
+  // kept in the database and so saved with the state: after a resume, a loop
+  // with an image of an earlier session can still name it. label() is empty
+  // for an image without one; both throw InvalidArgument for an image not
+  // processed.
+  void set_label(EntryId entry, std::string label);
+  std::string label(EntryId entry) const;
 
   // Forgets every image (and the words of an online vocabulary); the next
   // one gets entry id 0.
   void clear();
+
+  // The whole state as a file (.bbld, "binbow loop detector"), so that a
+  // session can stop and resume later: a detector loaded from it gives, for
+  // the next images, the same LoopResults (statuses, matches, scores,
+  // inliers; not the times) as the saved one would have, to the last bit.
+  // It holds the parameters, the database (inverted and direct index), the
+  // features kept for the geometric check, the temporal state (the previous
+  // BoW vector η divides by, the temporal-consistency chain, the count of
+  // images with features) and, for a detector made by online(), its
+  // OnlineVocabulary. A fixed vocabulary is not embedded: the file records its
+  // checksum, word count, levels and code size, and load() must be given the
+  // same vocabulary. Layout (docs/loop-detection.md): binbow's sectioned container
+  // (magic "BINBOWLD", version, CRC32C of the header, of the section table and
+  // of every section, little-endian), sections: parameters (JSON, as
+  // LoopDetectorParams::to_json), temporal state, previous BoW vector, the
+  // database as .bbdb without vocabulary, the online vocabulary as .bbov,
+  // feature counts per image, keypoints, descriptors. Saved atomically
+  // (temporary file, then rename): a failed save leaves no partial file and
+  // the old file, if any, intact. Throws FileError.
+  //
+  // Resuming an online detector with the default (approximate) search: the
+  // .bbov rebuilds the search trees from the words (see OnlineVocabulary),
+  // so from then on the approximate nearest words may differ from the
+  // uninterrupted run's (every load of a file continues the same way; with
+  // OnlineVocabularyOptions::exact, resumed and uninterrupted runs agree).
+  void save(const std::string& path) const;
+  std::vector<std::uint8_t> serialize() const;
+  // A detector with a fixed vocabulary: `vocabulary` must be the one it was
+  // saved with (same checksum), else FileError naming both. A file of an
+  // online detector is refused (load it with the other form), as is any
+  // damage: every section's CRC, every size checked against its section
+  // before allocation, every id and count against the others (FileError
+  // naming the file and the problem).
+  static LoopDetector load(const std::string& path, Vocabulary vocabulary);
+  // A detector made by online(); a file of a fixed-vocabulary detector is
+  // refused with a FileError saying which vocabulary it needs.
+  static LoopDetector load(const std::string& path);
+  // The same from bytes; `name` stands for the path in error messages.
+  static LoopDetector deserialize(const std::uint8_t* data, std::size_t size,
+                                  const std::string& name, Vocabulary vocabulary);
+  static LoopDetector deserialize(const std::uint8_t* data, std::size_t size,
+                                  const std::string& name);
+  // The header, parameters and kind of a .bbld file, checked (CRCs of what it
+  // reads) but without loading the rest. Throws FileError.
+  static LoopDetectorFileInfo inspect(const std::string& path);
 
  private:
   struct Impl;

@@ -72,9 +72,15 @@ std::string format_timing_table(const std::vector<StageTiming>& timing);
 struct LoopRun {
   std::vector<std::string> inputs;  // absolute paths
   std::string vocabulary;           // absolute path; empty with online_vocabulary
-  // The run grew its words (LoopDetector::online, default vocabulary
-  // options) instead of reading a vocabulary file.
+  // The run grew its words (LoopDetector::online) instead of reading a
+  // vocabulary file, with these options (descriptor aside: `descriptor`).
   bool online_vocabulary = false;
+  OnlineVocabularyOptions online_options;
+  // detect-loops --resume-state: the state (absolute path) the run started
+  // from and the frames it held; the record and loops.csv's indices start
+  // after them, and re-running the record alone cannot reproduce the run.
+  std::string resumed_from;
+  std::size_t resumed_frames = 0;
   std::string descriptor;
   int max_features = 0;               // 0: the extractor's default
   std::string params_json;            // LoopDetectorParams::to_json()

@@ -79,6 +79,15 @@ class SequenceDetector {
   SequenceDetector(const std::vector<std::string>& inputs,
                    OnlineVocabularyOptions vocabulary_options, const SequenceOptions& options,
                    const LoopDetectorParams& params);
+  // Resumes a detector (LoopDetector::load of a saved state): its parameters,
+  // and entry ids continuing after its images. Every frame is labelled with
+  // its file (LoopDetector::set_label, a tab and the Frame::scale appended
+  // when it is not 1), so that a loop with a frame of an earlier session,
+  // resumed from a state saved by a SequenceDetector, names that frame's file
+  // and gives its inliers in that file's pixels. Throws InvalidArgument when
+  // the extractor's code size is not the detector's.
+  SequenceDetector(const std::vector<std::string>& inputs, LoopDetector detector,
+                   const SequenceOptions& options = {});
   SequenceDetector(SequenceDetector&&) noexcept;
   SequenceDetector& operator=(SequenceDetector&&) noexcept;
   ~SequenceDetector();
@@ -88,7 +97,8 @@ class SequenceDetector {
 
   const LoopDetectorParams& params() const noexcept;
   // Why params().frequency is what it is, for a summary line:
-  // "the parameters given" (to the constructor), "--params" (the parameter
+  // "the saved state" (a resumed detector), "the parameters given" (to the
+  // constructor), "--params" (the parameter
   // file set it), "video frames processed per second" or "the paper's
   // default; images have no frame rate".
   std::string frequency_origin() const;

@@ -54,6 +54,7 @@ SimilarityMatrix similarity_matrix(const LoopDetector& detector);
 // the matrix scored with its words, as similarity_matrix(detector) does for
 // LoopDetector::online.
 SimilarityMatrix online_similarity_matrix(std::size_t code_size,
-                                          const std::vector<vision::Features>& features);
+                                          const std::vector<vision::Features>& features,
+                                          const OnlineVocabularyOptions& options = {});
 
 }  // namespace binbow::loop

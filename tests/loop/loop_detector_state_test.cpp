@@ -1,0 +1,392 @@
+// The loop detector's saved state (.bbld): a run stopped, saved, loaded and
+// resumed gives the same results as a run never stopped; the wrong
+// vocabulary, damaged files and failed saves are refused cleanly.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/error.h"
+#include "binbow/loop/loop_detector.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+#include "core/crc32c.h"
+#include "core/little_endian.h"
+#include "support/test_support.h"
+
+namespace binbow::loop {
+namespace {
+
+using vision::Features;
+
+// rtabmap-samples' 84 frames, extracted once per descriptor.
+const std::vector<Features>& sample_features(const std::string& descriptor) {
+  static std::map<std::string, std::vector<Features>> cache;
+  std::vector<Features>& features = cache[descriptor];
+  if (features.empty()) {
+    const auto extractor = vision::make_extractor(descriptor);
+    vision::ImageSource source({test::samples_folder()});
+    vision::Frame frame;
+    while (source.next(frame)) features.push_back(extractor->extract(frame.image));
+  }
+  return features;
+}
+
+// Everything a LoopResult says but the times.
+void expect_same_result(const LoopResult& a, const LoopResult& b) {
+  SCOPED_TRACE("frame " + std::to_string(a.query));
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.query, b.query);
+  EXPECT_EQ(a.features, b.features);
+  EXPECT_EQ(a.has_candidate, b.has_candidate);
+  EXPECT_EQ(a.match, b.match);
+  // Bit-identical, not merely close.
+  EXPECT_EQ(a.score, b.score);
+  EXPECT_EQ(a.normalisation_score, b.normalisation_score);
+  EXPECT_EQ(a.normalised_score, b.normalised_score);
+  EXPECT_EQ(a.island_score, b.island_score);
+  EXPECT_EQ(a.island_first, b.island_first);
+  EXPECT_EQ(a.island_last, b.island_last);
+  EXPECT_EQ(a.consistent_queries, b.consistent_queries);
+  EXPECT_EQ(a.correspondences, b.correspondences);
+  EXPECT_EQ(a.exhaustive_fallback_used, b.exhaustive_fallback_used);
+  EXPECT_EQ(a.inliers, b.inliers);
+}
+
+// Runs every frame without stopping, then again stopping after each of
+// `stops` frames (save, load, resume), and compares every result.
+template <class Make, class Load>
+void expect_resume_equals_uninterrupted(const std::vector<Features>& frames, Make make, Load load,
+                                        const std::vector<std::size_t>& stops) {
+  ASSERT_EQ(frames.size(), 84u);
+  LoopDetector uninterrupted = make();
+  std::vector<LoopResult> expected;
+  std::size_t loops = 0;
+  for (const Features& f : frames) {
+    expected.push_back(uninterrupted.process(f));
+    loops += expected.back().detection() ? 1 : 0;
+  }
+  ASSERT_GT(loops, 10u) << "the sequence must close loops for the comparison to mean anything";
+
+  test::TempDir dir;
+  LoopDetector detector = make();
+  std::size_t next = 0;
+  for (std::size_t stop : stops) {
+    for (; next < stop; ++next) expect_same_result(detector.process(frames[next]), expected[next]);
+    const std::string path = dir.file("state_" + std::to_string(stop) + ".bbld");
+    detector.save(path);
+    const std::vector<std::uint8_t> saved = test::read_file(path);
+    detector = load(path);
+    ASSERT_EQ(detector.size(), stop);
+    EXPECT_EQ(detector.serialize(), saved) << "a loaded state saves the same bytes";
+  }
+  for (; next < frames.size(); ++next)
+    expect_same_result(detector.process(frames[next]), expected[next]);
+}
+
+std::string vocabulary_path(const std::string& name) {
+  const std::string path = test::source_path("data/vocab/" + name);
+  if (!std::filesystem::exists(path)) {
+    ADD_FAILURE() << "the bundled vocabulary " << path << " is missing";
+    throw std::runtime_error("missing " + path);
+  }
+  return path;
+}
+
+TEST(LoopDetectorState, FixedOrbVocabularyResumesExactly) {
+  const Vocabulary vocabulary = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  expect_resume_equals_uninterrupted(
+      sample_features("orb"), [&] { return LoopDetector(vocabulary); },
+      [&](const std::string& path) { return LoopDetector::load(path, vocabulary); },
+      {1, 30, 55, 70});
+}
+
+// The online vocabulary's search trees are rebuilt from its words on load
+// (OnlineVocabulary's .bbov), so a resumed run equals the uninterrupted one
+// when the search is exact...
+OnlineVocabularyOptions exact_search(const std::string& descriptor) {
+  OnlineVocabularyOptions options;
+  options.descriptor = descriptor;
+  options.exact = true;
+  return options;
+}
+
+TEST(LoopDetectorState, OnlineOrbResumesExactly) {
+  expect_resume_equals_uninterrupted(
+      sample_features("orb"), [] { return LoopDetector::online(32, exact_search("orb")); },
+      [](const std::string& path) { return LoopDetector::load(path); }, {25, 50, 66});
+}
+
+TEST(LoopDetectorState, OnlineBriefResumesExactly) {
+  expect_resume_equals_uninterrupted(
+      sample_features("brief"), [] { return LoopDetector::online(32, exact_search("brief")); },
+      [](const std::string& path) { return LoopDetector::load(path); }, {0, 40, 60});
+}
+
+// ... and with the default approximate search, every load of a file
+// continues the same way.
+TEST(LoopDetectorState, OnlineApproximateSearchResumesTheSameWayFromEveryLoad) {
+  const std::vector<Features>& frames = sample_features("orb");
+  LoopDetector detector = LoopDetector::online(32);
+  for (std::size_t i = 0; i < 40; ++i) detector.process(frames[i]);
+  const std::vector<std::uint8_t> bytes = detector.serialize();
+  LoopDetector first = LoopDetector::deserialize(bytes.data(), bytes.size(), "memory");
+  LoopDetector second = LoopDetector::deserialize(bytes.data(), bytes.size(), "memory");
+  std::size_t loops = 0;
+  for (std::size_t i = 40; i < frames.size(); ++i) {
+    const LoopResult r = first.process(frames[i]);
+    expect_same_result(r, second.process(frames[i]));
+    loops += r.detection() ? 1 : 0;
+  }
+  EXPECT_GT(loops, 10u);
+  EXPECT_EQ(first.serialize(), second.serialize());
+}
+
+// A small online run (random images, each seen twice) for the file tests.
+LoopDetector small_online_detector(std::size_t frames = 12) {
+  std::mt19937_64 rng(4);
+  LoopDetectorParams params;
+  params.dislocal = 2;
+  LoopDetector detector = LoopDetector::online(32, {}, params);
+  std::vector<Features> places;
+  for (std::size_t i = 0; i < frames; ++i) {
+    Features f;
+    f.descriptors = test::random_descriptors(i == 3 ? 0 : 20, 32, rng);
+    for (std::size_t k = 0; k < f.descriptors.rows(); ++k)
+      f.keypoints.push_back({float(k), float(2 * k), 7, 1, 1, 0});
+    detector.process(f);
+  }
+  return detector;
+}
+
+TEST(LoopDetectorState, InspectSaysWhatToLoadItWith) {
+  test::TempDir dir;
+  const Vocabulary vocabulary = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(vocabulary);
+  for (std::size_t i = 0; i < 3; ++i) fixed.process(sample_features("orb")[i]);
+  fixed.save(dir.file("fixed.bbld"));
+  const LoopDetectorFileInfo info = LoopDetector::inspect(dir.file("fixed.bbld"));
+  EXPECT_FALSE(info.online);
+  EXPECT_EQ(info.frames, 3u);
+  EXPECT_EQ(info.code_size, 32u);
+  EXPECT_EQ(info.descriptor, vocabulary.descriptor());
+  EXPECT_EQ(info.vocabulary_checksum, vocabulary.checksum());
+  EXPECT_EQ(info.vocabulary_words, vocabulary.word_count());
+  EXPECT_EQ(info.params.to_json(), fixed.params().to_json());
+
+  small_online_detector().save(dir.file("online.bbld"));
+  const LoopDetectorFileInfo online = LoopDetector::inspect(dir.file("online.bbld"));
+  EXPECT_TRUE(online.online);
+  EXPECT_EQ(online.frames, 12u);
+  EXPECT_EQ(online.vocabulary_checksum, 0u);
+}
+
+std::string load_problem(const std::function<void()>& load) {
+  try {
+    load();
+  } catch (const FileError& e) {
+    return e.problem();
+  }
+  return "loaded";
+}
+
+TEST(LoopDetectorState, WrongVocabularyOrKindIsRefused) {
+  test::TempDir dir;
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  const Vocabulary brief = Vocabulary::load(vocabulary_path("brief_default.bbw"));
+  LoopDetector fixed(orb);
+  fixed.process(sample_features("orb")[0]);
+  const std::string fixed_path = dir.file("fixed.bbld");
+  fixed.save(fixed_path);
+  EXPECT_NE(load_problem([&] {
+              LoopDetector::load(fixed_path, brief);
+            }).find("saved with a different vocabulary"),
+            std::string::npos);
+  // Same tree, other scoring: another vocabulary for the scores.
+  EXPECT_NE(load_problem([&] {
+              LoopDetector::load(fixed_path, orb.with_scoring(Scoring::kL2));
+            }).find("different vocabulary"),
+            std::string::npos);
+  EXPECT_NE(
+      load_problem([&] { LoopDetector::load(fixed_path); }).find("load it with that vocabulary"),
+      std::string::npos);
+  EXPECT_EQ(load_problem([&] { LoopDetector::load(fixed_path, orb); }), "loaded");
+
+  const std::string online_path = dir.file("online.bbld");
+  small_online_detector().save(online_path);
+  EXPECT_NE(load_problem([&] {
+              LoopDetector::load(online_path, orb);
+            }).find("load it without a vocabulary"),
+            std::string::npos);
+}
+
+// The section table of a .bbld image: (offset, length) of each section.
+std::vector<std::pair<std::size_t, std::size_t>> sections_of(const std::vector<std::uint8_t>& b) {
+  const auto count = binbow::detail::load_le<std::uint32_t>(b.data() + 48);
+  std::vector<std::pair<std::size_t, std::size_t>> sections;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint8_t* entry = b.data() + 64 + 24 * i;
+    sections.emplace_back(binbow::detail::load_le<std::uint64_t>(entry + 8),
+                          binbow::detail::load_le<std::uint64_t>(entry + 16));
+  }
+  return sections;
+}
+
+TEST(LoopDetectorState, DamagedFilesAreRefused) {
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  for (std::size_t i = 0; i < 4; ++i) fixed.process(sample_features("orb")[i]);
+  struct Case {
+    const char* name;
+    std::vector<std::uint8_t> bytes;
+    std::function<void(const std::vector<std::uint8_t>&)> load;
+  };
+  const std::vector<Case> cases = {
+      {"online", small_online_detector().serialize(),
+       [](const std::vector<std::uint8_t>& b) {
+         LoopDetector::deserialize(b.data(), b.size(), "damaged.bbld");
+       }},
+      {"fixed", fixed.serialize(), [&](const std::vector<std::uint8_t>& b) {
+         LoopDetector::deserialize(b.data(), b.size(), "damaged.bbld", orb);
+       }}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::vector<std::uint8_t>& bytes = c.bytes;
+    ASSERT_NO_THROW(c.load(bytes));
+    const auto sections = sections_of(bytes);
+    ASSERT_EQ(sections.size(), 8u);
+    // A flipped byte at a few places of every section (all non-empty ones,
+    // in the header and the table too).
+    std::vector<std::size_t> places = {0, 9, 20, 30, 61, 64, 70, 64 + 24 * 8 + 1};
+    for (const auto& [offset, length] : sections)
+      for (std::size_t k = 0; k < 5 && length > 0; ++k) places.push_back(offset + k * length / 5);
+    for (std::size_t at : places) {
+      std::vector<std::uint8_t> flipped = bytes;
+      flipped[at] ^= 0x5A;
+      try {
+        c.load(flipped);
+        ADD_FAILURE() << "byte " << at << " flipped: loaded";
+      } catch (const FileError& e) {
+        EXPECT_EQ(e.path(), "damaged.bbld") << e.what();
+      }
+    }
+    for (std::size_t size = 0; size < bytes.size(); size += 1 + size / 9) {
+      const std::vector<std::uint8_t> truncated(bytes.begin(), bytes.begin() + size);
+      EXPECT_THROW(c.load(truncated), FileError) << "truncated to " << size;
+    }
+    std::vector<std::uint8_t> longer = bytes;
+    longer.push_back(0);
+    EXPECT_THROW(c.load(longer), FileError);
+  }
+  // Other binbow files are not states.
+  const std::vector<std::uint8_t> vocabulary_bytes = orb.serialize();
+  EXPECT_NE(load_problem([&] {
+              LoopDetector::deserialize(vocabulary_bytes.data(), vocabulary_bytes.size(), "v");
+            }).find("not a binbow loop detector state"),
+            std::string::npos);
+}
+
+// Content that passes every CRC (recomputed) but disagrees with itself: the
+// direct index would make the geometric check read past a frame's features.
+TEST(LoopDetectorState, InconsistentContentIsRefusedEvenWithValidChecksums) {
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  for (std::size_t i = 0; i < 3; ++i) fixed.process(sample_features("orb")[i]);
+  const std::vector<std::uint8_t> bytes = fixed.serialize();
+  const auto sections = sections_of(bytes);
+  const auto rewritten = [&](std::size_t section, const std::function<void(std::uint8_t*)>& edit) {
+    std::vector<std::uint8_t> out = bytes;
+    const auto [offset, length] = sections[section];
+    edit(out.data() + offset);
+    std::uint8_t* entry = out.data() + 64 + 24 * section;
+    binbow::detail::store_le<std::uint32_t>(entry + 4,
+                                            binbow::detail::crc32c(out.data() + offset, length));
+    binbow::detail::store_le<std::uint32_t>(
+        out.data() + 64 + 24 * sections.size(),
+        binbow::detail::crc32c(out.data() + 64, 24 * sections.size()));
+    return out;
+  };
+  const auto problem = [&](const std::vector<std::uint8_t>& data) {
+    return load_problem(
+        [&] { LoopDetector::deserialize(data.data(), data.size(), "crafted.bbld", orb); });
+  };
+  ASSERT_EQ(problem(rewritten(5, [](std::uint8_t*) {})), "loaded");
+  // Ten features moved from frame 0 to frame 1: the same total.
+  const auto moved = rewritten(5, [](std::uint8_t* counts) {
+    binbow::detail::store_le<std::uint32_t>(counts,
+                                            binbow::detail::load_le<std::uint32_t>(counts) - 10);
+    binbow::detail::store_le<std::uint32_t>(
+        counts + 4, binbow::detail::load_le<std::uint32_t>(counts + 4) + 10);
+  });
+  EXPECT_NE(problem(moved).find("direct index of frame 0"), std::string::npos) << problem(moved);
+  // A keypoint at NaN.
+  const auto nan = rewritten(6, [](std::uint8_t* keypoints) {
+    binbow::detail::store_le<float>(keypoints, std::numeric_limits<float>::quiet_NaN());
+  });
+  EXPECT_NE(problem(nan).find("non-finite"), std::string::npos) << problem(nan);
+  // The previous BoW vector out of order.
+  const auto unsorted = rewritten(
+      2, [](std::uint8_t* bow) { binbow::detail::store_le<std::uint32_t>(bow, 0xFFFFFFF0u); });
+  EXPECT_NE(problem(unsorted).find("previous BoW vector"), std::string::npos) << problem(unsorted);
+  // Parameters out of range go through LoopDetectorParams' own validation.
+  const auto params = rewritten(0, [](std::uint8_t* json) {
+    const std::string text(reinterpret_cast<char*>(json), 20);
+    const std::size_t at = text.find('{');
+    json[at] = '[';
+  });
+  EXPECT_NE(problem(params), "loaded");
+}
+
+TEST(LoopDetectorState, FeaturelessAndNoGeometricCheckStatesRoundTrip) {
+  // kNone keeps no features: the file has none and the detector still resumes.
+  LoopDetectorParams params;
+  params.geometric_check = GeometricCheck::kNone;
+  params.dislocal = 2;
+  std::mt19937_64 rng(8);
+  std::vector<Features> frames;
+  for (int i = 0; i < 16; ++i) {
+    Features f;
+    f.descriptors = test::random_descriptors(i % 5 == 2 ? 0 : 30, 32, rng);
+    f.keypoints.resize(f.descriptors.rows());
+    frames.push_back(i >= 8 ? frames[i - 8] : f);
+  }
+  LoopDetector uninterrupted = LoopDetector::online(32, {}, params);
+  std::vector<LoopResult> expected;
+  for (const Features& f : frames) expected.push_back(uninterrupted.process(f));
+  LoopDetector first = LoopDetector::online(32, {}, params);
+  for (int i = 0; i < 9; ++i) first.process(frames[i]);
+  const std::vector<std::uint8_t> bytes = first.serialize();
+  LoopDetector resumed = LoopDetector::deserialize(bytes.data(), bytes.size(), "memory");
+  EXPECT_EQ(resumed.keypoints(3).size(), 0u);
+  for (std::size_t i = 9; i < frames.size(); ++i)
+    expect_same_result(resumed.process(frames[i]), expected[i]);
+}
+
+TEST(LoopDetectorState, SaveIsAtomic) {
+  test::TempDir dir;
+  const LoopDetector detector = small_online_detector();
+  // Into a missing folder: refused, nothing created.
+  EXPECT_THROW(detector.save(dir.file("no/such/folder/state.bbld")), FileError);
+  // Over a folder: the content is written, then the rename fails; the
+  // temporary is removed.
+  std::filesystem::create_directories(dir.file("state.bbld/inside"));
+  EXPECT_THROW(detector.save(dir.file("state.bbld")), FileError);
+  std::size_t entries = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().filename(), "state.bbld");
+    ++entries;
+  }
+  EXPECT_EQ(entries, 1u);
+  // A good save replaces an old state whole.
+  detector.save(dir.file("good.bbld"));
+  small_online_detector(5).save(dir.file("good.bbld"));
+  EXPECT_EQ(LoopDetector::load(dir.file("good.bbld")).size(), 5u);
+}
+
+}  // namespace
+}  // namespace binbow::loop
