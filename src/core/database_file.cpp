@@ -59,13 +59,6 @@ constexpr const char* kSectionNames[kSectionCount] = {
 constexpr std::uint32_t kFlagDirectIndex = 1;
 constexpr std::uint32_t kFlagVocabulary = 2;
 
-template <class T>
-void append_values(std::vector<std::uint8_t>& out, const T* values, std::size_t count) {
-  const std::size_t at = out.size();
-  out.resize(at + count * sizeof(T));
-  if (count > 0) std::memcpy(out.data() + at, values, count * sizeof(T));
-}
-
 struct Header {
   std::uint32_t version = 0;
   EntryId next_entry_id = 0;
@@ -152,94 +145,127 @@ class Layout {
 
 }  // namespace
 
-std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
-  if (impl_->over_word_ids)
-    throw InvalidArgument(
-        "Database: a database over word ids has no vocabulary and cannot be saved as .bbdb");
-  std::shared_lock lock(impl_->mutex);
-  const Impl& impl = *impl_;
-  const auto next_id = static_cast<EntryId>(impl.alive.size());
-  std::vector<std::uint8_t> sections[kSectionCount];
-  if (include_vocabulary) sections[kVocabularyBytes] = impl.vocabulary.serialize();
-  const std::string description = impl.vocabulary.description();
-  sections[kDescription].assign(description.begin(), description.end());
-  sections[kEntryStates] = impl.alive;
+namespace {
 
-  // Live postings only, words in increasing order.
-  std::uint64_t posting_count = 0;
-  const std::size_t word_count = impl.vocabulary.word_count();
-  for (WordId word = 0; word < word_count; ++word) {
-    // Segments first, oldest first, then the tail: entry ids increase.
-    const detail::TailList list = impl.tail_lists[detail::group_of(word)];
-    const std::uint32_t high_mask = (1u << impl.high_bits) - 1;
-    const detail::TailPosting* tail = list.size != 0 ? impl.arena.at(list.block) : nullptr;
-    const auto in_tail = [&](std::uint32_t i) {
-      return (tail[i].key & high_mask) == word >> detail::kGroupBits;
-    };
-    const auto tail_entry = [&](std::uint32_t i) {
-      return static_cast<EntryId>(impl.tail_first_entry + (tail[i].key >> impl.high_bits));
-    };
-    std::uint32_t live = 0;
+// Writes the .bbdb sections of `impl` in order, streaming: nothing the size
+// of the index is held besides it (the vocabulary section, when included, is
+// serialised whole). The caller holds the database's lock. (A template only
+// because Database::Impl is private to the class.)
+template <class Impl>
+void write_database(const Impl& impl, bool include_vocabulary, detail::SectionedFileWriter& out) {
+  const auto next_id = static_cast<EntryId>(impl.alive.size());
+  if (include_vocabulary) {
+    const std::vector<std::uint8_t> vocabulary = impl.vocabulary.serialize();
+    out.append(vocabulary.data(), vocabulary.size());
+  }
+  out.next_section();
+  const std::string description = impl.vocabulary.description();
+  out.append(description.data(), description.size());
+  out.next_section();
+  out.append(impl.alive.data(), impl.alive.size());
+  out.next_section();
+
+  // The live postings of one word: segments oldest first, then the tail, so
+  // entry ids increase.
+  const std::uint32_t high_mask = (1u << impl.high_bits) - 1;
+  const auto for_each_live_posting = [&](WordId word, const auto& visit) {
     const std::uint32_t row = impl.row_order.row(word);
     for (const auto& segment : impl.segments)
-      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i)
-        live += impl.alive[segment->entry(i)];
-    for (std::uint32_t i = 0; i < list.size; ++i)
-      if (in_tail(i)) live += impl.alive[tail_entry(i)];
-    if (live == 0) continue;
-    detail::put_le<std::uint32_t>(sections[kWords], word);
-    detail::put_le<std::uint32_t>(sections[kListLengths], live);
-    const auto put_posting = [&](EntryId entry, float weight) {
-      if (impl.alive[entry] == 0) return;
-      detail::put_le<std::uint32_t>(sections[kPostingIds], entry);
-      detail::put_le<float>(sections[kPostingWeights], weight);
-    };
-    for (const auto& segment : impl.segments)
-      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i)
-        put_posting(segment->entry(i), segment->weights.data()[i]);
-    for (std::uint32_t i = 0; i < list.size; ++i)
-      if (in_tail(i)) put_posting(tail_entry(i), tail[i].weight);
-    posting_count += live;
+      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i) {
+        const EntryId entry = segment->entry(i);
+        if (impl.alive[entry] != 0) visit(entry, segment->weights.data()[i]);
+      }
+    const detail::TailList list = impl.tail_lists[detail::group_of(word)];
+    if (list.size == 0) return;
+    const detail::TailPosting* tail = impl.arena.at(list.block);
+    for (std::uint32_t i = 0; i < list.size; ++i) {
+      if ((tail[i].key & high_mask) != word >> detail::kGroupBits) continue;
+      const auto entry =
+          static_cast<EntryId>(impl.tail_first_entry + (tail[i].key >> impl.high_bits));
+      if (impl.alive[entry] != 0) visit(entry, tail[i].weight);
+    }
+  };
+  const std::size_t word_count = impl.vocabulary.word_count();
+  std::vector<std::uint32_t> live(word_count, 0);
+  std::uint64_t posting_count = 0;
+  for (WordId word = 0; word < word_count; ++word) {
+    for_each_live_posting(word, [&](EntryId, float) { ++live[word]; });
+    posting_count += live[word];
   }
+  for (WordId word = 0; word < word_count; ++word)
+    if (live[word] != 0) out.append_le<std::uint32_t>(word);
+  out.next_section();
+  for (WordId word = 0; word < word_count; ++word)
+    if (live[word] != 0) out.append_le<std::uint32_t>(live[word]);
+  out.next_section();
+  for (WordId word = 0; word < word_count; ++word)
+    for_each_live_posting(word, [&](EntryId entry, float) { out.append_le<std::uint32_t>(entry); });
+  out.next_section();
+  for (WordId word = 0; word < word_count; ++word)
+    for_each_live_posting(word, [&](EntryId, float weight) { out.append_le<float>(weight); });
+  out.next_section();
 
   if (impl.options.direct_index) {
     for (EntryId entry = 0; entry < next_id; ++entry) {
-      if (impl.alive[entry] == 0) {
-        detail::put_le<std::uint32_t>(sections[kDirectSizes], 0);
-        detail::put_le<std::uint32_t>(sections[kDirectSizes], 0);
-        continue;
-      }
-      const FeatureVector features = impl.direct[entry].unpack();
-      detail::put_le<std::uint32_t>(sections[kDirectSizes],
-                                    static_cast<std::uint32_t>(features.size()));
-      detail::put_le<std::uint32_t>(sections[kDirectSizes],
-                                    static_cast<std::uint32_t>(features.feature_count()));
-      append_values(sections[kDirectData], features.nodes().data(), features.size());
-      append_values(sections[kDirectData], features.offsets().data() + 1, features.size());
-      append_values(sections[kDirectData], features.feature_indices().data(),
-                    features.feature_count());
+      const bool alive = impl.alive[entry] != 0;
+      out.append_le<std::uint32_t>(alive ? impl.direct[entry].node_count() : 0);
+      out.append_le<std::uint32_t>(alive ? impl.direct[entry].feature_count() : 0);
     }
+    out.next_section();
+    for (EntryId entry = 0; entry < next_id; ++entry) {
+      if (impl.alive[entry] == 0) continue;
+      const FeatureVector features = impl.direct[entry].unpack();
+      out.append(features.nodes().data(), features.size() * sizeof(NodeId));
+      out.append(features.offsets().data() + 1, features.size() * sizeof(std::uint32_t));
+      out.append(features.feature_indices().data(),
+                 features.feature_count() * sizeof(std::uint32_t));
+    }
+  } else {
+    out.next_section();
   }
+  out.next_section();
 
   if (!impl.labels.empty()) {
-    for (EntryId entry = 0; entry < next_id; ++entry) {
-      const std::string& label = impl.labels[entry];
-      detail::put_le<std::uint32_t>(sections[kLabelLengths],
-                                    static_cast<std::uint32_t>(label.size()));
-      sections[kLabelBytes].insert(sections[kLabelBytes].end(), label.begin(), label.end());
-    }
+    for (EntryId entry = 0; entry < next_id; ++entry)
+      out.append_le<std::uint32_t>(static_cast<std::uint32_t>(impl.labels[entry].size()));
+    out.next_section();
+    for (EntryId entry = 0; entry < next_id; ++entry)
+      out.append(impl.labels[entry].data(), impl.labels[entry].size());
+  } else {
+    out.next_section();
   }
 
-  return detail::write_sectioned_file(
-      kMagic, kVersion, sections, kSectionCount, [&](std::uint8_t* h) {
-        detail::store_le<std::uint32_t>(h + 16, next_id);
-        detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
-        detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
-                                                    (include_vocabulary ? kFlagVocabulary : 0));
-        detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
-        detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
-        detail::store_le<std::uint64_t>(h + 40, posting_count);
+  out.finish(kMagic, kVersion, [&](std::uint8_t* h) {
+    detail::store_le<std::uint32_t>(h + 16, next_id);
+    detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
+    detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
+                                                (include_vocabulary ? kFlagVocabulary : 0));
+    detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
+    detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
+    detail::store_le<std::uint64_t>(h + 40, posting_count);
+  });
+}
+
+template <class Impl>
+void refuse_saving_over_word_ids(const Impl& impl) {
+  if (impl.over_word_ids)
+    throw InvalidArgument(
+        "Database: a database over word ids has no vocabulary and cannot be saved as .bbdb");
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
+  refuse_saving_over_word_ids(*impl_);
+  std::shared_lock lock(impl_->mutex);
+  std::vector<std::uint8_t> bytes;
+  detail::SectionedFileWriter out(
+      kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
+        if (bytes.size() < offset + size) bytes.resize(offset + size);
+        std::memcpy(bytes.data() + offset, data, size);
       });
+  write_database(*impl_, include_vocabulary, out);
+  return bytes;
 }
 
 namespace {
@@ -416,9 +442,23 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size,
   return deserialize(data, size, name, std::move(vocabulary));
 }
 
+// Streams the file: the memory a save needs does not grow with the database.
 void Database::save(const std::string& path, bool include_vocabulary) const {
-  const std::vector<std::uint8_t> bytes = serialize(include_vocabulary);
-  detail::write_file_atomically(path, bytes.data(), bytes.size());
+  refuse_saving_over_word_ids(*impl_);
+  std::shared_lock lock(impl_->mutex);
+  detail::write_file_atomically(path, [&](std::FILE* file) {
+    // Sections follow one another after the space kept for the header, which
+    // comes last: only the first section and the header need a seek.
+    std::size_t position = 0;
+    detail::SectionedFileWriter out(
+        kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
+          if (offset != position && std::fseek(file, static_cast<long>(offset), SEEK_SET) != 0)
+            throw FileError(path, "cannot seek to write the header");
+          detail::write_all(file, data, size, path);
+          position = offset + size;
+        });
+    write_database(*impl_, include_vocabulary, out);
+  });
 }
 
 Database Database::load(const std::string& path) {

@@ -181,6 +181,8 @@ class PackedFeatureVector {
   PackedFeatureVector() = default;
   explicit PackedFeatureVector(const FeatureVector& features);
   FeatureVector unpack() const;
+  std::uint32_t node_count() const noexcept { return node_count_; }
+  std::uint32_t feature_count() const noexcept { return feature_count_; }
   std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
 
  private:
