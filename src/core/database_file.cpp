@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <shared_mutex>
@@ -119,16 +120,23 @@ class Layout {
       fail(std::string("checksum mismatch in section '") + kSectionNames[s] +
            "': the file is corrupted");
   }
-  // The section as `count` values of T; fails unless its length is exactly that.
+  // The section as `count` values of T, its CRC checked; fails unless its
+  // length is exactly that.
   template <class T>
   std::vector<T> values(Section s, std::size_t count) const {
-    if (sections_[s].size / sizeof(T) != count || sections_[s].size % sizeof(T) != 0)
+    const std::uint8_t* data = array(s, count, sizeof(T));
+    std::vector<T> out(count);
+    if (count > 0) std::memcpy(out.data(), data, count * sizeof(T));
+    return out;
+  }
+  // The same, in place (little-endian values, maybe unaligned).
+  const std::uint8_t* array(Section s, std::size_t count, std::size_t value_size) const {
+    if (sections_[s].size / value_size != count || sections_[s].size % value_size != 0)
       fail(std::string("section '") + kSectionNames[s] + "' has " +
            std::to_string(sections_[s].size) + " bytes, expected " +
-           std::to_string(count * sizeof(T)));
-    std::vector<T> out(count);
-    if (count > 0) std::memcpy(out.data(), sections_[s].data, count * sizeof(T));
-    return out;
+           std::to_string(count * value_size));
+    verify(s);
+    return sections_[s].data;
   }
   std::size_t count_of(Section s, std::size_t value_size) const {
     if (sections_[s].size % value_size != 0)
@@ -143,9 +151,8 @@ class Layout {
   detail::Section sections_[kSectionCount];
 };
 
-}  // namespace
-
-namespace {
+// Told when the reader is done with a section of the file.
+using Release = std::function<void(const detail::Section&)>;
 
 // Writes the .bbdb sections of `impl` in order, streaming: nothing the size
 // of the index is held besides it (the vocabulary section, when included, is
@@ -276,20 +283,26 @@ std::string hex(std::uint32_t value) {
   return text;
 }
 
-}  // namespace
-
 // Every count below is checked against the length of the section it comes
 // from before anything is allocated, so a hostile file cannot make the
-// reader allocate more than its own size justifies.
-Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
-                               Vocabulary vocabulary) {
-  const Layout layout(data, size, name, true);
+// reader allocate more than its own size justifies. Each section's CRC is
+// checked just before it is read, and `release` is told when the reader is
+// done with it (load() then drops its pages from memory), so reading holds
+// little more than the database it builds. (A template only because
+// Database::Impl is private to the class.)
+template <class Impl>
+void read_database(const std::uint8_t* data, std::size_t size, const std::string& name,
+                   Vocabulary vocabulary, const Release& release, std::unique_ptr<Impl>& out) {
+  const Layout layout(data, size, name, false);
   const Header& header = layout.header();
   if (vocabulary.empty()) layout.fail("the vocabulary given to load the database is empty");
   if (vocabulary.checksum() != header.vocabulary_checksum)
     layout.fail("the database was built with a different vocabulary (checksum " +
                 hex(header.vocabulary_checksum) + ", the given vocabulary has " +
                 hex(vocabulary.checksum()) + ")");
+  // What this reader does not read is still checked: the file is intact or refused.
+  layout.verify(kVocabularyBytes);
+  layout.verify(kDescription);
 
   DatabaseOptions options;
   options.direct_index = (header.flags & kFlagDirectIndex) != 0;
@@ -320,8 +333,8 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
   if (posting_count != header.postings)
     layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
                 std::to_string(posting_count));
-  auto ids = layout.values<std::uint32_t>(kPostingIds, posting_count);
-  auto weights = layout.values<float>(kPostingWeights, posting_count);
+  const std::uint8_t* ids = layout.array(kPostingIds, posting_count, 4);
+  const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
   if (posting_count > std::numeric_limits<std::uint32_t>::max())
     layout.fail("more postings than this binbow supports (2^32)");
   impl->word_counts.assign(next_id, 0);
@@ -336,21 +349,13 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
     const std::uint32_t length = lengths[l];
     if (length == 0 || length > posting_count - at)
       layout.fail("posting list of word " + std::to_string(words[l]) + " has an invalid length");
-    for (std::size_t i = at; i < at + length; ++i) {
-      if (ids[i] >= next_id || impl->alive[ids[i]] == 0 || (i > at && ids[i] <= ids[i - 1]))
-        layout.fail("posting list of word " + std::to_string(words[l]) +
-                    " names a missing entry or is not in increasing order");
-      if (!std::isfinite(weights[i]))
-        layout.fail("posting list of word " + std::to_string(words[l]) +
-                    " has a non-finite weight");
-      ++impl->word_counts[ids[i]];
-    }
     row_ends[impl->row_order.row(words[l]) + 1] = length;
     at += length;
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
   for (std::size_t r = 0; r < word_count; ++r) row_ends[r + 1] += row_ends[r];
   // Everything loaded is one wide segment: no tail, however many entries.
+  // The postings go from the file straight to their place in it.
   if (posting_count > 0) {
     segment->end_entry = next_id;
     segment->level = detail::kLoadedLevel;
@@ -359,17 +364,33 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
     segment->weights.resize(posting_count);
     std::size_t from = 0;
     for (std::size_t l = 0; l < list_count; ++l) {
-      const std::uint32_t to = row_ends[impl->row_order.row(words[l])];
-      std::memcpy(segment->entries32.data() + to, ids.data() + from, lengths[l] * sizeof(EntryId));
-      std::memcpy(segment->weights.data() + to, weights.data() + from, lengths[l] * sizeof(float));
+      std::uint32_t* entries_out =
+          segment->entries32.data() + row_ends[impl->row_order.row(words[l])];
+      float* weights_out = segment->weights.data() + (entries_out - segment->entries32.data());
+      for (std::size_t i = 0; i < lengths[l]; ++i) {
+        const auto id = detail::load_le<std::uint32_t>(ids + 4 * (from + i));
+        const auto weight = detail::load_le<float>(weights + 4 * (from + i));
+        if (id >= next_id || impl->alive[id] == 0 || (i > 0 && id <= entries_out[i - 1]))
+          layout.fail("posting list of word " + std::to_string(words[l]) +
+                      " names a missing entry or is not in increasing order");
+        if (!std::isfinite(weight))
+          layout.fail("posting list of word " + std::to_string(words[l]) +
+                      " has a non-finite weight");
+        ++impl->word_counts[id];
+        entries_out[i] = id;
+        weights_out[i] = weight;
+      }
       from += lengths[l];
     }
     impl->segments.push_back(std::move(segment));
   }
+  release(layout.section(kPostingIds));
+  release(layout.section(kPostingWeights));
   impl->tail_first_entry = next_id;
 
   if (options.direct_index) {
     const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);
+    layout.verify(kDirectData);
     const detail::Section& direct_data = layout.section(kDirectData);
     const std::size_t available = layout.count_of(kDirectData, 4);
     impl->direct.resize(next_id);
@@ -406,12 +427,17 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
       }
     }
     if (cursor != available) layout.fail("direct index section has trailing data");
+    release(direct_data);
   } else if (layout.section(kDirectSizes).size != 0 || layout.section(kDirectData).size != 0) {
     layout.fail("direct index present in a database saved without one");
+  } else {
+    layout.verify(kDirectSizes);
+    layout.verify(kDirectData);
   }
 
   if (layout.section(kLabelLengths).size != 0) {
     const auto label_lengths = layout.values<std::uint32_t>(kLabelLengths, next_id);
+    layout.verify(kLabelBytes);
     const detail::Section& bytes = layout.section(kLabelBytes);
     impl->labels.resize(next_id);
     std::size_t cursor = 0;
@@ -425,7 +451,20 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
     if (cursor != bytes.size) layout.fail("labels section has trailing data");
   } else if (layout.section(kLabelBytes).size != 0) {
     layout.fail("label bytes without label lengths");
+  } else {
+    layout.verify(kLabelLengths);
+    layout.verify(kLabelBytes);
   }
+  out = std::move(impl);
+}
+
+}  // namespace
+
+Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
+                               Vocabulary vocabulary) {
+  std::unique_ptr<Impl> impl;
+  read_database(
+      data, size, name, std::move(vocabulary), [](const detail::Section&) {}, impl);
   return Database(std::move(impl));
 }
 
@@ -461,14 +500,39 @@ void Database::save(const std::string& path, bool include_vocabulary) const {
   });
 }
 
+namespace {
+
+// Reads a mapped file, dropping each large section's pages once read.
+template <class Impl>
+void load_database(const detail::MappedFile& file, Vocabulary vocabulary,
+                   std::unique_ptr<Impl>& out) {
+  read_database(
+      file.data(), file.size(), file.path(), std::move(vocabulary),
+      [&](const detail::Section& section) { file.release(section.data, section.size); }, out);
+}
+
+}  // namespace
+
 Database Database::load(const std::string& path) {
   const detail::MappedFile file(path);
-  return deserialize(file.data(), file.size(), path);
+  const Layout layout(file.data(), file.size(), path, false);
+  if ((layout.header().flags & kFlagVocabulary) == 0)
+    layout.fail("the database does not include its vocabulary (checksum " +
+                hex(layout.header().vocabulary_checksum) +
+                "); load it together with the vocabulary it was built with");
+  layout.verify(kVocabularyBytes);
+  const detail::Section& bytes = layout.section(kVocabularyBytes);
+  std::unique_ptr<Impl> impl;
+  load_database(file, Vocabulary::deserialize(bytes.data, bytes.size, path + " (vocabulary)"),
+                impl);
+  return Database(std::move(impl));
 }
 
 Database Database::load(const std::string& path, Vocabulary vocabulary) {
   const detail::MappedFile file(path);
-  return deserialize(file.data(), file.size(), path, std::move(vocabulary));
+  std::unique_ptr<Impl> impl;
+  load_database(file, std::move(vocabulary), impl);
+  return Database(std::move(impl));
 }
 
 DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {
