@@ -245,8 +245,6 @@ void BM_Fill(benchmark::State& state) {
   memory_counters(state, *s);
   label(state, *s);
 }
-BENCHMARK(BM_Fill)->Arg(10000)->Arg(100000)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(
-    benchmark::kSecond);
 
 std::vector<double> query_times_ms(const Database& database,
                                    const std::vector<BowVector>& queries) {
@@ -283,8 +281,13 @@ void BM_Query(benchmark::State& state) {
   memory_counters(state, *s);
   label(state, *s);
 }
-BENCHMARK(BM_Query)->Arg(10000)->Arg(100000)->Arg(1000000)->Iterations(1)->Unit(
-    benchmark::kMillisecond);
+// Registered size by size: each size's queries run before the database grows on.
+BENCHMARK(BM_Fill)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Fill)->Arg(100000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(100000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Fill)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 void BM_SaveLoad(benchmark::State& state) {
   Scale* s = scale_or_skip(state);

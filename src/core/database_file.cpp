@@ -152,7 +152,7 @@ class Layout {
 };
 
 // Told when the reader is done with a section of the file.
-using Release = std::function<void(const detail::Section&)>;
+using Release = std::function<void(const std::uint8_t* data, std::size_t size)>;
 
 // Writes the .bbdb sections of `impl` in order, streaming: nothing the size
 // of the index is held besides it (the vocabulary section, when included, is
@@ -293,6 +293,7 @@ std::string hex(std::uint32_t value) {
 template <class Impl>
 void read_database(const std::uint8_t* data, std::size_t size, const std::string& name,
                    Vocabulary vocabulary, const Release& release, std::unique_ptr<Impl>& out) {
+  constexpr std::size_t kReleaseBytes = std::size_t{64} << 20;  // released a part at a time
   const Layout layout(data, size, name, false);
   const Header& header = layout.header();
   if (vocabulary.empty()) layout.fail("the vocabulary given to load the database is empty");
@@ -337,10 +338,7 @@ void read_database(const std::uint8_t* data, std::size_t size, const std::string
   const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
   if (posting_count > std::numeric_limits<std::uint32_t>::max())
     layout.fail("more postings than this binbow supports (2^32)");
-  impl->word_counts.assign(next_id, 0);
-  auto segment = std::make_unique<detail::Segment>();
-  std::vector<std::uint32_t>& row_ends = segment->offsets;
-  row_ends.assign(word_count + 1, 0);
+  std::vector<std::uint32_t> rows(list_count);
   std::size_t at = 0;
   for (std::size_t l = 0; l < list_count; ++l) {
     if (words[l] >= word_count || (l > 0 && words[l] <= words[l - 1]))
@@ -349,43 +347,79 @@ void read_database(const std::uint8_t* data, std::size_t size, const std::string
     const std::uint32_t length = lengths[l];
     if (length == 0 || length > posting_count - at)
       layout.fail("posting list of word " + std::to_string(words[l]) + " has an invalid length");
-    row_ends[impl->row_order.row(words[l]) + 1] = length;
+    rows[l] = impl->row_order.row(words[l]);
     at += length;
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
-  for (std::size_t r = 0; r < word_count; ++r) row_ends[r + 1] += row_ends[r];
-  // Everything loaded is one wide segment: no tail, however many entries.
-  // The postings go from the file straight to their place in it.
-  if (posting_count > 0) {
-    segment->end_entry = next_id;
-    segment->level = detail::kLoadedLevel;
-    segment->wide = true;
-    segment->entries32.resize(posting_count);
-    segment->weights.resize(posting_count);
-    std::size_t from = 0;
+
+  // The postings go to one segment per kSegmentSpan ids (16-bit entries, as
+  // in a database that was filled by add()): a first pass checks them and
+  // counts each segment's rows, a second puts them in place. Within a list
+  // the entries increase, so each segment's part of a row is one run of it.
+  // The sections are released as they are read, a part at a time.
+  const auto for_each_list = [&](const auto& visit) {
+    std::size_t from = 0, released = 0;
     for (std::size_t l = 0; l < list_count; ++l) {
-      std::uint32_t* entries_out =
-          segment->entries32.data() + row_ends[impl->row_order.row(words[l])];
-      float* weights_out = segment->weights.data() + (entries_out - segment->entries32.data());
-      for (std::size_t i = 0; i < lengths[l]; ++i) {
-        const auto id = detail::load_le<std::uint32_t>(ids + 4 * (from + i));
-        const auto weight = detail::load_le<float>(weights + 4 * (from + i));
-        if (id >= next_id || impl->alive[id] == 0 || (i > 0 && id <= entries_out[i - 1]))
-          layout.fail("posting list of word " + std::to_string(words[l]) +
-                      " names a missing entry or is not in increasing order");
-        if (!std::isfinite(weight))
-          layout.fail("posting list of word " + std::to_string(words[l]) +
-                      " has a non-finite weight");
-        ++impl->word_counts[id];
-        entries_out[i] = id;
-        weights_out[i] = weight;
-      }
+      visit(l, from);
       from += lengths[l];
+      if ((from - released) * 4 >= kReleaseBytes || l + 1 == list_count) {
+        release(ids + 4 * released, 4 * (from - released));
+        release(weights + 4 * released, 4 * (from - released));
+        released = from;
+      }
     }
-    impl->segments.push_back(std::move(segment));
+  };
+  impl->word_counts.assign(next_id, 0);
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t segment_count = posting_count > 0 ? (next_id + span - 1) / span : 0;
+  std::vector<std::unique_ptr<detail::Segment>> segments(segment_count);  // those with postings
+  for_each_list([&](std::size_t l, std::size_t from) {
+    EntryId previous = 0;
+    for (std::size_t i = from; i < from + lengths[l]; ++i) {
+      const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
+      if (id >= next_id || impl->alive[id] == 0 || (i > from && id <= previous))
+        layout.fail("posting list of word " + std::to_string(words[l]) +
+                    " names a missing entry or is not in increasing order");
+      if (!std::isfinite(detail::load_le<float>(weights + 4 * i)))
+        layout.fail("posting list of word " + std::to_string(words[l]) +
+                    " has a non-finite weight");
+      ++impl->word_counts[id];
+      auto& segment = segments[id / span];
+      if (!segment) {
+        segment = std::make_unique<detail::Segment>();
+        segment->first_entry = static_cast<EntryId>(id / span * span);
+        segment->end_entry =
+            static_cast<EntryId>(std::min<std::size_t>(next_id, segment->first_entry + span));
+        segment->level = detail::kLoadedLevel;
+        segment->offsets.assign(word_count + 1, 0);
+      }
+      ++segment->offsets[rows[l] + 1];
+      previous = id;
+    }
+  });
+  for (auto& segment : segments) {
+    if (!segment) continue;
+    std::uint32_t* offsets = segment->offsets.data();
+    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
+    segment->entries16.resize(offsets[word_count]);
+    segment->weights.resize(offsets[word_count]);
   }
-  release(layout.section(kPostingIds));
-  release(layout.section(kPostingWeights));
+  for_each_list([&](std::size_t l, std::size_t from) {
+    std::size_t i = from;
+    const std::size_t end = from + lengths[l];
+    while (i < end) {
+      detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
+      std::uint32_t to = segment.offsets[rows[l]];
+      for (; i < end; ++i, ++to) {
+        const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
+        if (id >= segment.end_entry) break;
+        segment.entries16.data()[to] = static_cast<std::uint16_t>(id - segment.first_entry);
+        segment.weights.data()[to] = detail::load_le<float>(weights + 4 * i);
+      }
+    }
+  });
+  for (auto& segment : segments)
+    if (segment) impl->segments.push_back(std::move(segment));
   impl->tail_first_entry = next_id;
 
   if (options.direct_index) {
@@ -394,7 +428,7 @@ void read_database(const std::uint8_t* data, std::size_t size, const std::string
     const detail::Section& direct_data = layout.section(kDirectData);
     const std::size_t available = layout.count_of(kDirectData, 4);
     impl->direct.resize(next_id);
-    std::size_t cursor = 0;
+    std::size_t cursor = 0, released = 0;  // in values of 4 bytes
     for (EntryId entry = 0; entry < next_id; ++entry) {
       const std::uint64_t nodes = sizes[2 * std::size_t{entry}];
       const std::uint64_t features = sizes[2 * std::size_t{entry} + 1];
@@ -425,9 +459,13 @@ void read_database(const std::uint8_t* data, std::size_t size, const std::string
         layout.fail("direct index of entry " + std::to_string(entry) +
                     " is inconsistent: " + e.what());
       }
+      if ((cursor - released) * 4 >= kReleaseBytes) {
+        release(direct_data.data + released * 4, (cursor - released) * 4);
+        released = cursor;
+      }
     }
     if (cursor != available) layout.fail("direct index section has trailing data");
-    release(direct_data);
+    release(direct_data.data + released * 4, (cursor - released) * 4);
   } else if (layout.section(kDirectSizes).size != 0 || layout.section(kDirectData).size != 0) {
     layout.fail("direct index present in a database saved without one");
   } else {
@@ -464,7 +502,7 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
                                Vocabulary vocabulary) {
   std::unique_ptr<Impl> impl;
   read_database(
-      data, size, name, std::move(vocabulary), [](const detail::Section&) {}, impl);
+      data, size, name, std::move(vocabulary), [](const std::uint8_t*, std::size_t) {}, impl);
   return Database(std::move(impl));
 }
 
@@ -508,7 +546,7 @@ void load_database(const detail::MappedFile& file, Vocabulary vocabulary,
                    std::unique_ptr<Impl>& out) {
   read_database(
       file.data(), file.size(), file.path(), std::move(vocabulary),
-      [&](const detail::Section& section) { file.release(section.data, section.size); }, out);
+      [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }, out);
 }
 
 }  // namespace
