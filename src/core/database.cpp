@@ -286,12 +286,8 @@ template <Scoring kScoring>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order,
                         const BowVector& bow, EntryId last_entry, Accumulator* accumulators,
                         EntryId* touched, std::size_t& touched_count) {
-  if (segment.wide)
-    accumulate_segment<kScoring>(segment, segment.entries32.data(), order, bow, last_entry,
-                                 accumulators, touched, touched_count);
-  else
-    accumulate_segment<kScoring>(segment, segment.entries16.data(), order, bow, last_entry,
-                                 accumulators, touched, touched_count);
+  accumulate_segment<kScoring>(segment, segment.entries16.data(), order, bow, last_entry,
+                               accumulators, touched, touched_count);
 }
 
 // What a query reads of the index (Database::Impl is private).
@@ -529,7 +525,6 @@ std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Rela
 struct RelaidSegment {
   std::vector<std::uint32_t> offsets;
   detail::GrowableArray<std::uint16_t> entries16;
-  detail::GrowableArray<std::uint32_t> entries32;
   detail::GrowableArray<float> weights;
 };
 
@@ -550,15 +545,9 @@ void Database::Impl::grow_words(std::size_t needed) {
     const detail::Segment& segment = *segments[i];
     RelaidSegment& out = relaid[i];
     out.weights.resize(segment.postings());
-    if (segment.wide) {
-      out.entries32.resize(segment.postings());
-      out.offsets = relay_rows(segment, segment.entries32.data(), out.entries32.data(),
-                               out.weights.data(), word_capacity, new_words);
-    } else {
-      out.entries16.resize(segment.postings());
-      out.offsets = relay_rows(segment, segment.entries16.data(), out.entries16.data(),
-                               out.weights.data(), word_capacity, new_words);
-    }
+    out.entries16.resize(segment.postings());
+    out.offsets = relay_rows(segment, segment.entries16.data(), out.entries16.data(),
+                             out.weights.data(), word_capacity, new_words);
   }
   std::vector<detail::TailList> lists(std::min(new_words, std::size_t{1} << detail::kGroupBits));
   std::vector<std::uint8_t> block_logs(lists.size(), detail::kFirstBlockLog);
@@ -566,7 +555,6 @@ void Database::Impl::grow_words(std::size_t needed) {
     detail::Segment& segment = *segments[i];
     segment.offsets.swap(relaid[i].offsets);
     segment.entries16.swap(relaid[i].entries16);
-    segment.entries32.swap(relaid[i].entries32);
     segment.weights.swap(relaid[i].weights);
   }
   tail_lists.swap(lists);
@@ -657,18 +645,27 @@ void Database::Impl::merge_segments_if_many() {
     if (level == detail::kLoadedLevel) return;
     for (std::size_t i = n - detail::kSegmentFanIn; i < n; ++i)
       if (segments[i]->level != level) return;
-    merge_segments(n - detail::kSegmentFanIn, n);
+    // A merged segment spans at most kSegmentSpan ids, so that its entries
+    // stay 16-bit (6 bytes per posting, not 8): the oldest of these segments
+    // that fit together merge, if at least two do.
+    const std::size_t begin = n - detail::kSegmentFanIn;
+    std::size_t end = begin + 1;
+    while (end < n &&
+           segments[end]->end_entry - segments[begin]->first_entry <= detail::kSegmentSpan)
+      ++end;
+    if (end - begin < 2) return;
+    merge_segments(begin, end);
   }
 }
 
 namespace {
 
 // Row by row, the rows of the segments [begin, end), oldest first: entries
-// stay in increasing order. Every source is read sequentially.
-template <typename Relative>
+// stay in increasing order. Every source is read sequentially. Merged
+// segments and their sources span at most kSegmentSpan ids (16-bit entries).
 void merge_rows(const std::unique_ptr<detail::Segment>* begin,
-                const std::unique_ptr<detail::Segment>* end, detail::Segment& merged,
-                Relative* entries) noexcept {
+                const std::unique_ptr<detail::Segment>* end, detail::Segment& merged) noexcept {
+  std::uint16_t* entries = merged.entries16.data();
   const std::size_t rows = merged.offsets.size() - 1;
   float* weights = merged.weights.data();
   std::uint32_t* offsets = merged.offsets.data();
@@ -680,12 +677,8 @@ void merge_rows(const std::unique_ptr<detail::Segment>* begin,
       const std::uint32_t from = s.offsets[r];
       const std::uint32_t count = s.offsets[r + 1] - from;
       const std::uint32_t delta = s.first_entry - merged.first_entry;
-      if (s.wide)
-        for (std::uint32_t i = 0; i < count; ++i)
-          entries[at + i] = static_cast<Relative>(s.entries32.data()[from + i] + delta);
-      else
-        for (std::uint32_t i = 0; i < count; ++i)
-          entries[at + i] = static_cast<Relative>(s.entries16.data()[from + i] + delta);
+      for (std::uint32_t i = 0; i < count; ++i)
+        entries[at + i] = static_cast<std::uint16_t>(s.entries16.data()[from + i] + delta);
       std::memcpy(weights + at, s.weights.data() + from, count * sizeof(float));
       at += count;
     }
@@ -704,19 +697,11 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
   merged->first_entry = segments[begin]->first_entry;
   merged->end_entry = segments[end - 1]->end_entry;
   merged->level = segments[begin]->level + 1;
-  merged->wide = merged->end_entry - merged->first_entry > detail::kSegmentSpan;
   merged->offsets.resize(segments[begin]->offsets.size());
-  if (merged->wide)
-    merged->entries32.resize(total);
-  else
-    merged->entries16.resize(total);
+  merged->entries16.resize(total);
   merged->weights.resize(total);
   // Nothing below can throw.
-  const auto* sources = segments.data();
-  if (merged->wide)
-    merge_rows(sources + begin, sources + end, *merged, merged->entries32.data());
-  else
-    merge_rows(sources + begin, sources + end, *merged, merged->entries16.data());
+  merge_rows(segments.data() + begin, segments.data() + end, *merged);
   for (std::size_t i = begin; i < end; ++i) merged->dead_postings += segments[i]->dead_postings;
   segments[begin] = std::move(merged);
   segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(begin) + 1,
@@ -835,12 +820,8 @@ void Database::Impl::compact(std::size_t index) {
   }
   const std::uint8_t* live_at = alive.data() + segment.first_entry;
   // Shrinking never throws.
-  if (segment.wide) {
-    segment.entries32.resize(drop_dead_postings(segment, segment.entries32.data(), live_at));
-  } else {
-    segment.entries16.resize(drop_dead_postings(segment, segment.entries16.data(), live_at));
-  }
-  segment.weights.resize(segment.wide ? segment.entries32.size() : segment.entries16.size());
+  segment.entries16.resize(drop_dead_postings(segment, segment.entries16.data(), live_at));
+  segment.weights.resize(segment.entries16.size());
   segment.dead_postings = 0;
 }
 
@@ -983,7 +964,10 @@ void Database::remove(EntryId entry) {
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
   impl_->alive[entry] = 0;
   --impl_->live_entries;
-  const std::size_t segment = impl_->segment_of(entry);
+  // An entry without postings has nothing to drop, and may lie where no
+  // segment is left (one whose postings were all removed is dropped).
+  const std::size_t segment =
+      impl_->word_counts[entry] == 0 ? impl_->segments.size() : impl_->segment_of(entry);
   if (segment == impl_->segments.size()) {
     impl_->tail_dead_postings += impl_->word_counts[entry];
   } else {
@@ -1064,7 +1048,7 @@ std::size_t Database::memory_usage() const {
                       impl.labels.capacity() * sizeof(std::string);
   for (const auto& segment : impl.segments)
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
-             segment->postings() * ((segment->wide ? 4 : 2) + sizeof(float));
+             segment->postings() * (sizeof(std::uint16_t) + sizeof(float));
   bytes += impl.arena.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();
   for (const auto& label : impl.labels)

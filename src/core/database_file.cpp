@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <shared_mutex>
@@ -71,13 +72,6 @@ constexpr std::uint64_t kMaxWordCapacity = std::uint64_t{1} << 32;
 // capacity), starting at kInitialWordCapacity.
 std::uint64_t largest_capacity(std::uint64_t word_end) {
   return std::clamp<std::uint64_t>(2 * word_end, detail::kInitialWordCapacity, kMaxWordCapacity);
-}
-
-template <class T>
-void append_values(std::vector<std::uint8_t>& out, const T* values, std::size_t count) {
-  const std::size_t at = out.size();
-  out.resize(at + count * sizeof(T));
-  if (count > 0) std::memcpy(out.data() + at, values, count * sizeof(T));
 }
 
 struct Header {
@@ -152,16 +146,23 @@ class Layout {
       fail(std::string("checksum mismatch in section '") + kSectionNames[s] +
            "': the file is corrupted");
   }
-  // The section as `count` values of T; fails unless its length is exactly that.
+  // The section as `count` values of T, its CRC checked; fails unless its
+  // length is exactly that.
   template <class T>
   std::vector<T> values(Section s, std::size_t count) const {
-    if (sections_[s].size / sizeof(T) != count || sections_[s].size % sizeof(T) != 0)
+    const std::uint8_t* data = array(s, count, sizeof(T));
+    std::vector<T> out(count);
+    if (count > 0) std::memcpy(out.data(), data, count * sizeof(T));
+    return out;
+  }
+  // The same, in place (little-endian values, maybe unaligned).
+  const std::uint8_t* array(Section s, std::size_t count, std::size_t value_size) const {
+    if (sections_[s].size / value_size != count || sections_[s].size % value_size != 0)
       fail(std::string("section '") + kSectionNames[s] + "' has " +
            std::to_string(sections_[s].size) + " bytes, expected " +
-           std::to_string(count * sizeof(T)));
-    std::vector<T> out(count);
-    if (count > 0) std::memcpy(out.data(), sections_[s].data, count * sizeof(T));
-    return out;
+           std::to_string(count * value_size));
+    verify(s);
+    return sections_[s].data;
   }
   std::size_t count_of(Section s, std::size_t value_size) const {
     if (sections_[s].size % value_size != 0)
@@ -177,107 +178,133 @@ class Layout {
   detail::Section sections_[kSectionCount];
 };
 
+// Told when the reader is done with a section of the file.
+using Release = std::function<void(const std::uint8_t* data, std::size_t size)>;
+
+// Writes the .bbdb sections of `impl` in order, streaming: nothing the size
+// of the index is held besides it (the vocabulary section, when included, is
+// serialised whole). The caller holds the database's lock. (A template only
+// because Database::Impl is private to the class.)
+template <class Impl>
+void write_database(const Impl& impl, bool include_vocabulary, detail::SectionedFileWriter& out) {
+  include_vocabulary = include_vocabulary && !impl.over_word_ids;
+  const auto next_id = static_cast<EntryId>(impl.alive.size());
+  if (include_vocabulary) {
+    const std::vector<std::uint8_t> vocabulary = impl.vocabulary.serialize();
+    out.append(vocabulary.data(), vocabulary.size());
+  }
+  out.next_section();
+  const std::string description = impl.vocabulary.description();
+  if (!impl.over_word_ids) out.append(description.data(), description.size());
+  out.next_section();
+  out.append(impl.alive.data(), impl.alive.size());
+  out.next_section();
+
+  // The live postings of one word: segments oldest first, then the tail, so
+  // entry ids increase.
+  const std::uint32_t high_mask = (1u << impl.high_bits) - 1;
+  const auto for_each_live_posting = [&](WordId word, const auto& visit) {
+    const std::uint32_t row = impl.row_order.row(word);
+    for (const auto& segment : impl.segments)
+      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i) {
+        const EntryId entry = segment->entry(i);
+        if (impl.alive[entry] != 0) visit(entry, segment->weights.data()[i]);
+      }
+    const detail::TailList list = impl.tail_lists[detail::group_of(word)];
+    if (list.size == 0) return;
+    const detail::TailPosting* tail = impl.arena.at(list.block);
+    for (std::uint32_t i = 0; i < list.size; ++i) {
+      if ((tail[i].key & high_mask) != word >> detail::kGroupBits) continue;
+      const auto entry =
+          static_cast<EntryId>(impl.tail_first_entry + (tail[i].key >> impl.high_bits));
+      if (impl.alive[entry] != 0) visit(entry, tail[i].weight);
+    }
+  };
+  const std::size_t word_count = impl.word_capacity;
+  std::vector<std::uint32_t> live(word_count, 0);
+  std::uint64_t posting_count = 0;
+  std::uint64_t largest_word_end = 0;  // 1 + the largest word with a posting
+  for (WordId word = 0; word < word_count; ++word) {
+    for_each_live_posting(word, [&](EntryId, float) { ++live[word]; });
+    posting_count += live[word];
+    if (live[word] != 0) largest_word_end = std::uint64_t{word} + 1;
+  }
+  for (WordId word = 0; word < word_count; ++word)
+    if (live[word] != 0) out.append_le<std::uint32_t>(word);
+  out.next_section();
+  for (WordId word = 0; word < word_count; ++word)
+    if (live[word] != 0) out.append_le<std::uint32_t>(live[word]);
+  out.next_section();
+  for (WordId word = 0; word < word_count; ++word)
+    for_each_live_posting(word, [&](EntryId entry, float) { out.append_le<std::uint32_t>(entry); });
+  out.next_section();
+  for (WordId word = 0; word < word_count; ++word)
+    for_each_live_posting(word, [&](EntryId, float weight) { out.append_le<float>(weight); });
+  out.next_section();
+
+  if (impl.options.direct_index) {
+    for (EntryId entry = 0; entry < next_id; ++entry) {
+      const bool alive = impl.alive[entry] != 0;
+      out.append_le<std::uint32_t>(alive ? impl.direct[entry].node_count() : 0);
+      out.append_le<std::uint32_t>(alive ? impl.direct[entry].feature_count() : 0);
+    }
+    out.next_section();
+    for (EntryId entry = 0; entry < next_id; ++entry) {
+      if (impl.alive[entry] == 0) continue;
+      const FeatureVector features = impl.direct[entry].unpack();
+      out.append(features.nodes().data(), features.size() * sizeof(NodeId));
+      out.append(features.offsets().data() + 1, features.size() * sizeof(std::uint32_t));
+      out.append(features.feature_indices().data(),
+                 features.feature_count() * sizeof(std::uint32_t));
+    }
+  } else {
+    out.next_section();
+  }
+  out.next_section();
+
+  if (!impl.labels.empty()) {
+    for (EntryId entry = 0; entry < next_id; ++entry)
+      out.append_le<std::uint32_t>(static_cast<std::uint32_t>(impl.labels[entry].size()));
+    out.next_section();
+    for (EntryId entry = 0; entry < next_id; ++entry)
+      out.append(impl.labels[entry].data(), impl.labels[entry].size());
+  } else {
+    out.next_section();
+  }
+
+  out.finish(kMagic, kVersion, [&](std::uint8_t* h) {
+    detail::store_le<std::uint32_t>(h + 16, next_id);
+    detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
+    detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
+                                                (include_vocabulary ? kFlagVocabulary : 0) |
+                                                (impl.over_word_ids ? kFlagOverWordIds : 0));
+    detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
+    detail::store_le<std::uint64_t>(h + 40, posting_count);
+    if (!impl.over_word_ids) {
+      detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
+      return;
+    }
+    detail::store_le<std::uint32_t>(h + 36, static_cast<std::uint32_t>(impl.scoring));
+    // Within what the postings justify (largest_capacity), which the
+    // capacity exceeds only when the entries with the largest words were
+    // removed: the index keeps its shape, and a reader can bound it.
+    detail::store_le<std::uint64_t>(
+        h + 52, std::min<std::uint64_t>(impl.word_capacity, largest_capacity(largest_word_end)));
+  });
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
   std::shared_lock lock(impl_->mutex);
-  const Impl& impl = *impl_;
-  include_vocabulary = include_vocabulary && !impl.over_word_ids;
-  const auto next_id = static_cast<EntryId>(impl.alive.size());
-  std::vector<std::uint8_t> sections[kSectionCount];
-  if (include_vocabulary) sections[kVocabularyBytes] = impl.vocabulary.serialize();
-  const std::string description = impl.vocabulary.description();
-  if (!impl.over_word_ids) sections[kDescription].assign(description.begin(), description.end());
-  sections[kEntryStates] = impl.alive;
-
-  // Live postings only, words in increasing order.
-  std::uint64_t posting_count = 0;
-  const std::size_t word_count = impl.word_capacity;
-  std::uint64_t largest_word_end = 0;  // 1 + the largest word with a posting
-  for (WordId word = 0; word < word_count; ++word) {
-    // Segments first, oldest first, then the tail: entry ids increase.
-    const detail::TailList list = impl.tail_lists[detail::group_of(word)];
-    const std::uint32_t high_mask = (1u << impl.high_bits) - 1;
-    const detail::TailPosting* tail = list.size != 0 ? impl.arena.at(list.block) : nullptr;
-    const auto in_tail = [&](std::uint32_t i) {
-      return (tail[i].key & high_mask) == word >> detail::kGroupBits;
-    };
-    const auto tail_entry = [&](std::uint32_t i) {
-      return static_cast<EntryId>(impl.tail_first_entry + (tail[i].key >> impl.high_bits));
-    };
-    std::uint32_t live = 0;
-    const std::uint32_t row = impl.row_order.row(word);
-    for (const auto& segment : impl.segments)
-      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i)
-        live += impl.alive[segment->entry(i)];
-    for (std::uint32_t i = 0; i < list.size; ++i)
-      if (in_tail(i)) live += impl.alive[tail_entry(i)];
-    if (live == 0) continue;
-    largest_word_end = std::uint64_t{word} + 1;
-    detail::put_le<std::uint32_t>(sections[kWords], word);
-    detail::put_le<std::uint32_t>(sections[kListLengths], live);
-    const auto put_posting = [&](EntryId entry, float weight) {
-      if (impl.alive[entry] == 0) return;
-      detail::put_le<std::uint32_t>(sections[kPostingIds], entry);
-      detail::put_le<float>(sections[kPostingWeights], weight);
-    };
-    for (const auto& segment : impl.segments)
-      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i)
-        put_posting(segment->entry(i), segment->weights.data()[i]);
-    for (std::uint32_t i = 0; i < list.size; ++i)
-      if (in_tail(i)) put_posting(tail_entry(i), tail[i].weight);
-    posting_count += live;
-  }
-
-  if (impl.options.direct_index) {
-    for (EntryId entry = 0; entry < next_id; ++entry) {
-      if (impl.alive[entry] == 0) {
-        detail::put_le<std::uint32_t>(sections[kDirectSizes], 0);
-        detail::put_le<std::uint32_t>(sections[kDirectSizes], 0);
-        continue;
-      }
-      const FeatureVector features = impl.direct[entry].unpack();
-      detail::put_le<std::uint32_t>(sections[kDirectSizes],
-                                    static_cast<std::uint32_t>(features.size()));
-      detail::put_le<std::uint32_t>(sections[kDirectSizes],
-                                    static_cast<std::uint32_t>(features.feature_count()));
-      append_values(sections[kDirectData], features.nodes().data(), features.size());
-      append_values(sections[kDirectData], features.offsets().data() + 1, features.size());
-      append_values(sections[kDirectData], features.feature_indices().data(),
-                    features.feature_count());
-    }
-  }
-
-  if (!impl.labels.empty()) {
-    for (EntryId entry = 0; entry < next_id; ++entry) {
-      const std::string& label = impl.labels[entry];
-      detail::put_le<std::uint32_t>(sections[kLabelLengths],
-                                    static_cast<std::uint32_t>(label.size()));
-      sections[kLabelBytes].insert(sections[kLabelBytes].end(), label.begin(), label.end());
-    }
-  }
-
-  return detail::write_sectioned_file(
-      kMagic, kVersion, sections, kSectionCount, [&](std::uint8_t* h) {
-        detail::store_le<std::uint32_t>(h + 16, next_id);
-        detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(impl.live_entries));
-        detail::store_le<std::uint32_t>(h + 24, (impl.options.direct_index ? kFlagDirectIndex : 0) |
-                                                    (include_vocabulary ? kFlagVocabulary : 0) |
-                                                    (impl.over_word_ids ? kFlagOverWordIds : 0));
-        detail::store_le<std::uint32_t>(h + 28, impl.options.direct_index_levels_up);
-        detail::store_le<std::uint64_t>(h + 40, posting_count);
-        if (!impl.over_word_ids) {
-          detail::store_le<std::uint32_t>(h + 32, impl.vocabulary.checksum());
-          return;
-        }
-        detail::store_le<std::uint32_t>(h + 36, static_cast<std::uint32_t>(impl.scoring));
-        // Within what the postings justify (largest_capacity), which the
-        // capacity exceeds only when the entries with the largest words were
-        // removed: the index keeps its shape, and a reader can bound it.
-        detail::store_le<std::uint64_t>(
-            h + 52,
-            std::min<std::uint64_t>(impl.word_capacity, largest_capacity(largest_word_end)));
+  std::vector<std::uint8_t> bytes;
+  detail::SectionedFileWriter out(
+      kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
+        if (bytes.size() < offset + size) bytes.resize(offset + size);
+        std::memcpy(bytes.data() + offset, data, size);
       });
+  write_database(*impl_, include_vocabulary, out);
+  return bytes;
 }
 
 namespace {
@@ -290,11 +317,15 @@ std::string hex(std::uint32_t value) {
 
 // Every count below is checked against the length of the section it comes
 // from before anything is allocated, so a hostile file cannot make the
-// reader allocate more than its own size justifies. `impl` is empty, laid
-// out for the file's words; a template only so that it can name the private
-// Database::Impl.
-template <class DatabaseImpl>
-void read_index(const Layout& layout, DatabaseImpl* impl) {
+// reader allocate more than its own size justifies. Each section's CRC is
+// checked just before it is read, and `release` is told when the reader is
+// done with it (load() then drops its pages from memory), so reading holds
+// little more than the database it builds. `impl` is empty, laid out for the
+// file's words. (A template only because Database::Impl is private to the
+// class.)
+template <class Impl>
+void read_index(const Layout& layout, const Release& release, Impl* impl) {
+  constexpr std::size_t kReleaseBytes = std::size_t{64} << 20;  // released a part at a time
   const Header& header = layout.header();
   const std::size_t word_count = impl->word_capacity;
   const std::uint64_t node_count =
@@ -322,14 +353,11 @@ void read_index(const Layout& layout, DatabaseImpl* impl) {
   if (posting_count != header.postings)
     layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
                 std::to_string(posting_count));
-  auto ids = layout.values<std::uint32_t>(kPostingIds, posting_count);
-  auto weights = layout.values<float>(kPostingWeights, posting_count);
+  const std::uint8_t* ids = layout.array(kPostingIds, posting_count, 4);
+  const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
   if (posting_count > std::numeric_limits<std::uint32_t>::max())
     layout.fail("more postings than this binbow supports (2^32)");
-  impl->word_counts.assign(next_id, 0);
-  auto segment = std::make_unique<detail::Segment>();
-  std::vector<std::uint32_t>& row_ends = segment->offsets;
-  row_ends.assign(word_count + 1, 0);
+  std::vector<std::uint32_t> rows(list_count);
   std::size_t at = 0;
   for (std::size_t l = 0; l < list_count; ++l) {
     if (words[l] >= word_count || (l > 0 && words[l] <= words[l - 1]))
@@ -338,44 +366,88 @@ void read_index(const Layout& layout, DatabaseImpl* impl) {
     const std::uint32_t length = lengths[l];
     if (length == 0 || length > posting_count - at)
       layout.fail("posting list of word " + std::to_string(words[l]) + " has an invalid length");
-    for (std::size_t i = at; i < at + length; ++i) {
-      if (ids[i] >= next_id || impl->alive[ids[i]] == 0 || (i > at && ids[i] <= ids[i - 1]))
-        layout.fail("posting list of word " + std::to_string(words[l]) +
-                    " names a missing entry or is not in increasing order");
-      if (!std::isfinite(weights[i]))
-        layout.fail("posting list of word " + std::to_string(words[l]) +
-                    " has a non-finite weight");
-      ++impl->word_counts[ids[i]];
-    }
-    row_ends[impl->row_order.row(words[l]) + 1] = length;
+    rows[l] = impl->row_order.row(words[l]);
     at += length;
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
-  for (std::size_t r = 0; r < word_count; ++r) row_ends[r + 1] += row_ends[r];
-  // Everything loaded is one wide segment: no tail, however many entries.
-  if (posting_count > 0) {
-    segment->end_entry = next_id;
-    segment->level = detail::kLoadedLevel;
-    segment->wide = true;
-    segment->entries32.resize(posting_count);
-    segment->weights.resize(posting_count);
-    std::size_t from = 0;
+
+  // The postings go to one segment per kSegmentSpan ids (16-bit entries, as
+  // in a database that was filled by add()): a first pass checks them and
+  // counts each segment's rows, a second puts them in place. Within a list
+  // the entries increase, so each segment's part of a row is one run of it.
+  // The sections are released as they are read, a part at a time.
+  const auto for_each_list = [&](const auto& visit) {
+    std::size_t from = 0, released = 0;
     for (std::size_t l = 0; l < list_count; ++l) {
-      const std::uint32_t to = row_ends[impl->row_order.row(words[l])];
-      std::memcpy(segment->entries32.data() + to, ids.data() + from, lengths[l] * sizeof(EntryId));
-      std::memcpy(segment->weights.data() + to, weights.data() + from, lengths[l] * sizeof(float));
+      visit(l, from);
       from += lengths[l];
+      if ((from - released) * 4 >= kReleaseBytes || l + 1 == list_count) {
+        release(ids + 4 * released, 4 * (from - released));
+        release(weights + 4 * released, 4 * (from - released));
+        released = from;
+      }
     }
-    impl->segments.push_back(std::move(segment));
+  };
+  impl->word_counts.assign(next_id, 0);
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t segment_count = posting_count > 0 ? (next_id + span - 1) / span : 0;
+  std::vector<std::unique_ptr<detail::Segment>> segments(segment_count);  // those with postings
+  for_each_list([&](std::size_t l, std::size_t from) {
+    EntryId previous = 0;
+    for (std::size_t i = from; i < from + lengths[l]; ++i) {
+      const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
+      if (id >= next_id || impl->alive[id] == 0 || (i > from && id <= previous))
+        layout.fail("posting list of word " + std::to_string(words[l]) +
+                    " names a missing entry or is not in increasing order");
+      if (!std::isfinite(detail::load_le<float>(weights + 4 * i)))
+        layout.fail("posting list of word " + std::to_string(words[l]) +
+                    " has a non-finite weight");
+      ++impl->word_counts[id];
+      auto& segment = segments[id / span];
+      if (!segment) {
+        segment = std::make_unique<detail::Segment>();
+        segment->first_entry = static_cast<EntryId>(id / span * span);
+        segment->end_entry =
+            static_cast<EntryId>(std::min<std::size_t>(next_id, segment->first_entry + span));
+        segment->level = detail::kLoadedLevel;
+        segment->offsets.assign(word_count + 1, 0);
+      }
+      ++segment->offsets[rows[l] + 1];
+      previous = id;
+    }
+  });
+  for (auto& segment : segments) {
+    if (!segment) continue;
+    std::uint32_t* offsets = segment->offsets.data();
+    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
+    segment->entries16.resize(offsets[word_count]);
+    segment->weights.resize(offsets[word_count]);
   }
+  for_each_list([&](std::size_t l, std::size_t from) {
+    std::size_t i = from;
+    const std::size_t end = from + lengths[l];
+    while (i < end) {
+      detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
+      std::uint32_t to = segment.offsets[rows[l]];
+      for (; i < end; ++i, ++to) {
+        const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
+        if (id >= segment.end_entry) break;
+        segment.entries16.data()[to] = static_cast<std::uint16_t>(id - segment.first_entry);
+        segment.weights.data()[to] = detail::load_le<float>(weights + 4 * i);
+      }
+    }
+  });
+  for (auto& segment : segments)
+    if (segment) impl->segments.push_back(std::move(segment));
   impl->tail_first_entry = next_id;
 
   if (impl->options.direct_index) {
     const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);
+    layout.verify(kDirectData);
     const detail::Section& direct_data = layout.section(kDirectData);
     const std::size_t available = layout.count_of(kDirectData, 4);
     impl->direct.resize(next_id);
-    std::size_t cursor = 0;
+    std::size_t cursor = 0, released = 0;  // in values of 4 bytes
     for (EntryId entry = 0; entry < next_id; ++entry) {
       const std::uint64_t nodes = sizes[2 * std::size_t{entry}];
       const std::uint64_t features = sizes[2 * std::size_t{entry} + 1];
@@ -406,14 +478,23 @@ void read_index(const Layout& layout, DatabaseImpl* impl) {
         layout.fail("direct index of entry " + std::to_string(entry) +
                     " is inconsistent: " + e.what());
       }
+      if ((cursor - released) * 4 >= kReleaseBytes) {
+        release(direct_data.data + released * 4, (cursor - released) * 4);
+        released = cursor;
+      }
     }
     if (cursor != available) layout.fail("direct index section has trailing data");
+    release(direct_data.data + released * 4, (cursor - released) * 4);
   } else if (layout.section(kDirectSizes).size != 0 || layout.section(kDirectData).size != 0) {
     layout.fail("direct index present in a database saved without one");
+  } else {
+    layout.verify(kDirectSizes);
+    layout.verify(kDirectData);
   }
 
   if (layout.section(kLabelLengths).size != 0) {
     const auto label_lengths = layout.values<std::uint32_t>(kLabelLengths, next_id);
+    layout.verify(kLabelBytes);
     const detail::Section& bytes = layout.section(kLabelBytes);
     impl->labels.resize(next_id);
     std::size_t cursor = 0;
@@ -427,6 +508,9 @@ void read_index(const Layout& layout, DatabaseImpl* impl) {
     if (cursor != bytes.size) layout.fail("labels section has trailing data");
   } else if (layout.section(kLabelBytes).size != 0) {
     layout.fail("label bytes without label lengths");
+  } else {
+    layout.verify(kLabelLengths);
+    layout.verify(kLabelBytes);
   }
 }
 
@@ -437,11 +521,10 @@ DatabaseOptions options_of(const Header& header) {
   return options;
 }
 
-}  // namespace
-
-Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
-                               Vocabulary vocabulary) {
-  const Layout layout(data, size, name, true);
+// A database over a fixed vocabulary, which must be the one it was built with.
+template <class Impl>
+std::unique_ptr<Impl> read_vocabulary_database(const Layout& layout, Vocabulary vocabulary,
+                                               const Release& release) {
   const Header& header = layout.header();
   if (header.over_word_ids())
     layout.fail(
@@ -452,18 +535,22 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size, const
     layout.fail("the database was built with a different vocabulary (checksum " +
                 hex(header.vocabulary_checksum) + ", the given vocabulary has " +
                 hex(vocabulary.checksum()) + ")");
+  // What this reader does not read is still checked: the file is intact or refused.
+  layout.verify(kVocabularyBytes);
+  layout.verify(kDescription);
   auto impl = std::make_unique<Impl>(std::move(vocabulary), options_of(header));
-  read_index(layout, impl.get());
-  return Database(std::move(impl));
+  read_index(layout, release, impl.get());
+  return impl;
 }
-
-namespace {
 
 // A database over word ids: its capacity is checked against its words before
 // the index is laid out for it.
-template <class DatabaseImpl>
-void read_word_id_index(const Layout& layout, DatabaseImpl* impl) {
+template <class Impl>
+std::unique_ptr<Impl> read_word_id_database(const Layout& layout, const Release& release) {
   const Header& header = layout.header();
+  layout.verify(kVocabularyBytes);
+  layout.verify(kDescription);
+  layout.verify(kWords);
   const detail::Section& words = layout.section(kWords);
   const std::uint64_t word_end =
       words.size >= 4
@@ -479,44 +566,76 @@ void read_word_id_index(const Layout& layout, DatabaseImpl* impl) {
       header.word_capacity > largest_capacity(word_end))
     layout.fail("word-id capacity " + std::to_string(header.word_capacity) +
                 " does not fit its words (the largest ends at " + std::to_string(word_end) + ")");
+  auto impl = std::make_unique<Impl>(header.scoring, options_of(header));
   impl->lay_out(static_cast<std::size_t>(header.word_capacity));
-  read_index(layout, impl);
+  read_index(layout, release, impl.get());
+  return impl;
 }
 
-}  // namespace
-
-Database Database::deserialize(const std::uint8_t* data, std::size_t size,
-                               const std::string& name) {
-  const Layout layout(data, size, name, false);
-  if (layout.header().over_word_ids()) {
-    for (std::uint32_t i = 0; i < kSectionCount; ++i) layout.verify(static_cast<Section>(i));
-    auto impl = std::make_unique<Impl>(layout.header().scoring, options_of(layout.header()));
-    read_word_id_index(layout, impl.get());
-    return Database(std::move(impl));
-  }
+// A database whose file says what it is over: its own vocabulary or word ids.
+template <class Impl>
+std::unique_ptr<Impl> read_self_contained_database(const Layout& layout, const std::string& name,
+                                                   const Release& release) {
+  if (layout.header().over_word_ids()) return read_word_id_database<Impl>(layout, release);
   if ((layout.header().flags & kFlagVocabulary) == 0)
     layout.fail("the database does not include its vocabulary (checksum " +
                 hex(layout.header().vocabulary_checksum) +
                 "); load it together with the vocabulary it was built with");
   layout.verify(kVocabularyBytes);
   const detail::Section& bytes = layout.section(kVocabularyBytes);
-  Vocabulary vocabulary = Vocabulary::deserialize(bytes.data, bytes.size, name + " (vocabulary)");
-  return deserialize(data, size, name, std::move(vocabulary));
+  return read_vocabulary_database<Impl>(
+      layout, Vocabulary::deserialize(bytes.data, bytes.size, name + " (vocabulary)"), release);
 }
 
+// What deserialize() tells about sections it is done with: nothing to drop.
+void ignore_release(const std::uint8_t*, std::size_t) {}
+
+}  // namespace
+
+Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
+                               Vocabulary vocabulary) {
+  const Layout layout(data, size, name, false);
+  return Database(read_vocabulary_database<Impl>(layout, std::move(vocabulary), ignore_release));
+}
+
+Database Database::deserialize(const std::uint8_t* data, std::size_t size,
+                               const std::string& name) {
+  const Layout layout(data, size, name, false);
+  return Database(read_self_contained_database<Impl>(layout, name, ignore_release));
+}
+
+// Streams the file: the memory a save needs does not grow with the database.
 void Database::save(const std::string& path, bool include_vocabulary) const {
-  const std::vector<std::uint8_t> bytes = serialize(include_vocabulary);
-  detail::write_file_atomically(path, bytes.data(), bytes.size());
+  std::shared_lock lock(impl_->mutex);
+  detail::write_file_atomically(path, [&](std::FILE* file) {
+    // Sections follow one another after the space kept for the header, which
+    // comes last: only the first section and the header need a seek.
+    std::size_t position = 0;
+    detail::SectionedFileWriter out(
+        kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
+          if (offset != position && std::fseek(file, static_cast<long>(offset), SEEK_SET) != 0)
+            throw FileError(path, "cannot seek to write the header");
+          detail::write_all(file, data, size, path);
+          position = offset + size;
+        });
+    write_database(*impl_, include_vocabulary, out);
+  });
 }
 
+// load() reads a mapped file, dropping each large section's pages once read.
 Database Database::load(const std::string& path) {
   const detail::MappedFile file(path);
-  return deserialize(file.data(), file.size(), path);
+  const Layout layout(file.data(), file.size(), path, false);
+  return Database(read_self_contained_database<Impl>(
+      layout, path, [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }));
 }
 
 Database Database::load(const std::string& path, Vocabulary vocabulary) {
   const detail::MappedFile file(path);
-  return deserialize(file.data(), file.size(), path, std::move(vocabulary));
+  const Layout layout(file.data(), file.size(), path, false);
+  return Database(read_vocabulary_database<Impl>(
+      layout, std::move(vocabulary),
+      [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }));
 }
 
 DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {

@@ -183,6 +183,8 @@ class PackedFeatureVector {
   PackedFeatureVector() = default;
   explicit PackedFeatureVector(const FeatureVector& features);
   FeatureVector unpack() const;
+  std::uint32_t node_count() const noexcept { return node_count_; }
+  std::uint32_t feature_count() const noexcept { return feature_count_; }
   std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
 
  private:
@@ -204,36 +206,35 @@ namespace detail {
 // A part of the inverted index: the postings of the entries
 // [first_entry, end_entry) as compressed rows by word (in RowOrder): one
 // offset per word, then the entries as offsets from first_entry and the
-// weights. Segments that span at most kSegmentSpan ids store their entries
-// in 16 bits (6 bytes per posting), wider ones (merged or loaded) in 32. A
-// query pays one offset lookup per word and segment, small next to the
-// postings it reads.
+// weights. A segment spans at most kSegmentSpan ids, so its entries are 16
+// bits (6 bytes per posting; 32-bit entries would cost 8). A query pays one
+// offset lookup per word and segment, small next to the postings it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
 
 // So that a query's offset lookups stay few as the database grows, every
-// kSegmentFanIn segments of one level are merged into one of the next: a
-// posting is copied once per level, and a query visits at most
-// kSegmentFanIn - 1 segments of each level (8 for 100,000 images of 1000
-// words).
+// kSegmentFanIn segments of one level are merged into one of the next, as
+// long as the result spans at most kSegmentSpan ids (else the oldest of them
+// that fit, if two do): a posting is copied once per level, and a query
+// visits at most kSegmentFanIn - 1 segments of each level below the top,
+// plus one per ~65,536 entries (8 for 100,000 images of 1000 words, ~30 for
+// 1,000,000).
 constexpr std::size_t kSegmentFanIn = 8;
 constexpr unsigned kLoadedLevel = ~0u;
 
 struct Segment {
   EntryId first_entry = 0;
   EntryId end_entry = 0;
-  // Frozen from the tail: 0; merged from kSegmentFanIn segments of level l:
-  // l + 1; loaded: kLoadedLevel, never merged.
+  // Frozen from the tail: 0; merged from segments of level l: l + 1;
+  // loaded (one per kSegmentSpan ids): kLoadedLevel, never merged.
   unsigned level = 0;
-  bool wide = false;
   std::vector<std::uint32_t> offsets;      // word_count + 1, by RowOrder
-  GrowableArray<std::uint16_t> entries16;  // when !wide
-  GrowableArray<std::uint32_t> entries32;  // when wide
+  GrowableArray<std::uint16_t> entries16;  // entry - first_entry
   GrowableArray<float> weights;
   std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 
   std::size_t postings() const noexcept { return weights.size(); }
   EntryId entry(std::size_t posting) const noexcept {
-    return first_entry + (wide ? entries32.data()[posting] : entries16.data()[posting]);
+    return first_entry + entries16.data()[posting];
   }
 };
 

@@ -63,6 +63,14 @@ MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
   data_ = static_cast<const std::uint8_t*>(map);
 }
 
+void MappedFile::release(const std::uint8_t* begin, std::size_t size) const noexcept {
+  const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
+  const auto first = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
+  const auto end = (reinterpret_cast<std::uintptr_t>(begin) + size) / page * page;
+  // Advice only: if it fails, the pages simply stay resident.
+  if (end > first) (void)::madvise(reinterpret_cast<void*>(first), end - first, MADV_DONTNEED);
+}
+
 MappedFile::MappedFile(MappedFile&& other) noexcept
     : path_(std::move(other.path_)), data_(other.data_), size_(other.size_) {
   other.data_ = nullptr;

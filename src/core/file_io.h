@@ -32,6 +32,11 @@ class MappedFile {
   const std::uint8_t* data() const noexcept { return data_; }
   std::size_t size() const noexcept { return size_; }
   const std::string& path() const noexcept { return path_; }
+  // Drops the whole pages within [begin, begin + size) from the process's
+  // resident memory; touching them again reads them back (from the page
+  // cache, usually). A large file read once in order then never occupies
+  // memory as a whole.
+  void release(const std::uint8_t* begin, std::size_t size) const noexcept;
 
  private:
   std::string path_;

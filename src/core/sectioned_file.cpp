@@ -1,6 +1,8 @@
 #include "core/sectioned_file.h"
 
+#include <algorithm>
 #include <cstring>
+#include <utility>
 
 #include "core/crc32c.h"
 #include "core/little_endian.h"
@@ -37,6 +39,64 @@ std::vector<std::uint8_t> write_sectioned_file(
   }
   store_le<std::uint32_t>(table + table_size, crc32c(table, table_size));
   return out;
+}
+
+SectionedFileWriter::SectionedFileWriter(std::uint32_t count, Output output)
+    : count_(count),
+      output_(std::move(output)),
+      buffer_(std::size_t{1} << 20),
+      end_(kSectionedHeaderSize + count * kSectionEntrySize + 4),
+      crcs_(count, 0),
+      offsets_(count + 1, end_) {}
+
+void SectionedFileWriter::flush() {
+  if (used_ == 0) return;
+  crcs_[section_] = crc32c(buffer_.data(), used_, crcs_[section_]);
+  output_(end_, buffer_.data(), used_);
+  end_ += used_;
+  used_ = 0;
+}
+
+void SectionedFileWriter::append(const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  while (size > 0) {
+    if (used_ == buffer_.size()) flush();
+    const std::size_t part = std::min(size, buffer_.size() - used_);
+    std::memcpy(buffer_.data() + used_, bytes, part);
+    used_ += part;
+    bytes += part;
+    size -= part;
+  }
+}
+
+void SectionedFileWriter::next_section() {
+  flush();
+  offsets_[++section_] = end_;
+}
+
+void SectionedFileWriter::finish(const char* magic, std::uint32_t version,
+                                 const std::function<void(std::uint8_t* header)>& fill_header) {
+  flush();
+  offsets_[count_] = end_;
+  const std::size_t table_size = count_ * kSectionEntrySize;
+  std::vector<std::uint8_t> head(kSectionedHeaderSize + table_size + 4, 0);
+  std::uint8_t* header = head.data();
+  std::memcpy(header, magic, 8);
+  store_le<std::uint32_t>(header + 8, version);
+  store_le<std::uint32_t>(header + 12, kSectionedHeaderSize);
+  store_le<std::uint32_t>(header + 48, count_);
+  fill_header(header);
+  store_le<std::uint32_t>(header + 60, crc32c(header, 60));
+  std::uint8_t* table = header + kSectionedHeaderSize;
+  for (std::uint32_t i = 0; i < count_; ++i) {
+    std::uint8_t* entry = table + i * kSectionEntrySize;
+    store_le<std::uint32_t>(entry, i);
+    store_le<std::uint32_t>(entry + 4, crcs_[i]);
+    store_le<std::uint64_t>(entry + 8, offsets_[i]);
+    store_le<std::uint64_t>(entry + 16, offsets_[i + 1] - offsets_[i]);
+  }
+  store_le<std::uint32_t>(table + table_size, crc32c(table, table_size));
+  output_(0, head.data(), head.size());
 }
 
 std::vector<Section> read_section_table(const std::uint8_t* data, std::size_t size,

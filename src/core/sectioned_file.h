@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "core/little_endian.h"
+
 namespace binbow::detail {
 
 inline constexpr std::size_t kSectionedHeaderSize = 64;
@@ -22,6 +24,47 @@ inline constexpr std::size_t kSectionEntrySize = 24;
 std::vector<std::uint8_t> write_sectioned_file(
     const char* magic, std::uint32_t version, const std::vector<std::uint8_t>* sections,
     std::uint32_t count, const std::function<void(std::uint8_t* header)>& fill_header);
+
+// The same container, written section by section as the sections are
+// produced, so that a large file never exists in memory: the space for the
+// header and the table is kept at the start, each section's CRC32C is
+// computed as its bytes pass, and finish() writes the header and the table
+// last, at offset 0. The bytes are those write_sectioned_file() makes.
+class SectionedFileWriter {
+ public:
+  // Receives the file's bytes: the sections in order, then the header and
+  // table (offset 0); every other call continues where the previous ended.
+  using Output =
+      std::function<void(std::size_t offset, const std::uint8_t* data, std::size_t size)>;
+
+  SectionedFileWriter(std::uint32_t count, Output output);
+  // Appends to the current section; sections are written in id order,
+  // starting with section 0.
+  void append(const void* data, std::size_t size);
+  template <class T>
+  void append_le(T value) {
+    if (buffer_.size() - used_ < sizeof(T)) flush();
+    store_le<T>(buffer_.data() + used_, value);
+    used_ += sizeof(T);
+  }
+  // Ends the current section; the next appends go to the following one.
+  void next_section();
+  // Ends the last section and writes the header and the table.
+  void finish(const char* magic, std::uint32_t version,
+              const std::function<void(std::uint8_t* header)>& fill_header);
+
+ private:
+  void flush();
+
+  std::uint32_t count_;
+  Output output_;
+  std::vector<std::uint8_t> buffer_;
+  std::size_t used_ = 0;
+  std::size_t end_;  // file offset of the first byte not yet output
+  std::uint32_t section_ = 0;
+  std::vector<std::uint32_t> crcs_;
+  std::vector<std::size_t> offsets_;
+};
 
 struct Section {
   const std::uint8_t* data = nullptr;

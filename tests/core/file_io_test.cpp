@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "binbow/error.h"
 #include "core/file_io.h"
@@ -55,6 +57,35 @@ TEST(FileIo, MappingAFifoIsRefusedWithoutBlocking) {
     EXPECT_EQ(e.path(), dir.file("fifo"));
     EXPECT_NE(std::string(e.what()).find("FIFO"), std::string::npos) << e.what();
   }
+}
+
+std::size_t resident_file_kib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("RssFile:", 0) == 0) return std::stoul(line.substr(8));
+  return 0;
+}
+
+// Database::load drops each section's pages once read, so that a database
+// file never occupies memory whole beside the database built from it.
+TEST(FileIo, ReleasedPagesOfAMappedFileLeaveMemoryAndReadBackIntact) {
+  test::TempDir dir;
+  std::vector<std::uint8_t> bytes(std::size_t{16} << 20);
+  for (std::size_t i = 0; i < bytes.size(); ++i)
+    bytes[i] = static_cast<std::uint8_t>(i * 7 + i / 4096);
+  test::write_file(dir.file("big"), bytes);
+  const detail::MappedFile mapped(dir.file("big"));
+  ASSERT_EQ(mapped.size(), bytes.size());
+  std::size_t sum = 0;
+  for (std::size_t i = 0; i < mapped.size(); i += 4096) sum += mapped.data()[i];
+  EXPECT_GT(sum, 0u);
+  const std::size_t before = resident_file_kib();
+  ASSERT_GT(before, 0u) << "no RssFile line in /proc/self/status";
+  // An unaligned range: only the whole pages inside it go.
+  mapped.release(mapped.data() + 100, mapped.size() - 200);
+  EXPECT_LT(resident_file_kib() + 8 * 1024, before);
+  EXPECT_TRUE(std::equal(bytes.begin(), bytes.end(), mapped.data()));
 }
 
 // detect-loops streams loops.csv and its run record into staged temporaries

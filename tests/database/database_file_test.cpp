@@ -89,6 +89,18 @@ TEST(DatabaseFile, LargeDatabaseRoundTrip) {
   EXPECT_EQ(loaded.serialize(), bytes);
 }
 
+TEST(DatabaseFile, SaveStreamsTheBytesSerializeReturns) {
+  // More than the writer's 1 MiB buffer in the posting sections, segments and
+  // a tail, removed entries, labels, the vocabulary included or not.
+  const Fixture fixture(12000);
+  test::TempDir dir;
+  for (const bool include_vocabulary : {true, false}) {
+    const std::string path = dir.file("db.bbdb");
+    fixture.database.save(path, include_vocabulary);
+    EXPECT_EQ(test::read_file(path), fixture.database.serialize(include_vocabulary));
+  }
+}
+
 TEST(DatabaseFile, WithoutDirectIndexOrLabels) {
   const Vocabulary vocabulary = test_vocabulary();
   Database database(vocabulary, {false, 0});

@@ -431,8 +431,8 @@ TEST(Database, SegmentsOfAVocabularyOfMoreThan65536Words) {
 
 TEST(Database, SegmentsOfManySmallImages) {
   // Images of 0-2 words: the tail becomes a segment when it spans 65,536
-  // ids (entries are 16-bit offsets in a segment), and 8 such segments merge
-  // into one with 32-bit entries. Removing every image of one segment drops
+  // ids (entries are 16-bit offsets in a segment), and such segments never
+  // merge (they would span more). Removing every image of one segment drops
   // it.
   const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
   std::mt19937_64 rng(5);
@@ -472,9 +472,57 @@ TEST(Database, SegmentsOfManySmallImages) {
   check("small images, after removals");
 }
 
+TEST(Database, RemovingAnImageWithoutWordsWhoseSegmentWasDropped) {
+  // The first segment (65,536 ids, the tail's limit) holds one image with
+  // words; removing it drops the segment, whose images without words stay
+  // alive: removing one of them used to look for its segment before the first.
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  std::mt19937_64 rng(8);
+  Database database(vocabulary, {false, 0});
+  const BowVector words = random_bow(3, vocabulary.word_count(), rng);
+  database.add(words);
+  for (std::size_t i = 1; i < 2 * 65536 + 10; ++i)
+    database.add(i == 65536 + 5 ? words : BowVector());
+  database.remove(0);
+  database.remove(7);
+  EXPECT_FALSE(database.contains(7));
+  const auto results = database.query(words, 5);
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_EQ(results[0].entry, 65536u + 5);
+}
+
+TEST(Database, LoadedDatabasesAreSegmentsOf16BitEntries) {
+  // A loaded database of more than 65,536 entries is one segment per 65,536
+  // ids, so its postings cost what they did before saving (6 bytes, not 8),
+  // and answers the same, also when queries stop inside a segment.
+  const Vocabulary vocabulary = wide_vocabulary(10, 4, Scoring::kL1);
+  std::mt19937_64 rng(9);
+  std::vector<BowVector> bows;
+  const std::size_t count = 3 * 65536 + 1000;
+  for (std::size_t i = 0; i < count; ++i)
+    bows.push_back(random_bow(1 + i % 20, vocabulary.word_count(), rng));
+  Database database(vocabulary, {false, 0});
+  std::vector<bool> live(count, true);
+  for (const BowVector& bow : bows) database.add(bow);
+  for (EntryId id = 100; id < count; id += 7) {
+    database.remove(id);
+    live[id] = false;
+  }
+  const std::vector<std::uint8_t> bytes = database.serialize(false);
+  const Database loaded = Database::deserialize(bytes.data(), bytes.size(), "memory", vocabulary);
+  EXPECT_LE(loaded.memory_usage(), database.memory_usage() * 21 / 20);
+  for (int q = 0; q < 5; ++q) {
+    const BowVector& query = bows[rng() % count];
+    for (EntryId max_id : {kAllEntries, EntryId{150000}, EntryId{65535}, EntryId{65536}})
+      expect_same(loaded.query(query, 20, max_id),
+                  brute_force(vocabulary, bows, live, query, 20, max_id),
+                  "loaded, up to " + std::to_string(max_id));
+  }
+}
+
 TEST(Database, LoadedDatabasesKeepChanging) {
-  // A loaded database is one segment; adds make new ones after it, and
-  // removals compact it.
+  // A loaded database is one segment per 65,536 ids; adds make new ones
+  // after it, and removals compact it.
   const Vocabulary vocabulary = wide_vocabulary(10, 4, Scoring::kChiSquare);
   std::mt19937_64 rng(21);
   std::vector<BowVector> bows;

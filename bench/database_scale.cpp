@@ -1,0 +1,383 @@
+// The image database at scale: 10k → 100k → 1M entries of real images on the
+// trained k=10 L=6 ORB vocabulary (scripts/make_benchmark_vocabulary.sh; its
+// path in BINBOW_BENCH_VOCABULARY, as for bench_transform).
+//
+// Images: OpenCV ORB-1000 descriptors of the Debian training photographs
+// (scripts/training_images.sh --all). Every tenth photograph is held out for
+// the queries; each database entry is one of the others with kFlippedBits
+// random bits flipped in every descriptor (seeded per entry), so that entries
+// are distinct images of the same scenes, then transformed (BoW vector and
+// feature vector 4 levels up) and added at once: only one entry's descriptors
+// exist at a time, however large the database grows. Queries are the
+// held-out photographs with their own noise: images not in the database.
+//
+// The benchmarks run in order on one growing database: BM_Fill/N adds entries
+// until there are N (the time is the add calls alone: their mean is the
+// counter add_us), BM_Query/N answers the queries (top 10, the median
+// is query_ms), and BM_SaveLoad saves the largest database to a .bbdb file
+// (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it
+// back and checks that the loaded database answers every query identically,
+// with the peak resident memory of each step over the database's memory.
+//
+// BINBOW_BENCH_SCALE_DIRECT_INDEX=0 measures a database without direct index
+// (a retrieval server); the loop detector needs one (the default).
+// BINBOW_BENCH_SCALE_MAX_ENTRIES (default 1,000,000) stops the growth early.
+#include <benchmark/benchmark.h>
+
+#include <malloc.h>
+#include <unistd.h>
+
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/vision/features.h"
+#include "binbow/vision/image_source.h"
+
+namespace binbow::bench {
+namespace {
+
+constexpr std::size_t kFeatures = 1000;
+constexpr unsigned kLevelsUp = 4;
+constexpr int kFlippedBits = 8;  // of 256 per descriptor
+constexpr std::size_t kMaxResults = 10;
+constexpr std::size_t kNoisyCopiesPerQuery = 2;
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// This thread's CPU time: the machine is shared, and other processes inflate
+// wall times (both are reported).
+double thread_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + static_cast<double>(now.tv_nsec) * 1e-9;
+}
+
+std::size_t heap_in_use() {
+  const struct mallinfo2 info = mallinfo2();
+  return info.uordblks + info.hblkhd;  // small blocks + mmapped large blocks
+}
+
+// Resident memory now and its peak since the last reset_peak_rss(), in bytes.
+std::size_t status_kib(const std::string& field) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind(field + ":", 0) == 0) return std::stoul(line.substr(field.size() + 1));
+  return 0;
+}
+std::size_t rss() {
+  return status_kib("VmRSS") * 1024;
+}
+std::size_t peak_rss() {
+  return status_kib("VmHWM") * 1024;
+}
+bool reset_peak_rss() {
+  std::ofstream clear_refs("/proc/self/clear_refs");
+  clear_refs << "5";
+  clear_refs.flush();
+  return static_cast<bool>(clear_refs);
+}
+
+std::vector<std::string> training_photographs() {
+  const std::string command = std::string(BINBOW_SOURCE_DIR) + "/scripts/training_images.sh --all";
+  std::vector<std::string> paths;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return paths;
+  char line[4096];
+  while (std::fgets(line, sizeof line, pipe) != nullptr) {
+    std::string path(line);
+    while (!path.empty() && (path.back() == '\n' || path.back() == '\r')) path.pop_back();
+    if (!path.empty()) paths.push_back(path);
+  }
+  pclose(pipe);
+  return paths;
+}
+
+// 1000 ORB descriptors of a photograph; small photographs are enlarged until
+// they give 1000 (empty if they never do).
+DescriptorMatrix thousand_descriptors(const vision::FeatureExtractor& extractor,
+                                      const std::string& path) {
+  cv::Mat image = vision::read_grey_image(path);
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    DescriptorMatrix descriptors = extractor.extract(image).descriptors;
+    if (descriptors.rows() >= kFeatures) {
+      descriptors.resize(kFeatures);
+      return descriptors;
+    }
+    cv::resize(image, image, cv::Size(), 2.0, 2.0);
+  }
+  return DescriptorMatrix(32);
+}
+
+void flip_bits(DescriptorMatrix& image, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  for (std::size_t r = 0; r < image.rows(); ++r) {
+    std::uint8_t* row = image.row(r);
+    for (int flip = 0; flip < kFlippedBits; ++flip) {
+      const auto bit = rng() % 256;
+      row[bit / 8] ^= static_cast<std::uint8_t>(1u << (bit % 8));
+    }
+  }
+}
+
+struct Scale {
+  Vocabulary vocabulary;
+  bool direct_index = true;
+  std::size_t max_entries = 1000000;
+  std::string folder = "/tmp";
+  std::vector<DescriptorMatrix> photographs;  // the database's sources
+  std::vector<BowVector> queries;
+  // Postings a query reads per database entry, on average (the median query's
+  // cost is about this times the entries): the queries' words weighted by how
+  // many of the photographs, without noise, have them.
+  double postings_per_entry = 0;
+  std::unique_ptr<Database> database;
+  std::size_t heap_before = 0;  // heap in use before the database was created
+  double words_per_entry = 0;   // distinct words of the entries added, mean
+  std::size_t words_total = 0;
+};
+
+// Null (with the reason in `error`) when the vocabulary or the photographs
+// are missing.
+Scale* scale(std::string& error) {
+  static std::string failure;
+  static const std::unique_ptr<Scale> cached = []() -> std::unique_ptr<Scale> {
+    const char* vocabulary = std::getenv("BINBOW_BENCH_VOCABULARY");
+    if (vocabulary == nullptr) {
+      failure =
+          "set BINBOW_BENCH_VOCABULARY to a vocabulary from "
+          "scripts/make_benchmark_vocabulary.sh";
+      return nullptr;
+    }
+    auto s = std::make_unique<Scale>();
+    s->vocabulary = Vocabulary::load(vocabulary);
+    if (const char* direct = std::getenv("BINBOW_BENCH_SCALE_DIRECT_INDEX"))
+      s->direct_index = std::string(direct) != "0";
+    if (const char* max = std::getenv("BINBOW_BENCH_SCALE_MAX_ENTRIES"))
+      s->max_entries = std::stoul(max);
+    if (const char* folder = std::getenv("BINBOW_BENCH_DIR")) s->folder = folder;
+    const std::vector<std::string> paths = training_photographs();
+    const auto extractor = vision::make_extractor("orb", static_cast<int>(kFeatures));
+    for (std::size_t i = 0; i < paths.size(); ++i) {
+      DescriptorMatrix descriptors = thousand_descriptors(*extractor, paths[i]);
+      if (descriptors.rows() != kFeatures) continue;
+      if (i % 10 != 9) {
+        s->photographs.push_back(std::move(descriptors));
+        continue;
+      }
+      for (std::size_t copy = 0; copy < kNoisyCopiesPerQuery; ++copy) {
+        DescriptorMatrix query = descriptors;
+        flip_bits(query, 0x9000000000 + i * kNoisyCopiesPerQuery + copy);
+        BowVector bow;
+        s->vocabulary.transform(query, bow);
+        s->queries.push_back(std::move(bow));
+      }
+    }
+    std::vector<std::uint32_t> photographs_with_word(s->vocabulary.word_count(), 0);
+    for (const DescriptorMatrix& photograph : s->photographs) {
+      BowVector bow;
+      s->vocabulary.transform(photograph, bow);
+      for (const BowEntry& entry : bow) ++photographs_with_word[entry.word];
+    }
+    for (const BowVector& query : s->queries)
+      for (const BowEntry& entry : query)
+        s->postings_per_entry += photographs_with_word[entry.word];
+    s->postings_per_entry /=
+        static_cast<double>(s->queries.size()) * static_cast<double>(s->photographs.size());
+    if (s->photographs.size() < 100 || s->queries.empty()) {
+      failure = "too few training photographs with 1000 ORB features (" +
+                std::to_string(s->photographs.size()) + "): run scripts/training_images.sh --all";
+      return nullptr;
+    }
+    s->heap_before = heap_in_use();
+    s->database =
+        std::make_unique<Database>(s->vocabulary, DatabaseOptions{s->direct_index, kLevelsUp});
+    return s;
+  }();
+  error = failure;
+  return cached.get();
+}
+
+Scale* scale_or_skip(benchmark::State& state) {
+  std::string error;
+  Scale* s = scale(error);
+  if (s == nullptr) state.SkipWithError(error.c_str());
+  return s;
+}
+
+void label(benchmark::State& state, const Scale& s) {
+  state.SetLabel(std::to_string(s.vocabulary.word_count()) + " words, " +
+                 std::to_string(s.photographs.size()) + " photographs, " +
+                 (s.direct_index ? "direct index" : "no direct index"));
+}
+
+void memory_counters(benchmark::State& state, const Scale& s) {
+  const auto entries = static_cast<double>(s.database->size());
+  state.counters["entries"] = entries;
+  state.counters["KiB/entry(index)"] =
+      static_cast<double>(s.database->memory_usage()) / 1024.0 / entries;
+  state.counters["KiB/entry(heap)"] =
+      static_cast<double>(heap_in_use() - s.heap_before) / 1024.0 / entries;
+  state.counters["words/entry"] =
+      static_cast<double>(s.words_total) / static_cast<double>(s.database->next_entry_id());
+}
+
+void BM_Fill(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s == nullptr) return;
+  const auto target = static_cast<std::size_t>(state.range(0));
+  if (target > s->max_entries) {
+    state.SkipWithError("above BINBOW_BENCH_SCALE_MAX_ENTRIES");
+    return;
+  }
+  for (auto _ : state) {
+    const std::size_t first = s->database->next_entry_id();
+    DescriptorMatrix image;
+    BowVector bow;
+    FeatureVector features;
+    double add_seconds = 0, add_cpu_seconds = 0;
+    for (std::size_t entry = first; entry < target; ++entry) {
+      image = s->photographs[entry % s->photographs.size()];
+      flip_bits(image, entry);
+      if (s->direct_index) {
+        s->vocabulary.transform(image, bow, features, kLevelsUp);
+      } else {
+        s->vocabulary.transform(image, bow);
+      }
+      s->words_total += bow.size();
+      const Clock::time_point start = Clock::now();
+      const double cpu_start = thread_seconds();
+      s->database->add(bow, features);
+      add_cpu_seconds += thread_seconds() - cpu_start;
+      add_seconds += seconds_since(start);
+    }
+    state.SetIterationTime(add_seconds);
+    state.counters["add_us"] = add_seconds * 1e6 / static_cast<double>(target - first);
+    state.counters["add_us_cpu"] = add_cpu_seconds * 1e6 / static_cast<double>(target - first);
+  }
+  memory_counters(state, *s);
+  label(state, *s);
+}
+
+// Wall and CPU milliseconds of each query.
+void time_queries(const Database& database, const std::vector<BowVector>& queries,
+                  std::vector<double>& wall, std::vector<double>& cpu) {
+  for (const BowVector& query : queries) {
+    const Clock::time_point start = Clock::now();
+    const double cpu_start = thread_seconds();
+    const auto results = database.query(query, kMaxResults);
+    cpu.push_back((thread_seconds() - cpu_start) * 1e3);
+    wall.push_back(seconds_since(start) * 1e3);
+    benchmark::DoNotOptimize(results.data());
+  }
+}
+
+double median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+void BM_Query(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s == nullptr) return;
+  if (s->database->size() != static_cast<std::size_t>(state.range(0))) {
+    state.SkipWithError("run after BM_Fill of the same size");
+    return;
+  }
+  for (auto _ : state) {
+    std::vector<double> times, cpu_times;
+    time_queries(*s->database, s->queries, times, cpu_times);
+    state.counters["query_ms"] = median(times);
+    state.counters["query_ms_cpu"] = median(cpu_times);
+    std::sort(times.begin(), times.end());
+    state.counters["query_ms_p90"] = times[times.size() * 9 / 10];
+    state.counters["postings/query"] =
+        s->postings_per_entry * static_cast<double>(s->database->size());
+  }
+  memory_counters(state, *s);
+  label(state, *s);
+}
+// Registered size by size: each size's queries run before the database grows on.
+BENCHMARK(BM_Fill)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Fill)->Arg(100000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(100000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Fill)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+void BM_SaveLoad(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s == nullptr) return;
+  const std::string path = s->folder + "/binbow-bench-scale-" + std::to_string(getpid()) + ".bbdb";
+  for (auto _ : state) {
+    std::vector<std::vector<QueryResult>> expected;
+    for (const BowVector& query : s->queries)
+      expected.push_back(s->database->query(query, kMaxResults));
+    const std::size_t database_bytes = s->database->memory_usage();
+    const auto entries = static_cast<double>(s->database->size());
+
+    malloc_trim(0);
+    const std::size_t rss_before_save = rss();
+    if (!reset_peak_rss()) {
+      state.SkipWithError("cannot reset the peak RSS (/proc/self/clear_refs)");
+      return;
+    }
+    Clock::time_point start = Clock::now();
+    s->database->save(path, false);
+    const double save_seconds = seconds_since(start);
+    const std::size_t save_peak = peak_rss();
+
+    s->database.reset();
+    malloc_trim(0);
+    const std::size_t rss_before_load = rss();
+    reset_peak_rss();
+    start = Clock::now();
+    s->database = std::make_unique<Database>(Database::load(path, s->vocabulary));
+    const double load_seconds = seconds_since(start);
+    const std::size_t load_peak = peak_rss();
+    std::FILE* file = std::fopen(path.c_str(), "rb");
+    std::fseek(file, 0, SEEK_END);
+    const auto file_bytes = static_cast<double>(std::ftell(file));
+    std::fclose(file);
+    std::remove(path.c_str());
+
+    for (std::size_t q = 0; q < s->queries.size(); ++q)
+      if (s->database->query(s->queries[q], kMaxResults) != expected[q]) {
+        state.SkipWithError("the loaded database answers differently");
+        return;
+      }
+    state.SetIterationTime(save_seconds + load_seconds);
+    state.counters["save_s"] = save_seconds;
+    state.counters["load_s"] = load_seconds;
+    state.counters["file_B/entry"] = file_bytes / entries;
+    // The peak resident memory over the database's own (Database::memory_usage).
+    const auto db = static_cast<double>(database_bytes);
+    state.counters["save_peak/db"] =
+        static_cast<double>(save_peak - std::min(save_peak, rss_before_save)) / db + 1.0;
+    state.counters["load_peak/db"] =
+        static_cast<double>(load_peak - std::min(load_peak, rss_before_load)) / db;
+    state.counters["db_GiB"] = db / (1u << 30);
+  }
+  label(state, *s);
+}
+BENCHMARK(BM_SaveLoad)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+
+}  // namespace
+}  // namespace binbow::bench
+
+BENCHMARK_MAIN();
