@@ -12,7 +12,8 @@
 // of words (at most 65,536 groups, so that adding stays in cache); when the
 // tail holds about two postings per vocabulary word it becomes a segment of
 // compact rows by word (16-bit entry offsets and weights: 6 bytes per
-// posting), and every 8 segments of one size merge into one. add() is
+// posting), and every 8 segments of one size merge into one while it spans at
+// most 65,536 entry ids (so entries stay 16-bit at any size). add() is
 // O(words of the image) amortised; a query costs O(postings of the query's
 // words), plus one row lookup per query word and segment.
 //
