@@ -43,7 +43,7 @@ max_len_of() {
   case "$1" in
     gt_pairs) echo 1024 ;;
     params_json | params_yaml | gt_mat | loops_csv) echo 2048 ;;
-    orbslam_text | dbow2_yaml | gzip | tar | loop_run | bbld) echo 8192 ;;
+    orbslam_text | dbow2_yaml | gzip | tar | loop_run | bbov | bbld) echo 8192 ;;
     *) echo 4096 ;;
   esac
 }

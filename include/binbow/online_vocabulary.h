@@ -167,10 +167,13 @@ class OnlineVocabulary {
 
   // The state as a file (.bbov: magic, version, little-endian sections with a
   // CRC32C each, see docs/online-vocabulary.md), written atomically.
-  // Restoring gives the same words, counters and options; the search trees
-  // are rebuilt from the words on load, so what a restored vocabulary does
-  // next is the same for every restore of the file, and the same as the
-  // saved vocabulary would have done in exact mode. Throws FileError.
+  // Restoring gives the same words, counters, options and search trees (their
+  // nodes, centres and leaves in order, and the random draws to come), so a
+  // restored vocabulary searches and grows exactly as the saved one would
+  // have, approximate search included. A version-1 file (no trees, written
+  // before binbow kept them) still loads with its trees rebuilt from the
+  // words: it continues the same way from every load, and exactly as the
+  // saved vocabulary only with `exact`. Throws FileError.
   void save(const std::string& path) const;
   static OnlineVocabulary load(const std::string& path);
   std::vector<std::uint8_t> serialize() const;

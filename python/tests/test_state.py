@@ -28,8 +28,8 @@ def test_resumed_detector_equals_uninterrupted(kind, orb_features, tmp_path):
     def make():
         if kind == "fixed":
             return binbow.LoopDetector(vocabulary)
-        # Exact search: the approximate one's trees are rebuilt on load.
-        return binbow.LoopDetector.online("orb", exact=True)
+        # The default, approximate search: its trees are saved with the state.
+        return binbow.LoopDetector.online("orb")
 
     expected = _run(make(), orb_features)
     assert sum(status == "loop-detected" for _, status, *_ in expected) > 10

@@ -407,7 +407,7 @@ void OnlineVocabulary::Impl::rebuild_grown_trees() {
   }
 }
 
-void OnlineVocabulary::Impl::restore_derived_state() {
+void OnlineVocabulary::Impl::restore_purge_queue() {
   purge_queue.clear();
   if (options.purge_after_images > 0) {
     // The words created in the last purge_after_images images, oldest first,
@@ -419,8 +419,11 @@ void OnlineVocabulary::Impl::restore_derived_state() {
     std::sort(recent.begin(), recent.end());
     purge_queue.assign(recent.begin(), recent.end());
   }
+}
+
+void OnlineVocabulary::Impl::rebuild_trees_after_load() {
   // The rebuilds draw from a range add_image never reaches, and leave the
-  // counters as saved: a restored state saves the same bytes.
+  // counters as saved: every load of the file continues the same way.
   const std::uint64_t saved_draws = random_draws;
   const std::size_t saved_rebuilds = tree_rebuilds;
   random_draws = saved_draws | (std::uint64_t{1} << 63);

@@ -8,10 +8,17 @@
 //   3 word descriptors (code_size bytes per word)
 //   4 majority counters (one count byte per bit, for each word with two
 //     observations or more, in slot order)   5 counter totals (u8 per such word)
-// The search trees are not stored: loading rebuilds them from the words.
+//   6 trees (u32 node count, u32 live words at the last rebuild, per tree)
+//   7 tree nodes (u32 first child, u32 child count, u32 leaf words, per node
+//     of every tree in order)   8 tree centres (code_size bytes per node but
+//     the roots)   9 leaf words (u32 slots of every leaf, in node order)
+// Version 2 stores the search trees as they are, so that a loaded vocabulary
+// searches (and grows) exactly as the saved one would have; version 1 (no
+// sections 6..9) still loads, its trees rebuilt from the words.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,7 +35,8 @@ namespace binbow {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'O', 'V'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kVersionWithoutTrees = 1;
 constexpr std::size_t kHeaderSize = detail::kSectionedHeaderSize;
 constexpr std::size_t kOptionsSize = 48;  // before the descriptor name
 constexpr std::size_t kMaxDescriptorName = 8;
@@ -40,10 +48,18 @@ enum Section : std::uint32_t {
   kDescriptors,
   kCounters,
   kCounterTotals,
+  kSectionCountWithoutTrees,
+  kTrees = kSectionCountWithoutTrees,
+  kTreeNodes,
+  kTreeCentres,
+  kLeafWords,
   kSectionCount,
 };
-constexpr const char* kSectionNames[kSectionCount] = {"options",     "word ids", "word counts",
-                                                      "descriptors", "counters", "counter totals"};
+constexpr const char* kSectionNames[kSectionCount] = {
+    "options",        "word ids", "word counts", "descriptors",  "counters",
+    "counter totals", "trees",    "tree nodes",  "tree centres", "leaf words"};
+constexpr std::size_t kTreeRecordSize = 8;
+constexpr std::size_t kNodeRecordSize = 12;
 
 }  // namespace
 
@@ -83,6 +99,22 @@ std::vector<std::uint8_t> OnlineVocabulary::serialize() const {
   }
   sections[kDescriptors] = impl.descriptors;
 
+  for (const detail::WordTree& tree : impl.trees) {
+    detail::put_le<std::uint32_t>(sections[kTrees], static_cast<std::uint32_t>(tree.nodes.size()));
+    detail::put_le<std::uint32_t>(sections[kTrees], static_cast<std::uint32_t>(tree.built_words));
+    for (const detail::WordTree::Node& node : tree.nodes) {
+      detail::put_le<std::uint32_t>(sections[kTreeNodes], node.first_child);
+      detail::put_le<std::uint32_t>(sections[kTreeNodes], node.child_count);
+      detail::put_le<std::uint32_t>(sections[kTreeNodes],
+                                    static_cast<std::uint32_t>(node.slots.size()));
+      for (const std::uint32_t slot : node.slots)
+        detail::put_le<std::uint32_t>(sections[kLeafWords], slot);
+    }
+    sections[kTreeCentres].insert(
+        sections[kTreeCentres].end(),
+        tree.centres.begin() + static_cast<std::ptrdiff_t>(impl.code_size), tree.centres.end());
+  }
+
   return detail::write_sectioned_file(
       kMagic, kVersion, sections, kSectionCount, [&](std::uint8_t* h) {
         detail::store_le<std::uint32_t>(h + 16, static_cast<std::uint32_t>(impl.code_size));
@@ -108,9 +140,12 @@ OnlineVocabulary OnlineVocabulary::deserialize(const std::uint8_t* data, std::si
   if (std::memcmp(data, kMagic, 8) != 0)
     fail("not a binbow online vocabulary (.bbov): wrong magic bytes");
   const auto version = detail::load_le<std::uint32_t>(data + 8);
-  if (version != kVersion)
+  if (version != kVersion && version != kVersionWithoutTrees)
     fail("unsupported .bbov format version " + std::to_string(version) +
-         " (this binbow reads version " + std::to_string(kVersion) + ")");
+         " (this binbow reads versions " + std::to_string(kVersionWithoutTrees) + " and " +
+         std::to_string(kVersion) + ")");
+  const bool has_trees = version == kVersion;
+  const std::uint32_t expected_sections = has_trees ? kSectionCount : kSectionCountWithoutTrees;
   if (detail::load_le<std::uint32_t>(data + 60) != detail::crc32c(data, 60))
     fail("header checksum mismatch: the file is corrupted");
   if (detail::load_le<std::uint32_t>(data + 12) != kHeaderSize) fail("unexpected header size");
@@ -122,8 +157,8 @@ OnlineVocabulary OnlineVocabulary::deserialize(const std::uint8_t* data, std::si
   const auto purged_words = detail::load_le<std::uint64_t>(data + 40);
   const auto section_count = detail::load_le<std::uint32_t>(data + 48);
   const auto tree_rebuilds = detail::load_le<std::uint32_t>(data + 52);
-  if (section_count != kSectionCount)
-    fail("expected " + std::to_string(kSectionCount) + " sections, the header says " +
+  if (section_count != expected_sections)
+    fail("expected " + std::to_string(expected_sections) + " sections, the header says " +
          std::to_string(section_count));
   if (detail::load_le<std::uint32_t>(data + 36) != 0 ||
       detail::load_le<std::uint32_t>(data + 56) != 0)
@@ -135,10 +170,10 @@ OnlineVocabulary OnlineVocabulary::deserialize(const std::uint8_t* data, std::si
          " ids created)");
 
   const std::vector<detail::Section> table = detail::read_section_table(
-      data, size, kSectionCount, kSectionNames, [&](const std::string& p) { fail(p); });
-  const std::uint8_t* section_data[kSectionCount];
-  std::size_t section_size[kSectionCount];
-  for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+      data, size, expected_sections, kSectionNames, [&](const std::string& p) { fail(p); });
+  const std::uint8_t* section_data[kSectionCount] = {};
+  std::size_t section_size[kSectionCount] = {};
+  for (std::uint32_t i = 0; i < expected_sections; ++i) {
     if (!detail::section_intact(table[i]))
       fail(std::string("checksum mismatch in section '") + kSectionNames[i] +
            "': the file is corrupted");
@@ -234,8 +269,105 @@ OnlineVocabulary OnlineVocabulary::deserialize(const std::uint8_t* data, std::si
   for (std::uint32_t slot = 0; slot < word_count; ++slot)
     if (!impl->slot_of.emplace(impl->info[slot].id, slot).second)
       fail("word " + std::to_string(impl->info[slot].id) + " appears twice");
-  impl->restore_derived_state();
+  impl->restore_purge_queue();
+  if (has_trees) {
+    impl->read_trees(section_data + kTrees, section_size + kTrees, fail);
+  } else {
+    impl->rebuild_trees_after_load();
+  }
   return OnlineVocabulary(std::move(impl));
+}
+
+// Every count is checked against its section's length before anything is
+// allocated. A tree is well formed when every inner node has 2..branching
+// children placed after it (so no node is its own ancestor: no cycles, and a
+// descent ends within the node count), every node but the root is the child
+// of exactly one node, only leaves list words, and every live word is in
+// exactly one leaf.
+void OnlineVocabulary::Impl::read_trees(const std::uint8_t* const* data, const std::size_t* size,
+                                        const std::function<void(const std::string&)>& fail) {
+  const auto section_name = [](std::size_t s) { return std::string(kSectionNames[kTrees + s]); };
+  const auto expect_size = [&](std::size_t s, std::uint64_t expected) {
+    if (size[s] != expected)
+      fail("section '" + section_name(s) + "' has " + std::to_string(size[s]) +
+           " bytes, expected " + std::to_string(expected));
+  };
+  const std::size_t tree_count = trees.size();
+  const std::size_t live_words = word_count();
+  expect_size(0, std::uint64_t{tree_count} * kTreeRecordSize);
+  std::uint64_t total_nodes = 0;
+  for (std::size_t t = 0; t < tree_count; ++t) {
+    const auto nodes = detail::load_le<std::uint32_t>(data[0] + t * kTreeRecordSize);
+    const auto built = detail::load_le<std::uint32_t>(data[0] + t * kTreeRecordSize + 4);
+    if (nodes == 0) fail("tree " + std::to_string(t) + " has no root");
+    if (built > next_word_id)
+      fail("tree " + std::to_string(t) + " was built over more words than were ever created");
+    total_nodes += nodes;
+  }
+  expect_size(1, total_nodes * kNodeRecordSize);
+  expect_size(2, (total_nodes - tree_count) * code_size);
+  expect_size(3, std::uint64_t{tree_count} * live_words * 4);
+
+  std::fill(leaves.begin(), leaves.end(), detail::kNoSlot);
+  const std::uint8_t* node_record = data[1];
+  const std::uint8_t* centre = data[2];
+  const std::uint8_t* leaf_word = data[3];
+  for (std::size_t t = 0; t < tree_count; ++t) {
+    const std::string what = "tree " + std::to_string(t);
+    detail::WordTree& tree = trees[t];
+    const auto node_count = detail::load_le<std::uint32_t>(data[0] + t * kTreeRecordSize);
+    tree.built_words = detail::load_le<std::uint32_t>(data[0] + t * kTreeRecordSize + 4);
+    tree.nodes.assign(node_count, {});
+    tree.centres.assign(std::size_t{node_count} * code_size, 0);
+    std::memcpy(tree.centres.data() + code_size, centre, (std::size_t{node_count} - 1) * code_size);
+    centre += (std::size_t{node_count} - 1) * code_size;
+    std::vector<bool> has_parent(node_count, false);
+    std::size_t words_in_leaves = 0;
+    for (std::uint32_t n = 0; n < node_count; ++n, node_record += kNodeRecordSize) {
+      detail::WordTree::Node& node = tree.nodes[n];
+      node.first_child = detail::load_le<std::uint32_t>(node_record);
+      node.child_count = detail::load_le<std::uint32_t>(node_record + 4);
+      const auto leaf_words = detail::load_le<std::uint32_t>(node_record + 8);
+      const std::string where = what + " node " + std::to_string(n);
+      if (node.child_count == 0) {
+        if (node.first_child != 0) fail(where + " is a leaf with a first child");
+        if (leaf_words > live_words - words_in_leaves)
+          fail(what + " lists more words in its leaves than there are");
+        words_in_leaves += leaf_words;
+        node.slots.resize(leaf_words);
+        for (std::uint32_t& slot : node.slots) {
+          slot = detail::load_le<std::uint32_t>(leaf_word);
+          leaf_word += 4;
+          if (slot >= live_words)
+            fail(where + " lists word slot " + std::to_string(slot) + " beyond the " +
+                 std::to_string(live_words) + " words");
+          std::uint32_t& leaf = leaves[std::size_t{slot} * tree_count + t];
+          if (leaf != detail::kNoSlot)
+            fail(what + " lists word " + std::to_string(info[slot].id) + " twice");
+          leaf = n;
+        }
+        continue;
+      }
+      if (leaf_words != 0) fail(where + " is an inner node that lists words");
+      if (node.child_count < 2 || node.child_count > options.branching)
+        fail(where + " has " + std::to_string(node.child_count) + " children, expected 2 to " +
+             std::to_string(options.branching));
+      if (node.first_child <= n || std::uint64_t{node.first_child} + node.child_count > node_count)
+        fail(where +
+             "'s children are out of range (a child index must come after its parent "
+             "and within the tree's " +
+             std::to_string(node_count) + " nodes)");
+      for (std::uint32_t c = node.first_child; c < node.first_child + node.child_count; ++c) {
+        if (has_parent[c]) fail(what + " node " + std::to_string(c) + " has two parents");
+        has_parent[c] = true;
+      }
+    }
+    for (std::uint32_t n = 1; n < node_count; ++n)
+      if (!has_parent[n]) fail(what + " node " + std::to_string(n) + " is not in the tree");
+    if (words_in_leaves != live_words)
+      fail(what + " is missing " + std::to_string(live_words - words_in_leaves) +
+           " word(s) from its leaves");
+  }
 }
 
 void OnlineVocabulary::save(const std::string& path) const {

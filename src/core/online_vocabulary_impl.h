@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -97,8 +99,16 @@ struct OnlineVocabulary::Impl {
   // Splits a leaf holding more than leaf_size words, and its children as long
   // as they do too.
   void split_leaf(std::size_t tree, std::uint32_t leaf);
-  // Puts back the purge queue and the trees from the words (after loading).
-  void restore_derived_state();
+  // After loading: the purge queue from the words' counts.
+  void restore_purge_queue();
+  // After loading a file with trees (.bbov version 2): the trees of its
+  // sections 6..9 (`data` and `size` start at section 6), the words loaded
+  // already. Problems go to `fail`, which throws.
+  void read_trees(const std::uint8_t* const* data, const std::size_t* size,
+                  const std::function<void(const std::string&)>& fail);
+  // After loading a file without trees (.bbov version 1): the trees rebuilt
+  // from the words.
+  void rebuild_trees_after_load();
   std::size_t memory_usage() const;
 };
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "binbow/error.h"
 #include "core/crc32c.h"
 #include "core/little_endian.h"
+#include "core/sectioned_file.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -276,6 +278,8 @@ TEST(OnlineVocabulary, SameImagesGiveTheSameWords) {
   EXPECT_GT(reseeded.word_count(), 0u);
 }
 
+constexpr std::size_t kSections = 10;  // in a .bbov of version 2
+
 class OnlineVocabularyFile : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -283,6 +287,7 @@ class OnlineVocabularyFile : public ::testing::Test {
     OnlineVocabularyOptions options;
     options.purge_after_images = 4;
     options.descriptor = "orb";
+    options.leaf_size = 4;  // trees several levels deep
     vocabulary_ = std::make_unique<OnlineVocabulary>(32, options);
     all_ = test::clustered_descriptors(12 * 200, 32, 150, 0.06, rng);
     for (std::size_t i = 0; i < 12; ++i) {
@@ -294,9 +299,10 @@ class OnlineVocabularyFile : public ::testing::Test {
 
   // Recomputes every CRC so that a change reaches the checks behind them.
   static void fix_checksums(std::vector<std::uint8_t>& bytes) {
-    const std::size_t table_size = 6 * 24;
+    const std::size_t sections = detail::load_le<std::uint32_t>(bytes.data() + 48);
+    const std::size_t table_size = sections * 24;
     std::uint8_t* table = bytes.data() + 64;
-    for (std::size_t i = 0; i < 6; ++i) {
+    for (std::size_t i = 0; i < sections; ++i) {
       std::uint8_t* e = table + i * 24;
       const auto offset = detail::load_le<std::uint64_t>(e + 8);
       const auto length = detail::load_le<std::uint64_t>(e + 16);
@@ -305,6 +311,13 @@ class OnlineVocabularyFile : public ::testing::Test {
     }
     detail::store_le<std::uint32_t>(table + table_size, detail::crc32c(table, table_size));
     detail::store_le<std::uint32_t>(bytes.data() + 60, detail::crc32c(bytes.data(), 60));
+  }
+
+  // The offset and length of section `index` of a .bbov image.
+  static std::pair<std::size_t, std::size_t> section(const std::vector<std::uint8_t>& bytes,
+                                                     std::size_t index) {
+    const std::uint8_t* entry = bytes.data() + 64 + index * 24;
+    return {detail::load_le<std::uint64_t>(entry + 8), detail::load_le<std::uint64_t>(entry + 16)};
   }
 
   std::string rejection(const std::vector<std::uint8_t>& bytes) {
@@ -391,9 +404,9 @@ TEST_F(OnlineVocabularyFile, ClearErrorsForWrongMagicVersionAndHugeCounts) {
   EXPECT_NE(rejection(bytes).find("wrong magic"), std::string::npos);
 
   bytes = bytes_;
-  detail::store_le<std::uint32_t>(bytes.data() + 8, 2);
+  detail::store_le<std::uint32_t>(bytes.data() + 8, 3);
   fix_checksums(bytes);
-  EXPECT_NE(rejection(bytes).find("unsupported .bbov format version 2"), std::string::npos);
+  EXPECT_NE(rejection(bytes).find("unsupported .bbov format version 3"), std::string::npos);
 
   // Counts that would need gigabytes: rejected against the sections' sizes
   // before anything is allocated.
@@ -445,22 +458,152 @@ TEST_F(OnlineVocabularyFile, StatesAtTheCountersLimitsRefuseImagesUnchanged) {
 TEST_F(OnlineVocabularyFile, InconsistentWordsAreRejected) {
   // Word counts live in section 2, after options (48 + 3 bytes) and ids.
   const auto words = detail::load_le<std::uint32_t>(bytes_.data() + 28);
-  const std::size_t counts_offset = 64 + 6 * 24 + 4 + 48 + 3 + std::size_t{words} * 4;
+  const std::size_t counts_offset = 64 + kSections * 24 + 4 + 48 + 3 + std::size_t{words} * 4;
   std::vector<std::uint8_t> bytes = bytes_;
   detail::store_le<std::uint32_t>(bytes.data() + counts_offset, 0);  // seen in no image
   fix_checksums(bytes);
   EXPECT_NE(rejection(bytes).find("inconsistent counts"), std::string::npos);
 
   bytes = bytes_;
-  const std::size_t ids_offset = 64 + 6 * 24 + 4 + 48 + 3;
+  const std::size_t ids_offset = 64 + kSections * 24 + 4 + 48 + 3;
   std::memcpy(bytes.data() + ids_offset + 4, bytes.data() + ids_offset, 4);  // an id twice
   fix_checksums(bytes);
   EXPECT_NE(rejection(bytes).find("appears twice"), std::string::npos);
 
   bytes = bytes_;
-  bytes[64 + 6 * 24 + 4 + 12] = 0;  // zero trees
+  bytes[64 + kSections * 24 + 4 + 12] = 0;  // zero trees
   fix_checksums(bytes);
   EXPECT_NE(rejection(bytes).find("invalid options"), std::string::npos);
+}
+
+// The acceptance test of saved search trees: a vocabulary saved and loaded
+// every few images, approximate search, continues exactly as one never saved
+// (words, new words, purges, lookups), through splits, rebuilds and purges.
+TEST(OnlineVocabulary, SavedAndLoadedAtManyPointsContinuesAsNeverSaved) {
+  std::mt19937_64 rng(21);
+  const std::size_t per_image = 250;
+  const std::size_t image_count = 40;
+  const DescriptorMatrix all =
+      test::clustered_descriptors((image_count + 1) * per_image, 32, 1500, 0.12, rng);
+  const DescriptorView queries = all.view().slice(image_count * per_image, per_image);
+  OnlineVocabularyOptions options;
+  options.purge_after_images = 3;
+  options.leaf_size = 16;   // many splits
+  options.max_checks = 16;  // a coarse search: any change of tree shows
+  OnlineVocabulary never_saved(32, options);
+  OnlineVocabulary resumed(32, options);
+  std::size_t loads = 0;
+  for (std::size_t i = 0; i < image_count; ++i) {
+    SCOPED_TRACE("image " + std::to_string(i));
+    if (i % 6 == 1) {
+      const std::vector<std::uint8_t> bytes = resumed.serialize();
+      resumed = OnlineVocabulary::deserialize(bytes.data(), bytes.size(), "resumed.bbov");
+      ASSERT_EQ(resumed.serialize(), bytes) << "a loaded vocabulary saves the same bytes";
+      ++loads;
+    }
+    const DescriptorView image = all.view().slice(i * per_image, per_image);
+    const OnlineImageWords expected = never_saved.add_image(image);
+    const OnlineImageWords actual = resumed.add_image(image);
+    ASSERT_EQ(actual.words, expected.words);
+    ASSERT_EQ(actual.new_words, expected.new_words);
+    ASSERT_EQ(actual.purged, expected.purged);
+
+    std::vector<WordId> expected_words(queries.rows), actual_words(queries.rows);
+    std::vector<std::uint32_t> expected_distances(queries.rows), actual_distances(queries.rows);
+    never_saved.nearest_words(queries, expected_words.data(), expected_distances.data());
+    resumed.nearest_words(queries, actual_words.data(), actual_distances.data());
+    ASSERT_EQ(actual_words, expected_words);
+    ASSERT_EQ(actual_distances, expected_distances);
+  }
+  EXPECT_EQ(loads, 7u);
+  EXPECT_GE(never_saved.stats().tree_rebuilds, 3u * options.trees) << "rebuilds after loads";
+  EXPECT_GT(never_saved.stats().purged_words, 0u);
+  EXPECT_EQ(resumed.serialize(), never_saved.serialize());
+}
+
+TEST_F(OnlineVocabularyFile, Version1FilesStillLoadWithTreesRebuiltFromTheWords) {
+  // bytes_ as version 1 wrote them: the same header and first six sections,
+  // no trees.
+  std::vector<std::vector<std::uint8_t>> sections;
+  for (std::size_t i = 0; i < 6; ++i) {
+    const auto [offset, length] = section(bytes_, i);
+    sections.emplace_back(bytes_.begin() + offset, bytes_.begin() + offset + length);
+  }
+  const std::vector<std::uint8_t> version1 =
+      detail::write_sectioned_file("BINBOWOV", 1, sections.data(), 6, [&](std::uint8_t* header) {
+        std::memcpy(header + 16, bytes_.data() + 16, 32);
+        std::memcpy(header + 52, bytes_.data() + 52, 8);
+      });
+  OnlineVocabulary loaded = OnlineVocabulary::deserialize(version1.data(), version1.size(), "v1");
+  EXPECT_EQ(loaded.words(), vocabulary_->words());
+  for (const WordId word : loaded.words())
+    EXPECT_EQ(std::memcmp(loaded.word_descriptor(word), vocabulary_->word_descriptor(word), 32), 0);
+  EXPECT_EQ(detail::load_le<std::uint32_t>(loaded.serialize().data() + 8), 2u)
+      << "saved again, it is a version-2 file";
+
+  // Every load of the file continues alike.
+  OnlineVocabulary again = OnlineVocabulary::deserialize(version1.data(), version1.size(), "v1");
+  for (std::size_t i = 8; i < images_.size(); ++i) {
+    const OnlineImageWords a = loaded.add_image(images_[i]);
+    const OnlineImageWords b = again.add_image(images_[i]);
+    ASSERT_EQ(a.words, b.words);
+    ASSERT_EQ(a.purged, b.purged);
+  }
+  EXPECT_EQ(loaded.serialize(), again.serialize());
+}
+
+TEST_F(OnlineVocabularyFile, MalformedTreesAreRefusedEvenWithValidChecksums) {
+  const std::size_t trees_at = section(bytes_, 6).first;
+  const std::size_t nodes_at = section(bytes_, 7).first;
+  const std::size_t leaves_at = section(bytes_, 9).first;
+  const auto node_count = detail::load_le<std::uint32_t>(bytes_.data() + trees_at);
+  // Tree 0's node records: first child, child count, leaf words.
+  const auto field = [&](std::uint32_t node, std::size_t index) {
+    return nodes_at + std::size_t{node} * 12 + index * 4;
+  };
+  const auto root_children = detail::load_le<std::uint32_t>(bytes_.data() + field(0, 1));
+  ASSERT_GT(root_children, 2u);
+  ASSERT_GT(node_count, root_children + 1) << "tree 0 must be deeper than its root's children";
+  std::uint32_t first_leaf = 0;
+  while (detail::load_le<std::uint32_t>(bytes_.data() + field(first_leaf, 2)) == 0) ++first_leaf;
+
+  const auto refused_with = [&](const std::function<void(std::vector<std::uint8_t>&)>& change,
+                                const std::string& expected) {
+    std::vector<std::uint8_t> bytes = bytes_;
+    change(bytes);
+    fix_checksums(bytes);
+    const std::string problem = rejection(bytes);
+    EXPECT_NE(problem.find(expected), std::string::npos)
+        << "expected \"" << expected << "\", got: " << problem;
+  };
+  const auto set = [](std::size_t at, std::uint32_t value) {
+    return [=](std::vector<std::uint8_t>& bytes) {
+      detail::store_le<std::uint32_t>(bytes.data() + at, value);
+    };
+  };
+  // Counts that would need gigabytes, or no root at all.
+  refused_with(set(trees_at, 0xFFFFFFF0u), "section 'tree nodes' has");
+  refused_with(set(trees_at, 0), "tree 0 has no root");
+  refused_with(set(trees_at + 4, 0xFFFFFFF0u), "built over more words");
+  // A child index out of range, a cycle (children before their parent),
+  // too many children, a node with two parents, one with none.
+  refused_with(set(field(0, 0), node_count), "children are out of range");
+  refused_with(set(field(0, 0), 0), "must come after its parent");
+  refused_with(set(field(0, 1), 17), "has 17 children, expected 2 to 16");
+  refused_with(set(field(0, 0), 2), "has two parents");
+  refused_with(set(field(0, 1), root_children - 1), "is not in the tree");
+  refused_with(set(field(0, 2), 1), "an inner node that lists words");
+  refused_with(set(field(first_leaf, 0), 1), "is a leaf with a first child");
+  // A word missing from a tree, listed twice, or out of range.
+  const auto leaf_words = detail::load_le<std::uint32_t>(bytes_.data() + field(first_leaf, 2));
+  refused_with(set(field(first_leaf, 2), leaf_words - 1), "is missing 1 word(s)");
+  refused_with(set(field(first_leaf, 2), 0xFFFFFFF0u), "lists more words in its leaves");
+  refused_with(
+      [&](std::vector<std::uint8_t>& bytes) {
+        std::memcpy(bytes.data() + leaves_at + 4, bytes.data() + leaves_at, 4);
+      },
+      "twice");
+  refused_with(set(leaves_at, 0xFFFFFFF0u), "beyond the");
 }
 
 TEST(OnlineVocabularyExport, GrownWordsBecomeAFixedVocabulary) {

@@ -310,11 +310,9 @@ class LoopDetector {
   // (temporary file, then rename): a failed save leaves no partial file and
   // the old file, if any, intact. Throws FileError.
   //
-  // Resuming an online detector with the default (approximate) search: the
-  // .bbov rebuilds the search trees from the words (see OnlineVocabulary),
-  // so from then on the approximate nearest words may differ from the
-  // uninterrupted run's (every load of a file continues the same way; with
-  // OnlineVocabularyOptions::exact, resumed and uninterrupted runs agree).
+  // A resumed detector continues exactly as the uninterrupted one would
+  // have, online ones included: the .bbov keeps the vocabulary's search
+  // trees as they were (see OnlineVocabulary::save).
   void save(const std::string& path) const;
   std::vector<std::uint8_t> serialize() const;
   // A detector with a fixed vocabulary: `vocabulary` must be the one it was
