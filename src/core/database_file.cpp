@@ -298,11 +298,7 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
 std::vector<std::uint8_t> Database::serialize(bool include_vocabulary) const {
   std::shared_lock lock(impl_->mutex);
   std::vector<std::uint8_t> bytes;
-  detail::SectionedFileWriter out(
-      kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
-        if (bytes.size() < offset + size) bytes.resize(offset + size);
-        std::memcpy(bytes.data() + offset, data, size);
-      });
+  detail::SectionedFileWriter out(kSectionCount, detail::SectionedFileWriter::into(bytes));
   write_database(*impl_, include_vocabulary, out);
   return bytes;
 }

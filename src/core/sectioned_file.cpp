@@ -12,33 +12,24 @@ namespace binbow::detail {
 std::vector<std::uint8_t> write_sectioned_file(
     const char* magic, std::uint32_t version, const std::vector<std::uint8_t>* sections,
     std::uint32_t count, const std::function<void(std::uint8_t* header)>& fill_header) {
-  const std::size_t table_size = count * kSectionEntrySize;
-  std::vector<std::size_t> offsets(count);
-  std::size_t end = kSectionedHeaderSize + table_size + 4;
+  std::size_t size = kSectionedHeaderSize + count * kSectionEntrySize + 4;
+  for (std::uint32_t i = 0; i < count; ++i) size += sections[i].size();
+  std::vector<std::uint8_t> out;
+  out.reserve(size);
+  SectionedFileWriter writer(count, SectionedFileWriter::into(out));
   for (std::uint32_t i = 0; i < count; ++i) {
-    offsets[i] = end;
-    end += sections[i].size();
+    if (i > 0) writer.next_section();
+    writer.append(sections[i].data(), sections[i].size());
   }
-  std::vector<std::uint8_t> out(end, 0);
-  std::uint8_t* header = out.data();
-  std::memcpy(header, magic, 8);
-  store_le<std::uint32_t>(header + 8, version);
-  store_le<std::uint32_t>(header + 12, kSectionedHeaderSize);
-  store_le<std::uint32_t>(header + 48, count);
-  fill_header(header);
-  store_le<std::uint32_t>(header + 60, crc32c(header, 60));
-  std::uint8_t* table = header + kSectionedHeaderSize;
-  for (std::uint32_t i = 0; i < count; ++i) {
-    if (!sections[i].empty())
-      std::memcpy(out.data() + offsets[i], sections[i].data(), sections[i].size());
-    std::uint8_t* entry = table + i * kSectionEntrySize;
-    store_le<std::uint32_t>(entry, i);
-    store_le<std::uint32_t>(entry + 4, crc32c(sections[i].data(), sections[i].size()));
-    store_le<std::uint64_t>(entry + 8, offsets[i]);
-    store_le<std::uint64_t>(entry + 16, sections[i].size());
-  }
-  store_le<std::uint32_t>(table + table_size, crc32c(table, table_size));
+  writer.finish(magic, version, fill_header);
   return out;
+}
+
+SectionedFileWriter::Output SectionedFileWriter::into(std::vector<std::uint8_t>& bytes) {
+  return [&bytes](std::size_t offset, const std::uint8_t* data, std::size_t size) {
+    if (bytes.size() < offset + size) bytes.resize(offset + size);
+    if (size > 0) std::memcpy(bytes.data() + offset, data, size);
+  };
 }
 
 SectionedFileWriter::SectionedFileWriter(std::uint32_t count, Output output)

@@ -38,6 +38,8 @@ class SectionedFileWriter {
       std::function<void(std::size_t offset, const std::uint8_t* data, std::size_t size)>;
 
   SectionedFileWriter(std::uint32_t count, Output output);
+  // An Output that builds the file's image in `bytes` (which must outlive it).
+  static Output into(std::vector<std::uint8_t>& bytes);
   // Appends to the current section; sections are written in id order,
   // starting with section 0.
   void append(const void* data, std::size_t size);
