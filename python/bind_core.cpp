@@ -143,9 +143,7 @@ EntryId add_descriptors(Database& db, const py::object& descriptors,
                         const std::optional<std::string>& label) {
   const Descriptors d = to_descriptors(descriptors, "descriptors", db.vocabulary().code_size());
   py::gil_scoped_release release;
-  const EntryId entry = db.add(d.view);
-  if (label) db.set_label(entry, *label);
-  return entry;
+  return db.add(d.view, label.value_or(std::string()));
 }
 
 py::bytes database_bytes(const Database& db, bool include_vocabulary) {
@@ -338,9 +336,7 @@ void bind_core(py::module_& m) {
           "add_bow",
           [](Database& db, const BowVector& bow, const std::optional<std::string>& label) {
             py::gil_scoped_release release;
-            const EntryId entry = db.add(bow);
-            if (label) db.set_label(entry, *label);
-            return entry;
+            return db.add(bow, {}, label.value_or(std::string()));
           },
           py::arg("bow"), py::arg("label") = py::none(),
           "Add an image already transformed with this database's vocabulary; returns its id.")

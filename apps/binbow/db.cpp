@@ -96,8 +96,7 @@ std::vector<std::pair<EntryId, std::string>> add_images(Database& database,
   while (source.next(frame)) {
     const vision::Features extracted = extractor.extract(frame.image);
     if (features != nullptr) *features += extracted.descriptors.rows();
-    const EntryId entry = database.add(extracted.descriptors.view());
-    database.set_label(entry, frame.name);
+    const EntryId entry = database.add(extracted.descriptors.view(), frame.name);
     added.emplace_back(entry, frame.name);
     progress.update(added.size());
   }

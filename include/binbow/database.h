@@ -110,13 +110,15 @@ class Database {
 
   // Transforms the descriptors and adds the image. Returns its entry id: ids
   // are dense and increasing (0, 1, 2, ...), never reused after remove().
-  // Throws InvalidArgument if the code size differs from the vocabulary's.
-  EntryId add(const DescriptorView& descriptors);
+  // A non-empty `label` is set in the same step (see set_label), so no other
+  // thread sees the entry without it. Throws InvalidArgument if the code
+  // size differs from the vocabulary's.
+  EntryId add(const DescriptorView& descriptors, std::string label = {});
   // Adds an image already transformed with this database's vocabulary. The
   // feature vector is kept only if the database has a direct index. Throws
   // InvalidArgument for a word or node id outside the vocabulary, or a
   // non-finite value; nothing is added then.
-  EntryId add(const BowVector& bow, const FeatureVector& features = {});
+  EntryId add(const BowVector& bow, const FeatureVector& features = {}, std::string label = {});
 
   // The `max_results` entries most similar to `bow`, best first; ties are
   // ordered by increasing entry id. Only entries with id ≤ `max_entry_id` are

@@ -844,7 +844,12 @@ Database::Database(Database&&) noexcept = default;
 Database& Database::operator=(Database&&) noexcept = default;
 Database::~Database() = default;
 
-EntryId Database::add(const DescriptorView& descriptors) {
+void Database::Impl::store_label(EntryId entry, std::string label) {
+  if (labels.size() < alive.size()) labels.resize(alive.size());
+  labels[entry] = std::move(label);
+}
+
+EntryId Database::add(const DescriptorView& descriptors, std::string label) {
   if (impl_->over_word_ids)
     throw InvalidArgument(
         "Database::add: a database over word ids has no vocabulary to transform descriptors");
@@ -856,15 +861,17 @@ EntryId Database::add(const DescriptorView& descriptors) {
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
+  if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
 }
 
-EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
+EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::string label) {
   if (impl_->over_word_ids) {
     std::unique_lock lock(impl_->mutex);
     if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
     const EntryId entry = impl_->append(bow, features);
+    if (!label.empty()) impl_->store_label(entry, std::move(label));
     impl_->freeze_tail_if_full();
     return entry;
   }
@@ -878,6 +885,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features) {
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
+  if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
 }
@@ -999,8 +1007,7 @@ void Database::set_label(EntryId entry, std::string label) {
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::set_label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
-  if (impl_->labels.size() < impl_->alive.size()) impl_->labels.resize(impl_->alive.size());
-  impl_->labels[entry] = std::move(label);
+  impl_->store_label(entry, std::move(label));
 }
 
 std::string Database::label(EntryId entry) const {

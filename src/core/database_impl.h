@@ -264,6 +264,7 @@ struct Database::Impl {
 
   // Appends an entry whose arguments are already validated; exclusive lock held.
   EntryId append(const BowVector& bow, const FeatureVector& features);
+  void store_label(EntryId entry, std::string label);
   // Turns the tail into a segment when it is full enough (or always).
   void freeze_tail_if_full();
   void freeze_tail();

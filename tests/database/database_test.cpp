@@ -725,6 +725,17 @@ TEST(Database, Labels) {
   const EntryId b = database.add(BowVector({{1, 1.0f}}));
   EXPECT_EQ(database.label(a), "images/a.png");
   EXPECT_EQ(database.label(b), "");
+
+  // Labelled as it is added: another thread cannot remove the entry between
+  // the two steps and make the label fail after the add succeeded.
+  const EntryId c = database.add(BowVector({{2, 1.0f}}), {}, "images/c.png");
+  EXPECT_EQ(database.label(c), "images/c.png");
+  const Corpus corpus = random_corpus(vocabulary, 1, 6);
+  const EntryId d = database.add(corpus.images[0].view(), "images/d.png");
+  EXPECT_EQ(database.label(d), "images/d.png");
+  Database online = Database::over_word_ids(Scoring::kL1);
+  const EntryId e = online.add(BowVector({{70000, 1.0f}}), {}, "frame 0");
+  EXPECT_EQ(online.label(e), "frame 0");
 }
 
 TEST(Database, MemoryUsageGrowsWithEntries) {
