@@ -330,6 +330,18 @@ class OnlineVocabularyFile : public ::testing::Test {
     return "accepted";
   }
 
+  // Two vocabularies restored from one file continue alike from image
+  // `first` on: the same words and purges, and in the end the same state.
+  void expect_same_continuation(OnlineVocabulary& a, OnlineVocabulary& b, std::size_t first) {
+    for (std::size_t i = first; i < images_.size(); ++i) {
+      const OnlineImageWords from_a = a.add_image(images_[i]);
+      const OnlineImageWords from_b = b.add_image(images_[i]);
+      ASSERT_EQ(from_a.words, from_b.words) << "image " << i;
+      ASSERT_EQ(from_a.purged, from_b.purged) << "image " << i;
+    }
+    EXPECT_EQ(a.serialize(), b.serialize());
+  }
+
   std::unique_ptr<OnlineVocabulary> vocabulary_;
   DescriptorMatrix all_;
   std::vector<DescriptorView> images_;
@@ -354,13 +366,7 @@ TEST_F(OnlineVocabularyFile, RoundTripRestoresTheWordsAndContinuesTheSameWay) {
 
   // Every restore of the file continues alike, purges included.
   OnlineVocabulary again = OnlineVocabulary::deserialize(bytes_.data(), bytes_.size(), "again");
-  for (std::size_t i = 8; i < images_.size(); ++i) {
-    const OnlineImageWords a = loaded.add_image(images_[i]);
-    const OnlineImageWords b = again.add_image(images_[i]);
-    ASSERT_EQ(a.words, b.words);
-    ASSERT_EQ(a.purged, b.purged);
-  }
-  EXPECT_EQ(loaded.serialize(), again.serialize());
+  expect_same_continuation(loaded, again, 8);
 }
 
 TEST_F(OnlineVocabularyFile, ExactModeContinuesExactlyAsTheSavedVocabulary) {
@@ -543,13 +549,7 @@ TEST_F(OnlineVocabularyFile, Version1FilesStillLoadWithTreesRebuiltFromTheWords)
 
   // Every load of the file continues alike.
   OnlineVocabulary again = OnlineVocabulary::deserialize(version1.data(), version1.size(), "v1");
-  for (std::size_t i = 8; i < images_.size(); ++i) {
-    const OnlineImageWords a = loaded.add_image(images_[i]);
-    const OnlineImageWords b = again.add_image(images_[i]);
-    ASSERT_EQ(a.words, b.words);
-    ASSERT_EQ(a.purged, b.purged);
-  }
-  EXPECT_EQ(loaded.serialize(), again.serialize());
+  expect_same_continuation(loaded, again, 8);
 }
 
 TEST_F(OnlineVocabularyFile, MalformedTreesAreRefusedEvenWithValidChecksums) {
