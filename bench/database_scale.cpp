@@ -14,7 +14,8 @@
 // The benchmarks run in order on one growing database: BM_Fill/N adds entries
 // until there are N (the time is the add calls alone: their mean is the
 // counter add_us), BM_Query/N answers the queries (top 10, the median
-// is query_ms), and BM_SaveLoad saves the largest database to a .bbdb file
+// is query_ms), BM_QueryBounds/100000 measures what pruned or stop-listed
+// queries would read (see there), and BM_SaveLoad saves the largest database to a .bbdb file
 // (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it
 // back and checks that the loaded database answers every query identically,
 // with the peak resident memory of each step over the database's memory.
@@ -150,6 +151,10 @@ struct Scale {
   std::size_t heap_before = 0;  // heap in use before the database was created
   double words_per_entry = 0;   // distinct words of the entries added, mean
   std::size_t words_total = 0;
+  // Per word, over the entries added: how many have it, and its largest
+  // weight in any of them (what a pruned query could bound a word's part by).
+  std::vector<std::uint32_t> entries_with_word;
+  std::vector<float> largest_weight;
 };
 
 // Null (with the reason in `error`) when the vocabulary or the photographs
@@ -204,6 +209,8 @@ Scale* scale(std::string& error) {
                 std::to_string(s->photographs.size()) + "): run scripts/training_images.sh --all";
       return nullptr;
     }
+    s->entries_with_word.assign(s->vocabulary.word_count(), 0);
+    s->largest_weight.assign(s->vocabulary.word_count(), 0.0f);
     s->heap_before = heap_in_use();
     s->database =
         std::make_unique<Database>(s->vocabulary, DatabaseOptions{s->direct_index, kLevelsUp});
@@ -260,6 +267,10 @@ void BM_Fill(benchmark::State& state) {
         s->vocabulary.transform(image, bow);
       }
       s->words_total += bow.size();
+      for (const BowEntry& word : bow) {
+        ++s->entries_with_word[word.word];
+        s->largest_weight[word.word] = std::max(s->largest_weight[word.word], word.value);
+      }
       const Clock::time_point start = Clock::now();
       const double cpu_start = thread_seconds();
       s->database->add(bow, features);
@@ -312,11 +323,82 @@ void BM_Query(benchmark::State& state) {
   memory_counters(state, *s);
   label(state, *s);
 }
+// Why an exact query reads every posting of these images, and what skipping
+// the most common words (Sivic & Zisserman's stop list) would cost. For each
+// query, with the exact 10th score θ known in advance (an oracle):
+// - maxscore_read: the share of its postings in the words that an exact
+//   MaxScore-style query must read in full, all but the words of least
+//   bound min(query weight, largest weight) whose bounds sum below θ (L1);
+// - stop<f>_read: the share left when words in more than a fraction f of the
+//   entries are dropped from the query, and stop<f>_same_top: how often its
+//   best entry is still a copy of the same photograph as the exact best.
+void BM_QueryBounds(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s == nullptr) return;
+  if (s->database->size() != static_cast<std::size_t>(state.range(0)) ||
+      s->database->scoring() != Scoring::kL1) {
+    state.SkipWithError("run after BM_Fill of the same size, with an L1 vocabulary");
+    return;
+  }
+  const auto entries = static_cast<double>(s->database->size());
+  const double fractions[] = {0.2, 0.1, 0.05};
+  for (auto _ : state) {
+    std::vector<double> maxscore_read;
+    std::vector<double> stop_read[3], stop_same_top[3];
+    for (const BowVector& query : s->queries) {
+      const auto exact = s->database->query(query, kMaxResults);
+      if (exact.size() < kMaxResults) continue;
+      const double theta = exact.back().score;
+      std::vector<std::pair<double, std::uint32_t>> bounds;  // (bound, postings)
+      double postings = 0;
+      for (const BowEntry& word : query) {
+        bounds.emplace_back(std::min(word.value, s->largest_weight[word.word]),
+                            s->entries_with_word[word.word]);
+        postings += s->entries_with_word[word.word];
+      }
+      std::sort(bounds.begin(), bounds.end());
+      double bound_sum = 0, skipped = 0;
+      for (const auto& [bound, word_postings] : bounds) {
+        if (bound_sum + bound >= theta) break;
+        bound_sum += bound;
+        skipped += word_postings;
+      }
+      maxscore_read.push_back(1.0 - skipped / postings);
+      for (std::size_t f = 0; f < 3; ++f) {
+        std::vector<BowEntry> kept;
+        double kept_postings = 0;
+        for (const BowEntry& word : query)
+          if (s->entries_with_word[word.word] <= fractions[f] * entries) {
+            kept.push_back(word);
+            kept_postings += s->entries_with_word[word.word];
+          }
+        const auto pruned = s->database->query(BowVector(std::move(kept)), 1);
+        stop_read[f].push_back(kept_postings / postings);
+        stop_same_top[f].push_back(!pruned.empty() && pruned[0].entry % s->photographs.size() ==
+                                                          exact[0].entry % s->photographs.size());
+      }
+    }
+    const auto mean = [](const std::vector<double>& values) {
+      double sum = 0;
+      for (double v : values) sum += v;
+      return values.empty() ? 0.0 : sum / static_cast<double>(values.size());
+    };
+    state.counters["maxscore_read"] = median(maxscore_read);
+    const char* names[] = {"stop0.2", "stop0.1", "stop0.05"};
+    for (std::size_t f = 0; f < 3; ++f) {
+      state.counters[std::string(names[f]) + "_read"] = median(stop_read[f]);
+      state.counters[std::string(names[f]) + "_same_top"] = mean(stop_same_top[f]);
+    }
+  }
+  label(state, *s);
+}
+
 // Registered size by size: each size's queries run before the database grows on.
 BENCHMARK(BM_Fill)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Fill)->Arg(100000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(100000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_QueryBounds)->Arg(100000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
 

@@ -1,5 +1,5 @@
-// The image database: posting lists, packed direct index, queries through the
-// inverted index. The .bbdb format lives in database_file.cpp.
+// The image database: posting lists and the packed direct index. Queries
+// live in database_query.cpp, the .bbdb format in database_file.cpp.
 #include "binbow/database.h"
 
 #include <algorithm>
@@ -12,13 +12,8 @@
 #include <shared_mutex>
 #include <utility>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "binbow/error.h"
 #include "core/database_impl.h"
-#include "core/scoring.h"
 
 namespace binbow {
 
@@ -104,6 +99,18 @@ InvalidArgument non_finite_value(const char* what, WordId word) {
                          " has a non-finite value");
 }
 
+void check_bow_words(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
+  if (!bow.empty() && bow[bow.size() - 1].word >= vocabulary.word_count())
+    throw InvalidArgument(
+        std::string(what) + ": word id " + std::to_string(bow[bow.size() - 1].word) +
+        " is outside the vocabulary (" + std::to_string(vocabulary.word_count()) + " words)");
+}
+
+void check_bow_values(const BowVector& bow, const char* what) {
+  for (const BowEntry& entry : bow)
+    if (!std::isfinite(entry.value)) throw non_finite_value(what, entry.word);
+}
+
 namespace {
 
 // A full list moves to a block twice its size (see TailList).
@@ -150,11 +157,21 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
         std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
     layout_ = wide ? Layout::kRows32 : Layout::kRows16;
   }
-  const std::size_t nodes_bytes = std::size_t{node_count_} * 4;
+  // Node ids are increasing: the last one sets their width. Those of a
+  // direct index a few levels up are small (below 111 at level 2 of k=10).
+  const NodeId largest_node = node_count_ > 0 ? features.node(node_count_ - 1) : 0;
+  node_width_ = largest_node <= 0xFF ? 1 : largest_node <= 0xFFFF ? 2 : 4;
+  const std::size_t nodes_bytes = std::size_t{node_count_} * node_width_;
+  const auto write_nodes = [&] {
+    for (std::size_t node = 0; node < node_count_; ++node) {
+      const NodeId id = features.node(node);
+      std::memcpy(bytes_.data() + node * node_width_, &id, node_width_);  // little-endian
+    }
+  };
   if (partition) {
     const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
     bytes_.resize(nodes_bytes + std::size_t{feature_count_} * width);
-    if (node_count_ > 0) std::memcpy(bytes_.data(), features.nodes().data(), nodes_bytes);
+    write_nodes();
     std::uint8_t* slots = bytes_.data() + nodes_bytes;
     for (std::size_t node = 0; node < node_count_; ++node) {
       const auto slot = static_cast<std::uint16_t>(node);
@@ -171,9 +188,8 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
   const std::size_t width = layout_ == Layout::kRows32 ? 4 : 2;
   bytes_.resize(nodes_bytes + std::size_t{node_count_} * width +
                 std::size_t{feature_count_} * width);
-  std::uint8_t* out = bytes_.data();
-  if (node_count_ > 0) std::memcpy(out, features.nodes().data(), nodes_bytes);
-  out += nodes_bytes;
+  write_nodes();
+  std::uint8_t* out = bytes_.data() + nodes_bytes;
   const auto put = [&](std::uint32_t v) {
     std::memcpy(out, &v, width);  // little-endian: the low bytes
     out += width;
@@ -191,8 +207,9 @@ std::uint32_t PackedFeatureVector::value(std::size_t byte_offset,
 
 FeatureVector PackedFeatureVector::unpack() const {
   std::vector<NodeId> nodes(node_count_);
-  const std::size_t nodes_bytes = std::size_t{node_count_} * 4;
-  if (node_count_ > 0) std::memcpy(nodes.data(), bytes_.data(), nodes_bytes);
+  const std::size_t nodes_bytes = std::size_t{node_count_} * node_width_;
+  for (std::size_t node = 0; node < node_count_; ++node)
+    nodes[node] = value(node * node_width_, node_width_);
   std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
   std::vector<std::uint32_t> indices(feature_count_);
   if (layout_ == Layout::kPartition8 || layout_ == Layout::kPartition16) {
@@ -219,226 +236,6 @@ FeatureVector PackedFeatureVector::unpack() const {
 }  // namespace detail
 
 namespace {
-
-struct Accumulator {
-  double sum = 0;
-  std::uint32_t shared = 0;
-};
-
-// Per-thread buffers reused by every query: the dense score array (all zero
-// between queries), the ids touched by the current query, the candidates.
-struct QueryScratch {
-  std::vector<Accumulator> accumulators;
-  std::vector<EntryId> touched;
-  std::vector<QueryResult> candidates;
-};
-
-thread_local QueryScratch scratch;
-
-template <Scoring kScoring>
-inline void accumulate_posting(EntryId entry, float weight, double v, Accumulator* accumulators,
-                               EntryId* touched, std::size_t& touched_count) {
-  Accumulator& accumulator = accumulators[entry];
-  touched[touched_count] = entry;
-  touched_count += accumulator.shared == 0;
-  ++accumulator.shared;
-  accumulator.sum += detail::score_term(kScoring, v, weight);
-}
-
-// Posting lists are scattered in memory: the rows of words a few steps
-// ahead are prefetched so that their cache misses overlap.
-constexpr std::size_t kPrefetchAhead = 8;
-
-// Entries are increasing within a row, so `last_entry` cuts it short.
-template <Scoring kScoring, typename Relative>
-void accumulate_segment(const detail::Segment& segment, const Relative* entries,
-                        detail::RowOrder order, const BowVector& bow, EntryId last_entry,
-                        Accumulator* accumulators, EntryId* touched, std::size_t& touched_count) {
-  const std::uint32_t* offsets = segment.offsets.data();
-  const float* weights = segment.weights.data();
-  const EntryId first = segment.first_entry;
-  const bool cut = last_entry < segment.end_entry - 1;
-  const auto last = static_cast<Relative>(cut ? last_entry - first : 0);
-  const std::size_t n = bow.size();
-  const BowEntry* query = bow.begin();
-  for (std::size_t q = 0; q < n; ++q) {
-    if (q + 2 * kPrefetchAhead < n)
-      __builtin_prefetch(offsets + order.row(query[q + 2 * kPrefetchAhead].word));
-    if (q + kPrefetchAhead < n) {
-      const std::uint32_t begin = offsets[order.row(query[q + kPrefetchAhead].word)];
-      __builtin_prefetch(entries + begin);
-      __builtin_prefetch(weights + begin);
-    }
-    const std::uint32_t row = order.row(query[q].word);
-    const std::uint32_t begin = offsets[row];
-    std::uint32_t end = offsets[row + 1];
-    if (cut)
-      end = static_cast<std::uint32_t>(std::upper_bound(entries + begin, entries + end, last) -
-                                       entries);
-    const double v = query[q].value;
-    for (std::uint32_t i = begin; i < end; ++i)
-      accumulate_posting<kScoring>(first + entries[i], weights[i], v, accumulators, touched,
-                                   touched_count);
-  }
-}
-
-template <Scoring kScoring>
-void accumulate_segment(const detail::Segment& segment, detail::RowOrder order,
-                        const BowVector& bow, EntryId last_entry, Accumulator* accumulators,
-                        EntryId* touched, std::size_t& touched_count) {
-  accumulate_segment<kScoring>(segment, segment.entries16.data(), order, bow, last_entry,
-                               accumulators, touched, touched_count);
-}
-
-// What a query reads of the index (Database::Impl is private).
-struct IndexView {
-  const std::vector<std::unique_ptr<detail::Segment>>& segments;
-  const detail::TailList* tail_lists;
-  const detail::PostingArena& arena;
-  unsigned high_bits;
-  detail::RowOrder row_order;
-  std::size_t tail_postings;
-  EntryId tail_first_entry;
-};
-
-// Calls take(i) for the postings of a group list whose key has the given
-// low bits (the postings of one word), in order, until take returns false.
-// Four keys are compared at once: a word's postings are a small part of its
-// group's.
-template <typename Take>
-inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t size,
-                             std::uint32_t mask, std::uint32_t low, Take&& take) {
-  std::uint32_t i = 0;
-#if defined(__SSE2__)
-  const __m128i masks = _mm_set1_epi32(static_cast<int>(mask));
-  const __m128i lows = _mm_set1_epi32(static_cast<int>(low));
-  for (; i + 4 <= size; i += 4) {
-    const __m128 a = _mm_loadu_ps(reinterpret_cast<const float*>(postings + i));
-    const __m128 b = _mm_loadu_ps(reinterpret_cast<const float*>(postings + i + 2));
-    const __m128i keys = _mm_castps_si128(_mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0)));
-    unsigned hits = static_cast<unsigned>(
-        _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(keys, masks), lows))));
-    while (hits != 0) {
-      if (!take(i + static_cast<std::uint32_t>(__builtin_ctz(hits)))) return;
-      hits &= hits - 1;
-    }
-  }
-#endif
-  for (; i < size; ++i)
-    if ((postings[i].key & mask) == low && !take(i)) return;
-}
-
-// A query word's group list holds the postings of up to 2^high_bits words,
-// in increasing entry order: the word's own are picked out by their high
-// bits.
-template <Scoring kScoring>
-void accumulate_tail(const IndexView& index, const BowVector& bow, EntryId last_entry,
-                     Accumulator* accumulators, EntryId* touched, std::size_t& touched_count) {
-  const detail::TailList* lists = index.tail_lists;
-  const EntryId first = index.tail_first_entry;
-  const unsigned bits = index.high_bits;
-  const std::uint32_t mask = (1u << bits) - 1;
-  const std::uint64_t key_end = (std::uint64_t{last_entry} - first + 1) << bits;
-  const std::size_t n = bow.size();
-  const BowEntry* query = bow.begin();
-  for (std::size_t q = 0; q < n; ++q) {
-    if (q + 2 * kPrefetchAhead < n)
-      __builtin_prefetch(lists + detail::group_of(query[q + 2 * kPrefetchAhead].word));
-    if (q + kPrefetchAhead < n) {
-      // The whole list (up to 2 KiB) is read: fetch it all, not its start.
-      const detail::TailList ahead = lists[detail::group_of(query[q + kPrefetchAhead].word)];
-      if (ahead.size != 0) {
-        const auto* block = reinterpret_cast<const char*>(index.arena.at(ahead.block));
-        const std::size_t bytes =
-            std::min<std::size_t>(ahead.size, 256) * sizeof(detail::TailPosting);
-        for (std::size_t b = 0; b < bytes; b += 64) __builtin_prefetch(block + b);
-      }
-    }
-    const WordId word = query[q].word;
-    const detail::TailList list = lists[detail::group_of(word)];
-    if (list.size == 0) continue;
-    const detail::TailPosting* postings = index.arena.at(list.block);
-    const double v = query[q].value;
-    for_each_of_word(postings, list.size, mask, word >> detail::kGroupBits, [&](std::uint32_t i) {
-      const std::uint32_t key = postings[i].key;
-      if (key >= key_end) return false;
-      accumulate_posting<kScoring>(first + (key >> bits), postings[i].weight, v, accumulators,
-                                   touched, touched_count);
-      return true;
-    });
-  }
-}
-
-// Every term is computed and summed exactly as Vocabulary::score does, in the
-// same order (increasing word id), so scores agree to the last bit: each
-// entry lives in one segment or in the tail, whose pass visits the query's
-// words in order.
-template <Scoring kScoring>
-std::size_t accumulate(const IndexView& impl, const BowVector& bow, EntryId last_entry,
-                       Accumulator* accumulators, EntryId* touched) {
-  std::size_t touched_count = 0;
-  for (const auto& segment : impl.segments) {
-    if (segment->first_entry > last_entry) return touched_count;
-    accumulate_segment<kScoring>(*segment, impl.row_order, bow, last_entry, accumulators, touched,
-                                 touched_count);
-  }
-  if (impl.tail_postings > 0 && impl.tail_first_entry <= last_entry)
-    accumulate_tail<kScoring>(impl, bow, last_entry, accumulators, touched, touched_count);
-  return touched_count;
-}
-
-std::size_t accumulate(Scoring scoring, const IndexView& impl, const BowVector& bow,
-                       EntryId last_entry, Accumulator* accumulators, EntryId* touched) {
-  switch (scoring) {
-    case Scoring::kL1:
-      return accumulate<Scoring::kL1>(impl, bow, last_entry, accumulators, touched);
-    case Scoring::kL2:
-      return accumulate<Scoring::kL2>(impl, bow, last_entry, accumulators, touched);
-    case Scoring::kChiSquare:
-      return accumulate<Scoring::kChiSquare>(impl, bow, last_entry, accumulators, touched);
-    case Scoring::kKL:
-      return accumulate<Scoring::kKL>(impl, bow, last_entry, accumulators, touched);
-    case Scoring::kBhattacharyya:
-      return accumulate<Scoring::kBhattacharyya>(impl, bow, last_entry, accumulators, touched);
-    case Scoring::kDotProduct:
-      return accumulate<Scoring::kDotProduct>(impl, bow, last_entry, accumulators, touched);
-  }
-  return 0;
-}
-
-// Orders best first, then by entry id. A NaN score (only from vectors with
-// negative values) ranks last, so the order stays a strict weak ordering.
-struct BetterResult {
-  bool lower_is_better;
-
-  double key(double score) const {
-    if (std::isnan(score)) return lower_is_better ? INFINITY : -INFINITY;
-    return score;
-  }
-  bool operator()(const QueryResult& a, const QueryResult& b) const {
-    const double ka = key(a.score);
-    const double kb = key(b.score);
-    if (ka != kb) return lower_is_better ? ka < kb : ka > kb;
-    return a.entry < b.entry;
-  }
-};
-
-void check_words(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
-  if (!bow.empty() && bow[bow.size() - 1].word >= vocabulary.word_count())
-    throw InvalidArgument(
-        std::string(what) + ": word id " + std::to_string(bow[bow.size() - 1].word) +
-        " is outside the vocabulary (" + std::to_string(vocabulary.word_count()) + " words)");
-}
-
-void check_values(const BowVector& bow, const char* what) {
-  for (const BowEntry& entry : bow)
-    if (!std::isfinite(entry.value)) throw detail::non_finite_value(what, entry.word);
-}
-
-void check_bow(const BowVector& bow, const Vocabulary& vocabulary, const char* what) {
-  check_words(bow, vocabulary, what);
-  check_values(bow, what);
-}
 
 void check_direct_index_levels(const DatabaseOptions& options) {
   if (options.direct_index_levels_up > kMaxDirectIndexLevelsUp)
@@ -876,7 +673,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
     return entry;
   }
   // The values are checked while they are added (one pass over the image).
-  check_words(bow, impl_->vocabulary, "Database::add");
+  detail::check_bow_words(bow, impl_->vocabulary, "Database::add");
   if (impl_->options.direct_index && !features.empty() &&
       features.node(features.size() - 1) >= impl_->vocabulary.node_count())
     throw InvalidArgument("Database::add: feature vector node " +
@@ -888,81 +685,6 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
   if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
-}
-
-std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
-                                         EntryId max_entry_id) const {
-  if (impl_->over_word_ids)
-    check_values(bow, "Database::query");
-  else
-    check_bow(bow, impl_->vocabulary, "Database::query");
-  std::vector<QueryResult> results;
-  if (bow.empty() || max_results == 0) return results;
-  const Scoring scoring = impl_->scoring;
-  const double base = detail::score_base(scoring, bow);
-
-  std::shared_lock lock(impl_->mutex);
-  // Over word ids, words beyond the capacity are in no entry yet: the index
-  // is searched for the others (base() above still counts them, for KL).
-  BowVector indexed_words;
-  const BowVector* searched = &bow;
-  if (impl_->over_word_ids && bow[bow.size() - 1].word >= impl_->word_capacity) {
-    const auto end =
-        std::lower_bound(bow.begin(), bow.end(), impl_->word_capacity,
-                         [](const BowEntry& e, std::size_t capacity) { return e.word < capacity; });
-    indexed_words = BowVector(std::vector<BowEntry>(bow.begin(), end));
-    if (indexed_words.empty()) return results;
-    searched = &indexed_words;
-  }
-  const std::size_t entry_count = impl_->alive.size();
-  if (entry_count == 0) return results;
-  QueryScratch& buffers = scratch;
-  if (buffers.accumulators.size() < entry_count) buffers.accumulators.resize(entry_count);
-  // accumulate() may write one element past the last new id.
-  if (buffers.touched.size() < entry_count + 1) buffers.touched.resize(entry_count + 1);
-  const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
-  const IndexView index{impl_->segments,        impl_->tail_lists.data(), impl_->arena,
-                        impl_->high_bits,       impl_->row_order,         impl_->tail_postings,
-                        impl_->tail_first_entry};
-  const std::size_t touched = accumulate(scoring, index, *searched, last_entry,
-                                         buffers.accumulators.data(), buffers.touched.data());
-
-  // Collecting the best also zeroes the accumulators for the next query;
-  // reserve first so nothing can throw with dirty accumulators. The best
-  // max_results so far are a heap whose front is the worst of them, so most
-  // entries cost one comparison.
-  const BetterResult better{scoring == Scoring::kKL};
-  const std::size_t keep = std::min(max_results, touched);
-  std::vector<QueryResult>& candidates = buffers.candidates;
-  candidates.clear();
-  try {
-    candidates.reserve(keep);
-  } catch (...) {
-    for (std::size_t i = 0; i < touched; ++i) buffers.accumulators[buffers.touched[i]] = {};
-    throw;
-  }
-  for (std::size_t i = 0; i < touched; ++i) {
-    const EntryId entry = buffers.touched[i];
-    Accumulator& accumulator = buffers.accumulators[entry];
-    if (impl_->alive[entry] != 0) {
-      const QueryResult result{entry, detail::finish_score(scoring, accumulator.sum, base),
-                               accumulator.shared};
-      if (candidates.size() < keep) {
-        candidates.push_back(result);
-        if (candidates.size() == keep) std::make_heap(candidates.begin(), candidates.end(), better);
-      } else if (better(result, candidates.front())) {
-        std::pop_heap(candidates.begin(), candidates.end(), better);
-        candidates.back() = result;
-        std::push_heap(candidates.begin(), candidates.end(), better);
-      }
-    }
-    accumulator = {};
-  }
-  lock.unlock();
-
-  std::sort(candidates.begin(), candidates.end(), better);
-  results.assign(candidates.begin(), candidates.end());
-  return results;
 }
 
 void Database::remove(EntryId entry) {

@@ -78,6 +78,10 @@ struct TailList {
 
 // The error for a BoW value that is not finite.
 InvalidArgument non_finite_value(const char* what, WordId word);
+// Throw InvalidArgument, naming `what`, for a word beyond the vocabulary or
+// a value that is not finite.
+void check_bow_words(const BowVector& bow, const Vocabulary& vocabulary, const char* what);
+void check_bow_values(const BowVector& bow, const char* what);
 
 constexpr unsigned kFirstBlockLog = 2;
 constexpr bool tail_list_full(std::uint32_t size, unsigned first_block_log) noexcept {
@@ -172,7 +176,8 @@ class GrowableArray {
   std::size_t size_ = 0;
 };
 
-// One entry's FeatureVector, packed. Node ids are 32 bit. When every feature
+// One entry's FeatureVector, packed. Node ids take 8, 16 or 32 bits, as the
+// largest needs (8 for a direct index at level 2 of a k=10 tree). When every feature
 // 0..n-1 sits under exactly one node (what transform produces), each feature
 // just stores the position of its node, in 8 bits when there are at most 256
 // nodes (about 1 byte per feature) or 16 bits; otherwise the end offset of
@@ -195,6 +200,7 @@ class PackedFeatureVector {
   std::uint32_t node_count_ = 0;
   std::uint32_t feature_count_ = 0;
   Layout layout_ = Layout::kPartition8;
+  std::uint8_t node_width_ = 4;  // bytes per node id
 };
 
 }  // namespace binbow::detail
