@@ -205,6 +205,80 @@ std::uint32_t PackedFeatureVector::value(std::size_t byte_offset,
   return v;
 }
 
+std::size_t PackedFeatureVector::packed_size() const noexcept {
+  const std::size_t nodes = std::size_t{node_count_} * node_width_;
+  switch (layout_) {
+    case Layout::kPartition8:
+      return nodes + feature_count_;
+    case Layout::kPartition16:
+      return nodes + std::size_t{feature_count_} * 2;
+    case Layout::kRows16:
+      return nodes + (std::size_t{node_count_} + feature_count_) * 2;
+    case Layout::kRows32:
+      return nodes + (std::size_t{node_count_} + feature_count_) * 4;
+  }
+  return 0;
+}
+
+void PackedFeatureVector::encode(std::uint8_t* out) const noexcept {
+  out[0] = static_cast<std::uint8_t>(layout_);
+  out[1] = node_width_;
+  if (!bytes_.empty()) std::memcpy(out + 2, bytes_.data(), bytes_.size());
+}
+
+PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::size_t size,
+                                                std::uint32_t node_count,
+                                                std::uint32_t feature_count,
+                                                std::uint64_t node_limit) {
+  if (size < 2) throw InvalidArgument("shorter than its layout");
+  PackedFeatureVector packed;
+  packed.node_count_ = node_count;
+  packed.feature_count_ = feature_count;
+  if (data[0] > static_cast<std::uint8_t>(Layout::kRows32))
+    throw InvalidArgument("unknown layout " + std::to_string(data[0]));
+  packed.layout_ = static_cast<Layout>(data[0]);
+  packed.node_width_ = data[1];
+  if (packed.node_width_ != 1 && packed.node_width_ != 2 && packed.node_width_ != 4)
+    throw InvalidArgument("node ids of " + std::to_string(data[1]) + " bytes");
+  const bool partition =
+      packed.layout_ == Layout::kPartition8 || packed.layout_ == Layout::kPartition16;
+  if (partition && node_count > (packed.layout_ == Layout::kPartition8 ? 0x100u : 0x10000u))
+    throw InvalidArgument("too many nodes for its layout");
+  if (size - 2 != packed.packed_size())
+    throw InvalidArgument(std::to_string(size - 2) + " bytes, expected " +
+                          std::to_string(packed.packed_size()));
+  packed.bytes_.assign(data + 2, data + size);
+  const std::size_t nodes_bytes = std::size_t{node_count} * packed.node_width_;
+  for (std::size_t node = 0; node < node_count; ++node) {
+    const std::uint32_t id = packed.value(node * packed.node_width_, packed.node_width_);
+    if (id >= node_limit) throw InvalidArgument("node " + std::to_string(id) + " is out of range");
+    if (node > 0 && id <= packed.value((node - 1) * packed.node_width_, packed.node_width_))
+      throw InvalidArgument("nodes are not strictly increasing");
+  }
+  if (partition) {
+    // Every feature names a node, and every node has a feature.
+    const std::size_t width = packed.layout_ == Layout::kPartition8 ? 1 : 2;
+    std::vector<std::uint8_t> used(node_count, 0);
+    for (std::size_t f = 0; f < feature_count; ++f) {
+      const std::uint32_t slot = packed.value(nodes_bytes + f * width, width);
+      if (slot >= node_count) throw InvalidArgument("a feature names no node");
+      used[slot] = 1;
+    }
+    if (std::find(used.begin(), used.end(), 0) != used.end())
+      throw InvalidArgument("a node has no features");
+  } else {
+    const std::size_t width = packed.layout_ == Layout::kRows32 ? 4 : 2;
+    std::uint32_t previous = 0;
+    for (std::size_t node = 0; node < node_count; ++node) {
+      const std::uint32_t end = packed.value(nodes_bytes + node * width, width);
+      if (end <= previous) throw InvalidArgument("a node has no features");
+      previous = end;
+    }
+    if (previous != feature_count) throw InvalidArgument("node offsets do not end at its features");
+  }
+  return packed;
+}
+
 FeatureVector PackedFeatureVector::unpack() const {
   std::vector<NodeId> nodes(node_count_);
   const std::size_t nodes_bytes = std::size_t{node_count_} * node_width_;
@@ -505,71 +579,71 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
                  segments.begin() + static_cast<std::ptrdiff_t>(end));
 }
 
-void Database::Impl::freeze_tail() {
-  const std::size_t words = word_capacity;
+std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   const std::size_t live = tail_postings - tail_dead_postings;
-  std::unique_ptr<detail::Segment> segment;
-  std::vector<std::uint32_t> next;  // per word of a group: its row's next slot
-  if (live > 0) {
-    next.resize(std::size_t{1} << high_bits);
-    segment = std::make_unique<detail::Segment>();
-    segment->offsets.resize(words + 1);
-    segment->entries16.resize(live);
-    segment->weights.resize(live);
-    segments.reserve(segments.size() + 1);
-  }
-  // Nothing below can throw: the index changes all at once.
-  if (segment) {
-    segment->first_entry = tail_first_entry;
-    segment->end_entry = static_cast<EntryId>(alive.size());
-    std::uint32_t* offsets = segment->offsets.data();
-    std::uint16_t* entries = segment->entries16.data();
-    float* weights = segment->weights.data();
-    const std::uint8_t* live_at = alive.data() + tail_first_entry;
-    const bool drop_dead = tail_dead_postings > 0;
-    // One pass over the groups: a group's rows are consecutive (RowOrder),
-    // so each group's postings are counted by word, which gives its rows'
-    // offsets, then put in their rows, all written sequentially. Within a
-    // group's list entries increase, so the rows come out in entry order.
-    const std::uint32_t high_mask = (1u << high_bits) - 1;
-    constexpr std::size_t kAhead = 4;
-    constexpr std::uint32_t kLinesAhead = 8;
-    std::uint32_t row_end = 0;  // of the previous group
-    for (std::size_t group = 0; group < tail_lists.size(); ++group) {
-      if (group + kAhead < tail_lists.size()) {
-        const detail::TailList ahead = tail_lists[group + kAhead];
-        const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
-        for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
-          __builtin_prefetch(block + i);
-      }
-      const auto g = static_cast<std::uint32_t>(group);
-      const std::uint32_t first_row = row_order.group_start(g);
-      const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
-      const detail::TailList list = tail_lists[group];
-      const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
-      std::fill(next.begin(), next.begin() + rows, 0);
-      for (std::uint32_t i = 0; i < list.size; ++i) {
-        const std::uint32_t key = postings[i].key;
-        if (!drop_dead || live_at[key >> high_bits] != 0) ++next[key & high_mask];
-      }
-      for (std::uint32_t r = 0; r < rows; ++r) {
-        const std::uint32_t count = next[r];
-        next[r] = row_end;
-        row_end += count;
-        offsets[first_row + r + 1] = row_end;
-      }
-      for (std::uint32_t i = 0; i < list.size; ++i) {
-        const std::uint32_t key = postings[i].key;
-        const std::uint32_t relative = key >> high_bits;
-        if (drop_dead && live_at[relative] == 0) continue;
-        const std::uint32_t at = next[key & high_mask]++;
-        entries[at] = static_cast<std::uint16_t>(relative);
-        weights[at] = postings[i].weight;
-      }
+  if (live == 0) return nullptr;
+  std::vector<std::uint32_t> next(std::size_t{1}
+                                  << high_bits);  // per word of a group: its row's next slot
+  auto segment = std::make_unique<detail::Segment>();
+  segment->offsets.resize(word_capacity + 1);
+  segment->entries16.resize(live);
+  segment->weights.resize(live);
+  segment->first_entry = tail_first_entry;
+  segment->end_entry = static_cast<EntryId>(alive.size());
+  std::uint32_t* offsets = segment->offsets.data();
+  std::uint16_t* entries = segment->entries16.data();
+  float* weights = segment->weights.data();
+  const std::uint8_t* live_at = alive.data() + tail_first_entry;
+  const bool drop_dead = tail_dead_postings > 0;
+  // One pass over the groups: a group's rows are consecutive (RowOrder),
+  // so each group's postings are counted by word, which gives its rows'
+  // offsets, then put in their rows, all written sequentially. Within a
+  // group's list entries increase, so the rows come out in entry order.
+  const std::uint32_t high_mask = (1u << high_bits) - 1;
+  constexpr std::size_t kAhead = 4;
+  constexpr std::uint32_t kLinesAhead = 8;
+  std::uint32_t row_end = 0;  // of the previous group
+  for (std::size_t group = 0; group < tail_lists.size(); ++group) {
+    if (group + kAhead < tail_lists.size()) {
+      const detail::TailList ahead = tail_lists[group + kAhead];
+      const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
+      for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
+        __builtin_prefetch(block + i);
     }
-    offsets[0] = 0;
-    segments.push_back(std::move(segment));
+    const auto g = static_cast<std::uint32_t>(group);
+    const std::uint32_t first_row = row_order.group_start(g);
+    const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
+    const detail::TailList list = tail_lists[group];
+    const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
+    std::fill(next.begin(), next.begin() + rows, 0);
+    for (std::uint32_t i = 0; i < list.size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      if (!drop_dead || live_at[key >> high_bits] != 0) ++next[key & high_mask];
+    }
+    for (std::uint32_t r = 0; r < rows; ++r) {
+      const std::uint32_t count = next[r];
+      next[r] = row_end;
+      row_end += count;
+      offsets[first_row + r + 1] = row_end;
+    }
+    for (std::uint32_t i = 0; i < list.size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      const std::uint32_t relative = key >> high_bits;
+      if (drop_dead && live_at[relative] == 0) continue;
+      const std::uint32_t at = next[key & high_mask]++;
+      entries[at] = static_cast<std::uint16_t>(relative);
+      weights[at] = postings[i].weight;
+    }
   }
+  offsets[0] = 0;
+  return segment;
+}
+
+void Database::Impl::freeze_tail() {
+  std::unique_ptr<detail::Segment> segment = tail_as_segment();
+  if (segment) segments.reserve(segments.size() + 1);
+  // Nothing below can throw: the index changes all at once.
+  if (segment) segments.push_back(std::move(segment));
   for (std::size_t group = 0; group < tail_lists.size(); ++group) {
     const std::uint32_t size = tail_lists[group].size;
     // At most 2^16 postings (512 KiB): a burst in one round does not

@@ -4,10 +4,24 @@
 //   sections back to back in id order up to the end of the file, so that
 //   every byte is covered by a CRC. Sections, always present (maybe empty):
 //   1 embedded .bbw vocabulary   2 vocabulary description (text)
-//   3 entry states (u8 per id)   4 words with postings (u32, increasing)
-//   5 posting list lengths (u32) 6 posting entry ids (u32)  7 weights (f32)
-//   8 direct index sizes (u32 node count, u32 feature count per id)
-//   9 direct index data (per entry: nodes, node end offsets, feature indices)
+//   3 entry states (u8 per id)
+//   Version 2 (written): the index in parts of 65,536 ids (part k holds the
+//   postings of ids [65,536 k, 65,536 (k + 1))), as a database keeps them:
+//   4 parts (per part: u32 rows, u32 postings)
+//   5 rows (per part, per word with postings: u32 word, u32 length), by
+//     word mod 65,536, then word / 65,536
+//   6 posting entries (u16: id - the part's first id), by part, row, id
+//   7 posting weights (f32), in the same order
+//   8 direct index sizes (per id: u32 nodes, u32 features, u32 bytes)
+//   9 direct index data (per live entry: u8 layout, u8 node id width, the
+//     node ids, then per feature its node's position (u8 or u16: layouts 0,
+//     1) or per node the end of its features and the feature indices (u16
+//     or u32: layouts 2, 3))
+//   Version 1 (read): the index by word over every id:
+//   4 words with postings (u32, increasing)  5 posting list lengths (u32)
+//   6 posting entry ids (u32)  7 weights (f32)
+//   8 direct index sizes (per id: u32 node count, u32 feature count)
+//   9 direct index data (per entry: u32 nodes, node end offsets, feature indices)
 //  10 label lengths (u32 per id)  11 label bytes
 // Removed entries keep their id (state 0) and have no postings.
 // A database over word ids (flag 4, Database::over_word_ids) has no
@@ -37,25 +51,32 @@ namespace binbow {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'D', 'B'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // written; version 1 is read too
 constexpr std::size_t kHeaderSize = detail::kSectionedHeaderSize;
 
 enum Section : std::uint32_t {
   kVocabularyBytes = 0,
   kDescription,
   kEntryStates,
-  kWords,
-  kListLengths,
-  kPostingIds,
+  kParts,           // version 1: kWords
+  kRows,            // version 1: kListLengths
+  kPostingEntries,  // version 1: kPostingIds
   kPostingWeights,
   kDirectSizes,
   kDirectData,
   kLabelLengths,
   kLabelBytes,
   kSectionCount,
+  kWords = kParts,
+  kListLengths = kRows,
+  kPostingIds = kPostingEntries,
 };
 
 constexpr const char* kSectionNames[kSectionCount] = {
+    "vocabulary",   "vocabulary description", "entry states",    "parts",
+    "rows",         "posting entries",        "posting weights", "direct index sizes",
+    "direct index", "label lengths",          "labels"};
+constexpr const char* kVersion1SectionNames[kSectionCount] = {
     "vocabulary",  "vocabulary description", "entry states",       "words",        "list lengths",
     "posting ids", "posting weights",        "direct index sizes", "direct index", "label lengths",
     "labels"};
@@ -99,9 +120,11 @@ class Layout {
            std::to_string(kHeaderSize) + "-byte header of a .bbdb database");
     if (std::memcmp(data, kMagic, 8) != 0) fail("not a binbow database (.bbdb): wrong magic bytes");
     header_.version = detail::load_le<std::uint32_t>(data + 8);
-    if (header_.version != kVersion)
+    if (header_.version != 1 && header_.version != kVersion)
       fail("unsupported .bbdb format version " + std::to_string(header_.version) +
-           " (this binbow reads version " + std::to_string(kVersion) + ")");
+           " (this binbow reads versions 1 to " + std::to_string(kVersion) +
+           "): saved by a newer binbow?");
+    names_ = header_.version == 1 ? kVersion1SectionNames : kSectionNames;
     if (detail::load_le<std::uint32_t>(data + 60) != detail::crc32c(data, 60))
       fail("header checksum mismatch: the file is corrupted");
     if (detail::load_le<std::uint32_t>(data + 12) != kHeaderSize) fail("unexpected header size");
@@ -131,7 +154,7 @@ class Layout {
            std::to_string(section_count));
 
     const std::vector<detail::Section> sections = detail::read_section_table(
-        data, size, kSectionCount, kSectionNames, [this](const std::string& p) { fail(p); });
+        data, size, kSectionCount, names_, [this](const std::string& p) { fail(p); });
     std::copy(sections.begin(), sections.end(), sections_);
     if (verify_all)
       for (std::uint32_t i = 0; i < kSectionCount; ++i) verify(static_cast<Section>(i));
@@ -143,8 +166,7 @@ class Layout {
   const detail::Section& section(Section s) const { return sections_[s]; }
   void verify(Section s) const {
     if (!detail::section_intact(sections_[s]))
-      fail(std::string("checksum mismatch in section '") + kSectionNames[s] +
-           "': the file is corrupted");
+      fail(std::string("checksum mismatch in section '") + names_[s] + "': the file is corrupted");
   }
   // The section as `count` values of T, its CRC checked; fails unless its
   // length is exactly that.
@@ -158,16 +180,15 @@ class Layout {
   // The same, in place (little-endian values, maybe unaligned).
   const std::uint8_t* array(Section s, std::size_t count, std::size_t value_size) const {
     if (sections_[s].size / value_size != count || sections_[s].size % value_size != 0)
-      fail(std::string("section '") + kSectionNames[s] + "' has " +
-           std::to_string(sections_[s].size) + " bytes, expected " +
-           std::to_string(count * value_size));
+      fail(std::string("section '") + names_[s] + "' has " + std::to_string(sections_[s].size) +
+           " bytes, expected " + std::to_string(count * value_size));
     verify(s);
     return sections_[s].data;
   }
   std::size_t count_of(Section s, std::size_t value_size) const {
     if (sections_[s].size % value_size != 0)
-      fail(std::string("section '") + kSectionNames[s] +
-           "' has a length that is not a multiple of " + std::to_string(value_size));
+      fail(std::string("section '") + names_[s] + "' has a length that is not a multiple of " +
+           std::to_string(value_size));
     return sections_[s].size / value_size;
   }
 
@@ -175,6 +196,7 @@ class Layout {
   std::string name_;
   std::size_t size_;
   Header header_;
+  const char* const* names_ = kSectionNames;
   detail::Section sections_[kSectionCount];
 };
 
@@ -200,62 +222,138 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   out.append(impl.alive.data(), impl.alive.size());
   out.next_section();
 
-  // The live postings of one word: segments oldest first, then the tail, so
-  // entry ids increase.
-  const std::uint32_t high_mask = (1u << impl.high_bits) - 1;
-  const auto for_each_live_posting = [&](WordId word, const auto& visit) {
-    const std::uint32_t row = impl.row_order.row(word);
-    for (const auto& segment : impl.segments)
-      for (std::uint32_t i = segment->offsets[row]; i < segment->offsets[row + 1]; ++i) {
-        const EntryId entry = segment->entry(i);
-        if (impl.alive[entry] != 0) visit(entry, segment->weights.data()[i]);
-      }
-    const detail::TailList list = impl.tail_lists[detail::group_of(word)];
-    if (list.size == 0) return;
-    const detail::TailPosting* tail = impl.arena.at(list.block);
-    for (std::uint32_t i = 0; i < list.size; ++i) {
-      if ((tail[i].key & high_mask) != word >> detail::kGroupBits) continue;
-      const auto entry =
-          static_cast<EntryId>(impl.tail_first_entry + (tail[i].key >> impl.high_bits));
-      if (impl.alive[entry] != 0) visit(entry, tail[i].weight);
+  // The index in parts of kSegmentSpan ids: each part gathers, row by row,
+  // the live postings of the segments (and the tail) that overlap it.
+  const std::unique_ptr<detail::Segment> tail = impl.tail_as_segment();
+  std::vector<const detail::Segment*> sources;
+  for (const auto& segment : impl.segments) sources.push_back(segment.get());
+  if (tail) sources.push_back(tail.get());
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
+  // The sources overlapping part k: [source_begin[k], source_begin[k + 1]).
+  std::vector<std::size_t> source_begin(part_count + 1, 0);
+  for (std::size_t k = 0, s = 0; k <= part_count; ++k) {
+    while (s < sources.size() && sources[s]->end_entry <= k * span) ++s;
+    source_begin[k] = s;
+  }
+  // Calls visit(source, begin, end) for the postings [begin, end) of the
+  // row's runs in part k (removed entries included).
+  const auto for_each_run = [&](std::size_t k, std::uint32_t row, const auto& visit) {
+    const auto part_begin = static_cast<EntryId>(k * span);
+    const auto part_end = static_cast<EntryId>(std::min<std::size_t>(next_id, (k + 1) * span));
+    for (std::size_t s = source_begin[k]; s < sources.size(); ++s) {
+      const detail::Segment& source = *sources[s];
+      if (source.first_entry >= part_end) break;
+      const std::uint16_t* entries = source.entries16.data();
+      std::uint32_t begin = source.offsets[row], end = source.offsets[row + 1];
+      if (begin == end) continue;
+      if (source.first_entry < part_begin)
+        begin = static_cast<std::uint32_t>(
+            std::lower_bound(entries + begin, entries + end, part_begin - source.first_entry) -
+            entries);
+      if (source.end_entry > part_end)
+        end = static_cast<std::uint32_t>(
+            std::lower_bound(entries + begin, entries + end, part_end - source.first_entry) -
+            entries);
+      if (begin < end) visit(source, begin, end);
     }
   };
+  const auto is_live = [&](const detail::Segment& source, std::uint32_t i) {
+    return source.dead_postings == 0 || impl.alive[source.entry(i)] != 0;
+  };
+  // Rows in RowOrder, each with its word: by word mod 2^16, then word / 2^16.
   const std::size_t word_count = impl.word_capacity;
-  std::vector<std::uint32_t> live(word_count, 0);
+  const std::size_t groups =
+      std::min<std::size_t>(word_count, std::size_t{1} << detail::kGroupBits);
+  const auto for_each_row = [&](const auto& visit) {
+    std::uint32_t row = 0;
+    for (std::size_t group = 0; group < groups; ++group)
+      for (std::size_t word = group; word < word_count; word += groups, ++row)
+        visit(row, static_cast<WordId>(word));
+  };
+
+  struct PartRow {
+    std::uint32_t row;
+    WordId word;
+    std::uint32_t length;
+  };
+  std::vector<std::vector<PartRow>> part_rows(part_count);
+  std::vector<std::uint32_t> part_postings(part_count, 0);
   std::uint64_t posting_count = 0;
   std::uint64_t largest_word_end = 0;  // 1 + the largest word with a posting
-  for (WordId word = 0; word < word_count; ++word) {
-    for_each_live_posting(word, [&](EntryId, float) { ++live[word]; });
-    posting_count += live[word];
-    if (live[word] != 0) largest_word_end = std::uint64_t{word} + 1;
+  for (std::size_t k = 0; k < part_count; ++k) {
+    if (source_begin[k] == sources.size()) break;
+    for_each_row([&](std::uint32_t row, WordId word) {
+      std::uint32_t length = 0;
+      for_each_run(k, row,
+                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
+                     if (source.dead_postings == 0) {
+                       length += end - begin;
+                       return;
+                     }
+                     for (std::uint32_t i = begin; i < end; ++i) length += is_live(source, i);
+                   });
+      if (length == 0) return;
+      part_rows[k].push_back({row, word, length});
+      part_postings[k] += length;
+      largest_word_end = std::max<std::uint64_t>(largest_word_end, std::uint64_t{word} + 1);
+    });
+    posting_count += part_postings[k];
   }
-  for (WordId word = 0; word < word_count; ++word)
-    if (live[word] != 0) out.append_le<std::uint32_t>(word);
+  for (std::size_t k = 0; k < part_count; ++k) {
+    out.append_le<std::uint32_t>(static_cast<std::uint32_t>(part_rows[k].size()));
+    out.append_le<std::uint32_t>(part_postings[k]);
+  }
   out.next_section();
-  for (WordId word = 0; word < word_count; ++word)
-    if (live[word] != 0) out.append_le<std::uint32_t>(live[word]);
+  for (const auto& rows : part_rows)
+    for (const PartRow& row : rows) {
+      out.append_le<std::uint32_t>(row.word);
+      out.append_le<std::uint32_t>(row.length);
+    }
   out.next_section();
-  for (WordId word = 0; word < word_count; ++word)
-    for_each_live_posting(word, [&](EntryId entry, float) { out.append_le<std::uint32_t>(entry); });
+  for (std::size_t k = 0; k < part_count; ++k)
+    for (const PartRow& row : part_rows[k])
+      for_each_run(k, row.row,
+                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
+                     const auto shift = static_cast<std::uint16_t>(source.first_entry - k * span);
+                     if (shift == 0 && source.dead_postings == 0) {
+                       out.append(source.entries16.data() + begin, std::size_t{end - begin} * 2);
+                       return;
+                     }
+                     for (std::uint32_t i = begin; i < end; ++i)
+                       if (is_live(source, i))
+                         out.append_le<std::uint16_t>(
+                             static_cast<std::uint16_t>(source.entries16.data()[i] + shift));
+                   });
   out.next_section();
-  for (WordId word = 0; word < word_count; ++word)
-    for_each_live_posting(word, [&](EntryId, float weight) { out.append_le<float>(weight); });
+  for (std::size_t k = 0; k < part_count; ++k)
+    for (const PartRow& row : part_rows[k])
+      for_each_run(k, row.row,
+                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
+                     if (source.dead_postings == 0) {
+                       out.append(source.weights.data() + begin, std::size_t{end - begin} * 4);
+                       return;
+                     }
+                     for (std::uint32_t i = begin; i < end; ++i)
+                       if (is_live(source, i)) out.append_le<float>(source.weights.data()[i]);
+                   });
   out.next_section();
 
   if (impl.options.direct_index) {
     for (EntryId entry = 0; entry < next_id; ++entry) {
       const bool alive = impl.alive[entry] != 0;
-      out.append_le<std::uint32_t>(alive ? impl.direct[entry].node_count() : 0);
-      out.append_le<std::uint32_t>(alive ? impl.direct[entry].feature_count() : 0);
+      const detail::PackedFeatureVector& features = impl.direct[entry];
+      out.append_le<std::uint32_t>(alive ? features.node_count() : 0);
+      out.append_le<std::uint32_t>(alive ? features.feature_count() : 0);
+      out.append_le<std::uint32_t>(alive ? static_cast<std::uint32_t>(features.encoded_size()) : 0);
     }
     out.next_section();
+    std::vector<std::uint8_t> encoded;
     for (EntryId entry = 0; entry < next_id; ++entry) {
       if (impl.alive[entry] == 0) continue;
-      const FeatureVector features = impl.direct[entry].unpack();
-      out.append(features.nodes().data(), features.size() * sizeof(NodeId));
-      out.append(features.offsets().data() + 1, features.size() * sizeof(std::uint32_t));
-      out.append(features.feature_indices().data(),
-                 features.feature_count() * sizeof(std::uint32_t));
+      encoded.resize(impl.direct[entry].encoded_size());
+      impl.direct[entry].encode(encoded.data());
+      out.append(encoded.data(), encoded.size());
     }
   } else {
     out.next_section();
@@ -319,26 +417,15 @@ std::string hex(std::uint32_t value) {
 // little more than the database it builds. `impl` is empty, laid out for the
 // file's words. (A template only because Database::Impl is private to the
 // class.)
+constexpr std::size_t kReleaseBytes = std::size_t{64} << 20;  // released a part at a time
+
+// Version 1: posting lists by word over every id, cut into segments of
+// kSegmentSpan ids.
 template <class Impl>
-void read_index(const Layout& layout, const Release& release, Impl* impl) {
-  constexpr std::size_t kReleaseBytes = std::size_t{64} << 20;  // released a part at a time
+void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) {
   const Header& header = layout.header();
   const std::size_t word_count = impl->word_capacity;
-  const std::uint64_t node_count =
-      impl->over_word_ids ? kMaxWordCapacity : impl->vocabulary.node_count();
   const EntryId next_id = header.next_entry_id;
-
-  impl->alive = layout.values<std::uint8_t>(kEntryStates, next_id);
-  std::size_t live = 0;
-  for (std::uint8_t state : impl->alive) {
-    if (state > 1) layout.fail("invalid entry state " + std::to_string(state));
-    live += state;
-  }
-  if (live != header.live_entries)
-    layout.fail("the header counts " + std::to_string(header.live_entries) +
-                " entries, the entry states " + std::to_string(live));
-  impl->live_entries = live;
-
   const std::size_t list_count = layout.count_of(kWords, 4);
   if (list_count > word_count)
     layout.fail("more posting lists (" + std::to_string(list_count) + ") than words (" +
@@ -435,52 +522,218 @@ void read_index(const Layout& layout, const Release& release, Impl* impl) {
   });
   for (auto& segment : segments)
     if (segment) impl->segments.push_back(std::move(segment));
+}
+
+// Version 2: the parts are the segments, row by row as in memory.
+template <class Impl>
+void read_postings(const Layout& layout, const Release& release, Impl* impl) {
+  const Header& header = layout.header();
+  const std::size_t word_count = impl->word_capacity;
+  const EntryId next_id = header.next_entry_id;
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
+  const auto parts = layout.values<std::uint32_t>(kParts, 2 * part_count);
+  const std::size_t row_count = layout.count_of(kRows, 8);
+  const std::size_t posting_count = layout.count_of(kPostingEntries, 2);
+  if (posting_count != header.postings)
+    layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
+                std::to_string(posting_count));
+  std::uint64_t rows_in_parts = 0, postings_in_parts = 0;
+  for (std::size_t k = 0; k < part_count; ++k) {
+    rows_in_parts += parts[2 * k];
+    postings_in_parts += parts[2 * k + 1];
+    if ((parts[2 * k] == 0) != (parts[2 * k + 1] == 0) || parts[2 * k] > parts[2 * k + 1])
+      layout.fail("part " + std::to_string(k) + " has " + std::to_string(parts[2 * k]) +
+                  " rows for " + std::to_string(parts[2 * k + 1]) + " postings");
+  }
+  if (rows_in_parts != row_count || postings_in_parts != posting_count)
+    layout.fail("the parts count " + std::to_string(rows_in_parts) + " rows and " +
+                std::to_string(postings_in_parts) + " postings, the sections " +
+                std::to_string(row_count) + " and " + std::to_string(posting_count));
+  const std::uint8_t* rows = layout.array(kRows, row_count, 8);
+  const std::uint8_t* entries = layout.array(kPostingEntries, posting_count, 2);
+  const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
+  impl->word_counts.assign(next_id, 0);
+  std::size_t row_at = 0, posting_at = 0;
+  for (std::size_t k = 0; k < part_count; ++k) {
+    const std::uint32_t part_rows = parts[2 * k];
+    const std::uint32_t part_postings = parts[2 * k + 1];
+    if (part_postings == 0) continue;
+    const auto first = static_cast<EntryId>(k * span);
+    const auto end = static_cast<EntryId>(std::min<std::size_t>(next_id, first + span));
+    const std::string where = "part " + std::to_string(k);
+    auto segment = std::make_unique<detail::Segment>();
+    segment->first_entry = first;
+    segment->end_entry = end;
+    segment->level = detail::kLoadedLevel;
+    segment->offsets.assign(word_count + 1, 0);
+    std::uint32_t* offsets = segment->offsets.data();
+    std::uint64_t previous_row = 0, total = 0;
+    for (std::uint32_t r = 0; r < part_rows; ++r) {
+      const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
+      const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
+      if (word >= word_count)
+        layout.fail(where + " has a row for word " + std::to_string(word) + ", beyond the " +
+                    std::to_string(word_count) + " words");
+      const std::uint32_t row = impl->row_order.row(word);
+      if (r > 0 && row <= previous_row)
+        layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
+      if (length == 0 || length > end - first || length > part_postings - total)
+        layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
+      offsets[row + 1] = length;
+      previous_row = row;
+      total += length;
+    }
+    if (total != part_postings)
+      layout.fail(where + ": its rows hold " + std::to_string(total) + " postings, not " +
+                  std::to_string(part_postings));
+    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
+    segment->entries16.resize(part_postings);
+    segment->weights.resize(part_postings);
+    std::uint16_t* part_entries = segment->entries16.data();
+    float* part_weights = segment->weights.data();
+    std::memcpy(part_entries, entries + 2 * posting_at, std::size_t{part_postings} * 2);
+    std::memcpy(part_weights, weights + 4 * posting_at, std::size_t{part_postings} * 4);
+    release(entries + 2 * posting_at, std::size_t{part_postings} * 2);
+    release(weights + 4 * posting_at, std::size_t{part_postings} * 4);
+    // Within a row the entries increase; each names a live entry of the part.
+    const std::uint32_t part_span = end - first;
+    for (std::uint32_t r = 0; r < part_rows; ++r) {
+      const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
+      const std::uint32_t row = impl->row_order.row(word);
+      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
+        const std::uint32_t relative = part_entries[i];
+        if (relative >= part_span || impl->alive[first + relative] == 0 ||
+            (i > offsets[row] && relative <= part_entries[i - 1]))
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " names a missing entry or is not in increasing order");
+        if (!std::isfinite(part_weights[i]))
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " has a non-finite weight");
+        ++impl->word_counts[first + relative];
+      }
+    }
+    impl->segments.push_back(std::move(segment));
+    row_at += part_rows;
+    posting_at += part_postings;
+  }
+}
+
+// Version 1: per entry, its node ids, node end offsets and feature indices.
+template <class Impl>
+void read_direct_index_v1(const Layout& layout, const Release& release, Impl* impl,
+                          std::uint64_t node_count) {
+  const EntryId next_id = layout.header().next_entry_id;
+  const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);
+  layout.verify(kDirectData);
+  const detail::Section& direct_data = layout.section(kDirectData);
+  const std::size_t available = layout.count_of(kDirectData, 4);
+  impl->direct.resize(next_id);
+  std::size_t cursor = 0, released = 0;  // in values of 4 bytes
+  for (EntryId entry = 0; entry < next_id; ++entry) {
+    const std::uint64_t nodes = sizes[2 * std::size_t{entry}];
+    const std::uint64_t features = sizes[2 * std::size_t{entry} + 1];
+    if (impl->alive[entry] == 0) {
+      if (nodes != 0 || features != 0)
+        layout.fail("removed entry " + std::to_string(entry) + " has a direct index");
+      continue;
+    }
+    if (2 * nodes + features > available - cursor)
+      layout.fail("direct index of entry " + std::to_string(entry) + " runs past its section");
+    const auto read = [&](std::size_t count) {
+      std::vector<std::uint32_t> values(count);
+      if (count > 0) std::memcpy(values.data(), direct_data.data + cursor * 4, count * 4);
+      cursor += count;
+      return values;
+    };
+    std::vector<NodeId> node_ids = read(nodes);
+    std::vector<std::uint32_t> offsets = read(nodes);
+    offsets.insert(offsets.begin(), 0);
+    std::vector<std::uint32_t> indices = read(features);
+    if (!node_ids.empty() && node_ids.back() >= node_count)
+      layout.fail("direct index of entry " + std::to_string(entry) +
+                  " names a node outside the vocabulary");
+    try {
+      impl->direct[entry] = detail::PackedFeatureVector(
+          FeatureVector::from_arrays(std::move(node_ids), std::move(offsets), std::move(indices)));
+    } catch (const InvalidArgument& e) {
+      layout.fail("direct index of entry " + std::to_string(entry) +
+                  " is inconsistent: " + e.what());
+    }
+    if ((cursor - released) * 4 >= kReleaseBytes) {
+      release(direct_data.data + released * 4, (cursor - released) * 4);
+      released = cursor;
+    }
+  }
+  if (cursor != available) layout.fail("direct index section has trailing data");
+  release(direct_data.data + released * 4, (cursor - released) * 4);
+}
+
+// Version 2: per entry, its PackedFeatureVector's encoding.
+template <class Impl>
+void read_direct_index(const Layout& layout, const Release& release, Impl* impl,
+                       std::uint64_t node_count) {
+  const EntryId next_id = layout.header().next_entry_id;
+  const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 3);
+  layout.verify(kDirectData);
+  const detail::Section& data = layout.section(kDirectData);
+  impl->direct.resize(next_id);
+  std::size_t cursor = 0, released = 0;
+  for (EntryId entry = 0; entry < next_id; ++entry) {
+    const std::uint32_t* size = sizes.data() + 3 * std::size_t{entry};
+    if (impl->alive[entry] == 0) {
+      if (size[0] != 0 || size[1] != 0 || size[2] != 0)
+        layout.fail("removed entry " + std::to_string(entry) + " has a direct index");
+      continue;
+    }
+    if (size[2] > data.size - cursor)
+      layout.fail("direct index of entry " + std::to_string(entry) + " runs past its section");
+    try {
+      impl->direct[entry] = detail::PackedFeatureVector::decode(data.data + cursor, size[2],
+                                                                size[0], size[1], node_count);
+    } catch (const InvalidArgument& e) {
+      layout.fail("direct index of entry " + std::to_string(entry) +
+                  " is inconsistent: " + e.what());
+    }
+    cursor += size[2];
+    if (cursor - released >= kReleaseBytes) {
+      release(data.data + released, cursor - released);
+      released = cursor;
+    }
+  }
+  if (cursor != data.size) layout.fail("direct index section has trailing data");
+  release(data.data + released, cursor - released);
+}
+
+template <class Impl>
+void read_index(const Layout& layout, const Release& release, Impl* impl) {
+  const Header& header = layout.header();
+  const std::uint64_t node_count =
+      impl->over_word_ids ? kMaxWordCapacity : impl->vocabulary.node_count();
+  const EntryId next_id = header.next_entry_id;
+
+  impl->alive = layout.values<std::uint8_t>(kEntryStates, next_id);
+  std::size_t live = 0;
+  for (std::uint8_t state : impl->alive) {
+    if (state > 1) layout.fail("invalid entry state " + std::to_string(state));
+    live += state;
+  }
+  if (live != header.live_entries)
+    layout.fail("the header counts " + std::to_string(header.live_entries) +
+                " entries, the entry states " + std::to_string(live));
+  impl->live_entries = live;
+
+  if (header.version == 1)
+    read_postings_v1(layout, release, impl);
+  else
+    read_postings(layout, release, impl);
   impl->tail_first_entry = next_id;
 
   if (impl->options.direct_index) {
-    const auto sizes = layout.values<std::uint32_t>(kDirectSizes, std::size_t{next_id} * 2);
-    layout.verify(kDirectData);
-    const detail::Section& direct_data = layout.section(kDirectData);
-    const std::size_t available = layout.count_of(kDirectData, 4);
-    impl->direct.resize(next_id);
-    std::size_t cursor = 0, released = 0;  // in values of 4 bytes
-    for (EntryId entry = 0; entry < next_id; ++entry) {
-      const std::uint64_t nodes = sizes[2 * std::size_t{entry}];
-      const std::uint64_t features = sizes[2 * std::size_t{entry} + 1];
-      if (impl->alive[entry] == 0) {
-        if (nodes != 0 || features != 0)
-          layout.fail("removed entry " + std::to_string(entry) + " has a direct index");
-        continue;
-      }
-      if (2 * nodes + features > available - cursor)
-        layout.fail("direct index of entry " + std::to_string(entry) + " runs past its section");
-      const auto read = [&](std::size_t count) {
-        std::vector<std::uint32_t> values(count);
-        if (count > 0) std::memcpy(values.data(), direct_data.data + cursor * 4, count * 4);
-        cursor += count;
-        return values;
-      };
-      std::vector<NodeId> node_ids = read(nodes);
-      std::vector<std::uint32_t> offsets = read(nodes);
-      offsets.insert(offsets.begin(), 0);
-      std::vector<std::uint32_t> indices = read(features);
-      if (!node_ids.empty() && node_ids.back() >= node_count)
-        layout.fail("direct index of entry " + std::to_string(entry) +
-                    " names a node outside the vocabulary");
-      try {
-        impl->direct[entry] = detail::PackedFeatureVector(FeatureVector::from_arrays(
-            std::move(node_ids), std::move(offsets), std::move(indices)));
-      } catch (const InvalidArgument& e) {
-        layout.fail("direct index of entry " + std::to_string(entry) +
-                    " is inconsistent: " + e.what());
-      }
-      if ((cursor - released) * 4 >= kReleaseBytes) {
-        release(direct_data.data + released * 4, (cursor - released) * 4);
-        released = cursor;
-      }
-    }
-    if (cursor != available) layout.fail("direct index section has trailing data");
-    release(direct_data.data + released * 4, (cursor - released) * 4);
+    if (header.version == 1)
+      read_direct_index_v1(layout, release, impl, node_count);
+    else
+      read_direct_index(layout, release, impl, node_count);
   } else if (layout.section(kDirectSizes).size != 0 || layout.section(kDirectData).size != 0) {
     layout.fail("direct index present in a database saved without one");
   } else {
@@ -539,6 +792,24 @@ std::unique_ptr<Impl> read_vocabulary_database(const Layout& layout, Vocabulary 
   return impl;
 }
 
+// 1 + the largest word with postings (0 without postings).
+std::uint64_t largest_word_end(const Layout& layout) {
+  if (layout.header().version == 1) {
+    layout.verify(kWords);
+    const detail::Section& words = layout.section(kWords);
+    return words.size >= 4
+               ? std::uint64_t{detail::load_le<std::uint32_t>(words.data + words.size - 4)} + 1
+               : 0;
+  }
+  const std::size_t rows = layout.count_of(kRows, 8);
+  const std::uint8_t* data = layout.array(kRows, rows, 8);
+  std::uint64_t end = 0;
+  for (std::size_t r = 0; r < rows; ++r)
+    end = std::max<std::uint64_t>(end,
+                                  std::uint64_t{detail::load_le<std::uint32_t>(data + 8 * r)} + 1);
+  return end;
+}
+
 // A database over word ids: its capacity is checked against its words before
 // the index is laid out for it.
 template <class Impl>
@@ -546,12 +817,7 @@ std::unique_ptr<Impl> read_word_id_database(const Layout& layout, const Release&
   const Header& header = layout.header();
   layout.verify(kVocabularyBytes);
   layout.verify(kDescription);
-  layout.verify(kWords);
-  const detail::Section& words = layout.section(kWords);
-  const std::uint64_t word_end =
-      words.size >= 4
-          ? std::uint64_t{detail::load_le<std::uint32_t>(words.data + words.size - 4)} + 1
-          : 0;
+  const std::uint64_t word_end = largest_word_end(layout);
   // Rows cost 4 bytes per word id in memory: ids far sparser than the
   // postings that name them (16 bytes each in the file) are refused, so
   // that a small file cannot claim billions of rows.

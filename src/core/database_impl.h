@@ -192,9 +192,22 @@ class PackedFeatureVector {
   std::uint32_t feature_count() const noexcept { return feature_count_; }
   std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
 
+  // The form a .bbdb (version 2) stores: the layout (u8), the node id width
+  // (u8), then the packed bytes, little-endian.
+  std::size_t encoded_size() const noexcept { return 2 + bytes_.size(); }
+  void encode(std::uint8_t* out) const noexcept;
+  // The inverse, for `node_count` nodes below `node_limit` and
+  // `feature_count` features; throws InvalidArgument unless the bytes are
+  // exactly an encoding of a valid FeatureVector.
+  static PackedFeatureVector decode(const std::uint8_t* data, std::size_t size,
+                                    std::uint32_t node_count, std::uint32_t feature_count,
+                                    std::uint64_t node_limit);
+
  private:
   enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32 };
   std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept;
+  // The packed size for the layout and widths, in bytes.
+  std::size_t packed_size() const noexcept;
 
   std::vector<std::uint8_t> bytes_;
   std::uint32_t node_count_ = 0;
@@ -274,6 +287,9 @@ struct Database::Impl {
   // Turns the tail into a segment when it is full enough (or always).
   void freeze_tail_if_full();
   void freeze_tail();
+  // The tail's live postings as a segment (null when it has none); the
+  // index is unchanged.
+  std::unique_ptr<detail::Segment> tail_as_segment() const;
   // Merges the newest segments while kSegmentFanIn of them share a level.
   void merge_segments_if_many();
   void merge_segments(std::size_t begin, std::size_t end);
