@@ -14,6 +14,7 @@
 
 #include "binbow/error.h"
 #include "core/database_impl.h"
+#include "core/little_endian.h"
 
 namespace binbow {
 
@@ -157,16 +158,24 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
         std::any_of(indices.begin(), indices.end(), [](std::uint32_t i) { return i > 0xFFFF; });
     layout_ = wide ? Layout::kRows32 : Layout::kRows16;
   }
-  // Node ids are increasing: the last one sets their width. Those of a
-  // direct index a few levels up are small (below 111 at level 2 of k=10).
-  const NodeId largest_node = node_count_ > 0 ? features.node(node_count_ - 1) : 0;
-  node_width_ = largest_node <= 0xFF ? 1 : largest_node <= 0xFFFF ? 2 : 4;
-  const std::size_t nodes_bytes = std::size_t{node_count_} * node_width_;
+  // Node ids are increasing: each is stored as its step from the previous
+  // one (the first from 0), 7 bits per byte (LEB128). Siblings are
+  // consecutive ids, so most steps take a byte: a direct index 4 levels up a
+  // k=10 L=6 tree takes ~1.2 bytes per node, against 4 for the ids.
+  std::vector<std::uint8_t> steps;
+  steps.reserve(std::size_t{node_count_} * 2);
+  for (std::size_t node = 0; node < node_count_; ++node) {
+    NodeId step = features.node(node) - (node > 0 ? features.node(node - 1) : 0);
+    do {
+      const auto low = static_cast<std::uint8_t>(step & 0x7F);
+      step >>= 7;
+      steps.push_back(step != 0 ? low | 0x80 : low);
+    } while (step != 0);
+  }
+  node_bytes_ = static_cast<std::uint32_t>(steps.size());
+  const std::size_t nodes_bytes = node_bytes_;
   const auto write_nodes = [&] {
-    for (std::size_t node = 0; node < node_count_; ++node) {
-      const NodeId id = features.node(node);
-      std::memcpy(bytes_.data() + node * node_width_, &id, node_width_);  // little-endian
-    }
+    if (!steps.empty()) std::memcpy(bytes_.data(), steps.data(), steps.size());
   };
   if (partition) {
     const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
@@ -198,15 +207,8 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
   for (std::uint32_t index : indices) put(index);
 }
 
-std::uint32_t PackedFeatureVector::value(std::size_t byte_offset,
-                                         std::size_t width) const noexcept {
-  std::uint32_t v = 0;
-  std::memcpy(&v, bytes_.data() + byte_offset, width);  // little-endian
-  return v;
-}
-
 std::size_t PackedFeatureVector::packed_size() const noexcept {
-  const std::size_t nodes = std::size_t{node_count_} * node_width_;
+  const std::size_t nodes = node_bytes_;
   switch (layout_) {
     case Layout::kPartition8:
       return nodes + feature_count_;
@@ -222,39 +224,58 @@ std::size_t PackedFeatureVector::packed_size() const noexcept {
 
 void PackedFeatureVector::encode(std::uint8_t* out) const noexcept {
   out[0] = static_cast<std::uint8_t>(layout_);
-  out[1] = node_width_;
-  if (!bytes_.empty()) std::memcpy(out + 2, bytes_.data(), bytes_.size());
+  store_le<std::uint32_t>(out + 1, node_bytes_);
+  if (!bytes_.empty()) std::memcpy(out + 5, bytes_.data(), bytes_.size());
+}
+
+bool PackedFeatureVector::next_node(const std::uint8_t*& at, const std::uint8_t* end,
+                                    NodeId& id) noexcept {
+  std::uint64_t step = 0;
+  for (unsigned shift = 0; shift < 35; shift += 7) {
+    if (at == end) return false;
+    const std::uint8_t byte = *at++;
+    step |= std::uint64_t{byte & 0x7Fu} << shift;
+    if ((byte & 0x80) == 0) {
+      if (step > 0xFFFFFFFFu - id) return false;
+      id += static_cast<NodeId>(step);
+      return true;
+    }
+  }
+  return false;
 }
 
 PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::size_t size,
                                                 std::uint32_t node_count,
                                                 std::uint32_t feature_count,
                                                 std::uint64_t node_limit) {
-  if (size < 2) throw InvalidArgument("shorter than its layout");
+  if (size < 5) throw InvalidArgument("shorter than its layout");
   PackedFeatureVector packed;
   packed.node_count_ = node_count;
   packed.feature_count_ = feature_count;
   if (data[0] > static_cast<std::uint8_t>(Layout::kRows32))
     throw InvalidArgument("unknown layout " + std::to_string(data[0]));
   packed.layout_ = static_cast<Layout>(data[0]);
-  packed.node_width_ = data[1];
-  if (packed.node_width_ != 1 && packed.node_width_ != 2 && packed.node_width_ != 4)
-    throw InvalidArgument("node ids of " + std::to_string(data[1]) + " bytes");
+  packed.node_bytes_ = load_le<std::uint32_t>(data + 1);
   const bool partition =
       packed.layout_ == Layout::kPartition8 || packed.layout_ == Layout::kPartition16;
   if (partition && node_count > (packed.layout_ == Layout::kPartition8 ? 0x100u : 0x10000u))
     throw InvalidArgument("too many nodes for its layout");
-  if (size - 2 != packed.packed_size())
-    throw InvalidArgument(std::to_string(size - 2) + " bytes, expected " +
-                          std::to_string(packed.packed_size()));
-  packed.bytes_.assign(data + 2, data + size);
-  const std::size_t nodes_bytes = std::size_t{node_count} * packed.node_width_;
+  if (packed.node_bytes_ > size - 5 || size - 5 != packed.packed_size())
+    throw InvalidArgument(std::to_string(size - 5) + " bytes, not what its " +
+                          std::to_string(node_count) + " nodes and " +
+                          std::to_string(feature_count) + " features take");
+  packed.bytes_.assign(data + 5, data + size);
+  const std::size_t nodes_bytes = packed.node_bytes_;
+  const std::uint8_t* at = packed.bytes_.data();
+  const std::uint8_t* const nodes_end = at + nodes_bytes;
+  NodeId id = 0;
   for (std::size_t node = 0; node < node_count; ++node) {
-    const std::uint32_t id = packed.value(node * packed.node_width_, packed.node_width_);
+    const NodeId previous = id;
+    if (!next_node(at, nodes_end, id)) throw InvalidArgument("node ids are cut short or too large");
+    if (node > 0 && id == previous) throw InvalidArgument("nodes are not strictly increasing");
     if (id >= node_limit) throw InvalidArgument("node " + std::to_string(id) + " is out of range");
-    if (node > 0 && id <= packed.value((node - 1) * packed.node_width_, packed.node_width_))
-      throw InvalidArgument("nodes are not strictly increasing");
   }
+  if (at != nodes_end) throw InvalidArgument("node ids are followed by stray bytes");
   if (partition) {
     // Every feature names a node, and every node has a feature.
     const std::size_t width = packed.layout_ == Layout::kPartition8 ? 1 : 2;
@@ -281,9 +302,13 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
 
 FeatureVector PackedFeatureVector::unpack() const {
   std::vector<NodeId> nodes(node_count_);
-  const std::size_t nodes_bytes = std::size_t{node_count_} * node_width_;
-  for (std::size_t node = 0; node < node_count_; ++node)
-    nodes[node] = value(node * node_width_, node_width_);
+  const std::size_t nodes_bytes = node_bytes_;
+  const std::uint8_t* step = bytes_.data();
+  NodeId id = 0;
+  for (std::size_t node = 0; node < node_count_; ++node) {
+    next_node(step, bytes_.data() + nodes_bytes, id);
+    nodes[node] = id;
+  }
   std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
   std::vector<std::uint32_t> indices(feature_count_);
   if (layout_ == Layout::kPartition8 || layout_ == Layout::kPartition16) {

@@ -13,10 +13,10 @@
 //   6 posting entries (u16: id - the part's first id), by part, row, id
 //   7 posting weights (f32), in the same order
 //   8 direct index sizes (per id: u32 nodes, u32 features, u32 bytes)
-//   9 direct index data (per live entry: u8 layout, u8 node id width, the
-//     node ids, then per feature its node's position (u8 or u16: layouts 0,
-//     1) or per node the end of its features and the feature indices (u16
-//     or u32: layouts 2, 3))
+//   9 direct index data (per live entry: u8 layout, u32 bytes of node ids,
+//     the node ids as steps from the previous one (LEB128), then per
+//     feature its node's position (u8 or u16: layouts 0, 1) or per node the
+//     end of its features and the feature indices (u16 or u32: layouts 2, 3))
 //   Version 1 (read): the index by word over every id:
 //   4 words with postings (u32, increasing)  5 posting list lengths (u32)
 //   6 posting entry ids (u32)  7 weights (f32)

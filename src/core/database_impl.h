@@ -176,8 +176,8 @@ class GrowableArray {
   std::size_t size_ = 0;
 };
 
-// One entry's FeatureVector, packed. Node ids take 8, 16 or 32 bits, as the
-// largest needs (8 for a direct index at level 2 of a k=10 tree). When every feature
+// One entry's FeatureVector, packed. Node ids are the steps from the
+// previous one (LEB128: siblings take a byte each). When every feature
 // 0..n-1 sits under exactly one node (what transform produces), each feature
 // just stores the position of its node, in 8 bits when there are at most 256
 // nodes (about 1 byte per feature) or 16 bits; otherwise the end offset of
@@ -192,9 +192,9 @@ class PackedFeatureVector {
   std::uint32_t feature_count() const noexcept { return feature_count_; }
   std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
 
-  // The form a .bbdb (version 2) stores: the layout (u8), the node id width
-  // (u8), then the packed bytes, little-endian.
-  std::size_t encoded_size() const noexcept { return 2 + bytes_.size(); }
+  // The form a .bbdb (version 2) stores: the layout (u8), the bytes of the
+  // node ids (u32), then the packed bytes, little-endian.
+  std::size_t encoded_size() const noexcept { return 5 + bytes_.size(); }
   void encode(std::uint8_t* out) const noexcept;
   // The inverse, for `node_count` nodes below `node_limit` and
   // `feature_count` features; throws InvalidArgument unless the bytes are
@@ -205,7 +205,22 @@ class PackedFeatureVector {
 
  private:
   enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32 };
-  std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept;
+  // The little-endian value of `width` (1, 2 or 4) bytes at `byte_offset`.
+  std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept {
+    const std::uint8_t* at = bytes_.data() + byte_offset;
+    if (width == 1) return *at;
+    if (width == 2) {
+      std::uint16_t v;
+      std::memcpy(&v, at, 2);
+      return v;
+    }
+    std::uint32_t v;
+    std::memcpy(&v, at, 4);
+    return v;
+  }
+  // Adds the step at `at` (LEB128, before `end`) to `id`, and moves past it;
+  // false if it is cut short or makes `id` exceed 32 bits.
+  static bool next_node(const std::uint8_t*& at, const std::uint8_t* end, NodeId& id) noexcept;
   // The packed size for the layout and widths, in bytes.
   std::size_t packed_size() const noexcept;
 
@@ -213,7 +228,7 @@ class PackedFeatureVector {
   std::uint32_t node_count_ = 0;
   std::uint32_t feature_count_ = 0;
   Layout layout_ = Layout::kPartition8;
-  std::uint8_t node_width_ = 4;  // bytes per node id
+  std::uint32_t node_bytes_ = 0;  // of the node ids, at the start of bytes_
 };
 
 }  // namespace binbow::detail

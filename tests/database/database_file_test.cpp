@@ -250,8 +250,10 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
        "non-finite"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
        "unknown layout"},
-      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[1] = 3; }),
-       "node ids of 3 bytes"},
+      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[1] ^= 1; }),
+       "not what its"},
+      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[6] = 0; }),
+       "not strictly increasing"},
   };
   for (const auto& [data, expected] : cases) {
     const std::string found = problem(data);

@@ -627,10 +627,15 @@ TEST(Database, DirectIndexWithLargeFeatureIndices) {
   const FeatureVector small = FeatureVector::from_arrays({4}, {0, 2}, {1, 2});
   EXPECT_EQ(database.feature_vector(database.add(BowVector({{1, 1.0f}}), small)), small);
   EXPECT_EQ(database.feature_vector(database.add(BowVector({{1, 1.0f}}))), FeatureVector());
-  // Node ids are packed in 8, 16 or 32 bits, as the largest needs.
+  // Node ids are packed as steps in 8, 16 or 32 bits, as the largest needs.
   Database by_word_ids = Database::over_word_ids(Scoring::kL1);
-  for (const std::vector<NodeId>& nodes : std::vector<std::vector<NodeId>>{
-           {0, 255}, {7, 256}, {1, 65535}, {255, 65536}, {65536, 4000000000u}}) {
+  for (const std::vector<NodeId>& nodes : std::vector<std::vector<NodeId>>{{0, 255},
+                                                                           {7, 263},
+                                                                           {300, 555},
+                                                                           {1, 65535},
+                                                                           {70000, 135535},
+                                                                           {255, 65792},
+                                                                           {65536, 4000000000u}}) {
     const FeatureVector packed = FeatureVector::from_arrays(nodes, {0, 1, 3}, {2, 0, 1});
     EXPECT_EQ(by_word_ids.feature_vector(by_word_ids.add(BowVector({{1, 1.0f}}), packed)), packed)
         << "largest node " << nodes.back();
