@@ -188,6 +188,16 @@ TEST(DatabaseFile, DamagedFilesAreRejected) {
   EXPECT_THROW(load(vocabulary_bytes), FileError);
 }
 
+// Why a .bbdb image is refused ("loaded" if it is not).
+std::string load_problem(const std::vector<std::uint8_t>& data) {
+  try {
+    Database::deserialize(data.data(), data.size(), "hostile.bbdb");
+  } catch (const FileError& e) {
+    return e.problem();
+  }
+  return "loaded";
+}
+
 // A section of a .bbdb image changed in place, its CRC and the table's
 // recomputed: content that passes every checksum but not the reader's checks.
 std::vector<std::uint8_t> with_section(
@@ -211,15 +221,7 @@ std::vector<std::uint8_t> with_section(
 TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
   const Fixture fixture(12);  // removed: entries 4 and 6
   const std::vector<std::uint8_t> bytes = fixture.database.serialize();
-  const auto problem = [](const std::vector<std::uint8_t>& data) -> std::string {
-    try {
-      Database::deserialize(data.data(), data.size(), "hostile.bbdb");
-    } catch (const FileError& e) {
-      return e.problem();
-    }
-    return "loaded";
-  };
-  ASSERT_EQ(problem(bytes), "loaded");
+  ASSERT_EQ(load_problem(bytes), "loaded");
   const auto u32 = [](std::uint8_t* at, std::uint32_t value) { std::memcpy(at, &value, 4); };
   const auto u16 = [](std::uint8_t* at, std::uint16_t value) { std::memcpy(at, &value, 2); };
   enum : std::uint32_t { kParts = 3, kRows = 4, kEntries = 5, kWeights = 6, kDirect = 8 };
@@ -256,7 +258,7 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
        "not strictly increasing"},
   };
   for (const auto& [data, expected] : cases) {
-    const std::string found = problem(data);
+    const std::string found = load_problem(data);
     EXPECT_NE(found.find(expected), std::string::npos)
         << "expected '" << expected << "': " << found;
   }
@@ -406,20 +408,14 @@ TEST(DatabaseFile, OverWordIdsCapacityIsBounded) {
     for (std::size_t i = 0; i < 4; ++i) changed[60 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
     return changed;
   };
-  const auto problem = [](const std::vector<std::uint8_t>& data) -> std::string {
-    try {
-      Database::deserialize(data.data(), data.size(), "hostile.bbdb");
-    } catch (const FileError& e) {
-      return e.problem();
-    }
-    return "loaded";
-  };
-  EXPECT_EQ(problem(with_header_field(52, 65536, 8)), "loaded");
-  EXPECT_NE(problem(with_header_field(52, std::uint64_t{1} << 32, 8)).find("capacity"),
+  EXPECT_EQ(load_problem(with_header_field(52, 65536, 8)), "loaded");
+  EXPECT_NE(load_problem(with_header_field(52, std::uint64_t{1} << 32, 8)).find("capacity"),
             std::string::npos);
-  EXPECT_NE(problem(with_header_field(52, 100, 8)).find("capacity"), std::string::npos);
-  EXPECT_NE(problem(with_header_field(36, 9, 4)).find("inconsistent header"), std::string::npos);
-  EXPECT_NE(problem(with_header_field(32, 1234, 4)).find("inconsistent header"), std::string::npos);
+  EXPECT_NE(load_problem(with_header_field(52, 100, 8)).find("capacity"), std::string::npos);
+  EXPECT_NE(load_problem(with_header_field(36, 9, 4)).find("inconsistent header"),
+            std::string::npos);
+  EXPECT_NE(load_problem(with_header_field(32, 1234, 4)).find("inconsistent header"),
+            std::string::npos);
 }
 
 TEST(DatabaseFile, InspectVerifiesTheWholeFileByDefault) {
