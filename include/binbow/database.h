@@ -15,7 +15,9 @@
 // posting), and every 8 segments of one size merge into one while it spans at
 // most 65,536 entry ids (so entries stay 16-bit at any size). add() is
 // O(words of the image) amortised; a query costs O(postings of the query's
-// words), plus one row lookup per query word and segment.
+// words), plus one row lookup per query word and segment. A query scores one
+// segment (or the tail) at a time, so each querying thread keeps 768 KiB of
+// sums and counts, whatever the database's size.
 //
 // Removal: remove() marks the entry dead at once (it never appears in a
 // result again); its postings are dropped when the tail becomes a segment,
@@ -157,6 +159,8 @@ class Database {
   // with a CRC32C each; saved atomically (temporary file, then rename). With
   // `include_vocabulary`, the file is self-contained; otherwise it records the
   // vocabulary's checksum and load() must be given the same vocabulary.
+  // save() writes format version 2 (the index as memory holds it: about 7 KB
+  // per ORB-1000 image with its direct index); load() reads versions 1 and 2.
   void save(const std::string& path, bool include_vocabulary = true) const;
   // Throws FileError naming the file and the problem (damaged file, a file
   // without vocabulary, or a vocabulary whose checksum does not match).
