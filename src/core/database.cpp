@@ -162,43 +162,36 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
   // one (the first from 0), 7 bits per byte (LEB128). Siblings are
   // consecutive ids, so most steps take a byte: a direct index 4 levels up a
   // k=10 L=6 tree takes ~1.2 bytes per node, against 4 for the ids.
-  std::vector<std::uint8_t> steps;
-  steps.reserve(std::size_t{node_count_} * 2);
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    NodeId step = features.node(node) - (node > 0 ? features.node(node - 1) : 0);
-    do {
-      const auto low = static_cast<std::uint8_t>(step & 0x7F);
-      step >>= 7;
-      steps.push_back(step != 0 ? low | 0x80 : low);
-    } while (step != 0);
-  }
-  node_bytes_ = static_cast<std::uint32_t>(steps.size());
-  const std::size_t nodes_bytes = node_bytes_;
-  const auto write_nodes = [&] {
-    if (!steps.empty()) std::memcpy(bytes_.data(), steps.data(), steps.size());
+  const auto step = [&](std::size_t node) {
+    return features.node(node) - (node > 0 ? features.node(node - 1) : 0);
   };
+  for (std::size_t node = 0; node < node_count_; ++node) {
+    NodeId rest = step(node);
+    for (; rest >= 0x80; rest >>= 7) ++node_bytes_;
+    ++node_bytes_;
+  }
+  bytes_.resize(packed_size());
+  std::uint8_t* out = bytes_.data();
+  for (std::size_t node = 0; node < node_count_; ++node) {
+    NodeId rest = step(node);
+    for (; rest >= 0x80; rest >>= 7) *out++ = static_cast<std::uint8_t>((rest & 0x7F) | 0x80);
+    *out++ = static_cast<std::uint8_t>(rest);
+  }
   if (partition) {
     const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
-    bytes_.resize(nodes_bytes + std::size_t{feature_count_} * width);
-    write_nodes();
-    std::uint8_t* slots = bytes_.data() + nodes_bytes;
     for (std::size_t node = 0; node < node_count_; ++node) {
       const auto slot = static_cast<std::uint16_t>(node);
       if (width == 1) {
         for (std::uint32_t index : features.features(node))
-          slots[index] = static_cast<std::uint8_t>(slot);
+          out[index] = static_cast<std::uint8_t>(slot);
       } else {
         for (std::uint32_t index : features.features(node))
-          std::memcpy(slots + std::size_t{index} * 2, &slot, 2);  // little-endian
+          std::memcpy(out + std::size_t{index} * 2, &slot, 2);  // little-endian
       }
     }
     return;
   }
   const std::size_t width = layout_ == Layout::kRows32 ? 4 : 2;
-  bytes_.resize(nodes_bytes + std::size_t{node_count_} * width +
-                std::size_t{feature_count_} * width);
-  write_nodes();
-  std::uint8_t* out = bytes_.data() + nodes_bytes;
   const auto put = [&](std::uint32_t v) {
     std::memcpy(out, &v, width);  // little-endian: the low bytes
     out += width;
