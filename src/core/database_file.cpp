@@ -261,16 +261,6 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   const auto is_live = [&](const detail::Segment& source, std::uint32_t i) {
     return source.dead_postings == 0 || impl.alive[source.entry(i)] != 0;
   };
-  // Rows in RowOrder, each with its word: by word mod 2^16, then word / 2^16.
-  const std::size_t word_count = impl.word_capacity;
-  const std::size_t groups =
-      std::min<std::size_t>(word_count, std::size_t{1} << detail::kGroupBits);
-  const auto for_each_row = [&](const auto& visit) {
-    std::uint32_t row = 0;
-    for (std::size_t group = 0; group < groups; ++group)
-      for (std::size_t word = group; word < word_count; word += groups, ++row)
-        visit(row, static_cast<WordId>(word));
-  };
 
   struct PartRow {
     std::uint32_t row;
@@ -283,7 +273,7 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   std::uint64_t largest_word_end = 0;  // 1 + the largest word with a posting
   for (std::size_t k = 0; k < part_count; ++k) {
     if (source_begin[k] == sources.size()) break;
-    for_each_row([&](std::uint32_t row, WordId word) {
+    detail::RowOrder::for_each_row(impl.word_capacity, [&](std::uint32_t row, WordId word) {
       std::uint32_t length = 0;
       for_each_run(k, row,
                    [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
@@ -409,14 +399,13 @@ std::string hex(std::uint32_t value) {
   return text;
 }
 
-// Every count below is checked against the length of the section it comes
-// from before anything is allocated, so a hostile file cannot make the
-// reader allocate more than its own size justifies. Each section's CRC is
+// The readers below check every count against the length of the section it
+// comes from before anything is allocated, so a hostile file cannot make
+// them allocate more than its own size justifies. Each section's CRC is
 // checked just before it is read, and `release` is told when the reader is
 // done with it (load() then drops its pages from memory), so reading holds
-// little more than the database it builds. `impl` is empty, laid out for the
-// file's words. (A template only because Database::Impl is private to the
-// class.)
+// little more than the database it builds. (Templates only because
+// Database::Impl is private to the class.)
 constexpr std::size_t kReleaseBytes = std::size_t{64} << 20;  // released a part at a time
 
 // Version 1: posting lists by word over every id, cut into segments of
@@ -705,6 +694,7 @@ void read_direct_index(const Layout& layout, const Release& release, Impl* impl,
   release(data.data + released, cursor - released);
 }
 
+// `impl` is empty, laid out for the file's words.
 template <class Impl>
 void read_index(const Layout& layout, const Release& release, Impl* impl) {
   const Header& header = layout.header();

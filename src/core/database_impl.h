@@ -50,6 +50,16 @@ class RowOrder {
   std::uint32_t row(WordId word) const noexcept {
     return group_start(group_of(word)) + (word >> kGroupBits);
   }
+  // Calls visit(row, word) for the words below `word_count` in row order
+  // (the inverse of row() for RowOrder(word_count)).
+  template <class Visit>
+  static void for_each_row(std::size_t word_count, const Visit& visit) {
+    const std::size_t groups = std::min<std::size_t>(word_count, std::size_t{1} << kGroupBits);
+    std::uint32_t row = 0;
+    for (std::size_t group = 0; group < groups; ++group)
+      for (std::size_t word = group; word < word_count; word += groups, ++row)
+        visit(row, static_cast<WordId>(word));
+  }
 
  private:
   std::uint32_t per_group_ = 0;

@@ -10,6 +10,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
+#include "core/database_impl.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"
 
@@ -371,6 +372,26 @@ TEST(Database, OverWordIdsHasNoVocabularyToTransform) {
   const EntryId entry = database.add(bow, features);
   EXPECT_EQ(database.feature_vector(entry), features);
   EXPECT_EQ(database.query(bow, 5).size(), 1u);
+}
+
+// The .bbdb writer lists each part's rows by walking the row order; the
+// reader places them with row(): the walk must visit every word once, in
+// rows 0, 1, 2, ... as row() numbers them.
+TEST(Database, RowOrderWalkIsTheInverseOfRow) {
+  for (const std::size_t words : {std::size_t{1}, std::size_t{10}, std::size_t{65535},
+                                  std::size_t{65536}, std::size_t{65537}, std::size_t{540788}}) {
+    const detail::RowOrder order(words);
+    std::vector<std::uint8_t> seen(words, 0);
+    std::uint32_t expected_row = 0;
+    bool in_order = true;
+    detail::RowOrder::for_each_row(words, [&](std::uint32_t row, WordId word) {
+      in_order = in_order && row == expected_row++ && word < words && seen[word] == 0 &&
+                 order.row(word) == row;
+      if (word < words) seen[word] = 1;
+    });
+    EXPECT_TRUE(in_order) << words << " words";
+    EXPECT_EQ(expected_row, words);
+  }
 }
 
 TEST(Database, SegmentsOfAVocabularyOfMoreThan65536Words) {
