@@ -383,6 +383,15 @@ void check_level5_elements(const std::string& path) {
   const unsigned version =
       swapped ? header[124] << 8 | header[125] : header[125] << 8 | header[124];
   if (version == 0x0200) return;  // 7.3: HDF5 inside, which matio checks
+  // matio reads any other version as a level-4 file from byte 0, allocating
+  // a name as long as bytes 16-19 say (found by fuzzing: 744 MB).
+  if (version != 0x0100) {
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%04x", version);
+    throw FileError(path, std::string("unsupported .mat header version ") + hex +
+                              "; binbow reads level-5 files (version 0x0100, MATLAB's "
+                              "-v6 and -v7) and -v7.3 files (0x0200)");
+  }
   const Level5Reader reader{path, swapped};
   std::uint64_t offset = 128;
   while (offset < size) {

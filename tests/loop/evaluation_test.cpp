@@ -153,6 +153,17 @@ TEST(GroundTruth, MatHeadsAreCheckedBeforeMatioAllocates) {
   test::write_file(dir.file("hdf5_text.mat"), text_says_hdf5);
   expect_mat_error_mentioning(dir.file("hdf5_text.mat"), "truncated");
 
+  // Found by fuzzing: matio reads a header version other than level 5's or
+  // 7.3's as a level-4 file from byte 0, and allocated the 744 MB name its
+  // first 20 bytes declared.
+  auto version = plain;
+  const unsigned char level4_head[20] = {0, 0, 0, 0, 1, 0, 0,    0,    1,    0,
+                                         0, 0, 0, 0, 0, 0, 0x69, 0x9c, 0x65, 0x2c};
+  std::copy(std::begin(level4_head), std::end(level4_head), version.begin());
+  version[124] = 0x09;  // 0x0109, stored as the endian indicator says
+  test::write_file(dir.file("version.mat"), version);
+  expect_mat_error_mentioning(dir.file("version.mat"), "unsupported .mat header version 0x0109");
+
   auto damaged = test::read_file(test::source_path("fuzz/corpus/gt_mat/dense_double_zlib.mat"));
   damaged[damaged.size() - 6] ^= 0xff;  // inside the deflate stream or its checksum
   test::write_file(dir.file("damaged.mat"), damaged);
