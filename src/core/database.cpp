@@ -566,9 +566,13 @@ void merge_rows(const std::unique_ptr<detail::Segment>* begin,
       const std::uint32_t from = s.offsets[r];
       const std::uint32_t count = s.offsets[r + 1] - from;
       const std::uint32_t delta = s.first_entry - merged.first_entry;
-      for (std::uint32_t i = 0; i < count; ++i)
-        entries[at + i] = static_cast<std::uint16_t>(s.entries16.data()[from + i] + delta);
-      std::memcpy(weights + at, s.weights.data() + from, count * sizeof(float));
+      // Most rows hold a few postings: a call to memcpy would cost more.
+      const std::uint16_t* source_entries = s.entries16.data() + from;
+      const float* source_weights = s.weights.data() + from;
+      for (std::uint32_t i = 0; i < count; ++i) {
+        entries[at + i] = static_cast<std::uint16_t>(source_entries[i] + delta);
+        weights[at + i] = source_weights[i];
+      }
       at += count;
     }
     offsets[r + 1] = at;
