@@ -82,7 +82,8 @@ Result jpeg(const Bytes& b) {
   return std::nullopt;
 }
 
-// ImageWidth (256) and ImageLength (257) of the first image file directory.
+// ImageWidth (256), ImageLength (257), RowsPerStrip (278), TileWidth (322)
+// and TileLength (323) of the first image file directory.
 Result tiff(const Bytes& b) {
   const bool little = b[0] == 'I';
   const bool big_tiff = b.read(2, 2, little) == 43;
@@ -94,13 +95,13 @@ Result tiff(const Bytes& b) {
   const std::uint64_t directory = b.read(directory_at, offset_size, little);
   if (!b.has(directory, count_size)) return std::nullopt;
   const std::uint64_t entries = b.read(directory, count_size, little);
-  std::uint64_t width = 0, height = 0;
-  bool has_width = false, has_height = false;
+  std::uint64_t width = 0, height = 0, rows_per_strip = 0, tile_width = 0, tile_height = 0;
+  bool has_width = false, has_height = false, tiled = false;
   for (std::uint64_t i = 0; i < entries; ++i) {
     const std::uint64_t at = directory + count_size + i * entry_size;
     if (!b.has(at, entry_size)) return std::nullopt;
     const std::uint64_t tag = b.read(at, 2, little);
-    if (tag != 256 && tag != 257) continue;
+    if (tag != 256 && tag != 257 && tag != 278 && tag != 322 && tag != 323) continue;
     const std::uint64_t type = b.read(at + 2, 2, little);
     const std::uint64_t value_at = at + 4 + (big_tiff ? 8 : 4);
     std::uint64_t value = 0;
@@ -113,11 +114,29 @@ Result tiff(const Bytes& b) {
     } else {
       return std::nullopt;
     }
-    (tag == 256 ? width : height) = value;
-    (tag == 256 ? has_width : has_height) = true;
+    switch (tag) {
+      case 256:
+        width = value, has_width = true;
+        break;
+      case 257:
+        height = value, has_height = true;
+        break;
+      case 278:
+        rows_per_strip = value;
+        break;
+      default:
+        (tag == 322 ? tile_width : tile_height) = value, tiled = true;
+    }
   }
   if (!has_width || !has_height) return std::nullopt;
-  return dimensions(width, height, "tiff");
+  Result result = dimensions(width, height, "tiff");
+  // As OpenCV 4.6 sizes its buffer: a missing (0) width or height is the
+  // image's, and so is an unbounded (2^32 - 1) strip.
+  result->block_width = tiled && tile_width != 0 ? tile_width : width;
+  const std::uint64_t block_height = tiled ? tile_height : rows_per_strip;
+  result->block_height =
+      block_height == 0 || (!tiled && block_height == 0xFFFFFFFFu) ? height : block_height;
+  return result;
 }
 
 Result bmp(const Bytes& b) {

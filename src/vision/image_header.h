@@ -14,6 +14,9 @@ struct ImageDimensions {
   const char* format = "";  // "png", "jpeg", "tiff", "bmp", "webp", "pnm", ...
   // PNG and JPEG: the compression ratio is bounded (max_pixels_for_file_size).
   bool ratio_bounded = false;
+  // TIFF: the strip or tile that OpenCV's decoder buffers at once, which a
+  // header may declare larger than the image (0 x 0 for other formats).
+  std::uint64_t block_width = 0, block_height = 0;
 };
 
 // Width and height declared by the header of every still-image format this

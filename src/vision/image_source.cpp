@@ -142,6 +142,11 @@ cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint6
                     "(unknown format, or a damaged header)");
   }
   check_pixel_count(path, "image header", declared->width, declared->height, max_pixels);
+  // Found by fuzzing: a 172-byte TIFF of 12090x6 pixels in strips of 65530
+  // rows made OpenCV allocate 3 GB for one strip.
+  if (declared->block_width != 0)
+    check_pixel_count(path, "TIFF header's strip or tile", declared->block_width,
+                      declared->block_height, max_pixels);
   if (declared->ratio_bounded &&
       declared->width * declared->height > max_pixels_for_file_size(bytes.size())) {
     throw FileError(path,

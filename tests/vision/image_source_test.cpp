@@ -270,6 +270,26 @@ TEST(ReadGreyImage, DefaultPixelLimitRefusesSmallFilesDeclaringHugeImages) {
         << e.what();
   }
 
+  // Found by fuzzing: a TIFF of 12090x6 pixels whose strips declare 65530
+  // rows each; OpenCV sizes its strip buffer from that, 3 GB.
+  std::vector<std::uint8_t> strips = {
+      'I', 'I', 42, 0, 8, 0, 0, 0,                    // header, directory at 8
+      3,   0,                                         // three entries
+      0,   1,   3,  0, 1, 0, 0, 0, 0x3a, 0x2f, 0, 0,  // 256 ImageWidth SHORT 12090
+      1,   1,   3,  0, 1, 0, 0, 0, 6,    0,    0, 0,  // 257 ImageLength SHORT 6
+      22,  1,   3,  0, 1, 0, 0, 0, 0xfa, 0xff, 0, 0,  // 278 RowsPerStrip SHORT 65530
+  };
+  strips.resize(strips.size() + 4 + 100, 0);
+  test::write_file(dir.file("strips.tif"), strips);
+  try {
+    read_grey_image(dir.file("strips.tif"));
+    ADD_FAILURE() << "decoded a TIFF with 65530-row strips";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("strip or tile declares 12090x65530 pixels"),
+              std::string::npos)
+        << e.what();
+  }
+
   // The limit applies through ImageSource too.
   ASSERT_TRUE(cv::imwrite(dir.file("small.png"), colour_image(1, 40, 30)));
   ImageSourceOptions options;
