@@ -478,7 +478,7 @@ std::tuple<std::vector<loop::SequenceFrame>, LoopDetectorParams, loop::Similarit
 detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> vocabulary,
              const py::object& descriptor, const py::object& max_features, const py::object& params,
              long long stride, long long max_width, double video_fps, const py::object& progress,
-             bool online) {
+             bool online, const std::string& resume_state, const std::string& save_state) {
   loop::SequenceOptions options;
   options.source = source_options(stride, max_width, video_fps);
   if (const auto extractor = extractor_of(descriptor)) {
@@ -509,7 +509,14 @@ detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> v
   std::unique_ptr<loop::SequenceDetector> sequence;
   {
     py::gil_scoped_release release;
-    if (online)
+    if (!resume_state.empty())
+      sequence = std::make_unique<loop::SequenceDetector>(
+          inputs,
+          online ? loop::LoopDetector::load(resume_state)
+                 : loop::LoopDetector::load(resume_state,
+                                            std::move(vocabulary).value_or(Vocabulary())),
+          options);
+    else if (online)
       sequence = given ? std::make_unique<loop::SequenceDetector>(inputs, OnlineVocabularyOptions{},
                                                                   options, *given)
                        : std::make_unique<loop::SequenceDetector>(inputs, OnlineVocabularyOptions{},
@@ -536,9 +543,11 @@ detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> v
     if (!progress.is_none()) progress(frames.size(), total);
   }
   loop::SimilarityMatrix similarity;
-  if (sequence->params().geometric_check != loop::GeometricCheck::kNone) {
+  {
     py::gil_scoped_release release;
-    similarity = loop::similarity_matrix(sequence->detector());
+    if (!save_state.empty()) sequence->detector().save(save_state);
+    if (sequence->params().geometric_check != loop::GeometricCheck::kNone)
+      similarity = loop::similarity_matrix(sequence->detector());
   }
   return {std::move(frames), sequence->params(), std::move(similarity)};
 }
@@ -640,8 +649,21 @@ void bind_sequences(py::module_& m) {
   m.def("_detect_loops", &detect_loops, py::arg("inputs"), py::arg("vocabulary"),
         py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
         py::arg("max_width"), py::arg("video_fps"), py::arg("progress"), py::arg("online") = false,
+        py::arg("resume_state") = "", py::arg("save_state") = "",
         "binbow.detect_loops once its arguments are resolved (use that): the frames and\n"
         "the parameters used.");
+  m.def(
+      "_saved_state",
+      [](const std::string& path) {
+        loop::LoopDetectorFileInfo saved;
+        {
+          py::gil_scoped_release release;
+          saved = loop::LoopDetector::inspect(path);
+        }
+        return py::make_tuple(saved.online, saved.descriptor, saved.frames);
+      },
+      py::arg("path"),
+      "binbow.detect_loops' view of a state to resume: (online, descriptor, frames).");
   m.def("_write_report", &write_report, py::arg("folder"), py::arg("results"),
         py::arg("ground_truth"), py::arg("params"), py::arg("inputs"), py::arg("vocabulary"),
         py::arg("descriptor"), py::arg("similarity"),

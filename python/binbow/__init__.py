@@ -25,6 +25,7 @@ from ._binbow import (
     Vocabulary,
     __version__,
     _detect_loops,
+    _saved_state,
     evaluate,
     _write_report,
     hamming,
@@ -147,7 +148,7 @@ class _CliProgress:
 def detect_loops(
     inputs,
     vocabulary=None,
-    descriptor="orb",
+    descriptor=None,
     params=None,
     progress=False,
     *,
@@ -155,6 +156,8 @@ def detect_loops(
     stride=1,
     max_width=0,
     video_fps=0.0,
+    resume_state=None,
+    save_state=None,
 ):
     """Loop closures of an image sequence: what `binbow detect-loops` finds.
 
@@ -163,8 +166,8 @@ def detect_loops(
     text lists of images. vocabulary: None for Vocabulary.default(descriptor),
     a Vocabulary, or "online": no pre-trained vocabulary, the words grow from
     the sequence itself (LoopDetector.online, `detect-loops --online-vocabulary`).
-    descriptor: the extractor, "orb", "brief", "akaze" or "brisk", with the
-    CLI's defaults (max_features: None for the extractor's default), or a
+    descriptor: the extractor, "orb" (None), "brief", "akaze" or "brisk", with
+    the CLI's defaults (max_features: None for the extractor's default), or a
     FeatureExtractor configured otherwise. params: a
     LoopDetectorParams, a parameter file (JSON or YAML, as --params: keys it
     omits keep the defaults) or None: the paper's parameters, whose frame
@@ -172,6 +175,15 @@ def detect_loops(
     prints the CLI's progress on stderr; a callable is called with (done,
     total) after each frame, total None when not known beforehand. stride,
     max_width and video_fps thin the frames out as the CLI's options do.
+
+    save_state: a .bbld file to save the detector's state to after the last
+    frame (LoopDetector.save; its folder is created). resume_state: a .bbld
+    file saved so, to go on from: the frames continue its numbering, and its
+    loops can close with the frames it saw (as `detect-loops --resume-state`).
+    Its kind and descriptor are taken from the file: vocabulary may be None
+    (the default vocabulary of its descriptor, or "online" for an online
+    state) or the Vocabulary it ran with; params must be None (the state
+    keeps its own). ValueError when an argument contradicts the state.
 
     Returns a LoopResults: one LoopResult per frame, in order, with its file
     name, and what the run used. The GIL is released while frames are read and
@@ -184,6 +196,15 @@ def detect_loops(
         if not isinstance(item, (str, bytes, _os.PathLike)):
             raise TypeError(f"inputs[{index}] must be a path, got {type(item).__name__}")
         paths.append(_os.fsdecode(item))
+    resumed_frames = 0
+    if resume_state is not None:
+        resume_state, resumed_frames, vocabulary, descriptor = _resume(
+            resume_state, vocabulary, descriptor, params
+        )
+    if save_state is not None:
+        save_state = _output_file("save_state", save_state)
+    if descriptor is None:
+        descriptor = "orb"
     name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
     vocabulary_file = None
     online = isinstance(vocabulary, str) and vocabulary == "online"
@@ -211,7 +232,7 @@ def detect_loops(
         params = _os.fsdecode(params)
     frames, used, similarity = _detect_loops(
         paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
-        callback, online,
+        callback, online, resume_state or "", save_state or "",
     )
     if printer is not None:
         printer.finish()
@@ -222,7 +243,55 @@ def detect_loops(
     results.vocabulary = "online" if online else vocabulary
     results.vocabulary_file = vocabulary_file
     results.inputs = [_os.path.normpath(_os.path.abspath(path)) for path in paths]
+    if resume_state is not None:
+        results.resumed_from = _os.path.normpath(_os.path.abspath(resume_state))
+        results.resumed_frames = resumed_frames
     return results
+
+
+def _resume(path, vocabulary, descriptor, params):
+    """detect_loops' arguments resolved against the state saved at path:
+    (path, its frames, vocabulary, descriptor)."""
+    if not isinstance(path, (str, bytes, _os.PathLike)):
+        raise TypeError(f"resume_state must be a path, got {type(path).__name__}")
+    path = _os.fsdecode(path)
+    online, saved_descriptor, frames = _saved_state(path)
+    if params is not None:
+        raise ValueError(f"resume_state {path} keeps its own parameters; params must be None")
+    wants_online = isinstance(vocabulary, str) and vocabulary == "online"
+    if online and vocabulary is not None and not wants_online:
+        raise ValueError(
+            f"resume_state {path} holds an online vocabulary's state; vocabulary must be "
+            'None or "online"'
+        )
+    if not online and wants_online:
+        raise ValueError(
+            f"resume_state {path} holds a fixed vocabulary's state; give the Vocabulary it "
+            'was run with (or None for its descriptor\'s default), not "online"'
+        )
+    if saved_descriptor:
+        name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
+        if name is not None and name != saved_descriptor:
+            raise ValueError(
+                f"resume_state {path} was run with {saved_descriptor} descriptors, "
+                f"not {name}"
+            )
+        if descriptor is None:
+            descriptor = saved_descriptor
+    return path, frames, "online" if online else vocabulary, descriptor
+
+
+def _output_file(keyword, path):
+    """path as a str, its folder created (OSError naming it when it cannot be)."""
+    if not isinstance(path, (str, bytes, _os.PathLike)):
+        raise TypeError(f"{keyword} must be a path, got {type(path).__name__}")
+    path = _os.fsdecode(path)
+    folder = _os.path.dirname(_os.path.abspath(path))
+    try:
+        _os.makedirs(folder, exist_ok=True)
+    except OSError as error:
+        raise OSError(f"{keyword}: cannot create the folder {folder}: {error.strerror}") from None
+    return path
 
 
 class LoopResults(list):
@@ -234,7 +303,9 @@ class LoopResults(list):
     Vocabulary; vocabulary_file: its file when detect_loops loaded the default
     one, else None; inputs: the inputs as absolute paths; similarity: the
     SimilarityMatrix of the run (None when the geometric check is "none": the
-    detector then keeps no features to score).
+    detector then keeps no features to score); resumed_from and resumed_frames:
+    the state a run resumed (resume_state, as an absolute path) and its frames,
+    else None and 0.
     """
 
     params = None
@@ -243,6 +314,8 @@ class LoopResults(list):
     vocabulary = None
     vocabulary_file = None
     inputs = ()
+    resumed_from = None
+    resumed_frames = 0
 
 
 def write_report(folder, results, ground_truth=None):

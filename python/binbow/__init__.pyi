@@ -342,11 +342,13 @@ class LoopResults(list[LoopResult]):
     vocabulary: Union[None, Vocabulary, Literal["online"]]
     vocabulary_file: Optional[str]
     inputs: Sequence[str]
+    resumed_from: Optional[str]
+    resumed_frames: int
 
 def detect_loops(
     inputs: Union[_StrPath, Iterable[_StrPath]],
     vocabulary: Union[None, Vocabulary, Literal["online"]] = None,
-    descriptor: Union[Literal["orb", "brief", "akaze", "brisk"], FeatureExtractor] = "orb",
+    descriptor: Union[None, Literal["orb", "brief", "akaze", "brisk"], FeatureExtractor] = None,
     params: Union[None, LoopDetectorParams, _StrPath] = None,
     progress: Union[bool, Callable[[int, Optional[int]], object]] = False,
     *,
@@ -354,6 +356,8 @@ def detect_loops(
     stride: int = 1,
     max_width: int = 0,
     video_fps: float = 0.0,
+    resume_state: Optional[_StrPath] = None,
+    save_state: Optional[_StrPath] = None,
 ) -> LoopResults: ...
 def write_report(
     folder: _StrPath,

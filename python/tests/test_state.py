@@ -63,3 +63,44 @@ def test_load_needs_the_vocabulary_it_ran_with(orb_features, tmp_path):
     state.write_bytes(b"BINBOWLD" + bytes(100))
     with pytest.raises(OSError, match="fixed.bbld"):
         binbow.LoopDetector.load(state, orb)
+
+
+@pytest.mark.parametrize("kind", ["fixed", "online"])
+def test_detect_loops_saves_and_resumes_as_the_cli(kind, tmp_path):
+    """detect_loops(save_state=) over frames 1..42, then (resume_state=) over 43..84: the
+    loops of one run over 1..84; the kind and descriptor come from the state."""
+    frames = sample_frames()
+    vocabulary = "online" if kind == "online" else None
+    state = tmp_path / "new folder" / f"{kind}.bbld"
+    whole = binbow.detect_loops(frames, vocabulary)
+    first = binbow.detect_loops(frames[:42], vocabulary, save_state=state)
+    assert state.is_file() and first.resumed_from is None and first.resumed_frames == 0
+    second = binbow.detect_loops(frames[42:], resume_state=state)
+    assert second.resumed_from == str(state) and second.resumed_frames == 42
+    assert second.descriptor == "orb"
+    assert (second.vocabulary == "online") == (kind == "online")
+    outcomes = [_outcome(r) + (r.file, r.match_file) for r in list(first) + list(second)]
+    assert sum(r.detection for r in second) > 5
+    assert outcomes == [_outcome(r) + (r.file, r.match_file) for r in whole]
+
+
+def test_detect_loops_resume_state_contradictions(tmp_path):
+    frames = sample_frames()[:3]
+    fixed, online = tmp_path / "fixed.bbld", tmp_path / "online.bbld"
+    binbow.detect_loops(frames, save_state=fixed)
+    binbow.detect_loops(frames, "online", save_state=online)
+    vocabulary = binbow.Vocabulary.load(SOURCE_DIR / "data" / "vocab" / "orb_default.bbw")
+    with pytest.raises(ValueError, match="fixed vocabulary's state"):
+        binbow.detect_loops(frames, "online", resume_state=fixed)
+    with pytest.raises(ValueError, match="online vocabulary's state"):
+        binbow.detect_loops(frames, vocabulary, resume_state=online)
+    with pytest.raises(ValueError, match="run with orb descriptors, not brief"):
+        binbow.detect_loops(frames, descriptor="brief", resume_state=fixed)
+    with pytest.raises(ValueError, match="params must be None"):
+        binbow.detect_loops(frames, params=binbow.LoopDetectorParams(), resume_state=fixed)
+    with pytest.raises(TypeError, match="resume_state must be a path"):
+        binbow.detect_loops(frames, resume_state=3)
+    with pytest.raises(OSError, match="missing.bbld"):
+        binbow.detect_loops(frames, resume_state=tmp_path / "missing.bbld")
+    # The vocabulary it ran with is accepted as well as None.
+    assert len(binbow.detect_loops(frames, vocabulary, resume_state=fixed)) == 3
