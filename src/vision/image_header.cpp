@@ -114,18 +114,21 @@ Result tiff(const Bytes& b) {
     } else {
       return std::nullopt;
     }
+    // A repeated tag (found by fuzzing: a second ImageWidth of 1) counts at
+    // its largest, whichever one the decoder keeps.
     switch (tag) {
       case 256:
-        width = value, has_width = true;
+        width = std::max(width, value), has_width = true;
         break;
       case 257:
-        height = value, has_height = true;
+        height = std::max(height, value), has_height = true;
         break;
       case 278:
-        rows_per_strip = value;
+        rows_per_strip = std::max(rows_per_strip, value);
         break;
       default:
-        (tag == 322 ? tile_width : tile_height) = value, tiled = true;
+        std::uint64_t& tile = tag == 322 ? tile_width : tile_height;
+        tile = std::max(tile, value), tiled = true;
     }
   }
   if (!has_width || !has_height) return std::nullopt;

@@ -286,6 +286,13 @@ TEST(ReadGreyImage, DefaultPixelLimitRefusesSmallFilesDeclaringHugeImages) {
   test::write_file(dir.file("strips.tif"), strips);
   expect_image_error_mentioning(dir.file("strips.tif"),
                                 "strip or tile declares 12090x65530 pixels");
+  // Found by fuzzing: the same with a second ImageWidth of 1 after the first.
+  strips[8] = 4;
+  const std::uint8_t second_width[12] = {0, 1, 3, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+  strips.insert(strips.begin() + 10 + 3 * 12, std::begin(second_width), std::end(second_width));
+  test::write_file(dir.file("widths.tif"), strips);
+  expect_image_error_mentioning(dir.file("widths.tif"),
+                                "strip or tile declares 12090x65530 pixels");
 
   // The limit applies through ImageSource too.
   ASSERT_TRUE(cv::imwrite(dir.file("small.png"), colour_image(1, 40, 30)));
