@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -44,6 +45,28 @@ namespace {
 // on Linux) get U+FFFD instead of failing the run at its end.
 std::string json_text(const Json& value) {
   return value.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+
+// The integer at `key` of `object`, if it fits T. nlohmann's get<T>() also
+// converts a fraction or a number out of T's range (found by fuzzing: a
+// "match" of -5.6e35 converted to long long, which is undefined behaviour).
+template <typename T>
+T integer_at(const Json& object, const char* key, const std::string& path) {
+  const Json& value = object.at(key);
+  if (value.is_number_unsigned()) {
+    const auto v = value.get<std::uint64_t>();
+    if (v <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())) return static_cast<T>(v);
+  } else if (value.is_number_integer()) {
+    const auto v = value.get<std::int64_t>();
+    if (std::numeric_limits<T>::is_signed &&
+        v >= static_cast<std::int64_t>(std::numeric_limits<T>::min()) &&
+        v <= static_cast<std::int64_t>(std::numeric_limits<T>::max()))
+      return static_cast<T>(v);
+  }
+  throw FileError(path, std::string("malformed run record: \"") + key + "\" is " + value.dump() +
+                            ", not an integer in [" +
+                            std::to_string(std::numeric_limits<T>::min()) + ", " +
+                            std::to_string(std::numeric_limits<T>::max()) + "]");
 }
 }  // namespace
 
@@ -220,50 +243,53 @@ LoopRun LoopRun::load(const std::string& path) {
       const Json& o = j.at("online_options");
       OnlineVocabularyOptions& options = run.online_options;
       options.new_word_distance = o.at("new_word_distance").get<double>();
-      options.purge_after_images = o.at("purge_after_images").get<std::uint32_t>();
-      options.trees = o.at("trees").get<std::uint32_t>();
-      options.branching = o.at("branching").get<std::uint32_t>();
-      options.leaf_size = o.at("leaf_size").get<std::uint32_t>();
-      options.max_checks = o.at("max_checks").get<std::uint32_t>();
+      options.purge_after_images = integer_at<std::uint32_t>(o, "purge_after_images", path);
+      options.trees = integer_at<std::uint32_t>(o, "trees", path);
+      options.branching = integer_at<std::uint32_t>(o, "branching", path);
+      options.leaf_size = integer_at<std::uint32_t>(o, "leaf_size", path);
+      options.max_checks = integer_at<std::uint32_t>(o, "max_checks", path);
       options.exact = o.at("exact").get<bool>();
       try {
         options.scoring = parse_scoring(o.at("scoring").get<std::string>());
       } catch (const InvalidArgument& e) {
         throw FileError(path, std::string("online_options: ") + e.what());
       }
-      options.seed = o.at("seed").get<std::uint64_t>();
+      options.seed = integer_at<std::uint64_t>(o, "seed", path);
     }
     if (j.contains("resumed_from")) {
       run.resumed_from = j.at("resumed_from").get<std::string>();
-      run.resumed_frames = j.at("resumed_frames").get<std::size_t>();
+      run.resumed_frames = integer_at<std::size_t>(j, "resumed_frames", path);
     }
     run.descriptor = j.at("descriptor").get<std::string>();
-    run.max_features = j.at("max_features").get<int>();
+    run.max_features = integer_at<int>(j, "max_features", path);
     run.params_json = j.at("params").dump(2);
     if (j.contains("source")) {  // absent from records of earlier versions
       const Json& source = j.at("source");
-      run.source.stride = source.at("stride").get<std::size_t>();
-      run.source.max_width = source.at("max_width").get<int>();
+      run.source.stride = integer_at<std::size_t>(source, "stride", path);
+      run.source.max_width = integer_at<int>(source, "max_width", path);
       run.source.video_fps = source.at("video_fps").get<double>();
     }
     for (const Json& f : j.at("frames")) {
       // Absent from records written before it was added: not known.
       const long long correspondences =
-          f.contains("correspondences") ? f.at("correspondences").get<long long>() : -1;
+          f.contains("correspondences") ? integer_at<long long>(f, "correspondences", path) : -1;
       if (correspondences < -1)
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has a negative number of correspondences");
-      const long long features = f.contains("features") ? f.at("features").get<long long>() : -1;
+      const long long features =
+          f.contains("features") ? integer_at<long long>(f, "features", path) : -1;
       if (features < -1)
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has a negative number of features");
       run.frames.push_back({f.at("file").get<std::string>(), f.at("status").get<std::string>(),
-                            f.at("match").get<long long>(), f.at("score").get<double>(),
+                            integer_at<long long>(f, "match", path), f.at("score").get<double>(),
                             f.at("normalised_score").get<double>(),
-                            f.at("inliers").get<std::size_t>(), correspondences, features});
+                            integer_at<std::size_t>(f, "inliers", path), correspondences,
+                            features});
     }
     for (const Json& l : j.at("loops"))
-      run.loops.push_back({l.at("query").get<std::size_t>(), l.at("match").get<std::size_t>(),
+      run.loops.push_back({integer_at<std::size_t>(l, "query", path),
+                           integer_at<std::size_t>(l, "match", path),
                            l.at("inliers").get<std::vector<std::array<float, 4>>>()});
     for (const auto& [stage, values] : j.at("timing_ms").items())
       run.timing.push_back({stage, values.get<std::vector<double>>()});

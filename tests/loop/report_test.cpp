@@ -302,6 +302,22 @@ TEST(RunRecord, KeepsEachFramesCorrespondencesAndReadsOlderRecords) {
   negative.replace(negative.find(key), key.size(), "\"correspondences\":-5,");
   std::ofstream(record, std::ios::binary | std::ios::trunc) << negative;
   EXPECT_THROW(LoopRun::load(record), FileError);
+
+  // Found by fuzzing: a match of -5.6e35 was converted to long long
+  // (undefined behaviour); fractions and values out of range are refused.
+  const std::string match_key = "\"match\":0,";
+  ASSERT_NE(text.find(match_key), std::string::npos) << text;
+  for (const std::string value : {"-5.6e35", "1.5", "9223372036854775808"}) {
+    std::string bad = text;
+    bad.replace(bad.find(match_key), match_key.size(), "\"match\":" + value + ",");
+    std::ofstream(record, std::ios::binary | std::ios::trunc) << bad;
+    try {
+      LoopRun::load(record);
+      ADD_FAILURE() << "loaded a match of " << value;
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find("\"match\" is "), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(LoopReport, PageShowsMissesSimilaritySweepTable) {
