@@ -25,6 +25,7 @@
 #include "binbow/loop/similarity.h"
 #include "binbow/vision/features.h"
 #include "binding.h"
+#include "core/output_path.h"
 
 namespace binbow::python {
 namespace {
@@ -509,6 +510,8 @@ detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> v
   std::unique_ptr<loop::SequenceDetector> sequence;
   {
     py::gil_scoped_release release;
+    // Before the run: a folder that cannot be written fails now, not after it.
+    if (!save_state.empty()) detail::prepare_output_file(save_state);
     if (!resume_state.empty())
       sequence = std::make_unique<loop::SequenceDetector>(
           inputs,

@@ -202,7 +202,7 @@ def detect_loops(
             resume_state, vocabulary, descriptor, params
         )
     if save_state is not None:
-        save_state = _output_file("save_state", save_state)
+        save_state = _path("save_state", save_state)
     if descriptor is None:
         descriptor = "orb"
     name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
@@ -252,9 +252,7 @@ def detect_loops(
 def _resume(path, vocabulary, descriptor, params):
     """detect_loops' arguments resolved against the state saved at path:
     (path, its frames, vocabulary, descriptor)."""
-    if not isinstance(path, (str, bytes, _os.PathLike)):
-        raise TypeError(f"resume_state must be a path, got {type(path).__name__}")
-    path = _os.fsdecode(path)
+    path = _path("resume_state", path)
     online, saved_descriptor, frames = _saved_state(path)
     if params is not None:
         raise ValueError(f"resume_state {path} keeps its own parameters; params must be None")
@@ -281,17 +279,11 @@ def _resume(path, vocabulary, descriptor, params):
     return path, frames, "online" if online else vocabulary, descriptor
 
 
-def _output_file(keyword, path):
-    """path as a str, its folder created (OSError naming it when it cannot be)."""
+def _path(keyword, path):
+    """The path argument `keyword` as a str (TypeError for anything else)."""
     if not isinstance(path, (str, bytes, _os.PathLike)):
         raise TypeError(f"{keyword} must be a path, got {type(path).__name__}")
-    path = _os.fsdecode(path)
-    folder = _os.path.dirname(_os.path.abspath(path))
-    try:
-        _os.makedirs(folder, exist_ok=True)
-    except OSError as error:
-        raise OSError(f"{keyword}: cannot create the folder {folder}: {error.strerror}") from None
-    return path
+    return _os.fsdecode(path)
 
 
 class LoopResults(list):

@@ -100,6 +100,8 @@ def test_detect_loops_resume_state_contradictions(tmp_path):
         binbow.detect_loops(frames, params=binbow.LoopDetectorParams(), resume_state=fixed)
     with pytest.raises(TypeError, match="resume_state must be a path"):
         binbow.detect_loops(frames, resume_state=3)
+    with pytest.raises(OSError, match="is a folder, not a file"):
+        binbow.detect_loops(frames, save_state=tmp_path)
     with pytest.raises(OSError, match="missing.bbld"):
         binbow.detect_loops(frames, resume_state=tmp_path / "missing.bbld")
     # The vocabulary it ran with is accepted as well as None.
