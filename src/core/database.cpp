@@ -495,6 +495,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
       const WordId word = words[appended].word;
       if (!std::isfinite(words[appended].value))
         throw detail::non_finite_value("Database::add", word);
+      values.include(words[appended].value);
       const std::uint32_t group = detail::group_of(word);
       detail::push_back(lists[group], first_block_logs[group],
                         {key_base | (word >> detail::kGroupBits), words[appended].value}, arena);
@@ -860,6 +861,7 @@ void Database::clear() {
   std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
   std::vector<std::string>().swap(impl_->labels);
   impl_->live_entries = 0;
+  impl_->values = {};
 }
 
 std::size_t Database::memory_usage() const {

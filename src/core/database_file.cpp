@@ -471,9 +471,11 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
       if (id >= next_id || impl->alive[id] == 0 || (i > from && id <= previous))
         layout.fail("posting list of word " + std::to_string(words[l]) +
                     " names a missing entry or is not in increasing order");
-      if (!std::isfinite(detail::load_le<float>(weights + 4 * i)))
+      const float weight = detail::load_le<float>(weights + 4 * i);
+      if (!std::isfinite(weight))
         layout.fail("posting list of word " + std::to_string(words[l]) +
                     " has a non-finite weight");
+      impl->values.include(weight);
       ++impl->word_counts[id];
       auto& segment = segments[id / span];
       if (!segment) {
@@ -599,6 +601,7 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
         if (!std::isfinite(part_weights[i]))
           layout.fail(where + ": the row of word " + std::to_string(word) +
                       " has a non-finite weight");
+        impl->values.include(part_weights[i]);
         ++impl->word_counts[first + relative];
       }
     }

@@ -17,6 +17,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/scoring.h"
 #include "writer_priority_mutex.h"
 
 namespace binbow::detail {
@@ -354,6 +355,9 @@ struct Database::Impl {
   std::vector<std::string> labels;                  // empty until a label is set
 
   std::size_t live_entries = 0;
+  // Of every value added or loaded (removals do not narrow it): whether a
+  // query's L1 terms may be summed as minimums.
+  detail::ValueRange values;
 };
 
 }  // namespace binbow

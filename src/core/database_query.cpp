@@ -46,12 +46,23 @@ thread_local QueryScratch scratch;
 struct PartScores {
   EntryScore* entries;
 
-  template <Scoring kScoring>
-  void add(std::uint32_t relative_entry, float weight, double v) const {
+  void add(std::uint32_t relative_entry, double term) const {
     EntryScore& score = entries[relative_entry];
-    score.sum += detail::score_term(kScoring, v, weight);
+    score.sum += term;
     ++score.shared;
   }
+};
+
+// A query word's term with each posting: DBoW2's for the scoring, or the
+// minimum of the two values for L1 where detail::l1_terms_are_minimums.
+template <Scoring kScoring>
+struct ScoringTerm {
+  double value;
+  double operator()(float weight) const { return detail::score_term(kScoring, value, weight); }
+};
+struct MinimumTerm {
+  float value;
+  double operator()(float weight) const { return std::min(value, weight); }
 };
 
 // Posting lists are scattered in memory: the rows of words a few steps
@@ -59,7 +70,7 @@ struct PartScores {
 constexpr std::size_t kPrefetchAhead = 8;
 
 // Entries are increasing within a row, so `last_entry` cuts it short.
-template <Scoring kScoring>
+template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order,
                         const BowVector& bow, EntryId last_entry, PartScores scores) {
   const std::uint32_t* offsets = segment.offsets.data();
@@ -83,8 +94,8 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order,
     if (cut)
       end = static_cast<std::uint32_t>(std::upper_bound(entries + begin, entries + end, last) -
                                        entries);
-    const double v = query[q].value;
-    for (std::uint32_t i = begin; i < end; ++i) scores.add<kScoring>(entries[i], weights[i], v);
+    const Term term{query[q].value};
+    for (std::uint32_t i = begin; i < end; ++i) scores.add(entries[i], term(weights[i]));
   }
 }
 
@@ -131,7 +142,7 @@ inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t 
 // A query word's group list holds the postings of up to 2^high_bits words,
 // in increasing entry order: the word's own are picked out by their high
 // bits.
-template <Scoring kScoring>
+template <class Term>
 void accumulate_tail(const IndexView& index, const BowVector& bow, EntryId last_entry,
                      PartScores scores) {
   const detail::TailList* lists = index.tail_lists;
@@ -157,11 +168,11 @@ void accumulate_tail(const IndexView& index, const BowVector& bow, EntryId last_
     const detail::TailList list = lists[detail::group_of(word)];
     if (list.size == 0) continue;
     const detail::TailPosting* postings = index.arena.at(list.block);
-    const double v = query[q].value;
+    const Term term{query[q].value};
     for_each_of_word(postings, list.size, mask, word >> detail::kGroupBits, [&](std::uint32_t i) {
       const std::uint32_t key = postings[i].key;
       if (key >= key_end) return false;
-      scores.add<kScoring>(key >> bits, postings[i].weight, v);
+      scores.add(key >> bits, term(postings[i].weight));
       return true;
     });
   }
@@ -189,8 +200,11 @@ struct BetterResult {
 // front, so offering never throws.
 class BestResults {
  public:
-  BestResults(Scoring scoring, double base, std::size_t keep, std::vector<QueryResult>& storage)
+  // With `minimums`, the sums are MinimumTerm's.
+  BestResults(Scoring scoring, bool minimums, double base, std::size_t keep,
+              std::vector<QueryResult>& storage)
       : scoring_(scoring),
+        minimums_(minimums),
         base_(base),
         keep_(keep),
         better_{scoring == Scoring::kKL},
@@ -206,8 +220,7 @@ class BestResults {
       EntryScore& score = scores.entries[r];
       if (score.shared == 0) continue;
       if (alive[first + r] != 0)
-        offer({static_cast<EntryId>(first + r), detail::finish_score(scoring_, score.sum, base_),
-               score.shared});
+        offer({static_cast<EntryId>(first + r), finish(score.sum), score.shared});
       score = {};
     }
   }
@@ -230,30 +243,36 @@ class BestResults {
     }
   }
 
+  double finish(double sum) const {
+    return minimums_ ? detail::l1_score_of_minimums(sum)
+                     : detail::finish_score(scoring_, sum, base_);
+  }
+
   Scoring scoring_;
+  bool minimums_;
   double base_;
   std::size_t keep_;
   BetterResult better_;
   std::vector<QueryResult>& results_;
 };
 
-// Every term is computed and summed exactly as Vocabulary::score does, in the
-// same order (increasing word id), so scores agree to the last bit: each
-// entry lives in one segment or in the tail, whose pass visits the query's
-// words in order.
-template <Scoring kScoring>
+// Every term is computed and summed exactly as Vocabulary::score does (or,
+// for MinimumTerm, as its exact equal), in the same order (increasing word
+// id), so scores agree to the last bit: each entry lives in one segment or in
+// the tail, whose pass visits the query's words in order.
+template <class Term>
 void score_parts(const IndexView& index, const BowVector& bow, EntryId last_entry,
                  PartScores scores, BestResults& best) {
   for (const auto& segment : index.segments) {
     if (segment->first_entry > last_entry) return;
-    accumulate_segment<kScoring>(*segment, index.row_order, bow, last_entry, scores);
+    accumulate_segment<Term>(*segment, index.row_order, bow, last_entry, scores);
     best.take_part(segment->first_entry,
                    std::min<std::size_t>(segment->end_entry, std::size_t{last_entry} + 1) -
                        segment->first_entry,
                    scores, index.alive);
   }
   if (index.tail_postings > 0 && index.tail_first_entry <= last_entry) {
-    accumulate_tail<kScoring>(index, bow, last_entry, scores);
+    accumulate_tail<Term>(index, bow, last_entry, scores);
     best.take_part(index.tail_first_entry,
                    std::min<std::size_t>(index.entry_count, std::size_t{last_entry} + 1) -
                        index.tail_first_entry,
@@ -261,21 +280,23 @@ void score_parts(const IndexView& index, const BowVector& bow, EntryId last_entr
   }
 }
 
-void score_parts(Scoring scoring, const IndexView& index, const BowVector& bow, EntryId last_entry,
-                 PartScores scores, BestResults& best) {
+void score_parts(Scoring scoring, bool minimums, const IndexView& index, const BowVector& bow,
+                 EntryId last_entry, PartScores scores, BestResults& best) {
   switch (scoring) {
     case Scoring::kL1:
-      return score_parts<Scoring::kL1>(index, bow, last_entry, scores, best);
+      if (minimums) return score_parts<MinimumTerm>(index, bow, last_entry, scores, best);
+      return score_parts<ScoringTerm<Scoring::kL1>>(index, bow, last_entry, scores, best);
     case Scoring::kL2:
-      return score_parts<Scoring::kL2>(index, bow, last_entry, scores, best);
+      return score_parts<ScoringTerm<Scoring::kL2>>(index, bow, last_entry, scores, best);
     case Scoring::kChiSquare:
-      return score_parts<Scoring::kChiSquare>(index, bow, last_entry, scores, best);
+      return score_parts<ScoringTerm<Scoring::kChiSquare>>(index, bow, last_entry, scores, best);
     case Scoring::kKL:
-      return score_parts<Scoring::kKL>(index, bow, last_entry, scores, best);
+      return score_parts<ScoringTerm<Scoring::kKL>>(index, bow, last_entry, scores, best);
     case Scoring::kBhattacharyya:
-      return score_parts<Scoring::kBhattacharyya>(index, bow, last_entry, scores, best);
+      return score_parts<ScoringTerm<Scoring::kBhattacharyya>>(index, bow, last_entry, scores,
+                                                               best);
     case Scoring::kDotProduct:
-      return score_parts<Scoring::kDotProduct>(index, bow, last_entry, scores, best);
+      return score_parts<ScoringTerm<Scoring::kDotProduct>>(index, bow, last_entry, scores, best);
   }
 }
 
@@ -311,8 +332,14 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const IndexView index{impl_->segments,         impl_->tail_lists.data(), impl_->arena,
                         impl_->high_bits,        impl_->row_order,         impl_->tail_postings,
                         impl_->tail_first_entry, impl_->alive.data(),      entry_count};
-  BestResults best(scoring, base, std::min(max_results, impl_->live_entries), buffers.best);
-  score_parts(scoring, index, *searched, last_entry, PartScores{buffers.scores.data()}, best);
+  detail::ValueRange query_values;
+  for (const BowEntry& e : *searched) query_values.include(e.value);
+  const bool minimums =
+      scoring == Scoring::kL1 && detail::l1_terms_are_minimums(impl_->values, query_values);
+  BestResults best(scoring, minimums, base, std::min(max_results, impl_->live_entries),
+                   buffers.best);
+  score_parts(scoring, minimums, index, *searched, last_entry, PartScores{buffers.scores.data()},
+              best);
   lock.unlock();
   return best.sorted();
 }

@@ -8,6 +8,7 @@
 // the entry lacks (DBoW2 charges them v·(log v − log ε)).
 #pragma once
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 
@@ -63,6 +64,38 @@ inline double finish_score(Scoring scoring, double shared_sum, double base) {
       return shared_sum;
   }
   return shared_sum;
+}
+
+// What the values of an index (or of a query) span: the smallest positive,
+// the largest, and whether any is negative.
+struct ValueRange {
+  float min_positive = INFINITY;
+  float max = 0.0f;
+  bool negative = false;
+
+  void include(float value) noexcept {
+    negative = negative || value < 0.0f;
+    if (value > 0.0f) min_positive = std::min(min_positive, value);
+    max = std::max(max, value);
+  }
+};
+
+// L1's term |v - w| - |v| - |w|, computed in double from floats, is exactly
+// -2 min(v, w) when v, w >= 0 are less than 2^29 apart by ratio: v - w and
+// w - 2v then span at most 53 bits, so each step is exact. Scaling by -2 is
+// exact too, so a query may sum the minimums and get DBoW2's score to the
+// last bit, with fewer instructions per posting (see l1_score_of_minimums).
+inline bool l1_terms_are_minimums(const ValueRange& index, const ValueRange& query) noexcept {
+  if (index.negative || query.negative) return false;
+  const double smallest = std::min(index.min_positive, query.min_positive);
+  const double largest = std::max(index.max, query.max);
+  return largest < smallest * 0x1p29;  // true too when no value is positive
+}
+
+// finish_score(kL1, -2 sum, 0) for a sum of minimums: the sum itself, but
+// -0.0 for 0, as DBoW2's terms (all +0.0 then) give.
+inline double l1_score_of_minimums(double sum) noexcept {
+  return sum != 0.0 ? sum : -0.0;
 }
 
 }  // namespace binbow::detail

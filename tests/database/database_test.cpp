@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -91,12 +93,20 @@ std::vector<QueryResult> brute_force(const Vocabulary& vocabulary,
   return brute_force(vocabulary.scoring(), bows, live, query, max_results, max_entry_id);
 }
 
+// Scores must agree to the last bit, the sign of zero included.
+std::uint64_t bits_of(double score) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &score, sizeof bits);
+  return bits;
+}
+
 void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
                  const std::string& context) {
   ASSERT_EQ(actual.size(), expected.size()) << context;
   for (std::size_t i = 0; i < actual.size(); ++i) {
     EXPECT_EQ(actual[i].entry, expected[i].entry) << context << " rank " << i;
-    EXPECT_EQ(actual[i].score, expected[i].score) << context << " rank " << i;
+    EXPECT_EQ(bits_of(actual[i].score), bits_of(expected[i].score))
+        << context << " rank " << i << ": " << actual[i].score << " vs " << expected[i].score;
     EXPECT_EQ(actual[i].shared_words, expected[i].shared_words) << context << " rank " << i;
   }
 }
@@ -732,6 +742,98 @@ TEST(Database, NegativeValuesGiveAWellDefinedOrder) {
     database.add(BowVector({{0, i % 2 ? -0.5f : 0.5f}, {1, 0.25f * static_cast<float>(i % 3)}}));
   const auto results = database.query(BowVector({{0, 0.5f}, {1, 0.5f}}), 100);
   EXPECT_EQ(results.size(), 50u);
+}
+
+// A float in [2^lowest_exponent, 1): its exponent uniform, its significand random.
+float random_magnitude(int lowest_exponent, std::mt19937_64& rng) {
+  std::uniform_int_distribution<int> exponent(lowest_exponent, -1);
+  std::uniform_real_distribution<float> significand(1.0f, 2.0f);
+  return std::ldexp(significand(rng), exponent(rng));
+}
+
+TEST(Database, L1TermsAreMinimumsWithinTheirRange) {
+  // The identity the L1 query kernel relies on (core/scoring.h): DBoW2's term
+  // is exactly -2 min(v, w) for every pair the check admits, and is not for
+  // some pairs further apart, so the check is needed.
+  std::mt19937_64 rng(3);
+  std::size_t admitted = 0;
+  std::size_t refused_and_different = 0;
+  for (int i = 0; i < 1'000'000; ++i) {
+    const float v = random_magnitude(-60, rng);
+    const float w = random_magnitude(-60, rng);
+    detail::ValueRange index_values;
+    detail::ValueRange query_values;
+    index_values.include(w);
+    query_values.include(v);
+    const double term = detail::score_term(Scoring::kL1, v, w);
+    const double minimums = -2.0 * static_cast<double>(std::min(v, w));
+    if (detail::l1_terms_are_minimums(index_values, query_values)) {
+      ++admitted;
+      ASSERT_EQ(bits_of(term), bits_of(minimums)) << v << ", " << w;
+    } else {
+      refused_and_different += term != minimums;
+    }
+  }
+  EXPECT_GT(admitted, 400'000u);
+  EXPECT_GT(refused_and_different, 1000u);
+  EXPECT_EQ(
+      bits_of(detail::l1_score_of_minimums(0.0)),
+      bits_of(detail::finish_score(Scoring::kL1, detail::score_term(Scoring::kL1, 0.5, 0.0), 0.0)));
+}
+
+TEST(Database, L1ScoresAreExactWhateverTheValuesSpan) {
+  // Queries sum L1 terms as minimums when every value is non-negative and
+  // within a ratio of 2^29 of the others; otherwise (negative values, values
+  // further apart) they sum DBoW2's terms. Both give the brute force's scores
+  // to the last bit, zeros included.
+  const Vocabulary vocabulary = small_vocabulary(Weighting::kTfIdf);
+  ASSERT_EQ(vocabulary.scoring(), Scoring::kL1);
+  struct Case {
+    const char* name;
+    int lowest_exponent;
+    bool negatives;
+    bool minimums;  // what the values admit
+  };
+  for (const Case c :
+       {Case{"within 2^29", -28, false, true}, Case{"further apart", -60, false, false},
+        Case{"negative", -8, true, false}}) {
+    std::mt19937_64 rng(11);
+    std::bernoulli_distribution coin(0.2);
+    const auto random_values = [&](std::size_t words) {
+      std::vector<BowEntry> entries;
+      for (WordId word = 0; word < vocabulary.word_count(); ++word) {
+        if (rng() % vocabulary.word_count() >= words) continue;
+        float value = coin(rng) ? 0.0f : random_magnitude(c.lowest_exponent, rng);
+        if (c.negatives && coin(rng)) value = -value;
+        entries.push_back({word, value});
+      }
+      return BowVector(std::move(entries));
+    };
+    Database database(vocabulary, {false, 0});
+    std::vector<BowVector> bows;
+    detail::ValueRange values;
+    for (int i = 0; i < 400; ++i) {
+      bows.push_back(random_values(20));
+      for (const BowEntry& e : bows.back()) values.include(e.value);
+      database.add(bows.back());
+    }
+    // An entry that shares only a zero with the query scores -0.0.
+    bows.push_back(BowVector({{0, 0.0f}}));
+    database.add(bows.back());
+    const std::vector<bool> live(bows.size(), true);
+    for (int q = 0; q < 40; ++q) {
+      BowVector query = random_values(30);
+      if (q == 0) query = BowVector({{0, 0.5f}});
+      detail::ValueRange query_values;
+      for (const BowEntry& e : query) query_values.include(e.value);
+      ASSERT_EQ(detail::l1_terms_are_minimums(values, query_values), c.minimums) << c.name;
+      expect_same(database.query(query, 1000), brute_force(vocabulary, bows, live, query, 1000),
+                  c.name);
+    }
+    const auto zero = database.query(BowVector({{0, 0.5f}}), 1000);
+    ASSERT_FALSE(zero.empty());
+    EXPECT_EQ(bits_of(zero.back().score), bits_of(-0.0)) << c.name;
+  }
 }
 
 TEST(Database, EveryEntryTouchedByManyWords) {
