@@ -16,6 +16,7 @@
 #include <memory>
 
 #include "binbow/error.h"
+#include "core/output_path.h"
 
 namespace binbow::detail {
 
@@ -296,6 +297,7 @@ StagedFiles::StagedFiles() = default;
 StagedFiles::~StagedFiles() = default;
 
 std::FILE* StagedFiles::stage(const std::string& path) {
+  prepare_output_file(path);
   temporaries_.push_back(std::make_unique<TemporaryFile>(path, resolve_symlinks(path)));
   return temporaries_.back()->file();
 }

@@ -49,7 +49,8 @@ class MappedFile {
 // `path` and flushes the directory: readers never see a half-written file,
 // and after a power loss the name holds the old or the new content. A
 // symbolic link at `path` is written through: the file it points to is
-// replaced, the link stays. Throws FileError naming `path`.
+// replaced, the link stays. Missing folders on the way to `path` are created
+// (detail::prepare_output_file). Throws FileError naming `path`.
 //
 // The temporary is "<destination>.tmp-XXXXXX", flock()ed while its writer
 // lives; every save first removes the unlocked temporaries of its

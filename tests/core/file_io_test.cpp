@@ -192,18 +192,39 @@ TEST(FileIo, GroupsOfFilesAreWrittenAllOrNothing) {
   EXPECT_EQ(text_of(dir.file("loops.csv")), "old loops");
   EXPECT_EQ(text_of(dir.file("run.json")), "old run");
   EXPECT_EQ(names_in(dir.path()), (std::set<std::string>{"loops.csv", "run.json"}));
-  // A destination that cannot be written (missing directory) stops the group too.
+  // A destination that cannot be written (its folder is a file) stops the group too.
+  write_text(dir.file("blocker"), "a file");
   EXPECT_THROW(detail::write_files_atomically({{dir.file("loops.csv"), text("new loops")},
-                                               {dir.file("missing/run.json"), text("new run")}}),
+                                               {dir.file("blocker/run.json"), text("new run")}}),
                FileError);
   EXPECT_EQ(text_of(dir.file("loops.csv")), "old loops");
-  EXPECT_EQ(names_in(dir.path()), (std::set<std::string>{"loops.csv", "run.json"}));
+  EXPECT_EQ(names_in(dir.path()), (std::set<std::string>{"blocker", "loops.csv", "run.json"}));
 
   detail::write_files_atomically(
       {{dir.file("loops.csv"), text("new loops")}, {dir.file("run.json"), text("new run")}});
   EXPECT_EQ(text_of(dir.file("loops.csv")), "new loops");
   EXPECT_EQ(text_of(dir.file("run.json")), "new run");
-  EXPECT_EQ(names_in(dir.path()), (std::set<std::string>{"loops.csv", "run.json"}));
+  EXPECT_EQ(names_in(dir.path()), (std::set<std::string>{"blocker", "loops.csv", "run.json"}));
+}
+
+TEST(FileIo, SavesMakeMissingFoldersAndNameWhatBlocksThem) {
+  test::TempDir dir;
+  detail::write_file_atomically(dir.file("a/b/c.bin"), "abc", 3);
+  EXPECT_EQ(text_of(dir.file("a/b/c.bin")), "abc");
+  write_text(dir.file("a/file"), "not a folder");
+  try {
+    detail::write_file_atomically(dir.file("a/file/d.bin"), "d", 1);
+    FAIL() << "a file on the way was not reported";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a file, not a folder"), std::string::npos) << e.what();
+  }
+  try {
+    detail::write_file_atomically(dir.file("a/b"), "d", 1);
+    FAIL() << "a folder as the destination was not reported";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a folder, not a file"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(names_in(dir.file("a")), (std::set<std::string>{"b", "file"}));
 }
 
 }  // namespace

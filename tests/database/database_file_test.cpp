@@ -454,8 +454,12 @@ TEST(DatabaseFile, SaveIsAtomic) {
   test::TempDir dir;
   const std::string path = dir.file("db.bbdb");
   fixture.database.save(path);
-  // Saving into a missing directory fails cleanly and leaves nothing behind.
-  EXPECT_THROW(fixture.database.save(dir.file("no/such/dir/db.bbdb")), FileError);
+  // Saving below a file fails cleanly and leaves nothing behind.
+  EXPECT_THROW(fixture.database.save(dir.file("db.bbdb/inside.bbdb")), FileError);
+  EXPECT_EQ(Database::load(path).size(), fixture.database.size());
+  // Missing folders are made.
+  fixture.database.save(dir.file("no/such/dir/db.bbdb"));
+  EXPECT_EQ(Database::load(dir.file("no/such/dir/db.bbdb")).size(), fixture.database.size());
   fixture.database.save(path);  // overwrite
   EXPECT_EQ(Database::load(path).size(), fixture.database.size());
 }

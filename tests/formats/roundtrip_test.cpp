@@ -350,7 +350,8 @@ TEST(Formats, SavingIsAtomicAndRejectsEmptyVocabularies) {
   TempDir dir;
   EXPECT_THROW(save_vocabulary(Vocabulary(), dir.file("e.txt")), InvalidArgument);
   EXPECT_TRUE(read_file(dir.file("e.txt")).empty());
-  EXPECT_THROW(save_vocabulary(random_vocabulary(3, 2, 32, 1), dir.file("no/such/dir/v.txt")),
+  save_vocabulary(random_vocabulary(3, 2, 32, 1), dir.file("no/such/dir/v.txt"));  // folders made
+  EXPECT_THROW(save_vocabulary(random_vocabulary(3, 2, 32, 1), dir.file("no/such/dir/v.txt/w.txt")),
                FileError);
 }
 
