@@ -156,7 +156,8 @@ class Database {
   const DatabaseOptions& options() const noexcept;
 
   // binbow's database format (.bbdb): magic, version, little-endian sections
-  // with a CRC32C each; saved atomically (temporary file, then rename). With
+  // with a CRC32C each; saved atomically (temporary file, then rename; missing
+  // folders are made). With
   // `include_vocabulary`, the file is self-contained; otherwise it records the
   // vocabulary's checksum and load() must be given the same vocabulary.
   // save() writes format version 2 (the index as memory holds it: about 7 KB

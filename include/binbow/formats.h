@@ -36,7 +36,8 @@ VocabularyFormat format_for_output(const std::string& path);
 // and the problem for anything unreadable, truncated or inconsistent.
 Vocabulary load_vocabulary(const std::string& path,
                            VocabularyFormat format = VocabularyFormat::kAuto);
-// Writes atomically (temporary file, then rename); kAuto: by extension. DBoW2
+// Writes atomically (temporary file, then rename; missing folders are made);
+// kAuto: by extension. DBoW2
 // YAML is written with decimal-byte descriptors (DBoW2's FORB) unless
 // `brief_bit_strings` asks for FBrief's 0/1 strings (DLoopDetector, VINS).
 // fbow files keep neither L nor the weighting and scoring types (read back as

@@ -166,7 +166,8 @@ class OnlineVocabulary {
   std::vector<WordId> words() const;
 
   // The state as a file (.bbov: magic, version, little-endian sections with a
-  // CRC32C each, see docs/online-vocabulary.md), written atomically.
+  // CRC32C each, see docs/online-vocabulary.md), written atomically (missing
+  // folders are made).
   // Restoring gives the same words, counters, options and search trees (their
   // nodes, centres and leaves in order, and the random draws to come), so a
   // restored vocabulary searches and grows exactly as the saved one would

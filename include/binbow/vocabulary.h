@@ -101,7 +101,8 @@ class Vocabulary {
 
   // binbow's own format (.bbw): memory-mapped, validated. Throws FileError.
   static Vocabulary load(const std::string& path, const LoadOptions& options = {});
-  // Atomic: writes "<path>.tmp-XXXX" then renames. Throws FileError.
+  // Atomic: writes "<path>.tmp-XXXX" then renames; missing folders are made.
+  // Throws FileError.
   void save(const std::string& path) const;
   // The exact bytes save() writes.
   std::vector<std::uint8_t> serialize() const;

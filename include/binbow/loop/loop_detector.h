@@ -308,7 +308,7 @@ class LoopDetector {
   // database as .bbdb without vocabulary, the online vocabulary as .bbov,
   // feature counts per image, keypoints, descriptors. Saved atomically
   // (temporary file, then rename): a failed save leaves no partial file and
-  // the old file, if any, intact. Throws FileError.
+  // the old file, if any, intact. Missing folders are made. Throws FileError.
   //
   // A resumed detector continues exactly as the uninterrupted one would
   // have, online ones included: the .bbov keeps the vocabulary's search
