@@ -12,6 +12,11 @@
 #include <shared_mutex>
 #include <utility>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
 #include "binbow/error.h"
 #include "core/database_impl.h"
 #include "core/little_endian.h"
@@ -19,6 +24,21 @@
 namespace binbow {
 
 namespace detail {
+
+void populate(void* data, std::size_t bytes) noexcept {
+#if defined(__linux__) && defined(MADV_POPULATE_WRITE)
+  constexpr std::size_t kWorthACall = std::size_t{2} << 20;
+  if (bytes < kWorthACall) return;
+  const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+  const auto begin = (reinterpret_cast<std::uintptr_t>(data) + page - 1) & ~(page - 1);
+  const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(page - 1);
+  // Older kernels refuse the advice: the pages then fault in as they are written.
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE);
+#else
+  (void)data;
+  (void)bytes;
+#endif
+}
 
 std::uint32_t PostingArena::new_chunk(std::size_t postings) {
   // Addresses are 32 bits: chunk index, then kChunkBits of position.
@@ -555,6 +575,20 @@ namespace {
 // segments and their sources span at most kSegmentSpan ids (16-bit entries).
 void merge_rows(const std::unique_ptr<detail::Segment>* begin,
                 const std::unique_ptr<detail::Segment>* end, detail::Segment& merged) noexcept {
+  // The sources' arrays, read once: the stores below could alias their fields.
+  struct Source {
+    const std::uint32_t* offsets;
+    const std::uint16_t* entries;
+    const float* weights;
+    std::uint16_t delta;
+  };
+  Source sources[detail::kSegmentFanIn];
+  std::size_t source_count = 0;
+  for (auto source = begin; source != end; ++source, ++source_count) {
+    const detail::Segment& s = **source;
+    sources[source_count] = {s.offsets.data(), s.entries16.data(), s.weights.data(),
+                             static_cast<std::uint16_t>(s.first_entry - merged.first_entry)};
+  }
   std::uint16_t* entries = merged.entries16.data();
   const std::size_t rows = merged.offsets.size() - 1;
   float* weights = merged.weights.data();
@@ -562,17 +596,14 @@ void merge_rows(const std::unique_ptr<detail::Segment>* begin,
   std::uint32_t at = 0;
   offsets[0] = 0;
   for (std::size_t r = 0; r < rows; ++r) {
-    for (auto source = begin; source != end; ++source) {
-      const detail::Segment& s = **source;
+    for (std::size_t k = 0; k < source_count; ++k) {
+      const Source& s = sources[k];
       const std::uint32_t from = s.offsets[r];
       const std::uint32_t count = s.offsets[r + 1] - from;
-      const std::uint32_t delta = s.first_entry - merged.first_entry;
       // Most rows hold a few postings: a call to memcpy would cost more.
-      const std::uint16_t* source_entries = s.entries16.data() + from;
-      const float* source_weights = s.weights.data() + from;
       for (std::uint32_t i = 0; i < count; ++i) {
-        entries[at + i] = static_cast<std::uint16_t>(source_entries[i] + delta);
-        weights[at + i] = source_weights[i];
+        entries[at + i] = static_cast<std::uint16_t>(s.entries[from + i] + s.delta);
+        weights[at + i] = s.weights[from + i];
       }
       at += count;
     }
