@@ -71,6 +71,11 @@ def test_save_and_load_with_and_without_vocabulary(tmp_path, database, vocabular
     other = binbow.Vocabulary.build(images, branching=4, levels=2, seed=9)
     with pytest.raises(OSError, match="different vocabulary"):
         binbow.Database.load(tmp_path / "lean.bbdb", other)
+    nested = tmp_path / "new" / "folders" / "db.bbdb"
+    database.save(nested)  # the folders are made
+    assert binbow.Database.load(nested).query(query, 5) == expected
+    with pytest.raises(OSError, match="is a file, not a folder"):
+        database.save(tmp_path / "full.bbdb" / "db.bbdb")
 
 
 def test_memory_usage_grows_with_entries(vocabulary, images):
