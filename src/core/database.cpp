@@ -576,6 +576,7 @@ namespace {
 void merge_rows(const std::unique_ptr<detail::Segment>* begin,
                 const std::unique_ptr<detail::Segment>* end, detail::Segment& merged) noexcept {
   // The sources' arrays, read once: the stores below could alias their fields.
+  // merge_segments_if_many merges at most kSegmentFanIn segments.
   struct Source {
     const std::uint32_t* offsets;
     const std::uint16_t* entries;

@@ -332,10 +332,9 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const IndexView index{impl_->segments,         impl_->tail_lists.data(), impl_->arena,
                         impl_->high_bits,        impl_->row_order,         impl_->tail_postings,
                         impl_->tail_first_entry, impl_->alive.data(),      entry_count};
-  detail::ValueRange query_values;
-  for (const BowEntry& e : *searched) query_values.include(e.value);
   const bool minimums =
-      scoring == Scoring::kL1 && detail::l1_terms_are_minimums(impl_->values, query_values);
+      scoring == Scoring::kL1 &&
+      detail::l1_terms_are_minimums(impl_->values, detail::value_range(*searched));
   BestResults best(scoring, minimums, base, std::min(max_results, impl_->live_entries),
                    buffers.best);
   score_parts(scoring, minimums, index, *searched, last_entry, PartScores{buffers.scores.data()},

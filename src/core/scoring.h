@@ -80,6 +80,12 @@ struct ValueRange {
   }
 };
 
+inline ValueRange value_range(const BowVector& bow) noexcept {
+  ValueRange range;
+  for (const BowEntry& e : bow) range.include(e.value);
+  return range;
+}
+
 // L1's term |v - w| - |v| - |w|, computed in double from floats, is exactly
 // -2 min(v, w) when v, w >= 0 are less than 2^29 apart by ratio: v - w and
 // w - 2v then span at most 53 bits, so each step is exact. Scaling by -2 is
