@@ -19,5 +19,9 @@ void add_demo_command(CLI::App& app);
 // Prints `binbow info` lines for a .bbdb file, after checking the whole file
 // with `verify`; false if `path` is not one.
 bool print_database_info(const std::string& path, bool verify);
+// "unknown command 'detect-loop'; did you mean 'detect-loops'?" when the
+// argument after the commands given names none of the next level's commands;
+// empty otherwise.
+std::string unknown_command_message(const CLI::App& app, int argc, const char* const* argv);
 
 }  // namespace binbow::cli

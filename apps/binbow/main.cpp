@@ -46,7 +46,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    fail(e.what());
+    const std::string unknown = binbow::cli::unknown_command_message(app, argc, argv);
+    fail(unknown.empty() ? e.what() : unknown);
     std::fprintf(stderr, "Run '%s --help' for usage.\n", command_path(app).c_str());
     return 1;
   } catch (const binbow::Error& e) {

@@ -44,6 +44,16 @@ void expect_usage_error(const std::string& arguments, const std::string& command
       << output;
 }
 
+TEST(CliUsage, AMistypedCommandIsNamedWithTheNearestOne) {
+  expect_usage_error("detect-loop x", "binbow",
+                     "unknown command 'detect-loop'; did you mean 'detect-loops'?");
+  expect_usage_error("db quer x.bbdb", "binbow db",
+                     "unknown command 'quer' for 'binbow db'; did you mean 'query'?");
+  expect_usage_error("evaluat", "binbow", "did you mean 'evaluate'?");
+  // Nothing near: the commands are listed instead of a guess.
+  expect_usage_error("frobnicate", "binbow", "unknown command 'frobnicate'; the commands are: ");
+}
+
 TEST(CliUsage, EveryUsageErrorExitsOneAndSaysWhereTheUsageIs) {
   TempDir dir;
   const std::string image = quoted(shared_data("rtabmap-samples/samples/1.jpg"));
