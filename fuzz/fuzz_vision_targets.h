@@ -181,14 +181,17 @@ inline const Vocabulary& bbld_vocabulary() {
 }
 
 // A probe image for an accepted detector: `rows` descriptors of its size
-// (the last stored image's, so that candidates and matching are reached),
+// (the last remembered image's, so that candidates and matching are reached),
 // with keypoints spread over a 100 x 100 image.
 inline vision::Features bbld_probe(const loop::LoopDetector& detector, std::size_t code_size) {
   vision::Features probe;
   probe.descriptors = DescriptorMatrix(code_size);
-  const DescriptorView last = detector.size() > 0
-                                  ? detector.descriptors(static_cast<EntryId>(detector.size() - 1))
-                                  : DescriptorView{};
+  DescriptorView last;
+  for (auto frame = static_cast<EntryId>(detector.size()); frame-- > 0;)
+    if (!detector.is_forgotten(frame)) {
+      last = detector.descriptors(frame);
+      break;
+    }
   for (std::size_t row = 0; row < 12; ++row) {
     std::vector<std::uint8_t> code(code_size, static_cast<std::uint8_t>(row * 37));
     if (row < last.rows) std::memcpy(code.data(), last.row(row), code_size);
@@ -198,7 +201,8 @@ inline vision::Features bbld_probe(const loop::LoopDetector& detector, std::size
   return probe;
 }
 
-// An accepted state saves back to the same bytes, and processes images.
+// An accepted state saves back to the same bytes, and processes images
+// without proposing a forgotten one.
 inline void check_accepted_detector(loop::LoopDetector detector, std::size_t code_size) {
   const std::vector<std::uint8_t> saved = detector.serialize();
   const bool online = detector.online_vocabulary() != nullptr;
@@ -211,6 +215,8 @@ inline void check_accepted_detector(loop::LoopDetector detector, std::size_t cod
   for (int i = 0; i < 2; ++i) {
     const loop::LoopResult result = detector.process(bbld_probe(detector, code_size));
     if (result.query != frames + i) throw std::logic_error("a resumed detector renumbered frames");
+    if (result.has_candidate && detector.is_forgotten(result.match))
+      throw std::logic_error("a resumed detector proposed a forgotten frame");
   }
 }
 

@@ -108,6 +108,23 @@ std::vector<vision::Keypoint> to_keypoints(const py::handle& object, std::size_t
   return keypoints;
 }
 
+// A frame id taken strictly: an int (or numpy integer), not a bool or a
+// float; a negative one or one beyond the ids is a ValueError, as one never
+// processed is (LoopDetector's InvalidArgument).
+EntryId frame_id(const py::handle& object, const char* method) {
+  if (PyBool_Check(object.ptr()) || !PyIndex_Check(object.ptr()))
+    throw py::type_error(std::string("LoopDetector.") + method + ": frame must be an int, got " +
+                         type_name(object));
+  const auto value = py::reinterpret_steal<py::int_>(PyNumber_Index(object.ptr()));
+  if (!value) throw py::error_already_set();
+  int overflow = 0;
+  const long long id = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
+  if (overflow != 0 || id < 0 || id >= static_cast<long long>(kAllEntries))
+    throw py::value_error(std::string("LoopDetector.") + method + ": no frame " +
+                          py::repr(value).cast<std::string>());
+  return static_cast<EntryId>(id);
+}
+
 // LoopDetector is used by one thread at a time; the Python object may be
 // shared, so calls are serialised here rather than left to race.
 class PythonLoopDetector {
@@ -151,6 +168,26 @@ class PythonLoopDetector {
   std::size_t size() const {
     const std::lock_guard<std::mutex> lock(mutex_);
     return detector_.size();
+  }
+  // The database may compact a segment: the GIL is released meanwhile.
+  void forget(const py::handle& frame) {
+    const EntryId id = frame_id(frame, "forget");
+    py::gil_scoped_release release;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    detector_.forget(id);
+  }
+  bool is_forgotten(const py::handle& frame) const {
+    const EntryId id = frame_id(frame, "is_forgotten");
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return detector_.is_forgotten(id);
+  }
+  std::size_t forgotten_count() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return detector_.forgotten_count();
+  }
+  std::size_t memory_usage() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return detector_.memory_usage();
   }
   void clear() {
     const std::lock_guard<std::mutex> lock(mutex_);
@@ -419,6 +456,19 @@ void bind_detection(py::module_& m) {
            "keypoints None or empty (it is added, and can match nothing).")
       .def("__len__", &PythonLoopDetector::size, "Images processed.")
       .def("clear", &PythonLoopDetector::clear, "Forget every image; the next one is query 0.")
+      .def("forget", &PythonLoopDetector::forget, py::arg("frame"),
+           "Keyframe culling: never propose this frame again (as a match, in an island or to\n"
+           "the geometric check) and free its features and its database entry. Frame ids\n"
+           "are not reused and len() still counts it; the temporal state it took part in\n"
+           "(the next frame's normalisation, the consistency chain) is kept. Forgetting a\n"
+           "forgotten frame does nothing; a frame never processed raises ValueError.\n"
+           "save() keeps it forgotten.")
+      .def("is_forgotten", &PythonLoopDetector::is_forgotten, py::arg("frame"),
+           "Whether forget() was called for this frame (ValueError if never processed).")
+      .def_property_readonly("forgotten_count", &PythonLoopDetector::forgotten_count,
+                             "Frames forgotten so far (len() counts them too).")
+      .def_property_readonly("memory_usage", &PythonLoopDetector::memory_usage,
+                             "Bytes of heap memory held: database, kept features, online words.")
       .def_property_readonly("params", &PythonLoopDetector::params,
                              "The detector's parameters (a copy).")
       .def_static("online", &online_detector, py::arg("descriptor"), py::arg("params") = py::none(),

@@ -44,6 +44,7 @@ bool print_loop_state_info(const std::string& path) {
   std::printf("descriptor: %s\n", info.descriptor.empty() ? "unknown" : info.descriptor.c_str());
   std::printf("descriptor_bits: %zu\n", info.code_size * 8);
   std::printf("frames: %zu\n", info.frames);
+  std::printf("forgotten_frames: %zu\n", info.forgotten_frames);
   if (!info.online) {
     std::printf("vocabulary_checksum: %08x\n", info.vocabulary_checksum);
     std::printf("vocabulary_words: %zu\n", info.vocabulary_words);

@@ -1,5 +1,6 @@
 """LoopDetector.save / LoopDetector.load (.bbld): a detector stopped, saved and resumed gives the
 results of one never stopped; a state needs the vocabulary it ran with."""
+import numpy as np
 import pytest
 
 import binbow
@@ -106,3 +107,54 @@ def test_detect_loops_resume_state_contradictions(tmp_path):
         binbow.detect_loops(frames, resume_state=tmp_path / "missing.bbld")
     # The vocabulary it ran with is accepted as well as None.
     assert len(binbow.detect_loops(frames, vocabulary, resume_state=fixed)) == 3
+
+
+def test_forgotten_frames_stay_forgotten_across_save_and_resume(orb_features, tmp_path):
+    """Keyframe culling: the frames the loops so far matched are forgotten at frame 60; no later
+    frame proposes them (the detector that keeps them does), and forget + save + load (or
+    detect_loops' resume_state) continues exactly as forget + continue."""
+    vocabulary = binbow.Vocabulary.load(SOURCE_DIR / "data" / "vocab" / "orb_default.bbw")
+    reference = _run(binbow.LoopDetector(vocabulary), orb_features)
+    stop = 60
+    culled = sorted({m for _, status, m, *_ in reference[:stop] if status == "loop-detected"})
+    assert len(culled) >= 3
+    assert any(match in culled for _, _, match, *_ in reference[stop:]), "kept, they come back"
+
+    continued = binbow.LoopDetector(vocabulary)
+    _run(continued, orb_features[:stop])
+    memory = continued.memory_usage
+    for frame in culled:
+        continued.forget(frame)
+    continued.forget(culled[0])  # already forgotten: nothing happens
+    assert continued.memory_usage < memory
+    assert continued.forgotten_count == len(culled) and len(continued) == stop
+    assert [continued.is_forgotten(f) for f in range(stop)] == [f in culled for f in range(stop)]
+    state = tmp_path / "culled.bbld"
+    continued.save(state)
+    resumed = binbow.LoopDetector.load(state, vocabulary)
+    assert resumed.forgotten_count == len(culled)
+
+    later = _run(continued, orb_features[stop:])
+    assert _run(resumed, orb_features[stop:]) == later
+    assert all(match not in culled for _, _, match, *_ in later)
+    assert sum(status == "loop-detected" for _, status, *_ in later) > 5
+    # detect_loops resumes it as the CLI's --resume-state does.
+    frames = sample_frames()[stop:]
+    assert [_outcome(r) for r in binbow.detect_loops(frames, resume_state=state)] == later
+
+
+def test_forget_takes_frame_ids_strictly(orb_features):
+    detector = binbow.LoopDetector.online("orb")
+    _run(detector, orb_features[:3])
+    for wrong in (1.0, True, "1", None):
+        with pytest.raises(TypeError, match="frame must be an int"):
+            detector.forget(wrong)
+    for missing in (-1, 3, 2**32, 2**70):
+        with pytest.raises(ValueError):
+            detector.forget(missing)
+        with pytest.raises(ValueError):
+            detector.is_forgotten(missing)
+    assert detector.forgotten_count == 0
+    detector.forget(np.int64(1))
+    assert detector.is_forgotten(1) and not detector.is_forgotten(np.uint8(2))
+    assert detector.process(*orb_features[3]).query == 3

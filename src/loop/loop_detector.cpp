@@ -47,10 +47,9 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
     return;
   }
   const EntryId match = result.match;
-  const std::size_t begin = offsets[match], end = offsets[match + 1];
-  const Span<Keypoint> match_keypoints{keypoints.data() + begin, end - begin};
-  const DescriptorView match_descriptors{descriptor_bytes.data() + begin * code_size, end - begin,
-                                         code_size};
+  const Span<Keypoint> match_keypoints{frames[match].keypoints.data(),
+                                       frames[match].keypoints.size()};
+  const DescriptorView match_descriptors = descriptors_of(match);
   FundamentalCheckParams check;
   check.min_inliers = params.min_inliers;
   check.max_reprojection_error = params.max_reprojection_error;
@@ -240,13 +239,13 @@ void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_
 void LoopDetector::Impl::insert(BowVector& bow, const FeatureVector& nodes,
                                 Span<Keypoint> image_keypoints, const DescriptorView& descriptors) {
   database.add(bow, nodes);
+  FrameFeatures& kept = frames.emplace_back();
   if (keeps_features()) {
-    keypoints.insert(keypoints.end(), image_keypoints.begin(), image_keypoints.end());
+    kept.keypoints.assign(image_keypoints.begin(), image_keypoints.end());
     if (!descriptors.empty())
-      descriptor_bytes.insert(descriptor_bytes.end(), descriptors.data,
+      kept.descriptors.assign(descriptors.data,
                               descriptors.data + descriptors.rows * descriptors.code_size);
   }
-  offsets.push_back(keypoints.size());
   if (!bow.empty() || !params.skip_featureless_frames) previous_bow = std::move(bow);
   if (!descriptors.empty()) ++featured_frames;
 }
@@ -283,7 +282,7 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
 }
 
 std::size_t LoopDetector::size() const noexcept {
-  return impl_->offsets.size() - 1;
+  return impl_->frames.size();
 }
 const LoopDetectorParams& LoopDetector::params() const noexcept {
   return impl_->params;
@@ -295,26 +294,68 @@ const OnlineVocabulary* LoopDetector::online_vocabulary() const noexcept {
   return impl_->online ? &*impl_->online : nullptr;
 }
 
+void LoopDetector::Impl::check_remembered(EntryId frame) const {
+  if (frame >= frames.size()) throw InvalidArgument("no image " + std::to_string(frame));
+  if (!database.contains(frame))
+    throw InvalidArgument("image " + std::to_string(frame) + " was forgotten");
+}
+
 Span<Keypoint> LoopDetector::keypoints(EntryId entry) const {
-  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
-  const std::size_t begin = impl_->offsets[entry], end = impl_->offsets[entry + 1];
-  return {impl_->keypoints.data() + begin, end - begin};
+  impl_->check_remembered(entry);
+  const std::vector<Keypoint>& kept = impl_->frames[entry].keypoints;
+  return {kept.data(), kept.size()};
 }
 
 DescriptorView LoopDetector::descriptors(EntryId entry) const {
-  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
-  const std::size_t begin = impl_->offsets[entry], end = impl_->offsets[entry + 1];
-  return {impl_->descriptor_bytes.data() + begin * impl_->code_size, end - begin, impl_->code_size};
+  impl_->check_remembered(entry);
+  return impl_->descriptors_of(entry);
 }
 
 void LoopDetector::set_label(EntryId entry, std::string label) {
-  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
+  impl_->check_remembered(entry);
   impl_->database.set_label(entry, std::move(label));
 }
 
 std::string LoopDetector::label(EntryId entry) const {
-  if (entry >= size()) throw InvalidArgument("no image " + std::to_string(entry));
+  impl_->check_remembered(entry);
   return impl_->database.label(entry);
+}
+
+// The frame's database entry is its id (process() adds every image), so the
+// database's removed entries are the forgotten frames: one record of them,
+// saved with the database.
+void LoopDetector::forget(EntryId frame) {
+  Impl& d = *impl_;
+  if (frame >= d.frames.size())
+    throw InvalidArgument("loop detector: cannot forget image " + std::to_string(frame) + ": " +
+                          std::to_string(d.frames.size()) + " images processed");
+  if (!d.database.contains(frame)) return;
+  d.database.remove(frame);
+  d.frames[frame] = {};
+}
+
+bool LoopDetector::is_forgotten(EntryId frame) const {
+  if (frame >= size())
+    throw InvalidArgument("loop detector: no image " + std::to_string(frame) + " (" +
+                          std::to_string(size()) + " images processed)");
+  return !impl_->database.contains(frame);
+}
+
+std::size_t LoopDetector::forgotten_count() const {
+  return size() - impl_->database.size();
+}
+
+std::size_t LoopDetector::memory_usage() const {
+  const Impl& d = *impl_;
+  std::size_t bytes = d.database.memory_usage() +
+                      d.frames.capacity() * sizeof(Impl::FrameFeatures) +
+                      d.previous_bow.size() * sizeof(BowEntry) +
+                      d.candidates.capacity() * sizeof(detail::Candidate) +
+                      d.islands.capacity() * sizeof(detail::Island);
+  for (const Impl::FrameFeatures& f : d.frames)
+    bytes += f.keypoints.capacity() * sizeof(Keypoint) + f.descriptors.capacity();
+  if (d.online) bytes += d.online->stats().memory_bytes;
+  return bytes;
 }
 
 void LoopDetector::clear() {
@@ -323,9 +364,7 @@ void LoopDetector::clear() {
   d.window.clear();
   d.previous_bow.clear();
   d.featured_frames = 0;
-  d.keypoints.clear();
-  d.descriptor_bytes.clear();
-  d.offsets.assign(1, 0);
+  std::vector<Impl::FrameFeatures>().swap(d.frames);
   if (d.online) {
     // Copied first: emplace destroys the old vocabulary, and its options with it.
     const OnlineVocabularyOptions options = d.online->options();

@@ -5,8 +5,8 @@
 //   header 16 flags (1: online vocabulary)   20 code size (bytes)
 //          24 frames (images processed)      28 frames with features
 //          32, 36, 40 the fixed vocabulary's checksum, word count and levels
-//          (0 when online)   44 reserved (0)   48 section count
-//          52 keypoints kept (u64)
+//          (0 when online)   44 frames forgotten (version 2; reserved, 0,
+//          in version 1)   48 section count   52 keypoints kept (u64)
 //   sections 0 parameters (LoopDetectorParams::to_json text)
 //            1 temporal state (i32 consistent queries, u32 last island's
 //              first and last entry, u32 last query), then the descriptor
@@ -17,6 +17,8 @@
 //            5 feature counts (u32 per frame)   6 keypoints (x, y, size,
 //              angle, response f32, octave i32: 24 bytes each)   7 descriptors
 //            (5 to 7 empty with GeometricCheck::kNone, which keeps no features)
+// The forgotten frames are the database's removed entries, and have no
+// features. Version 1 (before LoopDetector::forget) has none and still loads.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -37,7 +39,7 @@ namespace binbow::loop {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'L', 'D'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;
 constexpr std::size_t kHeaderSize = binbow::detail::kSectionedHeaderSize;
 constexpr std::uint32_t kFlagOnline = 1;
 constexpr std::size_t kTemporalStateSize = 16;
@@ -68,6 +70,7 @@ struct Header {
   std::uint32_t code_size = 0;
   std::uint32_t frames = 0;
   std::uint32_t featured_frames = 0;
+  std::uint32_t forgotten_frames = 0;
   std::uint32_t vocabulary_checksum = 0;
   std::uint32_t vocabulary_words = 0;
   std::uint32_t vocabulary_levels = 0;
@@ -97,9 +100,9 @@ class Layout {
     if (std::memcmp(data, kMagic, 8) != 0)
       fail("not a binbow loop detector state (.bbld): wrong magic bytes");
     header_.version = binbow::detail::load_le<std::uint32_t>(data + 8);
-    if (header_.version != kVersion)
+    if (header_.version != 1 && header_.version != kVersion)
       fail("unsupported .bbld format version " + std::to_string(header_.version) +
-           " (this binbow reads version " + std::to_string(kVersion) + ")");
+           " (this binbow reads versions 1 to " + std::to_string(kVersion) + ")");
     if (binbow::detail::load_le<std::uint32_t>(data + 60) != binbow::detail::crc32c(data, 60))
       fail("header checksum mismatch: the file is corrupted");
     if (binbow::detail::load_le<std::uint32_t>(data + 12) != kHeaderSize)
@@ -113,13 +116,15 @@ class Layout {
     header_.vocabulary_checksum = binbow::detail::load_le<std::uint32_t>(data + 32);
     header_.vocabulary_words = binbow::detail::load_le<std::uint32_t>(data + 36);
     header_.vocabulary_levels = binbow::detail::load_le<std::uint32_t>(data + 40);
+    header_.forgotten_frames = binbow::detail::load_le<std::uint32_t>(data + 44);
     header_.keypoints = binbow::detail::load_le<std::uint64_t>(data + 52);
     const auto section_count = binbow::detail::load_le<std::uint32_t>(data + 48);
-    if (binbow::detail::load_le<std::uint32_t>(data + 44) != 0)
+    if (header_.version == 1 && header_.forgotten_frames != 0)
       fail("reserved header bytes are not zero");
     if (header_.code_size == 0 || header_.code_size > kMaxCodeSize)
       fail("descriptor size " + std::to_string(header_.code_size) + " is out of range");
-    if (header_.featured_frames > header_.frames || header_.frames == kAllEntries)
+    if (header_.featured_frames > header_.frames || header_.forgotten_frames > header_.frames ||
+        header_.frames == kAllEntries)
       fail("inconsistent frame counts in the header");
     if (header_.online && (header_.vocabulary_checksum != 0 || header_.vocabulary_words != 0 ||
                            header_.vocabulary_levels != 0))
@@ -197,16 +202,16 @@ BowVector read_previous_bow(const Layout& layout) {
   }
 }
 
-// Counts, keypoints and descriptors of the frames, checked against each other
-// and the header before anything is allocated.
+// Counts, keypoints and descriptors of the frames, checked against each other,
+// the header and the database's forgotten frames before anything is allocated.
 template <class DetectorImpl>
 void read_features(const Layout& layout, bool keeps_features, DetectorImpl& impl) {
   const Header& header = layout.header();
+  impl.frames.resize(header.frames);
   if (!keeps_features) {
     if (header.keypoints != 0 || layout.section(kFeatureCounts).size != 0 ||
         layout.section(kKeypoints).size != 0 || layout.section(kDescriptors).size != 0)
       layout.fail("features stored by a detector without geometric check");
-    impl.offsets.assign(std::size_t{header.frames} + 1, 0);
     return;
   }
   layout.expect_size(kFeatureCounts, std::uint64_t{header.frames} * 4);
@@ -215,8 +220,6 @@ void read_features(const Layout& layout, bool keeps_features, DetectorImpl& impl
   layout.expect_size(kKeypoints, header.keypoints * kKeypointSize);
   layout.expect_size(kDescriptors, header.keypoints * header.code_size);
   const std::uint8_t* counts = layout.section(kFeatureCounts).data;
-  impl.offsets.resize(std::size_t{header.frames} + 1);
-  impl.offsets[0] = 0;
   std::uint64_t total = 0;
   std::uint32_t featured = 0;
   for (std::size_t frame = 0; frame < header.frames; ++frame) {
@@ -224,30 +227,40 @@ void read_features(const Layout& layout, bool keeps_features, DetectorImpl& impl
     total += count;
     if (total > header.keypoints)
       layout.fail("feature counts exceed the keypoints (frame " + std::to_string(frame) + ")");
+    if (count > 0 && !impl.database.contains(static_cast<EntryId>(frame)))
+      layout.fail("forgotten frame " + std::to_string(frame) + " has features");
     featured += count > 0 ? 1 : 0;
-    impl.offsets[frame + 1] = static_cast<std::size_t>(total);
   }
   if (total != header.keypoints) layout.fail("feature counts do not cover every keypoint");
-  if (featured != header.featured_frames)
+  // A forgotten frame's features are gone, whether it had any or not.
+  if (featured > header.featured_frames ||
+      header.featured_frames - featured > header.forgotten_frames)
     layout.fail("the header counts " + std::to_string(header.featured_frames) +
-                " frames with features, the feature counts " + std::to_string(featured));
-  const std::uint8_t* bytes = layout.section(kKeypoints).data;
-  impl.keypoints.resize(static_cast<std::size_t>(total));
-  for (std::size_t i = 0; i < impl.keypoints.size(); ++i) {
-    const std::uint8_t* at = bytes + i * kKeypointSize;
-    vision::Keypoint& k = impl.keypoints[i];
-    k.x = binbow::detail::load_le<float>(at);
-    k.y = binbow::detail::load_le<float>(at + 4);
-    k.size = binbow::detail::load_le<float>(at + 8);
-    k.angle = binbow::detail::load_le<float>(at + 12);
-    k.response = binbow::detail::load_le<float>(at + 16);
-    k.octave = binbow::detail::load_le<std::int32_t>(at + 20);
-    if (!std::isfinite(k.x) || !std::isfinite(k.y) || !std::isfinite(k.size) ||
-        !std::isfinite(k.angle) || !std::isfinite(k.response))
-      layout.fail("keypoint " + std::to_string(i) + " has a non-finite coordinate");
+                " frames with features, the feature counts " + std::to_string(featured) + " and " +
+                std::to_string(header.forgotten_frames) + " frames are forgotten");
+  const std::uint8_t* keypoint_bytes = layout.section(kKeypoints).data;
+  const std::uint8_t* descriptor_bytes = layout.section(kDescriptors).data;
+  std::size_t next = 0;
+  for (std::size_t frame = 0; frame < header.frames; ++frame) {
+    const auto count = binbow::detail::load_le<std::uint32_t>(counts + 4 * frame);
+    std::vector<vision::Keypoint>& keypoints = impl.frames[frame].keypoints;
+    keypoints.resize(count);
+    for (vision::Keypoint& k : keypoints) {
+      const std::uint8_t* at = keypoint_bytes + next * kKeypointSize;
+      k.x = binbow::detail::load_le<float>(at);
+      k.y = binbow::detail::load_le<float>(at + 4);
+      k.size = binbow::detail::load_le<float>(at + 8);
+      k.angle = binbow::detail::load_le<float>(at + 12);
+      k.response = binbow::detail::load_le<float>(at + 16);
+      k.octave = binbow::detail::load_le<std::int32_t>(at + 20);
+      if (!std::isfinite(k.x) || !std::isfinite(k.y) || !std::isfinite(k.size) ||
+          !std::isfinite(k.angle) || !std::isfinite(k.response))
+        layout.fail("keypoint " + std::to_string(next) + " has a non-finite coordinate");
+      ++next;
+    }
+    const std::uint8_t* first = descriptor_bytes + (next - count) * header.code_size;
+    impl.frames[frame].descriptors.assign(first, first + std::size_t{count} * header.code_size);
   }
-  const binbow::detail::Section& descriptors = layout.section(kDescriptors);
-  impl.descriptor_bytes.assign(descriptors.data, descriptors.data + descriptors.size);
 }
 
 // The direct index pairs an entry's feature indices with its stored
@@ -256,7 +269,8 @@ template <class DetectorImpl>
 void check_direct_index(const Layout& layout, const DetectorImpl& impl) {
   if (impl.params.geometric_check != GeometricCheck::kDirectIndex) return;
   for (EntryId entry = 0; entry < layout.header().frames; ++entry) {
-    const std::size_t features = impl.offsets[entry + 1] - impl.offsets[entry];
+    if (!impl.database.contains(entry)) continue;
+    const std::size_t features = impl.frames[entry].keypoints.size();
     const FeatureVector vector = impl.database.feature_vector(entry);
     if (vector.feature_count() > features)
       layout.fail("the direct index of frame " + std::to_string(entry) + " has more features (" +
@@ -291,22 +305,26 @@ std::vector<std::uint8_t> LoopDetector::serialize() const {
   }
   sections[kDatabase] = d.database.serialize(false);
   if (d.online) sections[kOnlineVocabulary] = d.online->serialize();
+  std::uint64_t keypoint_count = 0;
+  for (const Impl::FrameFeatures& f : d.frames) keypoint_count += f.keypoints.size();
   if (d.keeps_features()) {
-    for (std::size_t frame = 0; frame + 1 < d.offsets.size(); ++frame)
-      binbow::detail::put_le<std::uint32_t>(
-          sections[kFeatureCounts],
-          static_cast<std::uint32_t>(d.offsets[frame + 1] - d.offsets[frame]));
     std::vector<std::uint8_t>& keypoints = sections[kKeypoints];
-    keypoints.reserve(d.keypoints.size() * kKeypointSize);
-    for (const vision::Keypoint& k : d.keypoints) {
-      binbow::detail::put_le<float>(keypoints, k.x);
-      binbow::detail::put_le<float>(keypoints, k.y);
-      binbow::detail::put_le<float>(keypoints, k.size);
-      binbow::detail::put_le<float>(keypoints, k.angle);
-      binbow::detail::put_le<float>(keypoints, k.response);
-      binbow::detail::put_le<std::int32_t>(keypoints, k.octave);
+    keypoints.reserve(keypoint_count * kKeypointSize);
+    sections[kDescriptors].reserve(keypoint_count * d.code_size);
+    for (const Impl::FrameFeatures& f : d.frames) {
+      binbow::detail::put_le<std::uint32_t>(sections[kFeatureCounts],
+                                            static_cast<std::uint32_t>(f.keypoints.size()));
+      for (const vision::Keypoint& k : f.keypoints) {
+        binbow::detail::put_le<float>(keypoints, k.x);
+        binbow::detail::put_le<float>(keypoints, k.y);
+        binbow::detail::put_le<float>(keypoints, k.size);
+        binbow::detail::put_le<float>(keypoints, k.angle);
+        binbow::detail::put_le<float>(keypoints, k.response);
+        binbow::detail::put_le<std::int32_t>(keypoints, k.octave);
+      }
+      sections[kDescriptors].insert(sections[kDescriptors].end(), f.descriptors.begin(),
+                                    f.descriptors.end());
     }
-    sections[kDescriptors] = d.descriptor_bytes;
   }
   const Vocabulary& vocabulary = d.database.vocabulary();
   return binbow::detail::write_sectioned_file(
@@ -315,13 +333,15 @@ std::vector<std::uint8_t> LoopDetector::serialize() const {
         binbow::detail::store_le<std::uint32_t>(h + 20, static_cast<std::uint32_t>(d.code_size));
         binbow::detail::store_le<std::uint32_t>(h + 24, static_cast<std::uint32_t>(size()));
         binbow::detail::store_le<std::uint32_t>(h + 28, d.featured_frames);
+        binbow::detail::store_le<std::uint32_t>(h + 44,
+                                                static_cast<std::uint32_t>(forgotten_count()));
         if (!d.online) {
           binbow::detail::store_le<std::uint32_t>(h + 32, vocabulary.checksum());
           binbow::detail::store_le<std::uint32_t>(
               h + 36, static_cast<std::uint32_t>(vocabulary.word_count()));
           binbow::detail::store_le<std::uint32_t>(h + 40, vocabulary.levels());
         }
-        binbow::detail::store_le<std::uint64_t>(h + 52, d.keypoints.size());
+        binbow::detail::store_le<std::uint64_t>(h + 52, keypoint_count);
       });
 }
 
@@ -342,10 +362,12 @@ std::unique_ptr<DetectorImpl> restore(const Layout& layout, std::unique_ptr<Dete
   if (options.direct_index != expected.direct_index ||
       (expected.direct_index && options.direct_index_levels_up != expected.direct_index_levels_up))
     layout.fail("the database's direct index disagrees with the parameters");
-  if (impl->database.next_entry_id() != header.frames || impl->database.size() != header.frames)
+  if (impl->database.next_entry_id() != header.frames ||
+      impl->database.size() != header.frames - header.forgotten_frames)
     layout.fail("the database holds " + std::to_string(impl->database.size()) + " of " +
                 std::to_string(impl->database.next_entry_id()) + " images, the state " +
-                std::to_string(header.frames));
+                std::to_string(header.frames) + " of which " +
+                std::to_string(header.forgotten_frames) + " forgotten");
   impl->previous_bow = read_previous_bow(layout);
   impl->featured_frames = header.featured_frames;
   impl->window.restore(layout.window());
@@ -362,6 +384,7 @@ LoopDetectorFileInfo info_of(const Layout& layout) {
   info.code_size = header.code_size;
   info.descriptor = layout.descriptor();
   info.frames = header.frames;
+  info.forgotten_frames = header.forgotten_frames;
   info.vocabulary_checksum = header.vocabulary_checksum;
   info.vocabulary_words = header.vocabulary_words;
   info.vocabulary_levels = header.vocabulary_levels;

@@ -35,17 +35,25 @@ struct LoopDetector::Impl {
   // Images with features so far: the time axis of the temporal window when
   // featureless frames are skipped.
   EntryId featured_frames = 0;
-  // Features of every image, one contiguous array each; entry e owns
-  // [offsets[e], offsets[e + 1]).
-  std::vector<vision::Keypoint> keypoints;
-  std::vector<std::uint8_t> descriptor_bytes;
-  std::vector<std::size_t> offsets{0};
+  // One per image processed (empty with GeometricCheck::kNone, and once
+  // forgotten): arrays of their own, so that forget() frees them at once.
+  struct FrameFeatures {
+    std::vector<vision::Keypoint> keypoints;
+    std::vector<std::uint8_t> descriptors;  // keypoints.size() rows of code_size bytes
+  };
+  std::vector<FrameFeatures> frames;
   std::size_t code_size = 0;
   // Scratch reused across frames.
   std::vector<detail::Candidate> candidates;
   std::vector<detail::Island> islands;
 
   bool keeps_features() const { return params.geometric_check != GeometricCheck::kNone; }
+  DescriptorView descriptors_of(EntryId frame) const {
+    const FrameFeatures& f = frames[frame];
+    return {f.descriptors.data(), f.keypoints.size(), code_size};
+  }
+  // InvalidArgument unless `frame` was processed and not forgotten.
+  void check_remembered(EntryId frame) const;
   // η's divisor: s(v_t, v_{t−Δt}), or 1 when the raw score is compared with α.
   double normalisation_factor(const LoopResult& result) const {
     return params.use_normalised_score ? result.normalisation_score : 1;

@@ -101,7 +101,9 @@ SimilarityMatrix similarity_matrix(const LoopDetector& detector) {
   std::vector<DescriptorView> views;
   views.reserve(detector.size());
   for (std::size_t entry = 0; entry < detector.size(); ++entry)
-    views.push_back(detector.descriptors(static_cast<EntryId>(entry)));
+    views.push_back(detector.is_forgotten(static_cast<EntryId>(entry))
+                        ? DescriptorView{}
+                        : detector.descriptors(static_cast<EntryId>(entry)));
   // With the words and IDF grown over the whole sequence.
   if (const OnlineVocabulary* online = detector.online_vocabulary())
     return similarity_matrix(*online, views);

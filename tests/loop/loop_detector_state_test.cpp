@@ -331,6 +331,55 @@ TEST(LoopDetectorState, InconsistentContentIsRefusedEvenWithValidChecksums) {
   EXPECT_NE(problem(params), "loaded");
 }
 
+// Forgotten frames (version 2): the header's count must be the database's
+// removed entries, which hold no features; version 1 has none (and loads).
+TEST(LoopDetectorState, ForgottenFramesAreChecked) {
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  for (std::size_t i = 0; i < 4; ++i) fixed.process(sample_features("orb")[i]);
+  const std::vector<std::uint8_t> whole = fixed.serialize();
+  fixed.forget(1);
+  const std::vector<std::uint8_t> bytes = fixed.serialize();
+  const auto problem = [&](const std::vector<std::uint8_t>& data) {
+    return load_problem(
+        [&] { LoopDetector::deserialize(data.data(), data.size(), "crafted.bbld", orb); });
+  };
+  ASSERT_EQ(problem(bytes), "loaded");
+  EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + 8), 2u);
+  EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + 44), 1u);
+  const auto header = [](std::vector<std::uint8_t> b, std::size_t at, std::uint32_t value) {
+    binbow::detail::store_le<std::uint32_t>(b.data() + at, value);
+    binbow::detail::store_le<std::uint32_t>(b.data() + 60, binbow::detail::crc32c(b.data(), 60));
+    return b;
+  };
+  EXPECT_NE(problem(header(bytes, 44, 0)).find("of which 0 forgotten"), std::string::npos)
+      << problem(header(bytes, 44, 0));
+  EXPECT_NE(problem(header(bytes, 44, 2)).find("of which 2 forgotten"), std::string::npos);
+  EXPECT_NE(problem(header(bytes, 44, 5)).find("inconsistent frame counts"), std::string::npos);
+  EXPECT_NE(problem(header(bytes, 8, 1)).find("reserved header bytes"), std::string::npos);
+  EXPECT_NE(problem(header(bytes, 8, 3)).find("unsupported .bbld format version 3"),
+            std::string::npos);
+  // Version 1 (no forgotten frames) loads, and is saved again as version 2.
+  const std::vector<std::uint8_t> version1 = header(whole, 8, 1);
+  ASSERT_EQ(problem(version1), "loaded");
+  EXPECT_EQ(LoopDetector::deserialize(version1.data(), version1.size(), "v1", orb).serialize(),
+            whole);
+  // The forgotten frame given ten features of frame 0 (CRCs recomputed).
+  const auto sections = sections_of(bytes);
+  std::vector<std::uint8_t> moved = bytes;
+  std::uint8_t* counts = moved.data() + sections[5].first;
+  binbow::detail::store_le<std::uint32_t>(counts,
+                                          binbow::detail::load_le<std::uint32_t>(counts) - 10);
+  binbow::detail::store_le<std::uint32_t>(counts + 4, 10);
+  std::uint8_t* entry = moved.data() + 64 + 24 * 5;
+  binbow::detail::store_le<std::uint32_t>(entry + 4, binbow::detail::crc32c(counts, 16));
+  binbow::detail::store_le<std::uint32_t>(
+      moved.data() + 64 + 24 * sections.size(),
+      binbow::detail::crc32c(moved.data() + 64, 24 * sections.size()));
+  EXPECT_NE(problem(moved).find("forgotten frame 1 has features"), std::string::npos)
+      << problem(moved);
+}
+
 TEST(LoopDetectorState, FeaturelessAndNoGeometricCheckStatesRoundTrip) {
   // kNone keeps no features: the file has none and the detector still resumes.
   LoopDetectorParams params;

@@ -234,6 +234,8 @@ struct LoopDetectorFileInfo {
   // the vocabulary does not say).
   std::string descriptor;
   std::size_t frames = 0;  // images processed: the next one gets this entry id
+  // Of those, the ones forgotten (LoopDetector::forget; 0 in a version-1 file).
+  std::size_t forgotten_frames = 0;
   // The fixed vocabulary the state needs (zeros when online): its checksum()
   // (what load() compares), word_count() and levels().
   std::uint32_t vocabulary_checksum = 0;
@@ -271,21 +273,61 @@ class LoopDetector {
   LoopResult process(const vision::Features& features);
   LoopResult process(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
 
-  std::size_t size() const noexcept;  // images processed
+  // Images processed, forgotten ones included: the next image gets this id.
+  std::size_t size() const noexcept;
   const LoopDetectorParams& params() const noexcept;
   const Database& database() const noexcept;
   // The words grown so far by a detector made by online(); nullptr otherwise.
   const OnlineVocabulary* online_vocabulary() const noexcept;
   // Features kept for the geometric check (empty with GeometricCheck::kNone).
+  // InvalidArgument for an image not processed or forgotten.
   Span<vision::Keypoint> keypoints(EntryId entry) const;
   DescriptorView descriptors(EntryId entry) const;
   // An optional name per image (SequenceDetector records the frame's file),
   // kept in the database and so saved with the state: after a resume, a loop
   // with an image of an earlier session can still name it. label() is empty
   // for an image without one; both throw InvalidArgument for an image not
-  // processed.
+  // processed or forgotten.
   void set_label(EntryId entry, std::string label);
   std::string label(EntryId entry) const;
+
+  // Keyframe culling: forgets one image, as a SLAM system erases a redundant
+  // keyframe from its place-recognition database.
+  //  - The frame is never proposed again: later queries see the database as
+  //    if it had never been in it (their candidates, η, islands and
+  //    geometric checks are those of a detector that never had it as a
+  //    candidate), so it is no match, no island member, and its features
+  //    are never matched.
+  //  - Its memory goes: its keypoints and descriptors at once, its database
+  //    entry's direct index and label at once, its postings when the
+  //    database next compacts (Database::remove; see memory_usage()).
+  //  - Ids stay honest: size() still counts it, the next image gets the id
+  //    it would have had, ids are never reused; is_forgotten() says which.
+  //  - What the image was to the *sequence* stays, since it was seen: if it
+  //    is the latest image, it is still the v_{t−Δt} the next frame's η
+  //    divides by (the detector keeps that one BoW vector until the next
+  //    image replaces it); it still counts on the temporal window's time
+  //    axis and, online, in the vocabulary's words and IDF; and the
+  //    temporal-consistency chain that earlier queries built is kept even if
+  //    the frame lies in its last island (the chain records where the place
+  //    was seen, an id range, and a culled keyframe's neighbours still show
+  //    it). Earlier results are not revised. Hence forgetting a frame before
+  //    it is old enough to be a candidate (t ≤ frame + dislocal) gives the
+  //    results of forgetting it right after process().
+  //  - Idempotent: forgetting a forgotten frame does nothing (a culling pass
+  //    may erase a keyframe twice). A frame never processed (frame ≥ size())
+  //    is a caller bug: InvalidArgument, nothing changes.
+  //  - save() keeps it forgotten (.bbld version 2).
+  // O(1) amortised; exclusive access, as process().
+  void forget(EntryId frame);
+  // Whether `frame` was forgotten; InvalidArgument for frame ≥ size().
+  bool is_forgotten(EntryId frame) const;
+  // Images forgotten so far; size() − forgotten_count() can still be matched.
+  std::size_t forgotten_count() const;
+  // Bytes of heap memory held: the database (Database::memory_usage), the
+  // features kept for the geometric check, an online vocabulary (its
+  // stats().memory_bytes) and the temporal state.
+  std::size_t memory_usage() const;
 
   // Forgets every image (and the words of an online vocabulary); the next
   // one gets entry id 0.
@@ -306,9 +348,12 @@ class LoopDetector {
   // of every section, little-endian), sections: parameters (JSON, as
   // LoopDetectorParams::to_json), temporal state, previous BoW vector, the
   // database as .bbdb without vocabulary, the online vocabulary as .bbov,
-  // feature counts per image, keypoints, descriptors. Saved atomically
+  // feature counts per image, keypoints, descriptors; forgotten images are
+  // the database's removed entries, without features. Saved atomically
   // (temporary file, then rename): a failed save leaves no partial file and
   // the old file, if any, intact. Missing folders are made. Throws FileError.
+  // save() writes version 2 (with forgotten images); load() reads versions 1
+  // and 2.
   //
   // A resumed detector continues exactly as the uninterrupted one would
   // have, online ones included: the .bbov keeps the vocabulary's search

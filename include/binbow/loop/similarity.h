@@ -46,7 +46,8 @@ SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
 SimilarityMatrix similarity_matrix(const Vocabulary& vocabulary,
                                    const std::vector<vision::Features>& features);
 // The matrix of the images a LoopDetector has processed, from the features
-// it keeps for the geometric check. Throws InvalidArgument when it keeps none
+// it keeps for the geometric check; a forgotten image (LoopDetector::forget)
+// scores as one without features. Throws InvalidArgument when it keeps none
 // (GeometricCheck::kNone).
 SimilarityMatrix similarity_matrix(const LoopDetector& detector);
 // For a run without a pre-trained vocabulary: an online vocabulary (default
