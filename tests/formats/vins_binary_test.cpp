@@ -446,12 +446,28 @@ TEST(VinsBinary, WordIdsInAnotherOrderAreReadAndReported) {
   EXPECT_EQ(loaded.vocabulary.word_count(), 4u);
 }
 
-TEST(VinsBinary, ParserRejectsEveryPrefixCleanly) {
+TEST(VinsBinary, ParserSurvivesEveryPrefixAndFlippedByte) {
   const std::vector<std::uint8_t> valid = vins_file(3, 2, small_nodes(), small_words());
   for (std::size_t cut = 0; cut < valid.size(); ++cut)
     EXPECT_THROW(detail::parse_vins_binary(valid.data(), cut, "prefix"), FileError) << cut;
   EXPECT_NO_THROW(detail::vocabulary_from_parsed(
       detail::parse_vins_binary(valid.data(), valid.size(), "whole"), "whole"));
+  std::size_t accepted = 0;
+  for (std::size_t at = 0; at < valid.size(); ++at) {
+    for (const std::uint8_t mask : {0x01, 0x80, 0xFF}) {
+      std::vector<std::uint8_t> bytes = valid;
+      bytes[at] ^= mask;
+      try {
+        const Vocabulary v = detail::vocabulary_from_parsed(
+            detail::parse_vins_binary(bytes.data(), bytes.size(), "flipped"), "flipped");
+        const std::uint8_t probe[32] = {0xA5};
+        EXPECT_LT(v.quantize(probe), v.word_count());
+        ++accepted;
+      } catch (const FileError&) {
+      }
+    }
+  }
+  EXPECT_GT(accepted, 0u);  // descriptor and weight bytes may change freely
 }
 
 }  // namespace
