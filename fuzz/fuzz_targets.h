@@ -52,6 +52,9 @@ inline void check_accepted(const Vocabulary& vocabulary, VocabularyFormat format
     case VocabularyFormat::kFbow:
       bytes = detail::format_fbow(tree);
       break;
+    case VocabularyFormat::kVinsBinary:
+      bytes = detail::format_vins_binary(tree);
+      break;
     default:
       return;
   }
@@ -262,6 +265,8 @@ inline const Target kTargets[] = {
                  std::size_t n) { load_tree_format(VocabularyFormat::kDbow3, d, n); }},
     {"fbow",
      [](const std::uint8_t* d, std::size_t n) { load_tree_format(VocabularyFormat::kFbow, d, n); }},
+    {"vins_binary", [](const std::uint8_t* d,
+                       std::size_t n) { load_tree_format(VocabularyFormat::kVinsBinary, d, n); }},
     {"bbw", load_bbw},
     {"bbdb", load_bbdb},
     {"bbov", load_bbov},

@@ -231,13 +231,24 @@ void bind_core(py::module_& m) {
   py::class_<Vocabulary>(m, "Vocabulary",
                          "A vocabulary tree of binary words. Immutable: copies share the tree.")
       .def_static(
-          "load", [](const Path& path) { return load_vocabulary(path.string()); }, py::arg("path"),
-          py::call_guard<py::gil_scoped_release>(),
-          "Load any supported format (.bbw, DBoW2 YAML, ORBvoc.txt, DBoW3, fbow).")
+          "load",
+          [](const Path& path, const std::string& format) {
+            return load_vocabulary(path.string(), parse_vocabulary_format(format));
+          },
+          py::arg("path"), py::arg("format") = "auto", py::call_guard<py::gil_scoped_release>(),
+          "Load any supported format (.bbw, DBoW2 YAML, ORBvoc.txt, ORB-SLAM .bin, DBoW3, fbow,\n"
+          "VINS brief_k10L6.bin). format: \"auto\" (detect from the content, then the\n"
+          "extension) or one of \"bbw\", \"dbow2\", \"orbslam-text\", \"orbslam-binary\",\n"
+          "\"dbow3\", \"fbow\", \"vins\".")
       .def(
-          "save", [](const Vocabulary& v, const Path& path) { save_vocabulary(v, path.string()); },
-          py::arg("path"), py::call_guard<py::gil_scoped_release>(),
-          "Save; the extension chooses the format (.bbw, .txt, .yml.gz, .dbow3, .fbow).")
+          "save",
+          [](const Vocabulary& v, const Path& path, const std::string& format) {
+            save_vocabulary(v, path.string(), parse_vocabulary_format(format));
+          },
+          py::arg("path"), py::arg("format") = "auto", py::call_guard<py::gil_scoped_release>(),
+          "Save; format \"auto\" lets the extension choose (.bbw, .txt, .bin, .vins.bin,\n"
+          ".yml.gz, .dbow3, .fbow), or name it as in load (\"vins\": VINS-Mono/VINS-Fusion's\n"
+          "binary layout, 256-bit descriptors only).")
       .def_static("build", &build_vocabulary, py::arg("images"), py::arg("branching") = 10,
                   py::arg("levels") = 6, py::arg("weighting") = "tf-idf", py::arg("scoring") = "l1",
                   py::arg("seed") = 0, py::arg("threads") = 0, py::arg("descriptor") = "",

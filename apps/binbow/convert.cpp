@@ -57,6 +57,12 @@ void run_convert(const ConvertArguments& args) {
     std::printf(
         "note: fbow files store no weighting or scoring type; they read back as tf-idf, "
         "l1\n");
+  const std::string& trained_on = loaded.vocabulary.descriptor();
+  if (to == VocabularyFormat::kVinsBinary && !trained_on.empty() && trained_on != "brief")
+    std::printf(
+        "note: VINS files do not record the extractor and VINS computes BRIEF descriptors; "
+        "this vocabulary was trained on %s ones\n",
+        trained_on.c_str());
 
   if (!args.descriptor.empty()) {
     const std::size_t code_size = vision::make_extractor(args.descriptor)->code_size();
@@ -87,19 +93,23 @@ void add_convert_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "convert",
       "Convert a vocabulary between formats (bbw, ORB-SLAM text/binary, DBoW2 YAML, "
-      "DBoW3, fbow)");
+      "DBoW3, fbow, VINS binary)");
   auto args = std::make_shared<ConvertArguments>();
   cmd->add_option("IN", args->input, "Vocabulary to read (format detected from its content)")
       ->required();
   cmd->add_option("OUT", args->output,
                   "File to write; its extension picks the format: .bbw, .txt (ORB-SLAM text), "
-                  ".bin (ORB-SLAM binary), .yml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3, .fbow")
+                  ".bin (ORB-SLAM binary), .vins.bin (VINS binary), .yml/.yml.gz/.voc.gz "
+                  "(DBoW2 YAML), .dbow3, .fbow")
       ->required();
   cmd->add_option("--from", args->from,
-                  "Input format: auto, bbw, dbow2, orbslam-text, orbslam-binary, dbow3, fbow")
+                  "Input format: auto, bbw, dbow2, orbslam-text, orbslam-binary, dbow3, fbow, "
+                  "vins")
       ->check(parsed_by(parse_vocabulary_format))
       ->capture_default_str();
-  cmd->add_option("--to", args->to, "Output format (same names; auto: by OUT's extension)")
+  cmd->add_option("--to", args->to,
+                  "Output format (same names; auto: by OUT's extension; vins writes "
+                  "VINS-Mono/VINS-Fusion's brief_k10L6.bin layout whatever the extension)")
       ->check(parsed_by(parse_vocabulary_format))
       ->capture_default_str();
   cmd->add_option("--descriptors", args->descriptors,

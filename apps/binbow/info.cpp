@@ -10,6 +10,7 @@
 #include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "formats/loader.h"
 
 namespace binbow::cli {
 
@@ -67,10 +68,12 @@ void add_info_command(CLI::App& app) {
   cmd->callback([path, header_only] {
     if (print_loop_state_info(*path)) return;
     if (print_database_info(*path, !*header_only)) return;
-    const VocabularyFormat format = detect_vocabulary_format(*path);
-    const Vocabulary vocabulary = load_vocabulary(*path, format);
-    std::printf("format: %s\n", to_string(format));
-    print_vocabulary(vocabulary);
+    // The format the loader settled on: inside a .gz it is known only after
+    // decompressing (ORB-SLAM and VINS binary files are told apart by size).
+    const detail::LoadedVocabulary loaded =
+        detail::load_vocabulary_with_details(*path, VocabularyFormat::kAuto);
+    std::printf("format: %s\n", to_string(loaded.format));
+    print_vocabulary(loaded.vocabulary);
   });
 }
 

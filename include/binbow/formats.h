@@ -15,21 +15,27 @@ enum class VocabularyFormat {
   kOrbSlamBinary,  // the binary ORBvoc.bin of ORB-SLAM2 pull request 21 and its forks, .bin
   kDbow3,          // DBoW3 binary .dbow3
   kFbow,           // fbow .fbow
+  kVinsBinary,     // VINS-Mono/VINS-Fusion brief_k10L6.bin (256-bit descriptors only), .vins.bin
 };
 
-// "bbw", "dbow2", "orbslam-text", "orbslam-binary", "dbow3", "fbow" ("auto" for kAuto).
+// "bbw", "dbow2", "orbslam-text", "orbslam-binary", "dbow3", "fbow", "vins"
+// ("auto" for kAuto).
 const char* to_string(VocabularyFormat format);
 // Accepts the names above; throws InvalidArgument listing them.
 VocabularyFormat parse_vocabulary_format(const std::string& name);
 // The format of an existing file, from its first bytes, then its extension.
+// ORB-SLAM and VINS binary files have no magic: each is recognised by its
+// header predicting the file's exact size (inside a plain .gz the size is
+// unknown until decompressed, so there the extension decides: .bin is
+// ORB-SLAM, .vins.bin VINS; load_vocabulary decompresses and looks again).
 // Every format may be gzip-compressed or the first file of a .tar.gz; the
 // format is then the one of the file inside. Throws FileError if the file
 // cannot be read or nothing matches.
 VocabularyFormat detect_vocabulary_format(const std::string& path);
 // The format an output file name asks for: .bbw, .txt, .bin (ORB-SLAM binary),
-// .yml/.yaml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3, .fbow; any of them may be
-// followed by .gz (written gzip-compressed). Throws InvalidArgument for other
-// extensions.
+// .vins.bin (VINS binary), .yml/.yaml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3,
+// .fbow; any of them may be followed by .gz (written gzip-compressed). Throws
+// InvalidArgument for other extensions.
 VocabularyFormat format_for_output(const std::string& path);
 
 // Reads a vocabulary in any supported format. Throws FileError naming the file
@@ -41,7 +47,8 @@ Vocabulary load_vocabulary(const std::string& path,
 // YAML is written with decimal-byte descriptors (DBoW2's FORB) unless
 // `brief_bit_strings` asks for FBrief's 0/1 strings (DLoopDetector, VINS).
 // fbow files keep neither L nor the weighting and scoring types (read back as
-// the tree's depth, tf-idf, L1); docs/formats.md lists what each format keeps.
+// the tree's depth, tf-idf, L1); VINS files take 256-bit descriptors only
+// (InvalidArgument otherwise); docs/formats.md lists what each format keeps.
 void save_vocabulary(const Vocabulary& vocabulary, const std::string& path,
                      VocabularyFormat format = VocabularyFormat::kAuto,
                      bool brief_bit_strings = false);

@@ -11,6 +11,9 @@ __version__: str
 # uint8 (n, code_size), one row per feature; None is an image without features.
 _Descriptors = Optional[npt.NDArray[np.uint8]]
 _StrPath = Union[str, os.PathLike[str]]
+_VocabularyFormat = Literal[
+    "auto", "bbw", "dbow2", "orbslam-text", "orbslam-binary", "dbow3", "fbow", "vins"
+]
 
 class Error(RuntimeError): ...
 
@@ -42,8 +45,8 @@ class Vocabulary:
     @staticmethod
     def default(descriptor: Literal["orb", "brief"] = "orb") -> Vocabulary: ...
     @staticmethod
-    def load(path: _StrPath) -> Vocabulary: ...
-    def save(self, path: _StrPath) -> None: ...
+    def load(path: _StrPath, format: _VocabularyFormat = "auto") -> Vocabulary: ...
+    def save(self, path: _StrPath, format: _VocabularyFormat = "auto") -> None: ...
     @staticmethod
     def build(
         images: Iterable[_Descriptors],

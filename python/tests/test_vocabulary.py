@@ -1,5 +1,6 @@
 """Vocabulary: building, transforms against brute force, files, the bundled defaults."""
 import os
+import struct
 
 import numpy as np
 import pytest
@@ -45,6 +46,31 @@ def test_save_load_round_trip_with_str_and_pathlike(tmp_path, vocabulary, images
     vocabulary.save(path)
     assert binbow.Vocabulary.load(path).transform(images[2]) == vocabulary.transform(images[2])
     assert binbow.Vocabulary.load(str(path)).checksum == vocabulary.checksum
+
+
+def test_vins_binary_round_trip_and_explicit_formats(tmp_path, vocabulary, images):
+    path = tmp_path / "brief_k10L6.bin"
+    vocabulary.save(path, format="vins")
+    data = path.read_bytes()
+    k, levels, _, _, nodes, words = struct.unpack_from("<6i", data)
+    assert (k, levels, words, nodes + 1) == (5, 3, vocabulary.word_count, vocabulary.node_count)
+    assert len(data) == 24 + 48 * nodes + 8 * words
+    again = binbow.Vocabulary.load(path)  # by content: a plain .bin would be ORB-SLAM's
+    assert again.checksum == vocabulary.checksum
+    assert again.transform(images[2]) == vocabulary.transform(images[2])
+    assert binbow.Vocabulary.load(str(path), format="vins").checksum == vocabulary.checksum
+    vocabulary.save(tmp_path / "v.vins.bin")
+    assert (tmp_path / "v.vins.bin").read_bytes() == data
+    with pytest.raises(OSError, match="brief_k10L6.bin"):
+        binbow.Vocabulary.load(path, format="dbow3")
+    with pytest.raises(ValueError, match="unknown vocabulary format 'morse'"):
+        vocabulary.save(tmp_path / "x.bin", format="morse")
+    rng = np.random.default_rng(2)
+    wide = binbow.Vocabulary.build([clustered(rng, 100, code_size=64) for _ in range(3)],
+                                   branching=3, levels=2, weighting="tf")
+    with pytest.raises(ValueError, match="256-bit descriptors only"):
+        wide.save(tmp_path / "wide.vins.bin")
+    assert not (tmp_path / "wide.vins.bin").exists()
 
 
 def test_records_the_descriptor_it_was_trained_on(tmp_path, images, vocabulary):

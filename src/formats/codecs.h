@@ -34,6 +34,8 @@ struct ParsedVocabulary {
 inline constexpr std::size_t kMaxCodeSize = 1024;
 inline constexpr std::uint32_t kMaxBranching = 255;
 inline constexpr std::uint32_t kMaxLevels = 32;
+// VINS files hold exactly 256-bit descriptors (four 64-bit words).
+inline constexpr std::size_t kVinsCodeSize = 32;
 
 ParsedVocabulary parse_orbslam_text(const std::uint8_t* data, std::size_t size,
                                     const std::string& name, unsigned threads = 2);
@@ -46,6 +48,10 @@ ParsedVocabulary parse_dbow2_yaml(const std::uint8_t* data, std::size_t size,
 ParsedVocabulary parse_dbow3_binary(const std::uint8_t* data, std::size_t size,
                                     const std::string& name);
 ParsedVocabulary parse_fbow(const std::uint8_t* data, std::size_t size, const std::string& name);
+ParsedVocabulary parse_vins_binary(const std::uint8_t* data, std::size_t size,
+                                   const std::string& name);
+// The size of a VINS file with these counts (its only signature).
+std::uint64_t vins_binary_size(std::int64_t node_count, std::int64_t word_count);
 
 // Writers take a tree from Vocabulary::to_tree() (DBoW2 node order).
 std::vector<std::uint8_t> format_orbslam_text(const VocabularyTree& tree);
@@ -53,6 +59,8 @@ std::vector<std::uint8_t> format_orbslam_binary(const VocabularyTree& tree);
 std::vector<std::uint8_t> format_dbow2_yaml(const VocabularyTree& tree, DescriptorText text);
 std::vector<std::uint8_t> format_dbow3_binary(const VocabularyTree& tree);
 std::vector<std::uint8_t> format_fbow(const VocabularyTree& tree);
+// Throws InvalidArgument unless tree.code_size is kVinsCodeSize.
+std::vector<std::uint8_t> format_vins_binary(const VocabularyTree& tree);
 
 // Vocabulary::from_tree, with its InvalidArgument turned into FileError(name, ...).
 Vocabulary vocabulary_from_parsed(const ParsedVocabulary& parsed, const std::string& name);

@@ -35,6 +35,7 @@ constexpr FormatName kFormatNames[] = {
     {VocabularyFormat::kOrbSlamBinary, "orbslam-binary"},
     {VocabularyFormat::kDbow3, "dbow3"},
     {VocabularyFormat::kFbow, "fbow"},
+    {VocabularyFormat::kVinsBinary, "vins"},
 };
 
 bool ends_with(const std::string& text, const char* suffix) {
@@ -53,6 +54,7 @@ std::string without_suffix(const std::string& path, const char* suffix) {
 VocabularyFormat format_from_plain_extension(const std::string& path) {
   if (ends_with(path, ".bbw")) return VocabularyFormat::kBinbow;
   if (ends_with(path, ".txt")) return VocabularyFormat::kOrbSlamText;
+  if (ends_with(path, ".vins.bin")) return VocabularyFormat::kVinsBinary;
   if (ends_with(path, ".bin")) return VocabularyFormat::kOrbSlamBinary;
   if (ends_with(path, ".yml") || ends_with(path, ".yaml") || ends_with(path, ".yml.gz") ||
       ends_with(path, ".yaml.gz") || ends_with(path, ".voc.gz"))
@@ -103,6 +105,27 @@ bool looks_like_orbslam_binary(const std::uint8_t* data, std::size_t size, std::
          24 + (nodes - 1) * node_size == file_size;
 }
 
+// VINS binary has no magic either: its counts must give the file size
+// exactly, and its first record must start with a node id in 1..node_count.
+// An ORB-SLAM binary file's first record starts with node 1's parent, the
+// root 0, so no file passes both checks.
+bool looks_like_vins_binary(const std::uint8_t* data, std::size_t size, std::size_t file_size) {
+  if (size < 28) return false;
+  const std::int32_t branching = detail::load_le<std::int32_t>(data);
+  const std::int32_t levels = detail::load_le<std::int32_t>(data + 4);
+  const std::int32_t scoring = detail::load_le<std::int32_t>(data + 8);
+  const std::int32_t weighting = detail::load_le<std::int32_t>(data + 12);
+  const std::int32_t nodes = detail::load_le<std::int32_t>(data + 16);
+  const std::int32_t words = detail::load_le<std::int32_t>(data + 20);
+  const std::int32_t first_id = detail::load_le<std::int32_t>(data + 24);
+  return branching >= 1 && static_cast<std::uint32_t>(branching) <= detail::kMaxBranching &&
+         levels >= 1 && static_cast<std::uint32_t>(levels) <= detail::kMaxLevels && scoring >= 0 &&
+         scoring <= static_cast<int>(Scoring::kDotProduct) && weighting >= 0 &&
+         weighting <= static_cast<int>(Weighting::kBinary) && nodes >= 1 && words >= 1 &&
+         words <= nodes && first_id >= 1 && first_id <= nodes &&
+         detail::vins_binary_size(nodes, words) == file_size;
+}
+
 // `data` holds the first `size` bytes of a file of `file_size` bytes (0: unknown).
 VocabularyFormat format_from_content(const std::uint8_t* data, std::size_t size,
                                      std::size_t file_size) {
@@ -114,6 +137,7 @@ VocabularyFormat format_from_content(const std::uint8_t* data, std::size_t size,
     return VocabularyFormat::kFbow;
   if (looks_like_yaml(data, size)) return VocabularyFormat::kDbow2Yaml;
   if (looks_like_orbslam_text(data, size)) return VocabularyFormat::kOrbSlamText;
+  if (looks_like_vins_binary(data, size, file_size)) return VocabularyFormat::kVinsBinary;
   if (looks_like_orbslam_binary(data, size, file_size)) return VocabularyFormat::kOrbSlamBinary;
   return VocabularyFormat::kAuto;
 }
@@ -168,9 +192,9 @@ VocabularyFormat format_for_output(const std::string& path) {
   const VocabularyFormat format = format_from_extension(path);
   if (format == VocabularyFormat::kAuto)
     throw InvalidArgument("cannot tell the vocabulary format from the name '" + path +
-                          "': use .bbw, .txt (ORB-SLAM text), .bin (ORB-SLAM binary), .yml, "
-                          ".yml.gz or .voc.gz (DBoW2 YAML), .dbow3 or .fbow (any of them may "
-                          "end in .gz), or --to");
+                          "': use .bbw, .txt (ORB-SLAM text), .bin (ORB-SLAM binary), "
+                          ".vins.bin (VINS binary), .yml, .yml.gz or .voc.gz (DBoW2 YAML), "
+                          ".dbow3 or .fbow (any of them may end in .gz), or --to");
   return format;
 }
 
@@ -210,6 +234,8 @@ ParsedVocabulary parse_vocabulary_bytes(VocabularyFormat format, const std::uint
       return parse_dbow3_binary(data, size, name);
     case VocabularyFormat::kFbow:
       return parse_fbow(data, size, name);
+    case VocabularyFormat::kVinsBinary:
+      return parse_vins_binary(data, size, name);
     default:
       throw InvalidArgument(std::string("no tree parser for format ") + to_string(format));
   }
@@ -251,6 +277,11 @@ void save_vocabulary_as(const Vocabulary& vocabulary, const std::string& path,
                         VocabularyFormat format, DescriptorText descriptor_text) {
   if (vocabulary.empty()) throw InvalidArgument("cannot save an empty vocabulary to " + path);
   if (format == VocabularyFormat::kAuto) format = format_for_output(path);
+  if (format == VocabularyFormat::kVinsBinary && vocabulary.code_size() != kVinsCodeSize)
+    throw InvalidArgument("cannot write " + path +
+                          " as a VINS vocabulary: the format holds 256-bit descriptors only, "
+                          "this vocabulary has " +
+                          std::to_string(vocabulary.code_size() * 8) + "-bit ones");
   const bool compress = ends_with(path, ".gz");
   if (format == VocabularyFormat::kBinbow && !compress) {
     vocabulary.save(path);
@@ -276,6 +307,9 @@ void save_vocabulary_as(const Vocabulary& vocabulary, const std::string& path,
       break;
     case VocabularyFormat::kFbow:
       bytes = format_fbow(tree);
+      break;
+    case VocabularyFormat::kVinsBinary:
+      bytes = format_vins_binary(tree);
       break;
     default:
       throw InvalidArgument(std::string("cannot write format ") + to_string(format));

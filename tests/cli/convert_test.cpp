@@ -168,6 +168,76 @@ TEST(CliConvert, DescriptorRecordsTheExtractorAndCommandsWarnWithoutOne) {
   EXPECT_EQ(output.find("warning"), std::string::npos) << output;
 }
 
+// VINS-Mono/VINS-Fusion's binary layout: asked for by `--to vins` or a
+// .vins.bin name, recognised by content, and usable wherever a vocabulary is.
+TEST(CliConvert, WritesAndReadsVinsBinary) {
+  TempDir dir;
+  small_vocabulary().save(dir.file("v.bbw"));
+  std::string output;
+  ASSERT_EQ(
+      run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("brief_k10L6.bin") + "' --to vins",
+              &output),
+      0)
+      << output;
+  EXPECT_NE(output.find("wrote " + dir.file("brief_k10L6.bin") + ": vins, 456 bytes"),
+            std::string::npos)
+      << output;
+  ASSERT_EQ(run_cli("info '" + dir.file("brief_k10L6.bin") + "'", &output), 0) << output;
+  EXPECT_NE(output.find("format: vins\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("words: 6\n"), std::string::npos) << output;
+  ASSERT_EQ(run_cli("convert '" + dir.file("brief_k10L6.bin") + "' '" + dir.file("back.bbw") + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("read " + dir.file("brief_k10L6.bin") + ": vins,"), std::string::npos)
+      << output;
+  EXPECT_EQ(read_file(dir.file("back.bbw")), read_file(dir.file("v.bbw")));
+  ASSERT_EQ(
+      run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("v.vins.bin") + "'", &output), 0)
+      << output;
+  EXPECT_EQ(read_file(dir.file("v.vins.bin")), read_file(dir.file("brief_k10L6.bin")));
+
+  // Gzipped under a .bin name, only the decompressed size tells it from ORB-SLAM binary.
+  ASSERT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("v.bin.gz") + "' --to vins",
+                    &output),
+            0)
+      << output;
+  ASSERT_EQ(run_cli("info '" + dir.file("v.bin.gz") + "'", &output), 0) << output;
+  EXPECT_NE(output.find("format: vins\n"), std::string::npos) << output;
+
+  // --vocab takes it like any other format.
+  const std::string image = test::source_path("data/samples/rtabmap/samples/1.jpg");
+  ASSERT_EQ(run_cli("db build --descriptor brief --vocab '" + dir.file("brief_k10L6.bin") +
+                        "' -o '" + dir.file("d.bbdb") + "' '" + image + "'",
+                    &output),
+            0)
+      << output;
+
+  // VINS computes BRIEF: an ORB vocabulary is written, with a note.
+  small_vocabulary().with_descriptor("orb").save(dir.file("orb.bbw"));
+  ASSERT_EQ(
+      run_cli("convert '" + dir.file("orb.bbw") + "' '" + dir.file("orb.vins.bin") + "'", &output),
+      0)
+      << output;
+  EXPECT_NE(output.find("note: VINS files do not record the extractor"), std::string::npos)
+      << output;
+
+  // Only 256-bit descriptors fit.
+  VocabularyTree wide = small_vocabulary().to_tree();
+  wide.code_size = 64;
+  wide.descriptors.resize(wide.node_count() * 64, 1);
+  Vocabulary::from_tree(wide).save(dir.file("wide.bbw"));
+  EXPECT_EQ(run_cli("convert '" + dir.file("wide.bbw") + "' '" + dir.file("wide.vins.bin") + "'",
+                    &output),
+            1);
+  EXPECT_NE(output.find("binbow: error: cannot write " + dir.file("wide.vins.bin") +
+                        " as a VINS vocabulary: the format holds 256-bit descriptors only, this "
+                        "vocabulary has 512-bit ones"),
+            std::string::npos)
+      << output;
+  EXPECT_TRUE(read_file(dir.file("wide.vins.bin")).empty());
+}
+
 // DBoW2 users must be able to go back: read our DBoW2 YAML (plain, gzip,
 // bytes and bits) through OpenCV's FileStorage exactly as DBoW2's
 // TemplatedVocabulary::load does, and compare with the vocabulary.
