@@ -37,7 +37,7 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/binbowConfig.cmake
 # from the file's own folder). The libraries are static, so their dependencies
 # are public requirements.
 file(RELATIVE_PATH BINBOW_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
-foreach(pc_file binbow binbow-vision)
+foreach(pc_file binbow binbow-vision binbow-dbow2)
   configure_file(cmake/${pc_file}.pc.in ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc @ONLY)
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc
           DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

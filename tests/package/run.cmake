@@ -2,7 +2,8 @@
 # consumer projects: one of binbow::core alone (find_package COMPONENTS core),
 # one of binbow::vision exactly as the README shows, the same two sources
 # built with nothing but the compiler and pkg-config, and one of
-# binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built as C++11.
+# binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built as C++11 through
+# find_package and through pkg-config.
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 
@@ -71,3 +72,17 @@ foreach(consumer core vision)
   endif()
   message(STATUS "pkg-config ${consumer}: ${output}")
 endforeach()
+
+# pkg-config: binbow-dbow2, as C++11.
+run("pkg-config binbow-dbow2" pkg-config --cflags --libs binbow-dbow2)
+string(STRIP "${output}" flags)
+separate_arguments(flags UNIX_COMMAND "${flags}")
+set(program ${WORK_DIR}/dbow2-pkgconfig)
+run("building the dbow2 consumer with pkg-config" ${CXX} -std=c++11 -O1
+    -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2/main.cpp -o ${program} ${flags})
+run("running the dbow2 consumer (pkg-config)" ${program} ${orbvoc}
+    ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
+if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
+  message(FATAL_ERROR "the dbow2 consumer built with pkg-config printed: ${output}")
+endif()
+message(STATUS "pkg-config dbow2: ${output}")
