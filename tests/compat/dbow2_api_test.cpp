@@ -89,6 +89,16 @@ TEST(Dbow2Database, AddFillsTheVectorsAndKeepsTheDirectIndex) {
   EXPECT_TRUE(db.retrieveFeatures(1) == expected_fv);
   EXPECT_EQ(vocabulary().size(), db.getVocabulary()->size());
 
+  std::ostringstream out;
+  out << db;
+  EXPECT_EQ(
+      "Database: Entries = 2, Using direct index = yes, Direct index levels = 2. "
+      "Vocabulary: k = 10, L = 4, Weighting = tf-idf, Scoring = L1-norm, Number of words = " +
+          std::to_string(vocabulary().size()),
+      out.str());
+  db.allocate(100, 10);
+  EXPECT_EQ(2u, db.size());
+
   db.clear();
   EXPECT_EQ(0u, db.size());
   EXPECT_EQ(0u, db.add(v));

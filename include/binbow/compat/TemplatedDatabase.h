@@ -13,6 +13,7 @@
 #define BINBOW_COMPAT_DBOW2_TEMPLATED_DATABASE_H
 
 #include <cstddef>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,8 +31,11 @@ namespace DBoW2 {
 /// TemplatedVocabulary::transform computes it).
 ///
 /// binbow extension: erase(id). Differences from DBoW2: save()/load() use
-/// binbow's .bbdb format (DBoW2's YAML databases cannot be read);
-/// allocate() is not provided (binbow sizes its index itself).
+/// binbow's .bbdb format (DBoW2's YAML databases cannot be read).
+///
+/// Threads: query() may run from several threads at once (binbow's index
+/// locks itself); retrieveFeatures() and every non-const method need
+/// exclusive access, as everything in DBoW2 does.
 template <class TDescriptor, class F>
 class TemplatedDatabase {
  public:
@@ -85,6 +89,13 @@ class TemplatedDatabase {
   }
   /// The database's own copy of the vocabulary (NULL without one).
   const Vocabulary* getVocabulary() const { return voc_; }
+
+  /// Accepted for DBoW2 code that calls it; reserves nothing, since binbow's
+  /// index grows by itself without copying its postings.
+  void allocate(int nd = 0, int ni = 0) {
+    (void)nd;
+    (void)ni;
+  }
 
   /// Transforms the features and adds the image; also returns its BoW vector
   /// and feature vector (at getDirectIndexLevels()) through the pointers
@@ -173,6 +184,18 @@ class TemplatedDatabase {
   Vocabulary* voc_;
   binbow_detail::DatabaseCore core_;
 };
+
+/// "Database: Entries = 10, Using direct index = yes, Direct index levels =
+/// 4. Vocabulary: ...", as DBoW2 prints it.
+template <class TDescriptor, class F>
+std::ostream& operator<<(std::ostream& os, const TemplatedDatabase<TDescriptor, F>& db) {
+  os << "Database: Entries = " << db.size()
+     << ", Using direct index = " << (db.usingDirectIndex() ? "yes" : "no");
+  if (db.usingDirectIndex()) os << ", Direct index levels = " << db.getDirectIndexLevels();
+  os << ". ";
+  if (db.getVocabulary()) os << *db.getVocabulary();
+  return os;
+}
 
 }  // namespace DBoW2
 
