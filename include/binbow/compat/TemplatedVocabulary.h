@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "binbow/compat/BowVector.h"
+#include "binbow/compat/FBrief.h"
+#include "binbow/compat/FORB.h"
 #include "binbow/compat/FeatureVector.h"
 #include "binbow/compat/detail/core.h"
 
