@@ -72,6 +72,29 @@ TEST(Dbow2Database, EraseRemovesTheEntryFromQueriesAndTheDirectIndex) {
   EXPECT_EQ(golden().images.size(), after[0].Id);
 }
 
+std::size_t file_size(const std::string& path) {
+  std::ifstream file(path.c_str(), std::ios::binary | std::ios::ate);
+  return static_cast<std::size_t>(file.tellg());
+}
+
+// A saved database holds the index as memory holds it: its size shows that
+// erased entries' postings and feature vectors are gone, not just hidden.
+TEST(Dbow2Database, EraseFreesTheEntriesMemory) {
+  TempDir dir;
+  OrbDatabase db(vocabulary(), true, 2);
+  db.save(dir.file("empty.bbdb"));  // the vocabulary alone
+  const std::size_t entries = 60 * golden().images.size();
+  for (std::size_t i = 0; i < entries; ++i) db.add(golden().images[i % golden().images.size()]);
+  db.save(dir.file("all.bbdb"));
+  for (DBoW2::EntryId id = 0; id < entries * 3 / 4; ++id) db.erase(id);
+  db.save(dir.file("quarter.bbdb"));
+  const std::size_t empty = file_size(dir.file("empty.bbdb"));
+  const std::size_t all = file_size(dir.file("all.bbdb")) - empty;
+  const std::size_t quarter = file_size(dir.file("quarter.bbdb")) - empty;
+  EXPECT_LT(quarter, all * 2 / 5) << "entries' bytes: " << all << " before, " << quarter
+                                  << " after erasing three quarters";
+}
+
 TEST(Dbow2Database, AddFillsTheVectorsAndKeepsTheDirectIndex) {
   OrbDatabase db(vocabulary(), true, 2);
   EXPECT_TRUE(db.usingDirectIndex());
