@@ -195,7 +195,12 @@ void expect_same_results(const dbow2_golden::Query& expected, const DBoW2::Query
   }
 }
 
-TEST(Dbow2Golden, DatabaseQueries) {
+// DBoW2's queries do not read the direct index: the same golden results hold
+// with and without one.
+class Dbow2GoldenDatabase : public ::testing::TestWithParam<bool> {};
+
+TEST_P(Dbow2GoldenDatabase, Queries) {
+  const bool use_di = GetParam();
   std::map<std::string, OrbDatabase> databases;
   std::size_t limited_by_id = 0, filtered_by_common_words = 0;
   for (const dbow2_golden::Query& q : golden().queries) {
@@ -203,7 +208,7 @@ TEST(Dbow2Golden, DatabaseQueries) {
       OrbVocabulary voc = vocabulary();
       voc.setScoringType(dbow2_golden::scoring_named(q.scoring));
       OrbDatabase& db = databases[q.scoring];
-      db.setVocabulary(voc, true, 1);
+      db.setVocabulary(voc, use_di, use_di ? 1 : 0);
       for (std::size_t i = 0; i < golden().images.size(); ++i)
         EXPECT_EQ(i, db.add(golden().images[i]));
     }
@@ -222,5 +227,10 @@ TEST(Dbow2Golden, DatabaseQueries) {
   EXPECT_GT(limited_by_id, 0u);  // max_id restricts while max_results still fills up
   EXPECT_GT(filtered_by_common_words, 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(DirectIndex, Dbow2GoldenDatabase, ::testing::Values(true, false),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "WithDirectIndex" : "WithoutDirectIndex";
+                         });
 
 }  // namespace
