@@ -229,8 +229,8 @@ TEST_P(Dbow2GoldenDatabase, Queries) {
 }
 
 INSTANTIATE_TEST_SUITE_P(DirectIndex, Dbow2GoldenDatabase, ::testing::Values(true, false),
-                         [](const ::testing::TestParamInfo<bool>& info) {
-                           return info.param ? "WithDirectIndex" : "WithoutDirectIndex";
+                         [](const ::testing::TestParamInfo<bool>& param) {
+                           return param.param ? "WithDirectIndex" : "WithoutDirectIndex";
                          });
 
 }  // namespace
