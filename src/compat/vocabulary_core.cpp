@@ -40,12 +40,17 @@ std::out_of_range no_word(WordId wid, std::size_t words) {
 }  // namespace
 
 void VocabularyCore::Impl::assign(binbow::Vocabulary v) {
-  binbow::VocabularyTree tree = v.to_tree();
   k = static_cast<int>(v.branching());
   L = static_cast<int>(v.levels());
   weighting = static_cast<WeightingType>(v.weighting());
   scoring = static_cast<ScoringType>(v.scoring());
-  parent = std::move(tree.parent);
+  parent.assign(v.node_count(), 0);
+  for (binbow::NodeId node = 0; node < v.node_count(); ++node) {
+    if (v.is_leaf(node)) continue;
+    const binbow::NodeId first = v.first_child(node);
+    for (binbow::NodeId child = first; child < first + v.child_count(node); ++child)
+      parent[child] = node;
+  }
   word_node = v.word_nodes();
   vocabulary = std::move(v);
 }
