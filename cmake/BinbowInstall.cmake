@@ -1,6 +1,6 @@
 include(CMakePackageConfigHelpers)
 
-# Two export sets, so that a consumer of binbow::core alone needs no OpenCV:
+# Export sets per component, so that a consumer of binbow::core alone needs no OpenCV:
 # binbowConfig.cmake loads the vision targets only when their dependencies are found.
 install(TARGETS binbow_core EXPORT binbowCoreTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
@@ -10,11 +10,18 @@ install(TARGETS binbow_vision EXPORT binbowVisionTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+# binbow::dbow2 (DBoW2's API) needs OpenCV core only.
+install(TARGETS binbow_dbow2 EXPORT binbowDbow2Targets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS binbow RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY include/binbow DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT binbowCoreTargets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
 install(EXPORT binbowVisionTargets NAMESPACE binbow::
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
+install(EXPORT binbowDbow2Targets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
 
 configure_package_config_file(cmake/binbowConfig.cmake.in
@@ -30,7 +37,7 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/binbowConfig.cmake
 # from the file's own folder). The libraries are static, so their dependencies
 # are public requirements.
 file(RELATIVE_PATH BINBOW_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
-foreach(pc_file binbow binbow-vision)
+foreach(pc_file binbow binbow-vision binbow-dbow2)
   configure_file(cmake/${pc_file}.pc.in ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc @ONLY)
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc
           DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

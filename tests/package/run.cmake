@@ -1,7 +1,9 @@
 # Installs the build tree into a scratch prefix, then builds and runs separate
 # consumer projects: one of binbow::core alone (find_package COMPONENTS core),
-# one of binbow::vision exactly as the README shows, and the same two sources
-# built with nothing but the compiler and pkg-config.
+# one of binbow::vision exactly as the README shows, the same two sources
+# built with nothing but the compiler and pkg-config, and one of
+# binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built as C++11 through
+# find_package and through pkg-config.
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 
@@ -36,6 +38,20 @@ foreach(consumer core vision)
   message(STATUS "CMake ${consumer}: ${output}")
 endforeach()
 
+# binbow::dbow2: an ORB-SLAM text vocabulary made by the installed CLI, and
+# DBoW2's own numbers to reproduce.
+set(orbvoc ${WORK_DIR}/ORBvoc.txt)
+run("converting the vocabulary for the dbow2 consumer" ${prefix}/bin/binbow convert ${vocabulary} ${orbvoc})
+set(build ${WORK_DIR}/dbow2-cmake)
+run("configuring the dbow2 consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/dbow2
+    -B ${build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+run("building the dbow2 consumer" ${CMAKE_COMMAND} --build ${build})
+run("running the dbow2 consumer" ${build}/consumer ${orbvoc} ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
+if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
+  message(FATAL_ERROR "the dbow2 consumer printed: ${output}")
+endif()
+message(STATUS "CMake dbow2: ${output}")
+
 # pkg-config: binbow (core) and binbow-vision.
 set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
 foreach(consumer core vision)
@@ -56,3 +72,17 @@ foreach(consumer core vision)
   endif()
   message(STATUS "pkg-config ${consumer}: ${output}")
 endforeach()
+
+# pkg-config: binbow-dbow2, as C++11.
+run("pkg-config binbow-dbow2" pkg-config --cflags --libs binbow-dbow2)
+string(STRIP "${output}" flags)
+separate_arguments(flags UNIX_COMMAND "${flags}")
+set(program ${WORK_DIR}/dbow2-pkgconfig)
+run("building the dbow2 consumer with pkg-config" ${CXX} -std=c++11 -O1
+    -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2/main.cpp -o ${program} ${flags})
+run("running the dbow2 consumer (pkg-config)" ${program} ${orbvoc}
+    ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
+if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
+  message(FATAL_ERROR "the dbow2 consumer built with pkg-config printed: ${output}")
+endif()
+message(STATUS "pkg-config dbow2: ${output}")
