@@ -2,8 +2,10 @@
 // BRIEF descriptors, printing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bitset>
 #include <fstream>
+#include <initializer_list>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -244,6 +246,30 @@ TEST(Dbow2Vocabulary, SaveLoadRoundTripsInEveryFormat) {
   EXPECT_TRUE(expected == bows_of(through_load_bin));
 }
 
+// VINS-Mono and VINS-Fusion load their brief_k10L6.bin with loadBin.
+TEST(Dbow2Vocabulary, LoadBinReadsVinsBinaryVocabularies) {
+  TempDir dir;
+  const std::string bbw = source_path("data/vocab/brief_default.bbw");
+  const binbow::Vocabulary core = binbow::load_vocabulary(bbw);
+  binbow::save_vocabulary(core, dir.file("brief_k10L6.bin"), binbow::VocabularyFormat::kVinsBinary);
+  ASSERT_EQ(binbow::VocabularyFormat::kVinsBinary,
+            binbow::detect_vocabulary_format(dir.file("brief_k10L6.bin")));
+  BriefVocabulary vins;
+  vins.loadBin(dir.file("brief_k10L6.bin"));
+  const BriefVocabulary original(bbw);
+  ASSERT_EQ(original.size(), vins.size());
+  EXPECT_EQ(original.getBranchingFactor(), vins.getBranchingFactor());
+  EXPECT_EQ(original.getDepthLevels(), vins.getDepthLevels());
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 100; ++i) {
+    const binbow::DescriptorMatrix bytes = binbow::test::random_descriptors(1, 32, rng);
+    const cv::Mat row(1, 32, CV_8U, const_cast<std::uint8_t*>(bytes.row(0)));
+    EXPECT_EQ(original.transform(row), vins.transform(row));
+  }
+  for (DBoW2::WordId w = 0; w < original.size(); w += 97)
+    EXPECT_FLOAT_EQ(original.getWordWeight(w), vins.getWordWeight(w)) << w;
+}
+
 TEST(Dbow2Vocabulary, StopWordsAndWeightingSurviveSave) {
   TempDir dir;
   OrbVocabulary voc = vocabulary();
@@ -340,22 +366,35 @@ TEST(Dbow2Vocabulary, WordsNodesAndDescriptors) {
   EXPECT_THROW(voc.transform(golden().images[0], v, fv, -1), std::invalid_argument);
 }
 
-TEST(Dbow2Vocabulary, BriefDescriptorsAreBitsetsInDbow2Order) {
+// A BRIEF descriptor with exactly the tests in `tests` set (test i is bit
+// i % 8 of byte i / 8).
+cv::Mat brief_with_tests(std::initializer_list<int> tests) {
+  cv::Mat d = cv::Mat::zeros(1, 32, CV_8U);
+  for (int test : tests)
+    d.at<unsigned char>(0, test / 8) |= static_cast<unsigned char>(1 << (test % 8));
+  return d;
+}
+
+TEST(Dbow2Vocabulary, BriefDescriptorsAreMatRowsInDbow2BitOrder) {
   const BriefVocabulary voc(source_path("data/vocab/brief_default.bbw"));
   const binbow::Vocabulary core =
       binbow::load_vocabulary(source_path("data/vocab/brief_default.bbw"));
   std::mt19937_64 rng(5);
   for (int i = 0; i < 200; ++i) {
     const binbow::DescriptorMatrix bytes = binbow::test::random_descriptors(1, 32, rng);
-    DBoW2::FBrief::TDescriptor bits;
-    for (std::size_t b = 0; b < 256; ++b) bits[b] = (bytes.row(0)[b / 8] >> (b % 8)) & 1u;
-    EXPECT_EQ(core.quantize(bytes.row(0)), voc.transform(bits));
+    const cv::Mat row(1, 32, CV_8U, const_cast<std::uint8_t*>(bytes.row(0)));
+    EXPECT_EQ(core.quantize(bytes.row(0)), voc.transform(row));
   }
   TempDir dir;
   voc.save(dir.file("brief.yml"));  // FBrief's bit strings, as DBoW2 writes them
   std::ifstream file(dir.file("brief.yml").c_str());
   std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("descriptor:\"" + voc.getWord(5).to_string() + "\""), std::string::npos);
+  EXPECT_NE(text.find("descriptor:\"" + DBoW2::FBrief::toString(voc.getWord(5)) + "\""),
+            std::string::npos);
+  // And the file reads back as the same words.
+  const BriefVocabulary reread(dir.file("brief.yml"));
+  for (DBoW2::WordId w = 0; w < 20; ++w)
+    EXPECT_EQ(0, DBoW2::FBrief::distance(voc.getWord(w), reread.getWord(w))) << w;
 }
 
 TEST(Dbow2Descriptors, ForbAndFbriefFunctions) {
@@ -381,17 +420,29 @@ TEST(Dbow2Descriptors, ForbAndFbriefFunctions) {
   DBoW2::FORB::toMat8U(golden().images[0], rows);
   EXPECT_EQ(static_cast<int>(golden().images[0].size()), rows.rows);
 
-  DBoW2::FBrief::TDescriptor x, y;
-  x.set(3);
-  x.set(200);
-  y.set(3);
+  const cv::Mat x = brief_with_tests({3, 200});
+  const cv::Mat y = brief_with_tests({3});
   EXPECT_EQ(1, DBoW2::FBrief::distance(x, y));
-  DBoW2::FBrief::TDescriptor z;
-  DBoW2::FBrief::fromString(z, DBoW2::FBrief::toString(x));
-  EXPECT_EQ(x, z);
+  // DBoW2's bitset::to_string: test 255 first.
+  const std::string text = DBoW2::FBrief::toString(x);
+  ASSERT_EQ(256u, text.size());
+  EXPECT_EQ('1', text[255 - 3]);
+  EXPECT_EQ('1', text[255 - 200]);
+  EXPECT_EQ(2, std::count(text.begin(), text.end(), '1'));
+  cv::Mat z;
+  DBoW2::FBrief::fromString(z, text);
+  EXPECT_EQ(0, DBoW2::FBrief::distance(x, z));
+  EXPECT_THROW(DBoW2::FBrief::fromString(z, "0101"), std::invalid_argument);
   std::vector<DBoW2::FBrief::pDescriptor> votes = {&x, &x, &y};
   DBoW2::FBrief::meanValue(votes, z);
-  EXPECT_EQ(x, z);
+  EXPECT_EQ(0, DBoW2::FBrief::distance(x, z));
+  cv::Mat brief_floats;
+  DBoW2::FBrief::toMat32F(std::vector<cv::Mat>(1, x), brief_floats);
+  ASSERT_EQ(256, brief_floats.cols);
+  EXPECT_EQ(1.f, brief_floats.at<float>(0, 3));
+  EXPECT_EQ(0.f, brief_floats.at<float>(0, 4));
+  EXPECT_EQ(1.f, brief_floats.at<float>(0, 200));
+  EXPECT_THROW(DBoW2::FBrief::distance(x, cv::Mat::zeros(1, 16, CV_8U)), std::invalid_argument);
 }
 
 TEST(Dbow2Vectors, PrintingAndNormalisationAsDbow2) {

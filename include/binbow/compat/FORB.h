@@ -45,8 +45,10 @@ namespace binbow_detail {
 void append_descriptor_bytes(const cv::Mat& d, std::size_t code_size,
                              std::vector<unsigned char>& out);
 void descriptor_from_bytes(const unsigned char* bytes, std::size_t code_size, cv::Mat& d);
-// DBoW2 YAML files of ORB vocabularies hold decimal bytes, not bit strings.
-inline bool yaml_bit_strings(const cv::Mat*) {
+// DBoW2 YAML files hold decimal bytes for every descriptor class but FBrief,
+// whose words are bit strings (see FBrief.h).
+template <class F>
+inline bool yaml_bit_strings(const F*) {
   return false;
 }
 }  // namespace binbow_detail

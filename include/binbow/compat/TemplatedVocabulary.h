@@ -31,7 +31,7 @@ class TemplatedDatabase;
 
 /// A vocabulary tree of k branches and L levels whose leaves are the words.
 /// TDescriptor/F: FORB::TDescriptor/FORB (ORB, cv::Mat rows of 32 bytes) or
-/// FBrief::TDescriptor/FBrief (std::bitset<256>); any F with the same
+/// FBrief::TDescriptor/FBrief (BRIEF, cv::Mat rows of 32 bytes); any F with the same
 /// descriptor types works, since binbow compares descriptors itself
 /// (Hamming distance, lowest child index on ties, as DBoW2's FORB/FBrief).
 ///
@@ -143,7 +143,7 @@ class TemplatedVocabulary {
   /// text), .bin (ORB-SLAM binary), .bbw (binbow), .dbow3, .fbow; any may
   /// end in .gz. Atomic: a failed save leaves no partial file.
   void save(const std::string& filename) const {
-    core_.save(filename, binbow_detail::yaml_bit_strings(static_cast<const TDescriptor*>(NULL)));
+    core_.save(filename, binbow_detail::yaml_bit_strings(static_cast<const F*>(NULL)));
   }
   /// Reads a vocabulary in any format binbow reads, detected from the
   /// content: DBoW2 YAML (plain or gzip), ORB-SLAM text and binary,
