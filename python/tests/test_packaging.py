@@ -148,6 +148,15 @@ def test_pip_install_from_the_source_tree(tmp_path):
     assert demo.returncode == 0, demo.stdout[-2000:] + demo.stderr[-2000:]
     assert "precision: 1\n" in demo.stdout, demo.stdout
     assert f"vocabulary: {vocabulary.resolve()}" in demo.stdout, demo.stdout
+    # Ctrl-C during the demo (its first line is printed before the work starts) ends it.
+    interrupted = subprocess.Popen(
+        [sys.executable, "-m", "binbow", "demo", "--out", str(tmp_path / "interrupted")],
+        env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first_line = interrupted.stdout.readline()
+    interrupted.send_signal(signal.SIGINT)
+    rest, errors = interrupted.communicate(timeout=600)
+    assert first_line.startswith("== binbow demo"), first_line + rest + errors
+    assert interrupted.returncode == -signal.SIGINT, (interrupted.returncode, rest, errors)
 
 
 def test_sdist_carries_the_sources_and_the_licenses(tmp_path):
