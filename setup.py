@@ -2,9 +2,13 @@
 
 The extension is built by the project's CMake (Release, the library's runtime
 CPU dispatch: per-file -mpopcnt / -mavx512* kernels chosen at run time), so it
-is the same code as the C++ library; the bundled default vocabularies are
-shipped inside the package (binbow/data/vocab). The version is the one of
-CMakeLists.txt's project(VERSION).
+is the same code as the C++ library. The package is laid out as an installed
+prefix: the `binbow` CLI, built by the same CMake run, is binbow/bin/binbow
+and the bundled data (default vocabularies, the demo's sample sequence, each
+with its license notice) binbow/share/binbow, where the CLI looks for it
+(<exe>/../share/binbow); the `binbow` console script and `python -m binbow`
+exec that CLI (binbow/_cli.py). The version is the one of CMakeLists.txt's
+project(VERSION).
 """
 import os
 import re
@@ -32,7 +36,7 @@ def project_version():
 
 
 class BuildWithCMake(build_ext):
-    """Configures the project in the build folder and builds only the module's target."""
+    """Configures the project in the build folder and builds the module and the CLI."""
 
     def build_extension(self, ext):
         build_dir = Path(self.build_temp).resolve() / "cmake"
@@ -40,6 +44,8 @@ class BuildWithCMake(build_ext):
             "cmake", "-S", str(ROOT), "-B", str(build_dir),
             "-DCMAKE_BUILD_TYPE=Release",
             "-DBINBOW_BUILD_TESTS=OFF", "-DBINBOW_BUILD_BENCH=OFF", "-DBINBOW_BUILD_PYTHON=ON",
+            # Static binbow libraries: the module and the CLI need no library of the build folder.
+            "-DBUILD_SHARED_LIBS=OFF",
             f"-DPython3_EXECUTABLE={sys.executable}",
         ]
         if shutil.which("ninja"):
@@ -49,7 +55,8 @@ class BuildWithCMake(build_ext):
         jobs = self.parallel or os.cpu_count() or 1
         subprocess.run(configure, check=True)
         subprocess.run(
-            ["cmake", "--build", str(build_dir), "--target", "binbow_python", "-j", str(jobs)],
+            ["cmake", "--build", str(build_dir), "--target", "binbow_python", "binbow",
+             "-j", str(jobs)],
             check=True,
         )
         built = sorted((build_dir / "python" / "binbow").glob("_binbow*.so"))
@@ -58,21 +65,35 @@ class BuildWithCMake(build_ext):
         target = Path(self.get_ext_fullpath(ext.name))
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(built[0], target)
+        cli = build_dir / "bin" / "binbow"
+        if not cli.is_file():
+            sys.exit(f"setup.py: CMake built no binbow CLI at {cli}")
+        packaged_cli = target.parent / "bin" / "binbow"
+        packaged_cli.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(cli, packaged_cli)
+        packaged_cli.chmod(0o755)
 
 
 class BuildWithData(build_py):
-    """Adds the bundled vocabularies and tells the package they are inside it."""
+    """Adds the bundled data as the CLI expects it and tells the package where it is."""
 
     def run(self):
         super().run()
         package = Path(self.build_lib) / "binbow"
-        vocab = package / "data" / "vocab"
-        vocab.mkdir(parents=True, exist_ok=True)
+        data = package / "share" / "binbow"
+        if data.exists():
+            shutil.rmtree(data)
+        # The vocabularies with their provenance, the sample with its LICENSE.
+        vocab = data / "vocab"
+        vocab.mkdir(parents=True)
         for source in sorted((ROOT / "data" / "vocab").glob("*.bbw")):
             shutil.copyfile(source, vocab / source.name)
+        shutil.copyfile(ROOT / "data" / "vocab" / "PROVENANCE.md", vocab / "PROVENANCE.md")
+        shutil.copytree(ROOT / "data" / "samples", data / "samples")
         (package / "_data_location.py").write_text(
-            "# Written by setup.py: the bundled data folder, relative to this package.\n"
-            'DATA_DIRECTORY = "data"\n',
+            "# Written by setup.py: the bundled data folder and the CLI, relative to this package.\n"
+            'DATA_DIRECTORY = "share/binbow"\n'
+            'CLI_EXECUTABLE = "bin/binbow"\n',
             encoding="utf-8",
         )
 

@@ -44,4 +44,9 @@ foreach(pc_file binbow binbow-vision binbow-dbow2)
 endforeach()
 
 # Bundled data, found by the CLI at <prefix>/share/binbow (default vocabularies, demo sample).
+# Each folder keeps its license notice and provenance (samples/rtabmap/LICENSE,
+# vocab/PROVENANCE.md) next to the files.
 install(DIRECTORY data/vocab data/samples DESTINATION ${CMAKE_INSTALL_DATADIR}/binbow)
+# binbow's license and the origin and license of every third-party file; the
+# built-in BRIEF pattern's license asks binary distributions to carry its notice.
+install(FILES LICENSE THIRD_PARTY.md DESTINATION ${CMAKE_INSTALL_DOCDIR})

@@ -32,7 +32,7 @@ int fail(const std::string& message) {
 int main(int argc, char** argv) {
   CLI::App app{"binbow: fast place recognition and loop closure with bags of binary words"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "binbow 0.1.0");
+  app.set_version_flag("--version", "binbow " BINBOW_VERSION);
   binbow::cli::add_info_command(app);
   binbow::cli::add_build_vocab_command(app);
   binbow::cli::add_features_command(app);

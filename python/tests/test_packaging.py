@@ -2,19 +2,24 @@
 
 Each installed copy is imported by a clean interpreter (-I: no PYTHONPATH, no
 user site, not this source tree) from another folder, and must give the
-project's version and the bundled default vocabularies.
+project's version and the bundled default vocabularies. Its `binbow` command
+(the console script, `python -m binbow`) must be the C++ CLI of the build
+under test: same version, errors and exit statuses. Both installs carry
+binbow's license and the third-party notices.
 
 pip is needed (Debian's python3-pip, installed by scripts/install-deps.sh);
 where it cannot be installed, BINBOW_SKIP_PIP_TEST=1 skips the pip test alone.
 """
 import os
 import re
+import signal
 import subprocess
 import sys
+import tarfile
 
 import pytest
 
-from conftest import SOURCE_DIR, require_env
+from conftest import SOURCE_DIR, cli, require_env
 
 pytestmark = pytest.mark.packaging
 
@@ -43,8 +48,7 @@ def project_version():
 
 def import_installed(site_dir, cwd, extra_env=None):
     """Imports binbow from `site_dir` alone, in a fresh process started in `cwd`."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "BINBOW_"))}
-    env.update(extra_env or {})
+    env = clean_env(**(extra_env or {}))
     code = f"import sys; sys.path.insert(0, {str(site_dir)!r})\n" + CHECK
     result = subprocess.run(
         [sys.executable, "-I", "-c", code, project_version(), str(site_dir),
@@ -53,6 +57,57 @@ def import_installed(site_dir, cwd, extra_env=None):
     )
     assert result.returncode == 0, result.stdout + result.stderr
     assert "imported" in result.stdout
+
+
+def clean_env(**extra):
+    """The environment without the test's PYTHON* and BINBOW_* settings."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "BINBOW_"))}
+    env.update(extra)
+    return env
+
+
+def run(command, env, cwd, stdout=subprocess.PIPE):
+    return subprocess.run(command, env=env, cwd=cwd, stdout=stdout, stderr=subprocess.PIPE,
+                          text=True, timeout=600)
+
+
+def check_command_is_the_cli(command, env, cwd):
+    """`command` (a list) behaves as the C++ build's binbow: output, errors, signals."""
+    expected = run([str(cli()), "--version"], os.environ, cwd)
+    assert expected.returncode == 0 and expected.stdout.startswith("binbow "), expected
+    version = run([*command, "--version"], env, cwd)
+    assert (version.returncode, version.stdout) == (0, expected.stdout), (command, version)
+    assert version.stdout.strip() == f"binbow {project_version()}"
+
+    unknown = run([*command, "no-such-command"], env, cwd)
+    assert unknown.returncode == 1, (command, unknown)
+    assert unknown.stderr.startswith("binbow: error:"), (command, unknown.stderr)
+
+    # A closed pipe ends it by SIGPIPE, as the C++ command (Python ignores SIGPIPE).
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        piped = run([*command, "--version"], env, cwd, stdout=write_end)
+        direct = run([str(cli()), "--version"], os.environ, cwd, stdout=write_end)
+    finally:
+        os.close(write_end)
+    assert piped.returncode == direct.returncode == -signal.SIGPIPE, (piped, direct)
+
+
+def check_info_of_bundled_vocabulary(command, vocabulary, env, cwd):
+    info = run([*command, "info", str(vocabulary)], env, cwd)
+    assert info.returncode == 0, (command, info)
+    assert "kind: vocabulary" in info.stdout and "descriptor: orb" in info.stdout, info.stdout
+
+
+def check_license_metadata(dist_info):
+    metadata = (dist_info / "METADATA").read_text(encoding="utf-8")
+    assert "License: BSD-3-Clause" in metadata.splitlines(), metadata[:2000]
+    assert "Classifier: License :: OSI Approved :: BSD License" in metadata, metadata[:2000]
+    for name in ("LICENSE", "THIRD_PARTY.md"):
+        found = list(dist_info.rglob(name))
+        assert found, f"no {name} in {dist_info}"
+        assert found[0].read_bytes() == (SOURCE_DIR / name).read_bytes(), found[0]
 
 
 def test_pip_install_from_the_source_tree(tmp_path):
@@ -70,11 +125,55 @@ def test_pip_install_from_the_source_tree(tmp_path):
     )
     assert result.returncode == 0, result.stdout[-4000:] + result.stderr[-4000:]
     package = target / "binbow"
-    for name in ("__init__.py", "__init__.pyi", "py.typed", "data/vocab/orb_default.bbw",
-                 "data/vocab/brief_default.bbw"):
+    for name in ("__init__.py", "__init__.pyi", "py.typed", "__main__.py", "bin/binbow",
+                 "share/binbow/vocab/orb_default.bbw", "share/binbow/vocab/brief_default.bbw",
+                 "share/binbow/vocab/PROVENANCE.md", "share/binbow/samples/rtabmap/LICENSE",
+                 "share/binbow/samples/rtabmap/samples_GT.bmp"):
         assert (package / name).is_file(), f"pip installed no binbow/{name}"
     assert list(package.glob("_binbow*.so")), "pip installed no extension"
+    dist_info = list(target.glob("binbow-*.dist-info"))
+    assert len(dist_info) == 1, f"no binbow .dist-info in {target}"
+    check_license_metadata(dist_info[0])
     import_installed(target, tmp_path)
+
+    # The console script and python -m binbow, from another folder.
+    env = clean_env(PYTHONPATH=str(target))
+    vocabulary = package / "share" / "binbow" / "vocab" / "orb_default.bbw"
+    for command in ([str(target / "bin" / "binbow")], [sys.executable, "-m", "binbow"]):
+        check_command_is_the_cli(command, env, tmp_path)
+        check_info_of_bundled_vocabulary(command, vocabulary, env, tmp_path)
+    # The demo finds the sample and the vocabulary installed in the package.
+    demo = run([str(target / "bin" / "binbow"), "demo", "--out", str(tmp_path / "demo")], env,
+               tmp_path)
+    assert demo.returncode == 0, demo.stdout[-2000:] + demo.stderr[-2000:]
+    assert "precision: 1\n" in demo.stdout, demo.stdout
+    assert f"vocabulary: {vocabulary.resolve()}" in demo.stdout, demo.stdout
+    # Ctrl-C during the demo (its first line is printed before the work starts) ends it.
+    interrupted = subprocess.Popen(
+        [sys.executable, "-m", "binbow", "demo", "--out", str(tmp_path / "interrupted")],
+        env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first_line = interrupted.stdout.readline()
+    interrupted.send_signal(signal.SIGINT)
+    rest, errors = interrupted.communicate(timeout=600)
+    assert first_line.startswith("== binbow demo"), first_line + rest + errors
+    assert interrupted.returncode == -signal.SIGINT, (interrupted.returncode, rest, errors)
+
+
+def test_sdist_carries_the_sources_and_the_licenses(tmp_path):
+    result = subprocess.run([sys.executable, "setup.py", "-q", "sdist", "-d", str(tmp_path)],
+                            cwd=SOURCE_DIR, capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout[-4000:] + result.stderr[-4000:]
+    archives = list(tmp_path.glob("binbow-*.tar.gz"))
+    assert len(archives) == 1, list(tmp_path.iterdir())
+    with tarfile.open(archives[0]) as archive:
+        names = {name.split("/", 1)[1] for name in archive.getnames() if "/" in name}
+        pkg_info = archive.extractfile(f"binbow-{project_version()}/PKG-INFO").read().decode()
+    for name in ("LICENSE", "THIRD_PARTY.md", "CMakeLists.txt", "setup.py", "pyproject.toml",
+                 "src/CMakeLists.txt", "apps/binbow/main.cpp", "python/module.cpp",
+                 "python/binbow/_cli.py", "data/samples/rtabmap/LICENSE",
+                 "data/vocab/orb_default.bbw"):
+        assert name in names, f"the sdist has no {name}"
+    assert "License: BSD-3-Clause" in pkg_info.splitlines(), pkg_info[:2000]
 
 
 def test_cmake_install_puts_the_package_in_the_prefix(tmp_path):
@@ -87,7 +186,17 @@ def test_cmake_install_puts_the_package_in_the_prefix(tmp_path):
     version = f"python{sys.version_info.major}.{sys.version_info.minor}"
     site_dir = prefix / "lib" / version / "site-packages"
     assert (site_dir / "binbow" / "py.typed").is_file(), f"no package in {site_dir}"
+    for name in ("share/doc/binbow/LICENSE", "share/doc/binbow/THIRD_PARTY.md",
+                 "share/binbow/samples/rtabmap/LICENSE", "share/binbow/vocab/PROVENANCE.md"):
+        assert (prefix / name).is_file(), f"cmake --install put no {name} in the prefix"
     # The vocabularies come from <prefix>/share/binbow: moving the prefix keeps them found.
     moved = tmp_path / "moved"
     prefix.rename(moved)
-    import_installed(moved / "lib" / version / "site-packages", tmp_path)
+    site_dir = moved / "lib" / version / "site-packages"
+    import_installed(site_dir, tmp_path)
+    # python -m binbow runs <prefix>/bin/binbow.
+    env = clean_env(PYTHONPATH=str(site_dir))
+    command = [sys.executable, "-m", "binbow"]
+    check_command_is_the_cli(command, env, tmp_path)
+    check_info_of_bundled_vocabulary(command, moved / "share/binbow/vocab/orb_default.bbw", env,
+                                     tmp_path)
