@@ -1,6 +1,6 @@
 // Vocabulary loading speed per format. The ORB-SLAM text file is generated in
-// ORBvoc.txt's exact format from a random k=10, L=6 tree shaped like the
-// issue's 684k-word vocabulary (levels 1-5 full, 0-10 leaves under each
+// ORBvoc.txt's exact format from a random k=10, L=6 tree shaped like
+// ORB-SLAM's 684k-word ORBvoc.txt (levels 1-5 full, 0-10 leaves under each
 // depth-5 node): loading speed depends on the file's size and node count,
 // not on how the words were trained. Results: docs/benchmarks.md, "Formats".
 #include <benchmark/benchmark.h>

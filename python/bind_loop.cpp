@@ -473,7 +473,7 @@ void bind_detection(py::module_& m) {
                              "The detector's parameters (a copy).")
       .def_static("online", &online_detector, py::arg("descriptor"), py::arg("params") = py::none(),
                   "A detector with no pre-trained vocabulary: its words grow from the images\n"
-                  "themselves (issue #14; docs/online-vocabulary.md). descriptor: an extractor\n"
+                  "themselves (docs/online-vocabulary.md). descriptor: an extractor\n"
                   "name (\"orb\", \"brief\", ...) or the descriptor size in bytes; params: a\n"
                   "LoopDetectorParams or None; keyword arguments set the online vocabulary's\n"
                   "options: new_word_distance, purge_after_images, trees, branching, leaf_size,\n"

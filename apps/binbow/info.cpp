@@ -1,11 +1,14 @@
 // `binbow info FILE`: what a vocabulary (any readable format), database or
-// loop detector state holds, as `key: value` lines.
+// loop detector state holds, as `key: value` lines. `binbow info --system`:
+// the CPU features binbow's kernels depend on and the Hamming kernel set in use,
+// so that a timing can be reported with the kernel that produced it.
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "binbow/descriptors.h"
 #include "binbow/formats.h"
 #include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
@@ -54,6 +57,16 @@ bool print_loop_state_info(const std::string& path) {
   return true;
 }
 
+void print_system_info() {
+  for (const CpuFeature& feature : cpu_features())
+    std::printf("cpu_%s: %s\n", feature.name, feature.present ? "yes" : "no");
+  std::string supported;
+  for (const std::string& name : supported_hamming_kernels())
+    supported += (supported.empty() ? "" : " ") + name;
+  std::printf("hamming_kernels_supported: %s\n", supported.c_str());
+  std::printf("hamming_kernel: %s\n", hamming_kernel_name());
+}
+
 }  // namespace
 
 void add_info_command(CLI::App& app) {
@@ -61,11 +74,18 @@ void add_info_command(CLI::App& app) {
       app.add_subcommand("info", "Describe a vocabulary, database or loop detector state file");
   auto path = std::make_shared<std::string>();
   auto header_only = std::make_shared<bool>(false);
-  cmd->add_option("FILE", *path, "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database")
-      ->required();
-  cmd->add_flag("--header-only", *header_only,
-                "Database: read the header only, without checking the whole file");
-  cmd->callback([path, header_only] {
+  auto system = std::make_shared<bool>(false);
+  auto* file = cmd->add_option("FILE", *path,
+                               "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database");
+  auto* header = cmd->add_flag("--header-only", *header_only,
+                               "Database: read the header only, without checking the whole file");
+  cmd->add_flag("--system", *system,
+                "Print the CPU features binbow uses and the Hamming kernel set in use")
+      ->excludes(file)
+      ->excludes(header);
+  cmd->callback([path, header_only, system] {
+    if (*system) return print_system_info();
+    if (path->empty()) throw CLI::RequiredError("FILE");
     if (print_loop_state_info(*path)) return;
     if (print_database_info(*path, !*header_only)) return;
     // The format the loader settled on: inside a .gz it is known only after

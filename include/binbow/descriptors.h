@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace binbow {
@@ -81,7 +82,25 @@ std::uint32_t hamming_distance(const std::uint8_t* a, const std::uint8_t* b, std
 void nearest_neighbors(const DescriptorView& queries, const DescriptorView& candidates,
                        std::uint32_t* best_index, std::uint32_t* best_distance);
 
-// Name of the Hamming kernel family selected at run time ("popcnt" or "generic").
+// Name of the Hamming kernel set chosen at run time for this CPU, the fastest it
+// supports: "avx512" (AVX-512 VPOPCNTDQ), "popcnt" (hardware popcount) or
+// "generic" (portable bit counting). Transform, database and matching speed depend
+// on it, so benchmarks should name it (`binbow info --system` prints it).
 const char* hamming_kernel_name();
+
+// Every kernel set this CPU can run, from the portable one to the fastest; the
+// last one is hamming_kernel_name().
+std::vector<std::string> supported_hamming_kernels();
+
+// A CPU feature that decides which kernel set can run.
+struct CpuFeature {
+  const char* name;  // as GCC's __builtin_cpu_supports spells it, e.g. "avx512vpopcntdq"
+  bool present;
+};
+
+// The CPU features binbow's kernel choice depends on, in a fixed order
+// (popcnt, avx512f, avx512vpopcntdq); empty on non-x86 builds, which always run
+// the compiler's own popcount.
+std::vector<CpuFeature> cpu_features();
 
 }  // namespace binbow

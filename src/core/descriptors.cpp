@@ -46,4 +46,17 @@ const char* hamming_kernel_name() {
   return detail::kernels().name;
 }
 
+std::vector<std::string> supported_hamming_kernels() {
+  std::vector<std::string> names;
+  for (const detail::Kernels* k : detail::supported_kernels()) names.emplace_back(k->name);
+  return names;
+}
+
+std::vector<CpuFeature> cpu_features() {
+  std::vector<CpuFeature> features;
+  for (const detail::CpuFeatureFlag& f : detail::kernel_cpu_features())
+    features.push_back({f.name, f.present});
+  return features;
+}
+
 }  // namespace binbow

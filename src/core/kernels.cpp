@@ -35,6 +35,17 @@ std::vector<const Kernels*> supported_kernels() {
   return all;
 }
 
+std::vector<CpuFeatureFlag> kernel_cpu_features() {
+#if defined(BINBOW_X86_DISPATCH)
+  __builtin_cpu_init();
+  return {{"popcnt", __builtin_cpu_supports("popcnt") != 0},
+          {"avx512f", __builtin_cpu_supports("avx512f") != 0},
+          {"avx512vpopcntdq", __builtin_cpu_supports("avx512vpopcntdq") != 0}};
+#else
+  return {};
+#endif
+}
+
 const Kernels& kernels() {
   // The list goes from the most portable set to the fastest.
   static const Kernels& chosen = *supported_kernels().back();

@@ -51,4 +51,11 @@ const Kernels& generic_kernels();
 // kernels() is the last one.
 std::vector<const Kernels*> supported_kernels();
 
+struct CpuFeatureFlag {
+  const char* name;
+  bool present;
+};
+// The CPU features supported_kernels() checks; empty without run-time dispatch.
+std::vector<CpuFeatureFlag> kernel_cpu_features();
+
 }  // namespace binbow::detail

@@ -3,5 +3,5 @@
 #include <algorithm>
 
 #define BINBOW_KERNEL_NAMESPACE avx512
-#define BINBOW_KERNEL_NAME "avx512-vpopcntdq"
+#define BINBOW_KERNEL_NAME "avx512"
 #include "core/kernels_impl.h"

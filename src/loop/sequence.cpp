@@ -67,7 +67,7 @@ struct SequenceDetector::Impl {
   bool params_given = false;
   bool resumed = false;  // from a saved detector, which brought its parameters
   std::unique_ptr<LoopDetector> detector;
-  // Of every frame of this session (entry ids from first_entry on): a
+  // Of every frame of this run (entry ids from first_entry on): a
   // loop's match_file, and Frame::scale for inliers in file pixels.
   std::vector<std::string> files;
   std::vector<double> scales;

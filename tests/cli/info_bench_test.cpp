@@ -1,5 +1,5 @@
 // The CLI as scripts use it: `binbow info` key lines, errors on stderr with
-// exit status 1, and `binbow bench` on real frames.
+// exit status 1, `binbow info --system`, and `binbow bench` on real frames.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "binbow/database.h"
+#include "binbow/descriptors.h"
 #include "binbow/vocabulary.h"
 #include "support/test_support.h"
 
@@ -137,6 +138,35 @@ TEST(CliInfo, ChecksTheWholeDatabaseUnlessHeaderOnly) {
   EXPECT_NE(out.find("entries: 5\n"), std::string::npos) << out;
 }
 
+TEST(CliInfo, SystemNamesTheHammingKernelInUseAndTheCpuFeatures) {
+  int status = -1;
+  const std::string out = run("info --system", &status);
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("hamming_kernel: " + std::string(hamming_kernel_name()) + "\n"),
+            std::string::npos)
+      << out;
+  std::string supported;
+  for (const std::string& name : supported_hamming_kernels())
+    supported += (supported.empty() ? "" : " ") + name;
+  EXPECT_NE(out.find("hamming_kernels_supported: " + supported + "\n"), std::string::npos) << out;
+  for (const CpuFeature& feature : cpu_features())
+    EXPECT_NE(out.find("cpu_" + std::string(feature.name) + ": " +
+                       (feature.present ? "yes" : "no") + "\n"),
+              std::string::npos)
+        << out;
+}
+
+TEST(CliInfo, SystemTakesNoFileAndAFileIsOtherwiseRequired) {
+  int status = -1;
+  std::string out =
+      run("info --system " + test::source_path("data/vocab/orb_default.bbw"), &status);
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_NE(out.find("binbow: error:"), std::string::npos) << out;
+  out = run("info", &status);
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_NE(out.find("FILE"), std::string::npos) << out;
+}
+
 TEST(CliBench, TimesEveryStageOnRealFrames) {
   test::TempDir dir;
   small_vocabulary().save(dir.file("v.bbw"));
@@ -149,6 +179,10 @@ TEST(CliBench, TimesEveryStageOnRealFrames) {
   for (const char* stage : {"features", "transform", "loop detection", "database add",
                             "database query", "vocabulary load"})
     EXPECT_NE(out.find(stage), std::string::npos) << stage << " missing in:\n" << out;
+  // Timings depend on the kernel set, so the report names the one that ran.
+  EXPECT_NE(out.find("hamming kernel: " + std::string(hamming_kernel_name()) + "\n"),
+            std::string::npos)
+      << out;
 }
 
 }  // namespace

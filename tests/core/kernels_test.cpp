@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "binbow/descriptors.h"
 #include "core/kernels.h"
 #include "support/test_support.h"
 
@@ -98,6 +99,33 @@ TEST(Kernels, TheDispatchedSetIsOneOfTheSupported) {
   bool found = false;
   for (const detail::Kernels* k : all) found = found || k == &detail::kernels();
   EXPECT_TRUE(found) << detail::kernels().name;
+}
+
+TEST(Kernels, ThePublicNamesAreTheDispatchedAndSupportedSets) {
+  EXPECT_STREQ(hamming_kernel_name(), detail::kernels().name);
+  const auto all = detail::supported_kernels();
+  const std::vector<std::string> names = supported_hamming_kernels();
+  ASSERT_EQ(names.size(), all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) EXPECT_EQ(names[i], all[i]->name);
+  EXPECT_EQ(names.front(), "generic");
+  EXPECT_EQ(names.back(), hamming_kernel_name());
+  for (const std::string& name : names)
+    EXPECT_TRUE(name == "generic" || name == "popcnt" || name == "avx512") << name;
+}
+
+TEST(Kernels, CpuFeaturesDecideTheKernelSet) {
+  const std::vector<CpuFeature> features = cpu_features();
+#if defined(__x86_64__)
+  ASSERT_EQ(features.size(), 3u);
+  EXPECT_STREQ(features[0].name, "popcnt");
+  EXPECT_STREQ(features[1].name, "avx512f");
+  EXPECT_STREQ(features[2].name, "avx512vpopcntdq");
+  const bool avx512 = features[0].present && features[1].present && features[2].present;
+  EXPECT_EQ(std::string(hamming_kernel_name()),
+            avx512 ? "avx512" : (features[0].present ? "popcnt" : "generic"));
+#else
+  EXPECT_TRUE(features.empty());
+#endif
 }
 
 TEST(Kernels, DistancesAndNearestRowsEqualBitCounting) {

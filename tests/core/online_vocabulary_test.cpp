@@ -234,7 +234,7 @@ Recall recall(const OnlineVocabulary& vocabulary, const DescriptorView& queries)
 }
 
 TEST(OnlineVocabulary, ApproximateSearchAgreesWithBruteForceOnClusteredDescriptors) {
-  // Descriptors around 2,000 centres, 10% of bits flipped (about 26 bits
+  // Descriptors near 2,000 centres, 10% of bits flipped (about 26 bits
   // from their centre, as close matches of real ORB features are), after
   // the trees have been split and rebuilt many times. The documented rates
   // (docs/online-vocabulary.md), a little lowered so that the test does not

@@ -2,7 +2,7 @@
 // on rtabmap-samples (84 frames, 44 queries with a ground-truth loop): no false
 // loop with any vocabulary binbow can build or read, and recall at that
 // precision of at least 0.90 (bundled ORB), 0.70 (bundled BRIEF) and 0.50
-// (brief_lite); with no pre-trained vocabulary (issue #14), 0.85 (ORB) and
+// (brief_lite); with no pre-trained vocabulary (online), 0.85 (ORB) and
 // 0.70 (BRIEF). Through the CLI, as scripts/measure_accuracy.sh measures them.
 #include <gtest/gtest.h>
 
@@ -96,7 +96,7 @@ INSTANTIATE_TEST_SUITE_P(
         AccuracyCase{"kimera", "orb", "shared:kimera-small-voc/small_voc.yml.gz", 0},
         AccuracyCase{"orb_k10_L5", "orb", "trained:5", 0},
         AccuracyCase{"orb_k10_L6", "orb", "trained:6", 0},
-        // Issue #14's targets with no pre-trained vocabulary.
+        // With no pre-trained vocabulary.
         AccuracyCase{"online_orb", "orb", "online:", 0.85},
         AccuracyCase{"online_brief", "brief", "online:", 0.70}),
     [](const testing::TestParamInfo<AccuracyCase>& test) { return std::string(test.param.name); });

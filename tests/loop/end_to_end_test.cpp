@@ -26,11 +26,10 @@ using test::shared_data;
 
 class RealSequence : public testing::Test {
  protected:
-  // A stand-in until the bundled default vocabularies exist: ORB k=10, L=4
-  // from the extractor's default 1000 features of each image of two unrelated
-  // sets (none of rtabmap-samples). Its recall here is 0.91 (0.77 before
-  // the defaults of issue #17); such small vocabularies vary with seeds and
-  // feature counts, see docs/loop-detection.md.
+  // A vocabulary trained here rather than a bundled one: ORB k=10, L=4 from
+  // the extractor's default 1000 features of each image of two unrelated sets
+  // (none of rtabmap-samples). Its recall here is 0.91; such small
+  // vocabularies vary with seeds and feature counts, see docs/loop-detection.md.
   static const Vocabulary& vocabulary() {
     static const Vocabulary v = [] {
       const auto extractor = make_extractor("orb");

@@ -164,8 +164,8 @@ TEST(LoopDetectorParams, NonFiniteNumbersAreRefusedInYamlAsInJson) {
 }
 
 // Every parameter has a documented range; the upper bounds keep a parameter
-// file from asking for unbounded work (the 1,000,000 RANSAC
-// iterations at 1e-9 px ran past 120 s on 84 frames).
+// file from asking for unbounded work (1,000,000 RANSAC iterations at
+// 1e-9 px ran past 120 s on 84 frames).
 TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
   test::TempDir dir;
   expect_error_mentions(dir.file("a.json"),

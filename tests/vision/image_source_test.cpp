@@ -245,7 +245,7 @@ void expect_image_error_mentioning(const std::string& path, const std::string& n
   }
 }
 
-// The bombs, crafted: small files declaring 32768x32767 (PNG) and
+// Decompression bombs, crafted: small files declaring 32768x32767 (PNG) and
 // 30000x30000 (TIFF) pixels are refused by the default limit in no time.
 TEST(ReadGreyImage, DefaultPixelLimitRefusesSmallFilesDeclaringHugeImages) {
   TempDir dir;
