@@ -34,9 +34,16 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/binbowConfig.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
 
 # pkg-config files for builds without CMake, relocatable (the prefix is found
-# from the file's own folder). The libraries are static, so their dependencies
-# are public requirements.
+# from the file's own folder). No -std= flag: binbow needs C++17 or later,
+# which the consumer chooses. Dependencies binbow's headers do not show
+# (zlib, matio, libjpeg) are private requirements of shared libraries, and
+# public ones of static libraries, which cannot link without them.
 file(RELATIVE_PATH BINBOW_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
+if(BUILD_SHARED_LIBS)
+  set(BINBOW_PC_PRIVATE ".private")
+else()
+  set(BINBOW_PC_PRIVATE "")
+endif()
 foreach(pc_file binbow binbow-vision binbow-dbow2)
   configure_file(cmake/${pc_file}.pc.in ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc @ONLY)
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Installs everything binbow needs to build, test and benchmark on Debian 12.
+# Installs everything binbow needs to build, test and benchmark on Debian 12
+# (other releases: docs/install.md).
 # Run as root (or through sudo). Only Debian packages; nothing is downloaded
 # at build time.
 set -euo pipefail
 packages=(
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git ccache
   libopencv-dev libjpeg-dev libmatio-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
@@ -13,6 +14,9 @@ packages=(
   python3-distributed
   clang libclang-rt-14-dev clang-format
   chromium
+  colcon python3-colcon-cmake python3-colcon-ros python3-colcon-bash python3-colcon-recursive-crawl
+  python3-colcon-parallel-executor python3-colcon-package-selection python3-colcon-output
+  python3-colcon-library-path python3-colcon-metadata python3-colcon-defaults
 )
 if [ "$(id -u)" -ne 0 ]; then
   if ! command -v sudo >/dev/null 2>&1; then

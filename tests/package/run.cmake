@@ -1,9 +1,10 @@
-# Installs the build tree into a scratch prefix, then builds and runs separate
-# consumer projects: one of binbow::core alone (find_package COMPONENTS core),
-# one of binbow::vision exactly as the README shows, the same two sources
-# built with nothing but the compiler and pkg-config, and one of
-# binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built as C++11 through
-# find_package and through pkg-config.
+# Installs the build tree into a scratch prefix, runs the installed CLI, then
+# builds and runs separate consumer projects: one of binbow::core alone
+# (find_package COMPONENTS core), one of binbow::vision exactly as the README
+# shows, the same two sources built with nothing but the compiler and
+# pkg-config, and one of binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built
+# as C++11 through find_package and through pkg-config. With SHARED, every
+# program must link binbow's shared libraries.
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 
@@ -15,6 +16,17 @@ function(run what)
   set(output "${out}" PARENT_SCOPE)
 endfunction()
 
+# A program links libbinbow_<library>.so.<soversion> exactly when the build is shared.
+function(expect_linkage program library)
+  run("reading the dynamic section of ${program}" readelf -d ${program})
+  string(REGEX MATCH "NEEDED[^\n]*\\[libbinbow_${library}\\.so\\.[0-9]" needed "${output}")
+  if(SHARED AND NOT needed)
+    message(FATAL_ERROR "${program} does not link libbinbow_${library}.so in a shared build:\n${output}")
+  elseif(NOT SHARED AND needed)
+    message(FATAL_ERROR "${program} links libbinbow_${library}.so in a static build:\n${output}")
+  endif()
+endfunction()
+
 run("installing binbow" ${CMAKE_COMMAND} --install ${BINBOW_BUILD_DIR} --prefix ${prefix})
 set(vocabulary ${prefix}/share/binbow/vocab/orb_default.bbw)
 set(sample ${prefix}/share/binbow/samples/rtabmap/samples)
@@ -23,6 +35,18 @@ foreach(path ${vocabulary} ${sample})
     message(FATAL_ERROR "the install did not put ${path} in place")
   endif()
 endforeach()
+
+# The installed CLI runs from the prefix (shared: through its install RPATH).
+set(cli ${prefix}/${BINDIR}/binbow)
+run("running the installed binbow --version" ${cli} --version)
+if(NOT output MATCHES "^binbow [0-9]+\\.[0-9]+\\.[0-9]+")
+  message(FATAL_ERROR "the installed binbow --version printed: ${output}")
+endif()
+run("running the installed binbow info" ${cli} info ${vocabulary})
+if(NOT output MATCHES "words")
+  message(FATAL_ERROR "the installed binbow info printed: ${output}")
+endif()
+expect_linkage(${cli} vision)
 
 set(core_expect "words: [0-9]+")
 set(vision_expect "frames: 84, database entries: 84, loops: [1-9][0-9]*")
@@ -35,13 +59,14 @@ foreach(consumer core vision)
   if(NOT output MATCHES "${${consumer}_expect}")
     message(FATAL_ERROR "the ${consumer} consumer printed: ${output}")
   endif()
+  expect_linkage(${build}/consumer ${consumer})
   message(STATUS "CMake ${consumer}: ${output}")
 endforeach()
 
 # binbow::dbow2: an ORB-SLAM text vocabulary made by the installed CLI, and
 # DBoW2's own numbers to reproduce.
 set(orbvoc ${WORK_DIR}/ORBvoc.txt)
-run("converting the vocabulary for the dbow2 consumer" ${prefix}/bin/binbow convert ${vocabulary} ${orbvoc})
+run("converting the vocabulary for the dbow2 consumer" ${cli} convert ${vocabulary} ${orbvoc})
 set(build ${WORK_DIR}/dbow2-cmake)
 run("configuring the dbow2 consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/dbow2
     -B ${build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
@@ -50,6 +75,7 @@ run("running the dbow2 consumer" ${build}/consumer ${orbvoc} ${CONSUMER_SOURCE_D
 if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
   message(FATAL_ERROR "the dbow2 consumer printed: ${output}")
 endif()
+expect_linkage(${build}/consumer dbow2)
 message(STATUS "CMake dbow2: ${output}")
 
 # pkg-config: binbow (core) and binbow-vision.
@@ -57,19 +83,36 @@ set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
 foreach(consumer core vision)
   if(consumer STREQUAL "core")
     set(module binbow)
+    set(private_requirements zlib)
   else()
     set(module binbow-vision)
+    set(private_requirements matio libjpeg)
   endif()
+  # The consumer chooses its C++ standard (C++17 or later).
+  run("pkg-config --cflags ${module}" pkg-config --cflags ${module})
+  if(output MATCHES "-std=")
+    message(FATAL_ERROR "pkg-config --cflags ${module} imposes a C++ standard: ${output}")
+  endif()
+  # A shared library's own dependencies are not the consumer's to link.
+  run("pkg-config --print-requires ${module}" pkg-config --print-requires ${module})
+  foreach(requirement ${private_requirements})
+    if(SHARED AND output MATCHES "(^|\n)${requirement}")
+      message(FATAL_ERROR "pkg-config ${module} makes ${requirement} public in a shared build: ${output}")
+    endif()
+  endforeach()
   run("pkg-config ${module}" pkg-config --cflags --libs ${module})
   string(STRIP "${output}" flags)
   separate_arguments(flags UNIX_COMMAND "${flags}")
   set(program ${WORK_DIR}/${consumer}-pkgconfig)
+  # The rpath lets the program find a shared binbow in the scratch prefix.
   run("building the ${consumer} consumer with pkg-config" ${CXX} -std=c++17 -O1
-      ${CONSUMER_SOURCE_DIR}/${consumer}/main.cpp -o ${program} ${flags})
+      ${CONSUMER_SOURCE_DIR}/${consumer}/main.cpp -o ${program} ${flags}
+      -Wl,-rpath,${prefix}/${LIBDIR})
   run("running the ${consumer} consumer (pkg-config)" ${program} ${vocabulary} ${sample})
   if(NOT output MATCHES "${${consumer}_expect}")
     message(FATAL_ERROR "the ${consumer} consumer built with pkg-config printed: ${output}")
   endif()
+  expect_linkage(${program} ${consumer})
   message(STATUS "pkg-config ${consumer}: ${output}")
 endforeach()
 
@@ -85,4 +128,5 @@ run("running the dbow2 consumer (pkg-config)" ${program} ${orbvoc}
 if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
   message(FATAL_ERROR "the dbow2 consumer built with pkg-config printed: ${output}")
 endif()
+expect_linkage(${program} dbow2)
 message(STATUS "pkg-config dbow2: ${output}")

@@ -5,6 +5,8 @@
 #include <random>
 #include <vector>
 
+static_assert(__cplusplus >= 201703L, "binbow::core must bring C++17 to its consumers");
+
 int main() {
   std::mt19937 rng(1);
   binbow::DescriptorMatrix training(2000, 32);
