@@ -226,7 +226,7 @@ bool move_to_free_name(const std::string& from, const std::string& to) {
 // Deals with the backups of `target` that dead saves left (see
 // keep_previous). A backup is removed only when the destination makes it
 // redundant: it is the destination itself (a second link), or the
-// destination was modified after it (the save that made it went through).
+// destination is not older than it (the save that made it went through).
 // When the destination is missing, its newest backup is the only copy of
 // the data and is put back in its place. Any other backup stays.
 void sweep_backups(const std::string& target) {
