@@ -75,7 +75,7 @@ void run_bench(const BenchArguments& args) {
     vision::Frame frame;
     while (source.next(frame)) {
       const auto start = Clock::now();
-      frames.push_back({extractor->extract(frame.image)});
+      frames.push_back({vision::extract_features(*extractor, frame.image, frame.name)});
       features.push_back(elapsed_ms(start));
       progress.update(frames.size());
     }

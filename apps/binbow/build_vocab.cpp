@@ -77,7 +77,7 @@ TrainingSet extract_training_set(const BuildVocabArguments& arguments) {
     std::size_t count = 0;
     while (count < batch.size() && (more = source.next(batch[count]))) ++count;
     detail::parallel_for(threads, count, [&](std::size_t i, unsigned worker) {
-      features[i] = extractors[worker]->extract(batch[i].image);
+      features[i] = vision::extract_features(*extractors[worker], batch[i].image, batch[i].name);
     });
     for (std::size_t i = 0; i < count; ++i) {
       set.descriptors.append(features[i].descriptors.view());

@@ -94,7 +94,7 @@ std::vector<std::pair<EntryId, std::string>> add_images(Database& database,
   std::vector<std::pair<EntryId, std::string>> added;
   vision::Frame frame;
   while (source.next(frame)) {
-    const vision::Features extracted = extractor.extract(frame.image);
+    const vision::Features extracted = vision::extract_features(extractor, frame.image, frame.name);
     if (features != nullptr) *features += extracted.descriptors.rows();
     const EntryId entry = database.add(extracted.descriptors.view(), frame.name);
     added.emplace_back(entry, frame.name);
@@ -127,7 +127,7 @@ void run_db_query(const DbQueryArguments& arguments) {
   vision::Frame frame;
   BowVector bow;
   for (std::size_t queries = 0; source.next(frame); ++queries) {
-    const vision::Features features = extractor->extract(frame.image);
+    const vision::Features features = vision::extract_features(*extractor, frame.image, frame.name);
     database.vocabulary().transform(features.descriptors.view(), bow);
     const auto results = database.query(bow, arguments.top);
     std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",

@@ -64,7 +64,7 @@ struct RunInputs {
 
 RunInputs read_run_inputs(const loop::LoopRun& run) {
   RunInputs inputs;
-  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
+  const auto extractor = loop::make_run_extractor(run);
   if (!run.online_vocabulary)
     load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), inputs.vocabulary);
   StageProgress progress;

@@ -90,11 +90,11 @@ void run_features(const FeaturesArguments& arguments) {
   if (!source.next(frame)) throw FileError(arguments.image, "has no frames");
   const cv::Mat& image = frame.image;
   // The first call pays for OpenCV's lazy initialisation; time the calls after it.
-  const vision::Features features = extractor->extract(image);
+  const vision::Features features = vision::extract_features(*extractor, image, frame.name);
   std::vector<double> times;
   for (int run = 0; run < arguments.repeat; ++run) {
     const auto start = std::chrono::steady_clock::now();
-    extractor->extract(image);
+    vision::extract_features(*extractor, image, frame.name);
     times.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
             .count());

@@ -14,6 +14,8 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "binbow/error.h"
 #include "core/output_path.h"
@@ -30,7 +32,8 @@ const char* file_kind(unsigned mode) {
   if (S_ISDIR(mode)) return "a directory";
   if (S_ISFIFO(mode)) return "a FIFO";
   if (S_ISSOCK(mode)) return "a socket";
-  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
   if (S_ISREG(mode)) return "a regular file";
   return "a special file";
 }
@@ -99,11 +102,43 @@ void write_all(std::FILE* file, const void* data, std::size_t size, const std::s
     throw FileError(path, "cannot write: " + errno_text());
 }
 
+ReplaceCalls& replace_calls() {
+  static ReplaceCalls calls{::link, std::rename, ::unlink};
+  return calls;
+}
+
 namespace {
 
 constexpr char kTemporaryInfix[] = ".tmp-";
-constexpr std::size_t kTemporarySuffixLength = 6;  // mkstemp's XXXXXX
-constexpr int kMaxSymlinkHops = 40;                // as the kernel's ELOOP limit
+constexpr char kBackupInfix[] = ".old-";
+constexpr std::size_t kRandomSuffixLength = 6;  // mkstemp's XXXXXX
+constexpr int kMaxSymlinkHops = 40;             // as the kernel's ELOOP limit
+constexpr int kAttempts = 10;
+
+// An open file descriptor, closed (and its flock released) when it dies.
+class Descriptor {
+ public:
+  Descriptor() noexcept = default;
+  explicit Descriptor(int fd) noexcept : fd_(fd) {}
+  Descriptor(Descriptor&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
+  Descriptor& operator=(Descriptor&& other) noexcept {
+    if (this != &other) {
+      if (fd_ >= 0) ::close(fd_);
+      fd_ = std::exchange(other.fd_, -1);
+    }
+    return *this;
+  }
+  Descriptor(const Descriptor&) = delete;
+  Descriptor& operator=(const Descriptor&) = delete;
+  ~Descriptor() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  int get() const noexcept { return fd_; }
+  bool valid() const noexcept { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+};
 
 std::string directory_of(const std::string& path) {
   const std::string parent = std::filesystem::path(path).parent_path().string();
@@ -128,35 +163,97 @@ std::string resolve_symlinks(const std::string& path) {
   throw FileError(path, "too many levels of symbolic links");
 }
 
-bool is_temporary_of(const std::string& name, const std::string& prefix) {
-  if (name.size() != prefix.size() + kTemporarySuffixLength ||
-      name.compare(0, prefix.size(), prefix))
+bool has_random_suffix(const std::string& name, const std::string& prefix) {
+  if (name.size() != prefix.size() + kRandomSuffixLength || name.compare(0, prefix.size(), prefix))
     return false;
   return std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()), name.end(),
                      [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; });
 }
 
-// Removes the temporaries of `target` that no live writer holds: a writer
-// keeps an exclusive flock on its temporary until it has renamed it, so one
-// that can be locked was left by a writer that died (kill -9, power loss).
-// A file that cannot be opened or locked (another user's, a file system
-// without locks) is left alone.
-void remove_stale_temporaries(const std::string& target) {
+// The files beside `target` named "<target><infix>XXXXXX".
+std::vector<std::string> siblings(const std::string& target, const char* infix) {
+  std::vector<std::string> found;
   const std::string directory = directory_of(target);
-  const std::string prefix = std::filesystem::path(target).filename().string() + kTemporaryInfix;
+  const std::string prefix = std::filesystem::path(target).filename().string() + infix;
   DIR* dir = ::opendir(directory.c_str());
-  if (dir == nullptr) return;
-  while (const dirent* entry = ::readdir(dir)) {
-    if (!is_temporary_of(entry->d_name, prefix)) continue;
-    const std::string path = directory + "/" + entry->d_name;
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
-    if (fd < 0) continue;
-    struct stat st {};
-    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && ::flock(fd, LOCK_EX | LOCK_NB) == 0)
-      ::unlink(path.c_str());
-    ::close(fd);
-  }
+  if (dir == nullptr) return found;
+  while (const dirent* entry = ::readdir(dir))
+    if (has_random_suffix(entry->d_name, prefix)) found.push_back(directory + "/" + entry->d_name);
   ::closedir(dir);
+  return found;
+}
+
+// `path` opened and exclusively locked when it is a regular file no live
+// save holds: every save keeps a lock on its temporaries and backups until
+// it is done with them, so one that can be locked was left by a save that
+// died (kill -9, power loss). Invalid when it cannot be opened or locked
+// (another user's file, a file system without locks): it is left alone.
+Descriptor lock_abandoned(const std::string& path, struct stat& st) {
+  Descriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK));
+  if (fd.valid() && ::fstat(fd.get(), &st) == 0 && S_ISREG(st.st_mode) &&
+      ::flock(fd.get(), LOCK_EX | LOCK_NB) == 0)
+    return fd;
+  return Descriptor();
+}
+
+// Removes the temporaries of `target` that dead saves left: half-written
+// files, never anything else's only copy.
+void remove_stale_temporaries(const std::string& target) {
+  for (const std::string& path : siblings(target, kTemporaryInfix)) {
+    struct stat st {};
+    const Descriptor lock = lock_abandoned(path, st);
+    if (lock.valid()) ::unlink(path.c_str());
+  }
+}
+
+bool same_file(const struct stat& a, const struct stat& b) {
+  return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
+
+bool modified_before(const struct stat& a, const struct stat& b) {
+  return a.st_mtim.tv_sec != b.st_mtim.tv_sec ? a.st_mtim.tv_sec < b.st_mtim.tv_sec
+                                              : a.st_mtim.tv_nsec < b.st_mtim.tv_nsec;
+}
+
+// Moves `from` to the free name `to`; false if `to` exists or the move fails.
+bool move_to_free_name(const std::string& from, const std::string& to) {
+  if (::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0) return true;
+  if (errno != EINVAL && errno != ENOSYS) return false;
+  // A file system without RENAME_NOREPLACE: link() never replaces either.
+  return ::link(from.c_str(), to.c_str()) == 0 && ::unlink(from.c_str()) == 0;
+}
+
+// Deals with the backups of `target` that dead saves left (see
+// keep_previous). A backup is removed only when the destination makes it
+// redundant: it is the destination itself (a second link), or the
+// destination is not older than it (the save that made it went through).
+// When the destination is missing, its newest backup is the only copy of
+// the data and is put back in its place. Any other backup stays.
+void sweep_backups(const std::string& target) {
+  struct Abandoned {
+    std::string path;
+    struct stat st;
+    Descriptor lock;
+  };
+  std::vector<Abandoned> abandoned;
+  for (std::string& path : siblings(target, kBackupInfix)) {
+    struct stat st {};
+    Descriptor lock = lock_abandoned(path, st);
+    if (lock.valid()) abandoned.push_back({std::move(path), st, std::move(lock)});
+  }
+  if (abandoned.empty()) return;
+  struct stat destination {};
+  bool exists = ::lstat(target.c_str(), &destination) == 0;
+  if (!exists && errno == ENOENT) {
+    const auto newest = std::max_element(
+        abandoned.begin(), abandoned.end(),
+        [](const Abandoned& a, const Abandoned& b) { return modified_before(a.st, b.st); });
+    if (move_to_free_name(newest->path, target)) abandoned.erase(newest);
+    exists = ::lstat(target.c_str(), &destination) == 0;
+  }
+  for (const Abandoned& backup : abandoned)
+    if (exists && (same_file(backup.st, destination) || !modified_before(destination, backup.st)))
+      ::unlink(backup.path.c_str());
 }
 
 mode_t new_file_mode() {
@@ -176,65 +273,12 @@ void sync_directory(const std::string& directory, const std::string& path) {
   if (!synced) throw FileError(path, "cannot flush its directory to disk: " + why);
 }
 
-// The previous version of a destination while a group is renamed, to put
-// back if a later rename fails.
-struct Backup {
-  std::string path;  // empty: the destination did not exist
-  bool linked = false;
-};
-
-// Reserves a fresh name beside `destination` for its previous version.
-std::string backup_name(const std::string& destination, const std::string& path) {
-  std::string name = destination + ".old-XXXXXX";
-  const int fd = ::mkstemp(name.data());
-  if (fd < 0) throw FileError(path, "cannot create a file beside it: " + errno_text());
-  ::close(fd);
-  ::unlink(name.c_str());
-  return name;
-}
-
-Backup keep_previous(const std::string& destination, const std::string& path) {
-  Backup backup;
-  struct stat st {};
-  if (::lstat(destination.c_str(), &st) != 0) return backup;
-  if (S_ISDIR(st.st_mode)) throw FileError(path, "cannot replace it: it is a directory");
-  backup.path = backup_name(destination, path);
-  // A second link keeps the destination in place until the rename replaces
-  // it; where links are not supported it moves aside for that moment.
-  if (::link(destination.c_str(), backup.path.c_str()) == 0) {
-    backup.linked = true;
-  } else if (std::rename(destination.c_str(), backup.path.c_str()) != 0) {
-    throw FileError(path, "cannot keep the previous version while replacing it: " + errno_text());
-  }
-  return backup;
-}
-
-// Undoes keep_previous for a destination that was not replaced.
-void drop_unused(const std::string& destination, const Backup& backup) {
-  if (backup.linked)
-    ::unlink(backup.path.c_str());
-  else if (!backup.path.empty())
-    std::rename(backup.path.c_str(), destination.c_str());
-}
-
-// Puts a replaced destination's previous version back.
-void restore(const std::string& destination, const Backup& backup) {
-  if (backup.path.empty())
-    ::unlink(destination.c_str());
-  else
-    std::rename(backup.path.c_str(), destination.c_str());
-}
-
-}  // namespace
-
-// A locked temporary beside a destination; removed unless renamed over it.
+// A locked "<destination>.tmp-XXXXXX"; removed unless renamed.
 class TemporaryFile {
  public:
-  TemporaryFile(const std::string& path, std::string destination)
-      : path_(path), destination_(std::move(destination)) {
-    remove_stale_temporaries(destination_);
+  TemporaryFile(const std::string& path, const std::string& destination) : path_(path) {
     for (int attempt = 0;; ++attempt) {
-      temporary_ = destination_ + kTemporaryInfix + std::string(kTemporarySuffixLength, 'X');
+      temporary_ = destination + kTemporaryInfix + std::string(kRandomSuffixLength, 'X');
       const int fd = ::mkstemp(temporary_.data());
       if (fd < 0)
         throw FileError(path_, "cannot create a temporary file beside it: " + errno_text());
@@ -250,7 +294,7 @@ class TemporaryFile {
       }
       // Another save took it for stale between mkstemp and flock and removes it.
       ::close(fd);
-      if (attempt == 10) throw FileError(path_, "cannot keep a temporary file beside it");
+      if (attempt == kAttempts) throw FileError(path_, "cannot keep a temporary file beside it");
     }
   }
   TemporaryFile(const TemporaryFile&) = delete;
@@ -261,18 +305,16 @@ class TemporaryFile {
   }
 
   std::FILE* file() const { return file_; }
-  const std::string& path() const { return path_; }
-  const std::string& destination() const { return destination_; }
 
-  // All bytes on disk, with the final permissions.
-  void flush() const {
+  // All bytes on disk, with permissions `mode`.
+  void flush(mode_t mode) const {
     if (std::fflush(file_) != 0 || ::fsync(::fileno(file_)) != 0)
       throw FileError(path_, "cannot write: " + errno_text());
-    ::fchmod(::fileno(file_), new_file_mode());
+    ::fchmod(::fileno(file_), mode);
   }
-  // Renamed while still open, so the lock covers the temporary until it is gone.
-  void rename() {
-    if (std::rename(temporary_.c_str(), destination_.c_str()) != 0)
+  // Renamed while still open, so the lock covers the file until it is closed.
+  void rename_to(const std::string& target) {
+    if (replace_calls().rename(temporary_.c_str(), target.c_str()) != 0)
       throw FileError(path_, "cannot replace the file: " + errno_text());
     renamed_ = true;
   }
@@ -286,11 +328,149 @@ class TemporaryFile {
     return ::fstat(fd, &st) == 0 && st.st_nlink > 0;
   }
 
-  std::string path_;         // as the caller named it, for errors
-  std::string destination_;  // symbolic links resolved
+  std::string path_;  // as the caller named it, for errors
   std::string temporary_;
   std::FILE* file_ = nullptr;
   bool renamed_ = false;
+};
+
+// The previous version of a destination while a group replaces it, to put
+// back if a later file of the group fails: "<destination>.old-XXXXXX",
+// locked from its creation until the group is done (see sweep_backups).
+struct Backup {
+  std::string path;  // empty: the destination did not exist
+  Descriptor lock;
+};
+
+// Reserves a fresh name beside `destination` for its previous version.
+std::string backup_name(const std::string& destination, const std::string& path) {
+  std::string name = destination + kBackupInfix + std::string(kRandomSuffixLength, 'X');
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) throw FileError(path, "cannot create a file beside it: " + errno_text());
+  ::close(fd);
+  ::unlink(name.c_str());
+  return name;
+}
+
+// A copy of `current` (open on the destination) named `name`, for file
+// systems without hard links: written whole as a temporary, with the
+// destination's permissions and times, then renamed.
+Backup copy_backup(const Descriptor& current, const struct stat& st, const std::string& destination,
+                   const std::string& name, const std::string& path) {
+  TemporaryFile copy(path, destination);
+  std::vector<char> buffer(std::size_t{1} << 16);
+  for (;;) {
+    const ssize_t n = ::read(current.get(), buffer.data(), buffer.size());
+    if (n == 0) break;
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0)
+      throw FileError(path, "cannot read it to keep its previous version: " + errno_text());
+    write_all(copy.file(), buffer.data(), static_cast<std::size_t>(n), path);
+  }
+  copy.flush(st.st_mode & 07777);
+  const timespec times[2] = {st.st_atim, st.st_mtim};
+  ::futimens(::fileno(copy.file()), times);
+  Descriptor lock(::fcntl(::fileno(copy.file()), F_DUPFD_CLOEXEC, 0));
+  copy.rename_to(name);
+  return {name, std::move(lock)};
+}
+
+// Keeps the destination's current version under a backup name before it is
+// replaced, without ever moving the destination itself: a second hard link,
+// or a copy where links are not supported. Either way the backup is locked
+// from birth (the link through a lock on the destination's inode taken
+// before linking), and has the destination's modification time.
+Backup keep_previous(const std::string& destination, const std::string& path) {
+  for (int attempt = 0;; ++attempt) {
+    Descriptor current(::open(destination.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK));
+    if (!current.valid() && errno == ENOENT) return {};
+    if (!current.valid())
+      throw FileError(path, "cannot open it to keep its previous version: " + errno_text());
+    struct stat st {};
+    if (::fstat(current.get(), &st) != 0)
+      throw FileError(path, "cannot stat it to keep its previous version: " + errno_text());
+    if (S_ISDIR(st.st_mode)) throw FileError(path, "cannot replace it: it is a directory");
+    // Shared: saves of the same file at once each keep their own backup.
+    ::flock(current.get(), LOCK_SH);
+    const std::string name = backup_name(destination, path);
+    if (replace_calls().link(destination.c_str(), name.c_str()) != 0)
+      return copy_backup(current, st, destination, name, path);
+    struct stat linked {};
+    if (::lstat(name.c_str(), &linked) == 0 && same_file(linked, st))
+      return {name, std::move(current)};
+    // Another save replaced the destination between open and link: the lock
+    // held is on the file before it.
+    ::unlink(name.c_str());
+    if (attempt == kAttempts)
+      throw FileError(path, "cannot keep its previous version: it keeps being replaced");
+  }
+}
+
+// Puts a replaced destination's previous version back.
+void restore(const std::string& destination, const Backup& backup) {
+  if (backup.path.empty())
+    replace_calls().unlink(destination.c_str());
+  else
+    replace_calls().rename(backup.path.c_str(), destination.c_str());
+}
+
+// A non-regular output written in place (see is_written_in_place): the
+// process's own descriptor shared (its offset, its append mode), any other
+// opened for writing (a FIFO waits for its reader, as a shell would).
+std::FILE* open_in_place(const std::string& path) {
+  const int own = own_descriptor(path);
+  const int fd = own >= 0 ? ::fcntl(own, F_DUPFD_CLOEXEC, 0)
+                          : ::open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) throw FileError(path, "cannot open it for writing: " + errno_text());
+  std::FILE* file = ::fdopen(fd, "wb");
+  if (file == nullptr) {
+    const std::string why = errno_text();
+    ::close(fd);
+    throw FileError(path, "cannot open it for writing: " + why);
+  }
+  return file;
+}
+
+}  // namespace
+
+// One file of a StagedFiles: a temporary beside its destination, replacing
+// it at commit, or a character device or FIFO written in place.
+class StagedFile {
+ public:
+  explicit StagedFile(const std::string& path) : path_(path) {
+    if (is_written_in_place(path)) {
+      in_place_ = open_in_place(path);
+      return;
+    }
+    destination_ = resolve_symlinks(path);
+    remove_stale_temporaries(destination_);
+    sweep_backups(destination_);
+    temporary_ = std::make_unique<TemporaryFile>(path, destination_);
+  }
+  StagedFile(const StagedFile&) = delete;
+  StagedFile& operator=(const StagedFile&) = delete;
+  ~StagedFile() {
+    if (in_place_ != nullptr) std::fclose(in_place_);
+  }
+
+  std::FILE* file() const { return in_place_ != nullptr ? in_place_ : temporary_->file(); }
+  bool in_place() const { return in_place_ != nullptr; }
+  const std::string& path() const { return path_; }
+  const std::string& destination() const { return destination_; }
+
+  void flush() const {
+    if (temporary_ != nullptr)
+      temporary_->flush(new_file_mode());
+    else if (std::fflush(in_place_) != 0)
+      throw FileError(path_, "cannot write: " + errno_text());
+  }
+  void replace() { temporary_->rename_to(destination_); }
+
+ private:
+  std::string path_;         // as the caller named it, for errors
+  std::string destination_;  // symbolic links resolved
+  std::unique_ptr<TemporaryFile> temporary_;
+  std::FILE* in_place_ = nullptr;
 };
 
 StagedFiles::StagedFiles() = default;
@@ -298,39 +478,39 @@ StagedFiles::~StagedFiles() = default;
 
 std::FILE* StagedFiles::stage(const std::string& path) {
   prepare_output_file(path);
-  temporaries_.push_back(std::make_unique<TemporaryFile>(path, resolve_symlinks(path)));
-  return temporaries_.back()->file();
+  files_.push_back(std::make_unique<StagedFile>(path));
+  return files_.back()->file();
 }
 
 void StagedFiles::commit() {
-  for (const auto& temporary : temporaries_) temporary->flush();
+  for (const auto& file : files_) file->flush();
+  std::vector<const StagedFile*> replaced;
   std::vector<Backup> backups;
   const auto undo = [&] {
-    for (std::size_t i = backups.size(); i-- > 0;)
-      restore(temporaries_[i]->destination(), backups[i]);
+    for (std::size_t i = backups.size(); i-- > 0;) restore(replaced[i]->destination(), backups[i]);
   };
-  for (const auto& temporary : temporaries_) {
+  for (const auto& file : files_) {
+    if (file->in_place()) continue;
+    Backup backup;
     try {
-      backups.push_back(keep_previous(temporary->destination(), temporary->path()));
+      backup = keep_previous(file->destination(), file->path());
+      file->replace();
     } catch (const FileError&) {
+      // The destination never left its place: only the backup goes.
+      if (!backup.path.empty()) replace_calls().unlink(backup.path.c_str());
       undo();
       throw;
     }
-    try {
-      temporary->rename();
-    } catch (const FileError&) {
-      drop_unused(temporary->destination(), backups.back());
-      backups.pop_back();
-      undo();
-      throw;
-    }
+    replaced.push_back(file.get());
+    backups.push_back(std::move(backup));
   }
   for (const Backup& backup : backups)
-    if (!backup.path.empty()) ::unlink(backup.path.c_str());
+    if (!backup.path.empty()) replace_calls().unlink(backup.path.c_str());
+  backups.clear();
   // The renames reach the disk with their directories.
-  for (const auto& temporary : temporaries_)
-    sync_directory(directory_of(temporary->destination()), temporary->path());
-  temporaries_.clear();
+  for (const StagedFile* file : replaced)
+    sync_directory(directory_of(file->destination()), file->path());
+  files_.clear();
 }
 
 void write_files_atomically(const std::vector<FileToWrite>& files) {

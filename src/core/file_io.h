@@ -52,9 +52,17 @@ class MappedFile {
 // replaced, the link stays. Missing folders on the way to `path` are created
 // (detail::prepare_output_file). Throws FileError naming `path`.
 //
-// The temporary is "<destination>.tmp-XXXXXX", flock()ed while its writer
-// lives; every save first removes the unlocked temporaries of its
-// destination, which writers killed before their rename left behind.
+// A `path` that is not a regular file is never replaced
+// (detail::is_written_in_place): a character device (/dev/null, a
+// terminal) or a FIFO is opened and written in place, sequentially, as a
+// shell redirection would (a FIFO waits for its reader); /dev/stdout,
+// /dev/stderr and /dev/fd/N write through the process's own descriptor; a
+// block device or a socket is refused.
+//
+// What a killed save leaves beside its destination is cleaned up by the
+// next save of that destination, and only what it can prove is a dead
+// save's: the temporary is "<destination>.tmp-XXXXXX", flock()ed while its
+// writer lives, and removed by any later save that can lock it.
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
 void write_file_atomically(const std::string& path, const void* data, std::size_t size);
 
@@ -64,16 +72,30 @@ struct FileToWrite {
   std::function<void(std::FILE*)> write;
 };
 
-class TemporaryFile;
+class StagedFile;
 
 // Files that belong together (a result and its description), written over a
 // while and replacing their destinations together or not at all. stage()
 // gives each a temporary beside its destination, as write_file_atomically
 // does (links followed, flock()ed, swept by a later save if its writer is
-// killed); commit() flushes every temporary to disk, then renames them in
-// order, and if a rename fails puts back what the earlier ones replaced.
-// Destroyed without a commit (a write failed, a full disk), it removes its
-// temporaries and every destination stays as it was.
+// killed); commit() flushes every temporary to disk, then replaces the
+// destinations in order, and if one fails puts back what the earlier ones
+// replaced. Destroyed without a commit (a write failed, a full disk), it
+// removes its temporaries and every destination stays as it was.
+//
+// Before a destination is replaced, its previous version is kept as
+// "<destination>.old-XXXXXX": a second hard link, or where the file system
+// has none a copy. The destination itself never moves, so whatever the file
+// system and wherever a kill lands, a reader finds the old or the new file,
+// never none. The backup is flock()ed from its creation until the commit
+// ends. A later save of the destination that finds one unlocked (its save
+// died) removes it only when it is redundant: the destination's own inode,
+// or a destination modified since; with the destination missing, it puts the
+// newest backup back in its place; any other backup stays. A kill between
+// two renames leaves the group's earlier files new and its later ones old.
+//
+// Outputs written in place (see write_file_atomically) take no part in the
+// all-or-nothing replacement: their bytes go out as they are written.
 class StagedFiles {
  public:
   StagedFiles();
@@ -88,11 +110,22 @@ class StagedFiles {
   void commit();
 
  private:
-  std::vector<std::unique_ptr<TemporaryFile>> temporaries_;
+  std::vector<std::unique_ptr<StagedFile>> files_;
 };
 
 // StagedFiles for contents written at once.
 void write_files_atomically(const std::vector<FileToWrite>& files);
+
+// The system calls that replace files, made through these pointers so that a
+// test can make one fail (a file system without hard links) or stop the
+// process just before one (a kill at that moment). Unless a test sets them
+// they are ::link, ::rename and ::unlink.
+struct ReplaceCalls {
+  int (*link)(const char* from, const char* to);
+  int (*rename)(const char* from, const char* to);
+  int (*unlink)(const char* path);
+};
+ReplaceCalls& replace_calls();
 
 // Writes all bytes or throws FileError naming `path`.
 void write_all(std::FILE* file, const void* data, std::size_t size, const std::string& path);

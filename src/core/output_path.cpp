@@ -1,12 +1,16 @@
 #include "core/output_path.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <system_error>
 
 #include "binbow/error.h"
+#include "core/file_io.h"
 
 namespace binbow::detail {
 namespace {
@@ -45,10 +49,50 @@ void check_writable(const fs::path& folder, const std::string& path) {
                             "; choose another path or make the folder writable");
 }
 
+constexpr int kMaxSymlinkHops = 40;  // as the kernel's ELOOP limit
+
+bool is_number(const std::string& text) {
+  return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c)) != 0;
+  });
+}
+
 }  // namespace
+
+int own_descriptor(const std::string& path) {
+  std::error_code error;
+  const fs::path descriptors = fs::canonical("/proc/self/fd", error);
+  if (error) return -1;
+  fs::path current(path);
+  for (int hop = 0; hop < kMaxSymlinkHops; ++hop) {
+    const fs::path folder =
+        fs::canonical(current.has_parent_path() ? current.parent_path() : ".", error);
+    if (!error && folder == descriptors && is_number(current.filename().string()))
+      return std::stoi(current.filename().string());
+    if (!fs::is_symlink(current, error)) return -1;
+    const fs::path target = fs::read_symlink(current, error);
+    if (error) return -1;
+    current = target.is_absolute() ? target : current.parent_path() / target;
+  }
+  return -1;
+}
+
+bool is_written_in_place(const std::string& path) {
+  if (own_descriptor(path) >= 0) return true;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode) || S_ISDIR(st.st_mode)) return false;
+  if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) return true;
+  throw FileError(path, std::string("is ") + file_kind(st.st_mode) +
+                            ", not a place for output; write to a regular file, a FIFO or a "
+                            "character device such as /dev/null");
+}
 
 void prepare_output_file(const std::string& path) {
   if (path.empty()) throw InvalidArgument("an output file name is empty");
+  if (is_written_in_place(path)) {
+    if (::access(path.c_str(), W_OK) == 0) return;
+    throw FileError(path, std::string("cannot write into it: ") + std::strerror(errno));
+  }
   const fs::path file(path);
   std::error_code error;
   if (!file.has_filename() || fs::is_directory(file, error)) {

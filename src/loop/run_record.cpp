@@ -16,6 +16,7 @@
 
 #include "binbow/error.h"
 #include "core/file_io.h"
+#include "core/output_path.h"
 #include "vision/regular_file.h"
 
 namespace binbow::loop {
@@ -75,7 +76,8 @@ struct LoopRunFiles::Impl {
       : csv_path(loops_csv),
         record_path(LoopRun::path_for(loops_csv)),
         csv(staged.stage(csv_path)),
-        record(staged.stage(record_path)) {
+        // Nothing can be kept beside /dev/null, a FIFO or a terminal.
+        record(detail::is_written_in_place(loops_csv) ? nullptr : staged.stage(record_path)) {
     for (const char* stage : kStageNames) timing.push_back({stage, {}});
     // The keys of a version 1 record, written one value at a time; "frames"
     // stays open until commit().
@@ -110,6 +112,7 @@ struct LoopRunFiles::Impl {
 
   void write(const std::string& text) {
     if (committed) throw FileError(record_path, "the run record is already finished");
+    if (record == nullptr) return;
     detail::write_all(record, text.data(), text.size(), record_path);
   }
 
@@ -230,6 +233,7 @@ LoopRun LoopRun::load(const std::string& path) {
   // Only a regular file, read whole: a FIFO would block, a device never end.
   const std::string text = vision::read_regular_file(path, kMaxRunRecordBytes);
   LoopRun run;
+  run.path = path;
   try {
     const Json j = Json::parse(text);
     if (j.at("format") != "binbow-loop-run" || j.at("version") != 1)

@@ -147,7 +147,8 @@ bool SequenceDetector::next(SequenceFrame& out) {
   Impl& d = *impl_;
   if (!d.source.next(d.frame)) return false;
   const auto start = std::chrono::steady_clock::now();
-  const vision::Features features = d.extractor->extract(d.frame.image);
+  const vision::Features features =
+      vision::extract_features(*d.extractor, d.frame.image, d.frame.name);
   out.features_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   out.result = d.detector->process(features);

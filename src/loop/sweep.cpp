@@ -51,7 +51,32 @@ LoopDetectorParams with_value(const LoopDetectorParams& base, const std::string&
   }
 }
 
+// A failure caused by what `run` says names its record.
+[[noreturn]] void fail_run(const LoopRun& run, const std::string& problem) {
+  if (run.path.empty()) throw InvalidArgument(problem);
+  throw FileError(run.path, problem);
+}
+
+// `make` (something built from what `run` says), its InvalidArgument naming the record.
+template <typename Make>
+auto from_run(const LoopRun& run, Make make) {
+  try {
+    return make();
+  } catch (const InvalidArgument& e) {
+    fail_run(run, e.what());
+  }
+}
+
+LoopDetectorParams run_params(const LoopRun& run) {
+  return LoopDetectorParams::from_json(run.params_json,
+                                       run.path.empty() ? "the run's parameters" : run.path);
+}
+
 }  // namespace
+
+std::unique_ptr<vision::FeatureExtractor> make_run_extractor(const LoopRun& run) {
+  return from_run(run, [&] { return vision::make_extractor(run.descriptor, run.max_features); });
+}
 
 std::vector<std::string> sweepable_parameters() {
   std::vector<std::string> names;
@@ -117,19 +142,20 @@ std::vector<PrCurvePoint> curve_in_recall_order(std::vector<PrCurvePoint> curve)
 }
 
 RunFeatures extract_run_features(const LoopRun& run, const SweepProgress& progress) {
-  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
-  vision::ImageSource source(run.inputs, run.source);
+  const auto extractor = make_run_extractor(run);
+  vision::ImageSource source =
+      from_run(run, [&] { return vision::ImageSource(run.inputs, run.source); });
   RunFeatures out;
   vision::Frame frame;
   while (source.next(frame)) {
-    out.features.push_back(extractor->extract(frame.image));
+    out.features.push_back(vision::extract_features(*extractor, frame.image, frame.name));
     out.names.push_back(frame.name);
     if (progress) progress("extracting features", out.features.size(), run.frames.size());
   }
   if (out.features.size() != run.frames.size())
-    throw InvalidArgument("the inputs of the recorded run now have " +
-                          std::to_string(out.features.size()) + " frames instead of " +
-                          std::to_string(run.frames.size()) + "; run detect-loops again");
+    fail_run(run, "the inputs of the recorded run now have " + std::to_string(out.features.size()) +
+                      " frames instead of " + std::to_string(run.frames.size()) +
+                      "; run detect-loops again");
   return out;
 }
 
@@ -138,21 +164,21 @@ std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const RunFeatures&
                                           const std::string& parameter,
                                           const std::vector<double>& values,
                                           const SweepProgress& progress) {
-  const LoopDetectorParams base = LoopDetectorParams::from_json(run.params_json);
+  const LoopDetectorParams base = run_params(run);
   std::vector<LoopDetectorParams> settings;
   for (double value : values) settings.push_back(with_value(base, parameter, value));
 
   // A run with an online vocabulary grows its words again at every value.
   OnlineVocabularyOptions online_options = run.online_options;
   online_options.descriptor = run.descriptor;
-  const std::size_t code_size =
-      run.online_vocabulary ? vision::make_extractor(run.descriptor, run.max_features)->code_size()
-                            : 0;
+  const std::size_t code_size = run.online_vocabulary ? make_run_extractor(run)->code_size() : 0;
   std::vector<PrCurvePoint> curve;
   for (std::size_t v = 0; v < values.size(); ++v) {
-    LoopDetector detector = run.online_vocabulary
-                                ? LoopDetector::online(code_size, online_options, settings[v])
-                                : LoopDetector(vocabulary, settings[v]);
+    LoopDetector detector =
+        run.online_vocabulary
+            ? from_run(run,
+                       [&] { return LoopDetector::online(code_size, online_options, settings[v]); })
+            : LoopDetector(vocabulary, settings[v]);
     std::vector<Detection> detections;
     for (std::size_t i = 0; i < features.features.size(); ++i) {
       const LoopResult r = detector.process(features.features[i]);
@@ -171,7 +197,7 @@ std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& 
                                           const std::vector<double>& values,
                                           const SweepProgress& progress) {
   // Parameter errors before the (long) feature extraction.
-  const LoopDetectorParams base = LoopDetectorParams::from_json(run.params_json);
+  const LoopDetectorParams base = run_params(run);
   for (double value : values) with_value(base, parameter, value);
   return sweep_parameter(run, extract_run_features(run, progress), vocabulary, truth, parameter,
                          values, progress);

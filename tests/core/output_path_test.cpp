@@ -3,7 +3,12 @@
 #include "core/output_path.h"
 
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -73,6 +78,34 @@ TEST(OutputPath, AFileInTheCurrentFolderNeedsNoParent) {
   fs::current_path(dir.path());
   EXPECT_NO_THROW(prepare_output_file("loops.csv"));
   fs::current_path(previous);
+}
+
+// Outputs written in place are ready as they are; a socket is refused
+// before any work, naming what it is.
+TEST(OutputPath, DevicesAndFifosAreReadyAndSocketsAreRefused) {
+  test::TempDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo").c_str(), 0600), 0);
+  EXPECT_TRUE(is_written_in_place(dir.file("fifo")));
+  EXPECT_TRUE(is_written_in_place("/dev/null"));
+  EXPECT_TRUE(is_written_in_place("/dev/stdout"));
+  EXPECT_FALSE(is_written_in_place(dir.file("missing")));
+  EXPECT_NO_THROW(prepare_output_file(dir.file("fifo")));
+  EXPECT_NO_THROW(prepare_output_file("/dev/null"));
+  EXPECT_EQ(own_descriptor("/dev/stdout"), 1);
+  EXPECT_EQ(own_descriptor("/dev/fd/2"), 2);
+  EXPECT_EQ(own_descriptor(dir.file("fifo")), -1);
+
+  const int sock = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  ASSERT_GE(sock, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  const std::string path = dir.file("sock");
+  ASSERT_LT(path.size(), sizeof(address.sun_path));
+  std::copy(path.begin(), path.end(), address.sun_path);
+  ASSERT_EQ(::bind(sock, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+  const std::string message = file_error([&] { prepare_output_file(path); });
+  EXPECT_EQ(message.rfind(path + ": is a socket", 0), 0u) << message;
+  ::close(sock);
 }
 
 }  // namespace

@@ -89,6 +89,9 @@ struct LoopRun {
   // The first kDrawnLoops loops found; inliers in pixels of the files (Frame::scale undone).
   std::vector<LoopRecord> loops;
   std::vector<StageTiming> timing;  // kStageNames, in that order
+  // The record's file (set by load()): what its content later fails on (an
+  // unknown descriptor, parameters, inputs that changed) names it.
+  std::string path;
 
   static std::string path_for(const std::string& loops_csv) { return loops_csv + ".run.json"; }
   // Only a regular file of at most kMaxRunRecordBytes; FileError naming the
@@ -102,7 +105,8 @@ struct LoopRun {
 // each), the loops the report draws and the stage timings (six numbers a
 // frame) wait for commit(). Both files are written to temporaries beside
 // them and appear together at commit(), or not at all: without commit()
-// (an exception, a full disk) the previous files stay as they were.
+// (an exception, a full disk) the previous files stay as they were. A
+// loops.csv written in place (/dev/null, /dev/stdout, a FIFO) has no record.
 class LoopRunFiles {
  public:
   // Starts both files; `description` gives the inputs, vocabulary,

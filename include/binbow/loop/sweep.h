@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -57,7 +58,7 @@ using SweepProgress =
 // (unused, and may be empty, for a run with an online vocabulary: the words
 // grow again from the frames, with the default online vocabulary options).
 // Throws InvalidArgument for an unknown parameter or a value out of its
-// range, or when the inputs no longer have the recorded number of frames.
+// range; errors of the run itself as extract_run_features.
 std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& vocabulary,
                                           const GroundTruth& truth, const std::string& parameter,
                                           const std::vector<double>& values,
@@ -69,8 +70,14 @@ struct RunFeatures {
   std::vector<vision::Features> features;  // frame i
   std::vector<std::string> names;          // vision::Frame::name of frame i
 };
-// Throws FileError for unreadable inputs, InvalidArgument when they no longer
-// have the recorded number of frames.
+// The run's feature extractor (its descriptor and max_features).
+std::unique_ptr<vision::FeatureExtractor> make_run_extractor(const LoopRun& run);
+
+// Errors caused by what the run says (its descriptor, parameters, source
+// options, online vocabulary options, a number of frames the inputs no
+// longer have) are FileErrors naming its record, LoopRun::path (an
+// InvalidArgument for a run not loaded from a file); an unreadable input is
+// a FileError naming the input.
 RunFeatures extract_run_features(const LoopRun& run, const SweepProgress& progress = {});
 std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const RunFeatures& features,
                                           const Vocabulary& vocabulary, const GroundTruth& truth,

@@ -57,6 +57,13 @@ class FeatureExtractor {
   virtual std::string name() const = 0;  // "orb", "brief", "akaze", "brisk", ...
 };
 
+// extractor.extract(image) for the image read from `file` (a path, or
+// "video.mp4#123" for a video frame): every failure, running out of memory
+// included, is a FileError naming `file`, so that a run over thousands of
+// images says which one it could not take.
+Features extract_features(const FeatureExtractor& extractor, const cv::Mat& image,
+                          const std::string& file);
+
 // OpenCV's ORB (oriented FAST + rotated BRIEF, 32 bytes) on a scale pyramid.
 struct OrbOptions {
   int max_features = 1000;
