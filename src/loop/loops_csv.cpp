@@ -123,6 +123,10 @@ std::vector<Detection> read_detections_csv(const std::string& path) {
     d.score = std::strtod(fields[4].c_str(), &end);
     if (fields[4].empty() || end != fields[4].c_str() + fields[4].size() || !std::isfinite(d.score))
       throw FileError(path, where + "score \"" + fields[4] + "\" is not a finite number");
+    // detect-loops closes a loop with an earlier frame only.
+    if (d.match >= d.query)
+      throw FileError(path, where + "match " + fields[1] + " is not earlier than query " +
+                                fields[0] + " (a loop closes with an earlier frame)");
     d.inliers = index(fields[5]);
     detections.push_back(std::move(d));
   }
