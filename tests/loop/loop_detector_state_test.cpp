@@ -17,6 +17,7 @@
 #include "binbow/vision/image_source.h"
 #include "core/crc32c.h"
 #include "core/little_endian.h"
+#include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -517,6 +518,25 @@ TEST(LoopDetectorState, InfoRefusesWhatResumeRefuses) {
       EXPECT_NE(out.find("the direct index of frame 0"), std::string::npos) << out;
     }
   }
+  // A vocabulary binbow does not bundle: info checks what it can without it
+  // and says what it could not; given it, checks everything.
+  std::mt19937_64 rng(5);
+  const Vocabulary own = Vocabulary::from_tree(test::random_tree(4, 3, 32, rng));
+  own.save(dir.file("own.bbw"));
+  LoopDetector own_detector(own);
+  for (std::size_t i = 0; i < 3; ++i) own_detector.process(sample_features("orb")[i]);
+  own_detector.save(dir.file("own.bbld"));
+  ASSERT_EQ(test::run_cli("info '" + dir.file("own.bbld") + "'", &out), 0) << out;
+  EXPECT_NE(out.find("note: " + dir.file("own.bbld") +
+                     ": the header, the parameters and the "
+                     "previous BoW vector are checked"),
+            std::string::npos)
+      << out;
+  ASSERT_EQ(test::run_cli(
+                "info '" + dir.file("own.bbld") + "' --vocab '" + dir.file("own.bbw") + "'", &out),
+            0)
+      << out;
+  EXPECT_EQ(out.find("note:"), std::string::npos) << out;
   // Given the wrong vocabulary, info refuses as resume does.
   test::write_file(dir.file("fixed.bbld"), fixed.serialize());
   EXPECT_EQ(test::run_cli("info '" + dir.file("fixed.bbld") + "' --vocab '" +
