@@ -84,8 +84,14 @@ void run_evaluate(const EvaluateArguments& arguments) {
 
   const std::string run_path = loop::LoopRun::path_for(arguments.detections);
   std::unique_ptr<loop::LoopRun> run;
-  if (std::filesystem::exists(run_path))
+  if (std::filesystem::exists(run_path)) {
     run = std::make_unique<loop::LoopRun>(loop::LoopRun::load(run_path));
+    if (!loop::check_loops_csv_of_run(*run, run_path, arguments.detections))
+      std::fprintf(stderr,
+                   "warning: %s was written before run records named their loops file; "
+                   "nothing checks that %s belongs to it\n",
+                   run_path.c_str(), arguments.detections.c_str());
+  }
   if (run && !run->resumed_from.empty()) {
     // Its frames start after the state's, which the record cannot re-run.
     std::fprintf(stderr,

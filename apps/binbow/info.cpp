@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "binbow/descriptors.h"
 #include "binbow/formats.h"
@@ -14,6 +15,7 @@
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "formats/loader.h"
+#include "default_vocabulary.h"
 
 namespace binbow::cli {
 
@@ -32,8 +34,44 @@ void print_vocabulary(const Vocabulary& v) {
   std::printf("checksum: %08x\n", v.checksum());
 }
 
+// Checks the whole state as `detect-loops --resume-state` does, by loading
+// it. A fixed vocabulary's state needs that vocabulary: --vocab, else the
+// bundled default of its descriptor when its checksum is the state's; without
+// one, says on stderr what was left unchecked.
+void verify_loop_state(const std::string& path, const loop::LoopDetectorFileInfo& info,
+                       const std::string& vocab_argument) {
+  if (info.online) {
+    loop::LoopDetector::load(path);
+    return;
+  }
+  Vocabulary vocabulary;
+  if (vocab_argument.empty()) {
+    if (has_default_vocabulary(info.descriptor)) {
+      const std::vector<std::string> candidates = default_vocabulary_candidates(info.descriptor);
+      for (const std::string& candidate : candidates) {
+        std::error_code error;
+        if (!std::filesystem::is_regular_file(candidate, error)) continue;
+        Vocabulary bundled = load_vocabulary(candidate);
+        if (bundled.checksum() == info.vocabulary_checksum) vocabulary = std::move(bundled);
+        break;
+      }
+    }
+    if (vocabulary.empty()) {
+      std::fprintf(stderr,
+                   "note: %s: the header, the parameters and the previous BoW vector are checked; "
+                   "the database, features and the rest need the state's vocabulary (checksum "
+                   "%08x): give --vocab to check them\n",
+                   path.c_str(), info.vocabulary_checksum);
+      return;
+    }
+  } else {
+    load_loop_vocabulary(vocab_argument, info.descriptor, info.code_size, vocabulary);
+  }
+  loop::LoopDetector::load(path, std::move(vocabulary));
+}
+
 // A loop detector state (.bbld): what to resume it with. False for any other file.
-bool print_loop_state_info(const std::string& path) {
+bool print_loop_state_info(const std::string& path, const std::string& vocab_argument) {
   // Only a regular file is opened here: a FIFO would block (the readers
   // below refuse it with a clear error).
   std::error_code error;
@@ -42,6 +80,7 @@ bool print_loop_state_info(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWLD", 8) != 0) return false;
   const loop::LoopDetectorFileInfo info = loop::LoopDetector::inspect(path);
+  verify_loop_state(path, info, vocab_argument);
   std::printf("kind: loop detector state\n");
   std::printf("version: %u\n", info.version);
   std::printf("vocabulary: %s\n", info.online ? "online" : "fixed");
@@ -75,18 +114,23 @@ void add_info_command(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto header_only = std::make_shared<bool>(false);
   auto system = std::make_shared<bool>(false);
+  auto vocab = std::make_shared<std::string>();
   auto* file = cmd->add_option("FILE", *path,
                                "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database");
   auto* header = cmd->add_flag("--header-only", *header_only,
                                "Database: read the header only, without checking the whole file");
+  cmd->add_option("--vocab", *vocab,
+                  "Loop detector state of a fixed vocabulary: that vocabulary, to check the whole "
+                  "state as --resume-state does (default: the descriptor's bundled one, when it "
+                  "is the state's)");
   cmd->add_flag("--system", *system,
                 "Print the CPU features binbow uses and the Hamming kernel set in use")
       ->excludes(file)
       ->excludes(header);
-  cmd->callback([path, header_only, system] {
+  cmd->callback([path, header_only, vocab, system] {
     if (*system) return print_system_info();
     if (path->empty()) throw CLI::RequiredError("FILE");
-    if (print_loop_state_info(*path)) return;
+    if (print_loop_state_info(*path, *vocab)) return;
     if (print_database_info(*path, !*header_only)) return;
     // The format the loader settled on: inside a .gz it is known only after
     // decompressing (ORB-SLAM and VINS binary files are told apart by size).

@@ -10,6 +10,7 @@
 #include "core/crc32c.h"
 #include "core/little_endian.h"
 #include "core/vocabulary_block.h"
+#include "core/word_weights.h"
 
 namespace binbow::detail {
 
@@ -198,9 +199,11 @@ void parse_block(VocabularyBlock& block, const std::string& name, const LoadOpti
   block.tree.child_counts = section_data[2];
   block.tree.code_size = code_size;
   block.word_weights = reinterpret_cast<const float*>(section_data[3]);
-  for (std::size_t word = 0; word < word_count; ++word)
-    if (!std::isfinite(load_le<float>(section_data[3] + word * sizeof(float))))
-      fail("the weight of word " + std::to_string(word) + " is not a finite number");
+  const std::string weights_problem = word_weights_problem(
+      word_count,
+      [&](std::size_t word) { return load_le<float>(section_data[3] + word * sizeof(float)); },
+      "word");
+  if (!weights_problem.empty()) fail(weights_problem);
 
   // Structure: every link stays inside the tree and points forward (so no
   // cycle), every node but the root has exactly one parent, depth ≤ levels,

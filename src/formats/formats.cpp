@@ -15,6 +15,7 @@
 #include "formats/gzip.h"
 #include "formats/loader.h"
 #include "formats/text_numbers.h"
+#include "formats/tree_checks.h"
 
 namespace binbow {
 
@@ -214,6 +215,7 @@ ChildLists child_lists(const VocabularyTree& tree) {
 }
 
 Vocabulary vocabulary_from_parsed(const ParsedVocabulary& parsed, const std::string& name) {
+  check_word_weights(parsed.tree, name);
   try {
     return Vocabulary::from_tree(parsed.tree);
   } catch (const InvalidArgument& e) {

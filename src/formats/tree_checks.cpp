@@ -3,6 +3,7 @@
 #include <cstdint>
 
 #include "binbow/error.h"
+#include "core/word_weights.h"
 #include "formats/codecs.h"
 
 namespace binbow::detail {
@@ -77,6 +78,14 @@ bool check_word_list(VocabularyTree& tree,
     if (leaf_rank[node] != word) ids_match = false;
   }
   return ids_match;
+}
+
+void check_word_weights(const VocabularyTree& tree, const std::string& name) {
+  // Inner nodes weigh 0, so the words' weights decide alone: a negative one
+  // is found among all nodes' weights, and "all 0" is the same over both.
+  const std::string problem = word_weights_problem(
+      tree.weights.size(), [&](std::size_t node) { return tree.weights[node]; }, "node");
+  if (!problem.empty()) throw FileError(name, problem);
 }
 
 }  // namespace binbow::detail

@@ -185,7 +185,11 @@ class Layout {
   std::string descriptor_;
 };
 
-BowVector read_previous_bow(const Layout& layout) {
+// The previous BoW vector, whose words must be below `word_limit`: the
+// vocabulary's words, or the online vocabulary's ids ever created. A word
+// beyond them scores nothing, so a resumed run would quietly lose the
+// normalisation of its next frame.
+BowVector read_previous_bow(const Layout& layout, std::uint64_t word_limit) {
   const binbow::detail::Section& section = layout.section(kPreviousBow);
   if (section.size % 8 != 0) layout.fail("section 'previous BoW vector' has a partial entry");
   std::vector<BowEntry> entries(section.size / 8);
@@ -194,6 +198,9 @@ BowVector read_previous_bow(const Layout& layout) {
     entries[i].value = binbow::detail::load_le<float>(section.data + 8 * i + 4);
     if (!std::isfinite(entries[i].value))
       layout.fail("the previous BoW vector has a non-finite value");
+    if (entries[i].word >= word_limit)
+      layout.fail("the previous BoW vector names word " + std::to_string(entries[i].word) +
+                  ", outside the vocabulary's " + std::to_string(word_limit) + " words");
   }
   try {
     return BowVector(std::move(entries));
@@ -355,7 +362,8 @@ namespace {
 // What both kinds share once the database (and online vocabulary) is in place.
 // (Templates only so that they can name the private LoopDetector::Impl.)
 template <class DetectorImpl>
-std::unique_ptr<DetectorImpl> restore(const Layout& layout, std::unique_ptr<DetectorImpl> impl) {
+std::unique_ptr<DetectorImpl> restore(const Layout& layout, std::unique_ptr<DetectorImpl> impl,
+                                      std::uint64_t word_limit) {
   const Header& header = layout.header();
   const DatabaseOptions expected = detail::database_options(impl->params);
   const DatabaseOptions& options = impl->database.options();
@@ -368,7 +376,7 @@ std::unique_ptr<DetectorImpl> restore(const Layout& layout, std::unique_ptr<Dete
                 std::to_string(impl->database.next_entry_id()) + " images, the state " +
                 std::to_string(header.frames) + " of which " +
                 std::to_string(header.forgotten_frames) + " forgotten");
-  impl->previous_bow = read_previous_bow(layout);
+  impl->previous_bow = read_previous_bow(layout, word_limit);
   impl->featured_frames = header.featured_frames;
   impl->window.restore(layout.window());
   read_features(layout, impl->keeps_features(), *impl);
@@ -411,13 +419,20 @@ LoopDetector LoopDetector::deserialize(const std::uint8_t* data, std::size_t siz
                 "); the given vocabulary has " +
                 describe_vocabulary(vocabulary.checksum(), vocabulary.word_count(),
                                     vocabulary.levels(), vocabulary.code_size()));
+  if (vocabulary.word_count() != header.vocabulary_words ||
+      vocabulary.levels() != header.vocabulary_levels)
+    layout.fail("the header describes a vocabulary of " + std::to_string(header.vocabulary_words) +
+                " words and " + std::to_string(header.vocabulary_levels) +
+                " levels; the one with its checksum has " +
+                std::to_string(vocabulary.word_count()) + " words and " +
+                std::to_string(vocabulary.levels()) + " levels");
   layout.expect_size(kOnlineVocabulary, 0);
   const binbow::detail::Section& database = layout.section(kDatabase);
   auto impl =
       std::make_unique<Impl>(Database::deserialize(database.data, database.size,
                                                    name + " (database)", std::move(vocabulary)),
                              layout.params(), header.code_size);
-  return LoopDetector(restore(layout, std::move(impl)));
+  return LoopDetector(restore(layout, std::move(impl), header.vocabulary_words));
 }
 
 LoopDetector LoopDetector::deserialize(const std::uint8_t* data, std::size_t size,
@@ -450,7 +465,8 @@ LoopDetector LoopDetector::deserialize(const std::uint8_t* data, std::size_t siz
                 " frames with features");
   if (impl->online->options().descriptor != layout.descriptor())
     layout.fail("the online vocabulary's descriptor name disagrees with the state's");
-  return LoopDetector(restore(layout, std::move(impl)));
+  const std::uint64_t word_limit = impl->online->next_word_id();
+  return LoopDetector(restore(layout, std::move(impl), word_limit));
 }
 
 LoopDetector LoopDetector::load(const std::string& path, Vocabulary vocabulary) {
@@ -465,7 +481,10 @@ LoopDetector LoopDetector::load(const std::string& path) {
 
 LoopDetectorFileInfo LoopDetector::inspect(const std::string& path) {
   const binbow::detail::MappedFile file(path);
-  return info_of(Layout(file.data(), file.size(), path));
+  const Layout layout(file.data(), file.size(), path);
+  // A fixed vocabulary's word count is in the header; an online one's needs its section.
+  if (!layout.header().online) read_previous_bow(layout, layout.header().vocabulary_words);
+  return info_of(layout);
 }
 
 }  // namespace binbow::loop

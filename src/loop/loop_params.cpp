@@ -263,15 +263,19 @@ void LoopDetectorParams::validate() const {
   in_range("min_inlier_spread", min_inlier_spread, 0, 1);
 }
 
-LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name,
-                                                 const LoopDetectorParams& defaults) {
-  Json object;
+namespace {
+Json parse_json_object(const std::string& text, const std::string& name) {
   try {
-    object = Json::parse(text);
+    return Json::parse(text);
   } catch (const Json::exception& e) {
     throw FileError(name, std::string("invalid JSON: ") + e.what());
   }
-  return from_object(object, name, defaults);
+}
+}  // namespace
+
+LoopDetectorParams LoopDetectorParams::from_json(const std::string& text, const std::string& name,
+                                                 const LoopDetectorParams& defaults) {
+  return from_object(parse_json_object(text, name), name, defaults);
 }
 
 LoopDetectorParams LoopDetectorParams::load(const std::string& path,
@@ -282,11 +286,15 @@ LoopDetectorParams LoopDetectorParams::load(const std::string& path,
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool json = (first != std::string::npos && text[first] == '{') ||
                     (path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0);
-  if (json) return from_json(text, path, defaults);
-
   // YAML: parsed here (OpenCV's parser hangs on some malformed files) into
   // JSON, to share one validator.
-  return from_object(parse_flat_yaml(text, path), path, defaults);
+  const Json object = json ? parse_json_object(text, path) : parse_flat_yaml(text, path);
+  // A file that sets nothing is a wrong file, not a wish for the defaults.
+  if (object.is_object() && object.empty())
+    throw FileError(path,
+                    "sets no parameter: the file is empty or holds only comments (expected "
+                    "\"name: value\" lines or a JSON object)");
+  return from_object(object, path, defaults);
 }
 
 LoopDetectorParams LoopDetectorParams::load(const std::string& path) {

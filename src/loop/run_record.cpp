@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "binbow/error.h"
+#include "core/crc32c.h"
 #include "core/file_io.h"
 #include "core/output_path.h"
 #include "vision/regular_file.h"
@@ -68,6 +69,33 @@ T integer_at(const Json& object, const char* key, const std::string& path) {
                             ", not an integer in [" +
                             std::to_string(std::numeric_limits<T>::min()) + ", " +
                             std::to_string(std::numeric_limits<T>::max()) + "]");
+}
+// The largest max_features a record may hold: detect-loops --features' bound.
+constexpr int kMaxRecordedFeatures = 1'000'000;
+
+// How the inputs were read, within the bounds ImageSource takes: a sweep
+// re-reads them so.
+void check_source(const vision::ImageSourceOptions& source, const std::string& path) {
+  const auto fail = [&](const char* key, const std::string& value, const std::string& range) {
+    throw FileError(path, std::string("malformed run record: \"source\" \"") + key + "\" is " +
+                              value + " (" + range + " expected)");
+  };
+  if (source.stride < 1 || source.stride > vision::kMaxStride)
+    fail("stride", std::to_string(source.stride), "1 to " + std::to_string(vision::kMaxStride));
+  if (source.max_width < 0 || source.max_width > vision::kMaxFrameWidth)
+    fail("max_width", std::to_string(source.max_width),
+         "0 to " + std::to_string(vision::kMaxFrameWidth));
+  if (!(source.video_fps >= 0 && source.video_fps <= vision::kMaxVideoFps))
+    fail("video_fps", Json(source.video_fps).dump(), "0 to " + Json(vision::kMaxVideoFps).dump());
+}
+
+bool is_loop_status(const std::string& status) {
+  for (const LoopStatus s :
+       {LoopStatus::kLoopDetected, LoopStatus::kNoDatabaseResults,
+        LoopStatus::kLowNormalisationScore, LoopStatus::kLowScores, LoopStatus::kNoIslands,
+        LoopStatus::kNoTemporalConsistency, LoopStatus::kNoGeometricConsistency})
+    if (status == to_string(s)) return true;
+  return false;
 }
 }  // namespace
 
@@ -144,7 +172,7 @@ struct LoopRunFiles::Impl {
     loops.push_back(std::move(loop));
   }
 
-  void finish_record() {
+  void finish_record(const std::string& csv_text) {
     write("],\n\"loops\":[");
     for (std::size_t i = 0; i < loops.size(); ++i) {
       const LoopRecord& l = loops[i];
@@ -155,7 +183,11 @@ struct LoopRunFiles::Impl {
     for (std::size_t s = 0; s < kStageCount; ++s)
       write((s == 0 ? "\n" : ",\n") + json_text(Json(timing[s].stage)) + ":" +
             json_text(Json(timing[s].ms)));
-    write("}}\n");
+    write("},\n\"loops_csv\":" +
+          Json{{"bytes", csv_text.size()},
+               {"crc32c", binbow::detail::crc32c(csv_text.data(), csv_text.size())}}
+              .dump() +
+          "}\n");
   }
 
   std::string csv_path;
@@ -189,7 +221,7 @@ void LoopRunFiles::commit() {
   Impl& d = *impl_;
   const std::string csv_text = format_detections_csv(d.detections);
   detail::write_all(d.csv, csv_text.data(), csv_text.size(), d.csv_path);
-  d.finish_record();
+  d.finish_record(csv_text);
   d.committed = true;
   d.staged.commit();
 }
@@ -266,12 +298,18 @@ LoopRun LoopRun::load(const std::string& path) {
     }
     run.descriptor = j.at("descriptor").get<std::string>();
     run.max_features = integer_at<int>(j, "max_features", path);
+    // As detect-loops --features takes it: a sweep would re-run with it.
+    if (run.max_features < 0 || run.max_features > kMaxRecordedFeatures)
+      throw FileError(path, "malformed run record: \"max_features\" is " +
+                                std::to_string(run.max_features) + " (0 to " +
+                                std::to_string(kMaxRecordedFeatures) + " expected)");
     run.params_json = j.at("params").dump(2);
     if (j.contains("source")) {  // absent from records of earlier versions
       const Json& source = j.at("source");
       run.source.stride = integer_at<std::size_t>(source, "stride", path);
       run.source.max_width = integer_at<int>(source, "max_width", path);
       run.source.video_fps = source.at("video_fps").get<double>();
+      check_source(run.source, path);
     }
     for (const Json& f : j.at("frames")) {
       // Absent from records written before it was added: not known.
@@ -285,11 +323,14 @@ LoopRun LoopRun::load(const std::string& path) {
       if (features < -1)
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has a negative number of features");
-      run.frames.push_back({f.at("file").get<std::string>(), f.at("status").get<std::string>(),
-                            integer_at<long long>(f, "match", path), f.at("score").get<double>(),
-                            f.at("normalised_score").get<double>(),
-                            integer_at<std::size_t>(f, "inliers", path), correspondences,
-                            features});
+      const std::string status = f.at("status").get<std::string>();
+      if (!is_loop_status(status))
+        throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
+                                  " has the unknown status \"" + status + "\"");
+      run.frames.push_back(
+          {f.at("file").get<std::string>(), status, integer_at<long long>(f, "match", path),
+           f.at("score").get<double>(), f.at("normalised_score").get<double>(),
+           integer_at<std::size_t>(f, "inliers", path), correspondences, features});
     }
     for (const Json& l : j.at("loops"))
       run.loops.push_back({integer_at<std::size_t>(l, "query", path),
@@ -297,6 +338,12 @@ LoopRun LoopRun::load(const std::string& path) {
                            l.at("inliers").get<std::vector<std::array<float, 4>>>()});
     for (const auto& [stage, values] : j.at("timing_ms").items())
       run.timing.push_back({stage, values.get<std::vector<double>>()});
+    if (j.contains("loops_csv")) {
+      const Json& csv = j.at("loops_csv");
+      run.knows_loops_csv = true;
+      run.loops_csv_bytes = integer_at<std::uint64_t>(csv, "bytes", path);
+      run.loops_csv_crc32c = integer_at<std::uint32_t>(csv, "crc32c", path);
+    }
   } catch (const Json::exception& e) {
     throw FileError(path, std::string("malformed run record: ") + e.what());
   }
@@ -310,6 +357,36 @@ LoopRun LoopRun::load(const std::string& path) {
       run.timing.begin(), run.timing.end(),
       [&](const StageTiming& a, const StageTiming& b) { return rank(a.stage) < rank(b.stage); });
   return run;
+}
+
+bool check_loops_csv_of_run(const LoopRun& run, const std::string& run_path,
+                            const std::string& loops_csv) {
+  if (!run.knows_loops_csv) return false;
+  vision::require_regular_file(loops_csv);
+  std::ifstream in(loops_csv, std::ios::binary);
+  if (!in) throw FileError(loops_csv, std::string("cannot open: ") + std::strerror(errno));
+  std::vector<char> buffer(std::size_t{1} << 20);
+  std::uint64_t bytes = 0;
+  std::uint32_t crc = 0;
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    const auto got = static_cast<std::size_t>(in.gcount());
+    crc = binbow::detail::crc32c(buffer.data(), got, crc);
+    bytes += got;
+  }
+  if (in.bad()) throw FileError(loops_csv, "cannot read: " + std::string(std::strerror(errno)));
+  if (bytes != run.loops_csv_bytes || crc != run.loops_csv_crc32c) {
+    char sums[64];
+    std::snprintf(sums, sizeof sums, "CRC-32C %08x, the record's %08x", crc,
+                  static_cast<unsigned>(run.loops_csv_crc32c));
+    throw FileError(loops_csv, "not the loops file written with the run record " + run_path + " (" +
+                                   std::to_string(bytes) + " bytes, the record's " +
+                                   std::to_string(run.loops_csv_bytes) + "; " + sums +
+                                   "): one of them was replaced or edited after the run. Run "
+                                   "detect-loops again, or move the record away to evaluate the "
+                                   "loops alone");
+  }
+  return true;
 }
 
 std::string format_timing_table(const std::vector<StageTiming>& timing) {

@@ -208,5 +208,36 @@ TEST(VocabularyFile, StructuralChecksCatchForgedTreesEvenWithoutChecksums) {
   EXPECT_THROW(Vocabulary::deserialize(bytes.data(), bytes.size(), "forged", no_crc), FileError);
 }
 
+// Words weigh 0 (a stop word) or more under every weighting: a negative
+// weight means nothing, and a vocabulary of stop words only turns every
+// image into an empty BoW vector (then no loop is ever found).
+TEST(VocabularyFile, NegativeOrAllZeroWeightsAreRejected) {
+  test::TempDir dir;
+  for (const Weighting weighting :
+       {Weighting::kTfIdf, Weighting::kIdf, Weighting::kTf, Weighting::kBinary}) {
+    SCOPED_TRACE(to_string(weighting));
+    std::vector<std::uint8_t> good = sample_vocabulary().serialize();
+    good[28] = static_cast<std::uint8_t>(weighting);
+    detail::store_le<std::uint32_t>(good.data() + 60, detail::crc32c(good.data(), 60));
+    ASSERT_NO_THROW(Vocabulary::deserialize(good.data(), good.size(), "good"));
+    const std::size_t words =
+        Vocabulary::deserialize(good.data(), good.size(), "good").word_count();
+    for (const float weight : {-1.0f, 0.0f}) {
+      std::vector<std::uint8_t> bytes = good;
+      for (std::size_t word = 0; word < words; ++word)
+        detail::store_le<float>(bytes.data() + section_offset(bytes, 3) + 4 * word, weight);
+      recompute_section_crc(bytes, 3);
+      test::write_file(dir.file("weights.bbw"), bytes);
+      expect_file_error(dir.file("weights.bbw"),
+                        weight < 0 ? "the weight of word 0 is negative" : "every word weighs 0");
+    }
+    // One stop word among others is fine.
+    std::vector<std::uint8_t> bytes = good;
+    detail::store_le<float>(bytes.data() + section_offset(bytes, 3), 0.0f);
+    recompute_section_crc(bytes, 3);
+    EXPECT_NO_THROW(Vocabulary::deserialize(bytes.data(), bytes.size(), "one stop word"));
+  }
+}
+
 }  // namespace
 }  // namespace binbow

@@ -213,6 +213,19 @@ TEST_F(DamagedFiles, ParentsOutsideTheTreeOrInCyclesAreRejected) {
   EXPECT_NE(rejection(dir_, "cycle.fbow", fbow).find("reached twice"), std::string::npos);
 }
 
+// Every format's words weigh 0 (a stop word) or more, and not all 0: the
+// check is shared by all readers (here ORB-SLAM text, two words).
+TEST_F(DamagedFiles, NegativeOrAllZeroWordWeightsAreRejected) {
+  EXPECT_NE(rejection(dir_, "negative.txt", bytes_of("2 1 0 0\n0 1 1 2 0.5\n0 1 3 4 -1\n"))
+                .find("is negative"),
+            std::string::npos);
+  EXPECT_NE(rejection(dir_, "zero.txt", bytes_of("2 1 0 0\n0 1 1 2 0\n0 1 3 4 0\n"))
+                .find("every word weighs 0"),
+            std::string::npos);
+  write_file(dir_.file("one_stop_word.txt"), bytes_of("2 1 0 0\n0 1 1 2 0\n0 1 3 4 0.5\n"));
+  EXPECT_EQ(load_vocabulary(dir_.file("one_stop_word.txt")).word_count(), 2u);
+}
+
 TEST_F(DamagedFiles, DescriptorsOfTheWrongLengthAreRejected) {
   EXPECT_NE(
       rejection(dir_, "short.txt", bytes_of("2 1 0 0\n0 1 1 2 0.5\n0 1 3 0.5\n")).find("line 3"),

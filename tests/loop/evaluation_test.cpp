@@ -458,5 +458,25 @@ TEST(Detections, NonFiniteScoresAreRefused) {
   }
 }
 
+// A loop closes with an earlier frame: detect-loops never writes a row whose
+// match is the query or later, so such a row is a damaged or foreign file.
+TEST(DetectionsCsv, RowsWhoseMatchIsNotEarlierAreRefusedNamingTheLine) {
+  test::TempDir dir;
+  const std::string header = "query_index,match_index,query_file,match_file,score,inliers\n";
+  for (const std::string row : {"4,4,a.jpg,a.jpg,0.5,30\n", "4,9,a.jpg,b.jpg,0.5,30\n"}) {
+    SCOPED_TRACE(row);
+    std::ofstream(dir.file("loops.csv")) << header << "5,2,c.jpg,d.jpg,0.5,30\n" << row;
+    try {
+      read_detections_csv(dir.file("loops.csv"));
+      ADD_FAILURE() << "read";
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), dir.file("loops.csv"));
+      EXPECT_NE(std::string(e.what()).find("line 3: match"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("not earlier than query 4"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace binbow::loop

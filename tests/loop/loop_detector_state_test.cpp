@@ -17,6 +17,7 @@
 #include "binbow/vision/image_source.h"
 #include "core/crc32c.h"
 #include "core/little_endian.h"
+#include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -424,6 +425,125 @@ TEST(LoopDetectorState, SaveIsAtomic) {
   // Into missing folders: they are made.
   detector.save(dir.file("new/folder/state.bbld"));
   EXPECT_EQ(LoopDetector::load(dir.file("new/folder/state.bbld")).size(), detector.size());
+}
+
+// The bytes of a .bbld image with section `section` edited and every CRC
+// recomputed: content that passes the checksums but not the checks.
+std::vector<std::uint8_t> with_section_edited(
+    const std::vector<std::uint8_t>& bytes, std::size_t section,
+    const std::function<void(std::uint8_t*, std::size_t)>& edit) {
+  std::vector<std::uint8_t> out = bytes;
+  const auto sections = sections_of(bytes);
+  const auto [offset, length] = sections[section];
+  edit(out.data() + offset, length);
+  std::uint8_t* entry = out.data() + 64 + 24 * section;
+  binbow::detail::store_le<std::uint32_t>(entry + 4,
+                                          binbow::detail::crc32c(out.data() + offset, length));
+  binbow::detail::store_le<std::uint32_t>(
+      out.data() + 64 + 24 * sections.size(),
+      binbow::detail::crc32c(out.data() + 64, 24 * sections.size()));
+  return out;
+}
+
+// The last word of the previous BoW vector moved to 4294967280, still in
+// order: that word scores nothing, so a resumed run would lose the
+// normalisation score of its next frame.
+std::vector<std::uint8_t> with_previous_bow_word_outside(const std::vector<std::uint8_t>& bytes) {
+  return with_section_edited(bytes, 2, [](std::uint8_t* bow, std::size_t length) {
+    EXPECT_GE(length, 8u) << "no previous BoW vector to damage";
+    if (length >= 8) binbow::detail::store_le<std::uint32_t>(bow + length - 8, 4294967280u);
+  });
+}
+
+TEST(LoopDetectorState, PreviousBowWordsOutsideTheVocabularyAreRefused) {
+  test::TempDir dir;
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  for (std::size_t i = 0; i < 3; ++i) fixed.process(sample_features("orb")[i]);
+  const std::vector<std::uint8_t> fixed_bytes = with_previous_bow_word_outside(fixed.serialize());
+  EXPECT_NE(load_problem([&] {
+              LoopDetector::deserialize(fixed_bytes.data(), fixed_bytes.size(), "f.bbld", orb);
+            }).find("previous BoW vector names word 4294967280"),
+            std::string::npos);
+  // inspect() knows the fixed vocabulary's word count from the header.
+  test::write_file(dir.file("fixed.bbld"), fixed_bytes);
+  EXPECT_NE(
+      load_problem([&] { LoopDetector::inspect(dir.file("fixed.bbld")); }).find("word 4294967280"),
+      std::string::npos);
+
+  const std::vector<std::uint8_t> online_bytes =
+      with_previous_bow_word_outside(small_online_detector().serialize());
+  EXPECT_NE(load_problem([&] {
+              LoopDetector::deserialize(online_bytes.data(), online_bytes.size(), "o.bbld");
+            }).find("previous BoW vector names word 4294967280"),
+            std::string::npos);
+}
+
+// `binbow info` on a state checks what --resume-state checks: the whole
+// file, loaded (a fixed vocabulary's state with --vocab, or the bundled
+// vocabulary of its descriptor when it is the state's).
+TEST(LoopDetectorState, InfoRefusesWhatResumeRefuses) {
+  test::TempDir dir;
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  for (std::size_t i = 0; i < 3; ++i) fixed.process(sample_features("orb")[i]);
+  // Ten features moved from frame 0 to frame 1: every CRC valid, the
+  // direct index of frame 0 then names features frame 0 no longer has.
+  const auto moved = [](const std::vector<std::uint8_t>& bytes) {
+    return with_section_edited(bytes, 5, [](std::uint8_t* counts, std::size_t) {
+      binbow::detail::store_le<std::uint32_t>(counts,
+                                              binbow::detail::load_le<std::uint32_t>(counts) - 10);
+      binbow::detail::store_le<std::uint32_t>(
+          counts + 4, binbow::detail::load_le<std::uint32_t>(counts + 4) + 10);
+    });
+  };
+  const std::string vocab = " --vocab '" + vocabulary_path("orb_default.bbw") + "'";
+  std::string out;
+  for (const std::string kind : {"fixed", "online"}) {
+    SCOPED_TRACE(kind);
+    const std::vector<std::uint8_t> good =
+        kind == "fixed" ? fixed.serialize() : small_online_detector().serialize();
+    const std::string path = dir.file(kind + ".bbld");
+    test::write_file(path, good);
+    ASSERT_EQ(test::run_cli("info '" + path + "'", &out), 0) << out;
+    EXPECT_EQ(out.find("note:"), std::string::npos) << out;
+    test::write_file(path, moved(good));
+    ASSERT_NO_THROW(LoopDetector::inspect(path)) << "the header alone is intact";
+    EXPECT_EQ(test::run_cli("info '" + path + "'", &out), 1) << out;
+    EXPECT_NE(out.find("binbow: error: " + path + ": the direct index of frame 0"),
+              std::string::npos)
+        << out;
+    if (kind == "fixed") {
+      EXPECT_EQ(test::run_cli("info '" + path + "'" + vocab, &out), 1) << out;
+      EXPECT_NE(out.find("the direct index of frame 0"), std::string::npos) << out;
+    }
+  }
+  // A vocabulary binbow does not bundle: info checks what it can without it
+  // and says what it could not; given it, checks everything.
+  std::mt19937_64 rng(5);
+  const Vocabulary own = Vocabulary::from_tree(test::random_tree(4, 3, 32, rng));
+  own.save(dir.file("own.bbw"));
+  LoopDetector own_detector(own);
+  for (std::size_t i = 0; i < 3; ++i) own_detector.process(sample_features("orb")[i]);
+  own_detector.save(dir.file("own.bbld"));
+  ASSERT_EQ(test::run_cli("info '" + dir.file("own.bbld") + "'", &out), 0) << out;
+  EXPECT_NE(out.find("note: " + dir.file("own.bbld") +
+                     ": the header, the parameters and the "
+                     "previous BoW vector are checked"),
+            std::string::npos)
+      << out;
+  ASSERT_EQ(test::run_cli(
+                "info '" + dir.file("own.bbld") + "' --vocab '" + dir.file("own.bbw") + "'", &out),
+            0)
+      << out;
+  EXPECT_EQ(out.find("note:"), std::string::npos) << out;
+  // Given the wrong vocabulary, info refuses as resume does.
+  test::write_file(dir.file("fixed.bbld"), fixed.serialize());
+  EXPECT_EQ(test::run_cli("info '" + dir.file("fixed.bbld") + "' --vocab '" +
+                              vocabulary_path("brief_default.bbw") + "'",
+                          &out),
+            1)
+      << out;
 }
 
 }  // namespace

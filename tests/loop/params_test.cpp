@@ -242,5 +242,30 @@ TEST(LoopStatus, Names) {
   EXPECT_THROW(parse_geometric_check("flann"), InvalidArgument);
 }
 
+// A --params file that sets nothing is a wrong file (an empty YAML, a
+// template never filled), not a wish for the defaults.
+TEST(LoopDetectorParams, FilesThatSetNothingAreRefused) {
+  test::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"empty.yml", ""},
+      {"empty.yaml", "\n\n"},
+      {"params", ""},
+      {"comments.yml", "%YAML:1.0\n---\n# alpha: 0.3\n"},
+      {"empty.json", "{}"}};
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    write_text(dir.file(name), text);
+    try {
+      LoopDetectorParams::load(dir.file(name));
+      ADD_FAILURE() << "loaded";
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), dir.file(name));
+      EXPECT_NE(std::string(e.what()).find("sets no parameter"), std::string::npos) << e.what();
+    }
+  }
+  write_text(dir.file("one.yml"), "alpha: 0.4\n");
+  EXPECT_DOUBLE_EQ(LoopDetectorParams::load(dir.file("one.yml")).alpha, 0.4);
+}
+
 }  // namespace
 }  // namespace binbow::loop

@@ -12,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "binbow/error.h"
+#include "binbow/loop/run_record.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -131,6 +133,105 @@ TEST(RunRecord, KeepsOnlyTheLoopsAndInliersTheReportDraws) {
   ASSERT_EQ(test::run_cli("evaluate --gt '" + dir.file("truth.txt") + "' '" + csv + "'", &out), 0)
       << out;
   EXPECT_GT(test::printed_number(out, "precision"), 0.5) << out;
+}
+
+// The smallest run record detect-loops could have written: three frames.
+nlohmann::json small_record() {
+  nlohmann::json frames = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i)
+    frames.push_back({{"file", std::to_string(i) + ".jpg"},
+                      {"status", "no-database-results"},
+                      {"match", -1},
+                      {"score", 0},
+                      {"normalised_score", 0},
+                      {"inliers", 0}});
+  return {{"format", "binbow-loop-run"},
+          {"version", 1},
+          {"inputs", {"frames"}},
+          {"vocabulary", "v.bbw"},
+          {"descriptor", "brief"},
+          {"max_features", 0},
+          {"params", nlohmann::json::object()},
+          {"source", {{"stride", 1}, {"max_width", 0}, {"video_fps", 0}}},
+          {"frames", frames},
+          {"loops", nlohmann::json::array()},
+          {"timing_ms", nlohmann::json::object()}};
+}
+
+// A sweep re-runs detection as the record says: values detect-loops never
+// writes are refused, naming the record and the field.
+TEST(RunRecord, ValuesDetectLoopsNeverWritesAreRefused) {
+  test::TempDir dir;
+  const std::string csv = dir.file("loops.csv");
+  const std::string path = csv + ".run.json";
+  write_text(csv, "query_index,match_index,query_file,match_file,score,inliers\n");
+  write_text(dir.file("truth.txt"), "# 0-based\n2 0\n");
+  write_text(path, small_record().dump());
+  ASSERT_NO_THROW(loop::LoopRun::load(path));
+  const std::vector<std::pair<std::string, nlohmann::json::json_pointer>> cases = {
+      {"max_features", nlohmann::json::json_pointer("/max_features")},
+      {"stride", nlohmann::json::json_pointer("/source/stride")},
+      {"max_width", nlohmann::json::json_pointer("/source/max_width")},
+      {"status", nlohmann::json::json_pointer("/frames/1/status")}};
+  for (const auto& [field, pointer] : cases) {
+    SCOPED_TRACE(field);
+    nlohmann::json record = small_record();
+    record[pointer] = field == "status"   ? nlohmann::json("bogus")
+                      : field == "stride" ? nlohmann::json(0)
+                                          : nlohmann::json(-5);
+    write_text(path, record.dump());
+    try {
+      loop::LoopRun::load(path);
+      ADD_FAILURE() << "loaded";
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), path);
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+    std::string out;
+    EXPECT_EQ(
+        test::run_cli("evaluate --sweep --gt '" + dir.file("truth.txt") + "' '" + csv + "'", &out),
+        1)
+        << out;
+    EXPECT_NE(out.find(path), std::string::npos) << out;
+  }
+}
+
+// loops.csv and its record are renamed into place one after the other; a
+// run killed between the two, or a loops.csv replaced or edited since, leaves
+// a pair that disagrees: evaluate refuses it rather than report on the wrong
+// run. Records from before the check are read with a warning.
+TEST(RunRecord, EvaluateRefusesALoopsFileThatIsNotTheRecords) {
+  const std::string samples = test::shared_data("rtabmap-samples/samples");
+  const std::string truth = test::shared_data("rtabmap-samples/samples_GT.bmp");
+  test::TempDir dir;
+  const std::string csv = dir.file("loops.csv");
+  const std::string record = csv + ".run.json";
+  std::string out;
+  ASSERT_EQ(test::run_cli(detect_loops_arguments(csv, samples), &out), 0) << out;
+  const std::string evaluate = "evaluate --gt '" + truth + "' '" + csv + "'";
+  ASSERT_EQ(test::run_cli(evaluate, &out), 0) << out;
+  EXPECT_EQ(out.find("warning"), std::string::npos) << out;
+  const double recall = test::printed_number(out, "recall");
+  ASSERT_GT(recall, 0.3) << out;
+
+  // The loops of another run: one loop fewer.
+  const std::string loops = read_text(csv);
+  ASSERT_GT(std::count(loops.begin(), loops.end(), '\n'), 2);
+  const std::string fewer = loops.substr(0, loops.rfind('\n', loops.size() - 2) + 1);
+  write_text(csv, fewer);
+  EXPECT_EQ(test::run_cli(evaluate, &out), 1) << out;
+  EXPECT_NE(out.find("binbow: error: " + csv + ": not the loops file written with the run record " +
+                     record),
+            std::string::npos)
+      << out;
+
+  // A record written before records named their loops file.
+  nlohmann::json old = nlohmann::json::parse(read_text(record));
+  ASSERT_TRUE(old.contains("loops_csv"));
+  old.erase("loops_csv");
+  write_text(record, old.dump());
+  EXPECT_EQ(test::run_cli(evaluate, &out), 0) << out;
+  EXPECT_NE(out.find("warning: " + record), std::string::npos) << out;
 }
 
 }  // namespace

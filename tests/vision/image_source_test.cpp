@@ -662,5 +662,44 @@ TEST(ImageSource, UnreadableVideoGivesFileError) {
   expect_file_error_naming(dir.file("broken.avi"), [&] { source.next(frame); });
 }
 
+// Bytes flipped inside the entropy-coded scan of a real frame: libjpeg
+// decodes most such files without a warning (Huffman codes resynchronise)
+// into a frame with shifted or garbage blocks. Those whose damage shows in
+// libjpeg's warnings or in coefficients no 8-bit image has are refused,
+// naming the file; JPEG has no checksum, so the others cannot be told apart.
+TEST(ReadGreyImage, JpegWithDamagedScanDataIsAnError) {
+  TempDir dir;
+  const std::vector<std::uint8_t> jpeg =
+      test::read_file(test::shared_data("rtabmap-samples/samples/1.jpg"));
+  std::size_t sos = 0;
+  while (sos + 3 < jpeg.size() && !(jpeg[sos] == 0xFF && jpeg[sos + 1] == 0xDA)) ++sos;
+  ASSERT_LT(sos + 3, jpeg.size()) << "no start of scan";
+  const std::size_t scan = sos + 2 + (std::size_t{jpeg[sos + 2]} << 8 | jpeg[sos + 3]);
+  const std::size_t end = jpeg.size() - 2;  // the end-of-image marker
+  ASSERT_GT(end, scan + 1000);
+  constexpr std::size_t kDamaged = 40;
+  std::size_t refused = 0;
+  for (std::size_t k = 0; k < kDamaged; ++k) {
+    std::vector<std::uint8_t> damaged = jpeg;
+    const std::size_t at = scan + (end - scan) * (k + 1) / (kDamaged + 1);
+    damaged[at] ^= 0xFF;
+    damaged[at + 1] ^= 0x55;
+    const std::string path = dir.file("damaged" + std::to_string(k) + ".jpg");
+    test::write_file(path, damaged);
+    try {
+      read_grey_image(path);
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), path);
+      EXPECT_NE(std::string(e.what()).find("damaged JPEG: Corrupt JPEG data"), std::string::npos)
+          << e.what();
+      ++refused;
+    }
+  }
+  // libjpeg's warnings alone catch 19 of them.
+  EXPECT_GE(refused, 27u);
+  // The second one decodes with a warning-free stream but a DC term of 1116.
+  EXPECT_THROW(read_grey_image(dir.file("damaged1.jpg")), FileError);
+}
+
 }  // namespace
 }  // namespace binbow::vision

@@ -92,12 +92,26 @@ struct LoopRun {
   // The record's file (set by load()): what its content later fails on (an
   // unknown descriptor, parameters, inputs that changed) names it.
   std::string path;
+  // The loops.csv written with the record: its size and CRC-32C, so that a
+  // loops.csv replaced or edited after the run (or a run killed between the
+  // two renames) is told from its own. Not known (false) in records written
+  // before the key existed.
+  bool knows_loops_csv = false;
+  std::uint64_t loops_csv_bytes = 0;
+  std::uint32_t loops_csv_crc32c = 0;
 
   static std::string path_for(const std::string& loops_csv) { return loops_csv + ".run.json"; }
   // Only a regular file of at most kMaxRunRecordBytes; FileError naming the
   // file for anything malformed.
   static LoopRun load(const std::string& path);
 };
+
+// Whether `loops_csv` is the file written with `run`, read from `run_path`:
+// throws FileError naming `loops_csv` when its size or CRC-32C differs from
+// what the record says; returns false, checking nothing, for a record that
+// does not say (written before records named their loops.csv).
+bool check_loops_csv_of_run(const LoopRun& run, const std::string& run_path,
+                            const std::string& loops_csv);
 
 // Writes loops.csv and its run record while the frames are processed, so
 // that neither the record nor the memory it takes grows with more than the
