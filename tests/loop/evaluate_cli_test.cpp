@@ -1,6 +1,8 @@
 // `binbow evaluate` on a MATLAB ground truth, against the library's numbers.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "binbow/loop/evaluation.h"
 #include "support/test_support.h"
 
@@ -41,6 +43,17 @@ TEST(EvaluateCommand, MatGroundTruthAndErrors) {
   write_detections_csv(dir.file("outside.csv"), detections);
   EXPECT_NE(test::run_cli("evaluate --gt " + gt + " " + dir.file("outside.csv"), &out), 0);
   EXPECT_NE(out.find("wrong --gt"), std::string::npos) << out;
+}
+
+TEST(EvaluateCommand, ReadsLoopsOfOtherToolsByTheirQueryAndMatchColumns) {
+  const std::string gt = test::shared_data("rtabmap-samples/samples_GT_pairs.txt");
+  test::TempDir dir;
+  std::string out;
+  ASSERT_EQ(test::run_cli("evaluate --gt " + gt + " " + dir.file("missing.csv"), &out), 1) << out;
+  // Frames 41 → 0 and 42 → 1 (0-based) are loops of the corridor, 60 → 5 is not.
+  std::ofstream(dir.file("other.csv")) << "match,query,similarity\n0,41,0.9\n1,42,0.8\n5,60,0.7\n";
+  ASSERT_EQ(test::run_cli("evaluate --gt " + gt + " " + dir.file("other.csv"), &out), 0) << out;
+  EXPECT_NEAR(test::printed_number(out, "precision"), 2.0 / 3.0, 1e-5) << out;
 }
 
 }  // namespace

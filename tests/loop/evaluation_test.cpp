@@ -478,5 +478,41 @@ TEST(DetectionsCsv, RowsWhoseMatchIsNotEarlierAreRefusedNamingTheLine) {
   }
 }
 
+// Loops found by another tool: any CSV whose header names query and match.
+TEST(DetectionsCsv, AnyCsvWithQueryAndMatchColumnsIsRead) {
+  test::TempDir dir;
+  std::ofstream(dir.file("other.csv")) << "Score, Match ,frame_time,QUERY\n"
+                                       << "0.75,2,1.5,5\n"
+                                       << " 0.5 , 0 ,2.5, 9 \n";
+  const std::vector<Detection> read = read_detections_csv(dir.file("other.csv"));
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[0].query, 5u);
+  EXPECT_EQ(read[0].match, 2u);
+  EXPECT_EQ(read[0].score, 0.75);
+  EXPECT_EQ(read[0].inliers, 0u);
+  EXPECT_EQ(read[1].query, 9u);
+  EXPECT_EQ(read[1].match, 0u);
+
+  std::ofstream(dir.file("pairs.csv")) << "query,match\n7,3\n";
+  ASSERT_EQ(read_detections_csv(dir.file("pairs.csv")).size(), 1u);
+
+  const auto expect_refused = [&](const std::string& text, const std::string& what) {
+    SCOPED_TRACE(text);
+    std::ofstream(dir.file("bad.csv")) << text;
+    try {
+      read_detections_csv(dir.file("bad.csv"));
+      ADD_FAILURE() << "read";
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), dir.file("bad.csv"));
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_refused("a,b\n1,0\n", "line 1: expected a header naming a query and a match column");
+  expect_refused("query,match,query\n1,0,1\n", "names the column \"query\" twice");
+  expect_refused("query,match\n1,0,4\n", "line 2: expected 2 comma-separated fields");
+  expect_refused("query,match\n1,x\n", "line 2: \"x\" is not a non-negative index");
+  expect_refused("query,match\n3,3\n", "line 2: match 3 is not earlier than query 3");
+}
+
 }  // namespace
 }  // namespace binbow::loop
