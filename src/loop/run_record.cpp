@@ -207,7 +207,7 @@ const std::vector<StageTiming>& LoopRunFiles::timing() const noexcept {
 FrameRecord frame_record(const SequenceFrame& frame) {
   const LoopResult& r = frame.result;
   return {frame.file,
-          to_string(r.status),
+          frame.unreadable.empty() ? to_string(r.status) : kUnreadableFrameStatus,
           r.has_candidate ? static_cast<long long>(r.match) : -1,
           r.score,
           r.normalised_score,

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -149,6 +150,28 @@ TEST(CliBench, TimesEveryStageOnRealFrames) {
   for (const char* stage : {"features", "transform", "loop detection", "database add",
                             "database query", "vocabulary load"})
     EXPECT_NE(out.find(stage), std::string::npos) << stage << " missing in:\n" << out;
+}
+
+// Ten million entries take gigabytes: refused with the estimate before the
+// database is filled, here under a 3 GB address-space limit (`ulimit -v`,
+// which the estimate counts with the machine's available memory), instead
+// of dying out of memory.
+TEST(CliBench, RefusesADatabaseSizeBeyondTheAvailableMemory) {
+  const std::string frames = test::source_path("data/samples/rtabmap/samples");
+  std::string out;
+  const int status =
+      test::run_command("ulimit -v 3000000 && '" + test::cli_path() +
+                            "' bench --database-size 10000000 --stride 20 '" + frames + "'",
+                        &out);
+  EXPECT_EQ(status, 1) << out;
+  const std::regex refusal(
+      "binbow: error: --database-size 10000000 needs about ([0-9.]+) GiB; this machine has "
+      "([0-9.]+) GiB available");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, refusal)) << out;
+  EXPECT_GT(std::stod(m[1]), 3.0) << out;
+  EXPECT_LT(std::stod(m[2]), 3.0) << out;
+  EXPECT_EQ(out.find("database add"), std::string::npos) << out;
 }
 
 }  // namespace
