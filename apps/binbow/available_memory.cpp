@@ -65,8 +65,9 @@ std::uint64_t available_memory() {
 }
 
 std::string gibibytes(std::uint64_t bytes) {
+  const double gib = static_cast<double>(bytes) / (1 << 30);
   char text[32];
-  std::snprintf(text, sizeof text, "%.2g GiB", static_cast<double>(bytes) / (1 << 30));
+  std::snprintf(text, sizeof text, gib < 10 ? "%.1f GiB" : "%.0f GiB", gib);
   return text;
 }
 

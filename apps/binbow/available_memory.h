@@ -13,7 +13,7 @@ namespace binbow::cli {
 // what it already maps. 0 when none of them can be read.
 std::uint64_t available_memory();
 
-// "7.3 GiB": bytes in GiB with two significant digits at least.
+// Bytes in GiB for a message: "7.3 GiB", "31 GiB".
 std::string gibibytes(std::uint64_t bytes);
 
 }  // namespace binbow::cli
