@@ -519,6 +519,13 @@ TEST(CliDetectLoops, TruncatedJpegStopsTheRunUnlessSkippedAndKeepsTheFrameNumber
         [&](const loop::Detection& e) { return e.query == d.query && e.match == d.match; }))
         << d.query << " -> " << d.match;
   EXPECT_GE(skipped.size() + 3, intact.size());
+  // The sweep re-runs the frames as the run read them: the damaged one skipped.
+  ASSERT_EQ(
+      run_cli("evaluate --sweep --gt '" + gt + "' '" + dir.file("skipped.csv") + "'", &output), 0)
+      << output;
+  EXPECT_NE(output.find("query " + std::to_string(kDamaged - 1) + ": unreadable"),
+            std::string::npos)
+      << output;
 }
 
 TEST(CliFeatures, ReadsTheFirstFrameOfAVideoOrFolderWithTheSourceOptions) {
