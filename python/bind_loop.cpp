@@ -21,6 +21,7 @@
 
 #include "binbow/loop/loop_detector.h"
 #include "binbow/loop/report.h"
+#include "binbow/loop/run_record.h"
 #include "binbow/loop/sequence.h"
 #include "binbow/loop/similarity.h"
 #include "binbow/vision/features.h"
@@ -321,12 +322,14 @@ py::tuple frame_state(const loop::SequenceFrame& frame) {
                         r.exhaustive_fallback_used, inliers,
                         std::array<double, 5>{t.transform_ms, t.query_ms, t.islands_ms,
                                               t.verification_ms, t.insertion_ms},
-                        r.features);
+                        r.features, frame.unreadable);
 }
 
 loop::SequenceFrame frame_from_state(const py::tuple& state) {
   constexpr int kLastStatus = static_cast<int>(loop::LoopStatus::kNoGeometricConsistency);
-  if (state.size() != 20) throw py::value_error("invalid pickled binbow.LoopResult");
+  // 20 fields before `unreadable` was added.
+  if (state.size() != 20 && state.size() != 21)
+    throw py::value_error("invalid pickled binbow.LoopResult");
   loop::SequenceFrame frame;
   frame.file = state[0].cast<std::string>();
   frame.match_file = state[1].cast<std::string>();
@@ -355,6 +358,7 @@ loop::SequenceFrame frame_from_state(const py::tuple& state) {
   const auto ms = state[18].cast<std::array<double, 5>>();
   r.times = {ms[0], ms[1], ms[2], ms[3], ms[4]};
   r.features = state[19].cast<std::size_t>();
+  if (state.size() > 20) frame.unreadable = state[20].cast<std::string>();
   return frame;
 }
 
@@ -368,10 +372,18 @@ void bind_detection(py::module_& m) {
       .def_readonly("match_file", &loop::SequenceFrame::match_file,
                     "Detections of detect_loops: the loop's earlier frame's name; \"\" otherwise.")
       .def_property_readonly(
-          "status", [](const loop::SequenceFrame& f) { return loop::to_string(f.result.status); },
+          "status",
+          [](const loop::SequenceFrame& f) {
+            return f.unreadable.empty() ? loop::to_string(f.result.status)
+                                        : loop::kUnreadableFrameStatus;
+          },
           "Why the frame did or did not close a loop, as the CLI names it: \"loop-detected\",\n"
           "\"no-database-results\", \"low-normalisation-score\", \"low-scores\", \"no-islands\",\n"
-          "\"no-temporal-consistency\", \"no-geometric-consistency\".")
+          "\"no-temporal-consistency\", \"no-geometric-consistency\"; \"unreadable\" for a frame\n"
+          "detect_loops(skip_unreadable=True) could not read.")
+      .def_readonly("unreadable", &loop::SequenceFrame::unreadable,
+                    "Why detect_loops(skip_unreadable=True) could not read the frame (it kept\n"
+                    "its index, without features); \"\" for a frame read.")
       .def_property_readonly(
           "detection", [](const loop::SequenceFrame& f) { return f.result.detection(); },
           "Whether a loop was detected.")
@@ -503,7 +515,8 @@ void bind_detection(py::module_& m) {
 
 // The bounds ImageSource checks, as ValueErrors naming the keyword and
 // before the narrowing casts.
-vision::ImageSourceOptions source_options(long long stride, long long max_width, double video_fps) {
+vision::ImageSourceOptions source_options(long long stride, long long max_width, double video_fps,
+                                          bool skip_unreadable) {
   const auto stride_limit = static_cast<long long>(vision::kMaxStride);
   if (stride < 1 || stride > stride_limit)
     throw py::value_error("stride must be in [1, " + std::to_string(stride_limit) + "], got " +
@@ -519,6 +532,7 @@ vision::ImageSourceOptions source_options(long long stride, long long max_width,
   source.stride = static_cast<std::size_t>(stride);
   source.max_width = static_cast<int>(max_width);
   source.video_fps = video_fps;
+  source.skip_unreadable = skip_unreadable;
   return source;
 }
 
@@ -529,9 +543,10 @@ std::tuple<std::vector<loop::SequenceFrame>, LoopDetectorParams, loop::Similarit
 detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> vocabulary,
              const py::object& descriptor, const py::object& max_features, const py::object& params,
              long long stride, long long max_width, double video_fps, const py::object& progress,
-             bool online, const std::string& resume_state, const std::string& save_state) {
+             bool online, const std::string& resume_state, const std::string& save_state,
+             bool skip_unreadable) {
   loop::SequenceOptions options;
-  options.source = source_options(stride, max_width, video_fps);
+  options.source = source_options(stride, max_width, video_fps, skip_unreadable);
   if (const auto extractor = extractor_of(descriptor)) {
     if (!max_features.is_none())
       throw py::value_error(
@@ -703,6 +718,7 @@ void bind_sequences(py::module_& m) {
         py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
         py::arg("max_width"), py::arg("video_fps"), py::arg("progress"), py::arg("online") = false,
         py::arg("resume_state") = "", py::arg("save_state") = "",
+        py::arg("skip_unreadable") = false,
         "binbow.detect_loops once its arguments are resolved (use that): the frames and\n"
         "the parameters used.");
   m.def(

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "available_memory.h"
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/formats.h"
@@ -45,6 +46,38 @@ struct Frame {
   vision::Features features;
 };
 
+// Entries in the database that estimates the memory of a larger one.
+constexpr std::size_t kProbeEntries = 16384;
+
+// The memory of a database of `entries` entries cycling through the frames'
+// vectors, extrapolated from a database of kProbeEntries (or `entries` if
+// fewer) filled so: what its second half added, per entry, for every further
+// entry, plus the add timings (8 bytes an entry, up to twice that as their
+// list grows), with a quarter more: filling 300,000 entries peaked at 1.2
+// times the index's memory_usage(). Refused before the database is filled.
+void refuse_database_beyond_memory(std::size_t entries, const Vocabulary& vocabulary,
+                                   const std::vector<BowVector>& bows,
+                                   const std::vector<FeatureVector>& direct) {
+  const std::size_t probe_entries = std::min(entries, kProbeEntries);
+  Database probe(vocabulary, DatabaseOptions{});
+  double half = 0;
+  for (std::size_t i = 0; i < probe_entries; ++i) {
+    if (i == probe_entries / 2) half = static_cast<double>(probe.memory_usage());
+    probe.add(bows[i % bows.size()], direct[i % direct.size()]);
+  }
+  const auto full = static_cast<double>(probe.memory_usage());
+  const double per_entry = (full - half) / static_cast<double>(probe_entries - probe_entries / 2);
+  constexpr double kPeakOverIndex = 1.25;
+  const auto needed = static_cast<std::uint64_t>(
+      kPeakOverIndex * (full + per_entry * static_cast<double>(entries - probe_entries)) +
+      2 * sizeof(double) * static_cast<double>(entries));
+  const std::uint64_t available = available_memory();
+  if (available == 0 || needed <= available) return;
+  throw InvalidArgument("--database-size " + std::to_string(entries) + " needs about " +
+                        gibibytes(needed) + "; this machine has " + gibibytes(available) +
+                        " available");
+}
+
 void run_bench(const BenchArguments& args) {
   check_vocabulary_given(args.vocabulary, args.descriptor);
   const auto extractor = vision::make_extractor(args.descriptor, args.features);
@@ -69,7 +102,7 @@ void run_bench(const BenchArguments& args) {
   std::vector<Frame> frames;
   auto& features = stage("features");
   {
-    vision::ImageSource source(args.inputs, args.source);
+    vision::ImageSource source(args.inputs, vision::limit_for_extractor(args.source, *extractor));
     const long long total = source.size();
     Progress progress("features", total > 0 ? static_cast<std::size_t>(total) : 0);
     vision::Frame frame;
@@ -92,6 +125,8 @@ void run_bench(const BenchArguments& args) {
                          db_options.direct_index_levels_up);
     transform.push_back(elapsed_ms(start));
   }
+
+  refuse_database_beyond_memory(args.database_size, vocabulary, bows, direct);
 
   auto& detection = stage("loop detection, features excluded");
   {

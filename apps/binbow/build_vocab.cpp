@@ -66,7 +66,8 @@ TrainingSet extract_training_set(const BuildVocabArguments& arguments) {
     extractors.push_back(
         vision::make_extractor(arguments.descriptor, arguments.features_per_image));
   }
-  vision::ImageSource source(arguments.inputs, arguments.source);
+  vision::ImageSource source(arguments.inputs,
+                             vision::limit_for_extractor(arguments.source, *extractors.front()));
   const long long known_size = source.size();
   Progress progress("reading images", known_size > 0 ? static_cast<std::size_t>(known_size) : 0);
   TrainingSet set;

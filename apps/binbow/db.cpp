@@ -81,26 +81,39 @@ std::unique_ptr<vision::FeatureExtractor> database_extractor(const Database& dat
                        arguments.descriptor, arguments.features, embedded);
 }
 
-// Adds every frame of the inputs, labelled with its name; returns the entries
-// added with their labels.
-std::vector<std::pair<EntryId, std::string>> add_images(Database& database,
-                                                        const vision::FeatureExtractor& extractor,
-                                                        const std::vector<std::string>& inputs,
-                                                        const vision::ImageSourceOptions& options,
-                                                        std::size_t* features) {
-  vision::ImageSource source(inputs, options);
+// What add_images added: the entries with their labels, and the frames
+// skipped (--skip-unreadable).
+struct AddedImages {
+  std::vector<std::pair<EntryId, std::string>> entries;
+  std::size_t skipped = 0;
+};
+
+// Adds every frame of the inputs, labelled with its name. A frame skipped as
+// unreadable is added without features (it matches nothing), so that entries
+// keep the frames' order and numbering, as in detect-loops.
+AddedImages add_images(Database& database, const vision::FeatureExtractor& extractor,
+                       const std::vector<std::string>& inputs,
+                       const vision::ImageSourceOptions& options, std::size_t* features) {
+  vision::ImageSource source(inputs, vision::limit_for_extractor(options, extractor));
   const long long known = source.size();
   Progress progress("adding images", known > 0 ? static_cast<std::size_t>(known) : 0);
-  std::vector<std::pair<EntryId, std::string>> added;
+  AddedImages added;
   vision::Frame frame;
   while (source.next(frame)) {
-    const vision::Features extracted = vision::extract_features(extractor, frame.image, frame.name);
+    vision::Features extracted;
+    if (warn_if_unreadable(frame.name, frame.unreadable)) {
+      extracted.descriptors = DescriptorMatrix(extractor.code_size());
+      ++added.skipped;
+    } else {
+      extracted = vision::extract_features(extractor, frame.image, frame.name);
+    }
     if (features != nullptr) *features += extracted.descriptors.rows();
     const EntryId entry = database.add(extracted.descriptors.view(), frame.name);
-    added.emplace_back(entry, frame.name);
-    progress.update(added.size());
+    added.entries.emplace_back(entry, frame.name);
+    progress.update(added.entries.size());
   }
   progress.finish();
+  if (options.skip_unreadable) std::fprintf(stderr, "skipped frames: %zu\n", added.skipped);
   return added;
 }
 
@@ -123,10 +136,16 @@ void run_db_build(const DbBuildArguments& arguments) {
 void run_db_query(const DbQueryArguments& arguments) {
   const Database database = load_database(arguments.database, arguments.vocabulary);
   const auto extractor = database_extractor(database, arguments);
-  vision::ImageSource source(arguments.inputs, arguments.source);
+  vision::ImageSource source(arguments.inputs,
+                             vision::limit_for_extractor(arguments.source, *extractor));
   vision::Frame frame;
   BowVector bow;
-  for (std::size_t queries = 0; source.next(frame); ++queries) {
+  std::size_t skipped = 0;
+  for (std::size_t queries = 0; source.next(frame);) {
+    if (warn_if_unreadable(frame.name, frame.unreadable)) {
+      ++skipped;
+      continue;
+    }
     const vision::Features features = vision::extract_features(*extractor, frame.image, frame.name);
     database.vocabulary().transform(features.descriptors.view(), bow);
     const auto results = database.query(bow, arguments.top);
@@ -138,18 +157,22 @@ void run_db_query(const DbQueryArguments& arguments) {
                   database.label(result.entry).c_str(), result.score);
     }
     std::fflush(stdout);
+    ++queries;
   }
+  if (arguments.source.skip_unreadable) std::fprintf(stderr, "skipped frames: %zu\n", skipped);
 }
 
 void run_db_add(const DbArguments& arguments) {
   const bool vocabulary_included = Database::inspect(arguments.database).vocabulary_included;
   Database database = load_database(arguments.database, arguments.vocabulary);
   const auto extractor = database_extractor(database, arguments);
-  const auto added = add_images(database, *extractor, arguments.inputs, arguments.source, nullptr);
+  const AddedImages added =
+      add_images(database, *extractor, arguments.inputs, arguments.source, nullptr);
   database.save(arguments.database, vocabulary_included);
-  for (const auto& [entry, label] : added) std::printf("added %u\t%s\n", entry, label.c_str());
-  std::printf("%s: %zu entries added, %zu entries\n", arguments.database.c_str(), added.size(),
-              database.size());
+  for (const auto& [entry, label] : added.entries)
+    std::printf("added %u\t%s\n", entry, label.c_str());
+  std::printf("%s: %zu entries added, %zu entries\n", arguments.database.c_str(),
+              added.entries.size(), database.size());
 }
 
 void run_db_remove(const DbRemoveArguments& arguments) {
@@ -180,6 +203,7 @@ void add_database_options(CLI::App* command, DbArguments& arguments,
   command->add_option("--vocab", arguments.vocabulary,
                       "Vocabulary, for databases built with --external-vocab");
   add_image_source_options(command, arguments.source);
+  add_skip_unreadable_option(command, arguments.source);
 }
 
 }  // namespace
@@ -231,6 +255,7 @@ void add_db_command(CLI::App& app) {
                    "labelled with the frame names")
       ->required();
   add_image_source_options(build_command, build->source);
+  add_skip_unreadable_option(build_command, build->source);
   build_command->callback([build] { run_db_build(*build); });
 
   auto query = std::make_shared<DbQueryArguments>();

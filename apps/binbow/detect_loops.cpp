@@ -174,6 +174,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   loop::LoopRunFiles outputs(arguments.output, run);
   loop::SequenceFrame frame;
   while (sequence.next(frame)) {
+    warn_if_unreadable(frame.file, frame.unreadable);
     outputs.add(frame);
     progress.update(outputs.frames());
   }
@@ -199,6 +200,8 @@ void run_detect_loops(DetectLoopsArguments arguments) {
                outputs.detections().size(), arguments.output.c_str());
   if (sequence.unreadable_frames() > 0)
     std::fprintf(stderr, "frames unreadable: %zu\n", sequence.unreadable_frames());
+  if (arguments.source.skip_unreadable)
+    std::fprintf(stderr, "skipped frames: %zu\n", sequence.skipped_frames());
   std::fprintf(stderr, "frequency: %s (%s)\n", hertz(params.frequency).c_str(),
                sequence.frequency_origin().c_str());
   print_status_counts(sequence.status_counts());
@@ -328,6 +331,7 @@ void add_detect_loops_command(CLI::App& app) {
                    "Image files, directories, videos or text lists of images")
       ->required();
   add_image_source_options(command, arguments->source);
+  add_skip_unreadable_option(command, arguments->source);
   command->callback([arguments, command] {
     DetectLoopsArguments given = *arguments;
     given.descriptor_given = command->count("--descriptor") > 0;

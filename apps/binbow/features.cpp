@@ -85,7 +85,8 @@ void run_features(const FeaturesArguments& arguments) {
     prepare_output_file("--draw", arguments.draw);
   }
   const auto extractor = make_configured_extractor(arguments);
-  vision::ImageSource source({arguments.image}, arguments.source);
+  vision::ImageSource source({arguments.image},
+                             vision::limit_for_extractor(arguments.source, *extractor));
   vision::Frame frame;
   if (!source.next(frame)) throw FileError(arguments.image, "has no frames");
   const cv::Mat& image = frame.image;

@@ -8,6 +8,7 @@ an image without keypoints) is an image with no features.
 import os as _os
 import sys as _sys
 import time as _time
+import warnings as _warnings
 
 from . import _data_location
 from ._binbow import (
@@ -158,6 +159,7 @@ def detect_loops(
     video_fps=0.0,
     resume_state=None,
     save_state=None,
+    skip_unreadable=False,
 ):
     """Loop closures of an image sequence: what `binbow detect-loops` finds.
 
@@ -175,6 +177,10 @@ def detect_loops(
     prints the CLI's progress on stderr; a callable is called with (done,
     total) after each frame, total None when not known beforehand. stride,
     max_width and video_fps thin the frames out as the CLI's options do.
+    skip_unreadable: an image that cannot be read (damaged, truncated) is a
+    warning (UserWarning naming the file and the reason) instead of an error:
+    its LoopResult keeps the frame's index, with status "unreadable" and
+    .unreadable the reason, and matches nothing (as `--skip-unreadable`).
 
     save_state: a .bbld file to save the detector's state to after the last
     frame (LoopDetector.save; its folder is created). resume_state: a .bbld
@@ -232,8 +238,11 @@ def detect_loops(
         params = _os.fsdecode(params)
     frames, used, similarity = _detect_loops(
         paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
-        callback, online, resume_state or "", save_state or "",
+        callback, online, resume_state or "", save_state or "", bool(skip_unreadable),
     )
+    for frame in frames:
+        if frame.unreadable:
+            _warnings.warn(f"{frame.file}: {frame.unreadable}; skipped", stacklevel=2)
     if printer is not None:
         printer.finish()
     results = LoopResults(frames)

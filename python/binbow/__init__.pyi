@@ -204,6 +204,7 @@ _Status = Literal[
     "no-islands",
     "no-temporal-consistency",
     "no-geometric-consistency",
+    "unreadable",
 ]
 
 class LoopResult:
@@ -213,6 +214,8 @@ class LoopResult:
     def match_file(self) -> str: ...
     @property
     def status(self) -> _Status: ...
+    @property
+    def unreadable(self) -> str: ...
     @property
     def detection(self) -> bool: ...
     @property
@@ -367,6 +370,7 @@ def detect_loops(
     video_fps: float = 0.0,
     resume_state: Optional[_StrPath] = None,
     save_state: Optional[_StrPath] = None,
+    skip_unreadable: bool = False,
 ) -> LoopResults: ...
 def write_report(
     folder: _StrPath,

@@ -191,3 +191,27 @@ def test_the_similarity_matrix_comes_with_the_results(tmp_path, results):
     assert np.array_equal(again.scores, scores) and again.frames == 84
     binbow.write_report(tmp_path / "report", results)
     assert (tmp_path / "report" / "similarity.png").stat().st_size > 1000
+
+
+def test_skip_unreadable_keeps_the_frame_numbers_as_the_cli(tmp_path):
+    frames = sorted(FOLDER.glob("*.jpg"), key=lambda p: int(p.stem))
+    truncated = tmp_path / "50.jpg"
+    truncated.write_bytes(frames[49].read_bytes()[: frames[49].stat().st_size // 2])
+    listed = [str(truncated) if i == 49 else str(p) for i, p in enumerate(frames)]
+    frame_list = tmp_path / "frames.txt"
+    frame_list.write_text("\n".join(listed) + "\n")
+
+    with pytest.raises(OSError, match=re.escape(str(truncated))):
+        binbow.detect_loops(frame_list)
+    with pytest.warns(UserWarning, match=re.escape(str(truncated)) + ": damaged JPEG"):
+        skipped = binbow.detect_loops(frame_list, skip_unreadable=True)
+    assert [r.file for r in skipped] == listed
+    assert [r.query for r in skipped] == list(range(len(listed)))
+    assert skipped[49].status == "unreadable" and skipped[49].unreadable.startswith("damaged JPEG")
+    assert all(r.status != "unreadable" and not r.unreadable for i, r in enumerate(skipped) if i != 49)
+    assert pickle.loads(pickle.dumps(skipped[49])).status == "unreadable"
+    loops = [r for r in skipped if r.detection]
+    assert loops and all(listed[r.match] == r.match_file for r in loops)
+
+    run_cli("detect-loops", "--skip-unreadable", "-o", str(tmp_path / "loops.csv"), str(frame_list))
+    assert_same_loops(skipped, csv_rows(tmp_path / "loops.csv"))

@@ -89,7 +89,8 @@ void check_source(const vision::ImageSourceOptions& source, const std::string& p
     fail("video_fps", Json(source.video_fps).dump(), "0 to " + Json(vision::kMaxVideoFps).dump());
 }
 
-bool is_loop_status(const std::string& status) {
+bool is_frame_status(const std::string& status) {
+  if (status == kUnreadableFrameStatus) return true;
   for (const LoopStatus s :
        {LoopStatus::kLoopDetected, LoopStatus::kNoDatabaseResults,
         LoopStatus::kLowNormalisationScore, LoopStatus::kLowScores, LoopStatus::kNoIslands,
@@ -242,7 +243,7 @@ const std::vector<StageTiming>& LoopRunFiles::timing() const noexcept {
 FrameRecord frame_record(const SequenceFrame& frame) {
   const LoopResult& r = frame.result;
   return {frame.file,
-          to_string(r.status),
+          frame.unreadable.empty() ? to_string(r.status) : kUnreadableFrameStatus,
           r.has_candidate ? static_cast<long long>(r.match) : -1,
           r.score,
           r.normalised_score,
@@ -324,7 +325,7 @@ LoopRun LoopRun::load(const std::string& path) {
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has a negative number of features");
       const std::string status = f.at("status").get<std::string>();
-      if (!is_loop_status(status))
+      if (!is_frame_status(status))
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has the unknown status \"" + status + "\"");
       run.frames.push_back(

@@ -57,12 +57,12 @@ LoopDetectorParams defaults_for(double frame_rate) {
 
 struct SequenceDetector::Impl {
   Impl(const std::vector<std::string>& inputs, const SequenceOptions& options)
-      : source(inputs, options.source),
-        extractor(extractor_of(options)),
+      : extractor(extractor_of(options)),
+        source(inputs, vision::limit_for_extractor(options.source, *extractor)),
         defaults(defaults_for(source.frame_rate())) {}
 
-  vision::ImageSource source;
   std::shared_ptr<const vision::FeatureExtractor> extractor;
+  vision::ImageSource source;
   LoopDetectorParams defaults;
   bool params_given = false;
   bool resumed = false;  // from a saved detector, which brought its parameters
@@ -73,6 +73,7 @@ struct SequenceDetector::Impl {
   std::vector<double> scales;
   EntryId first_entry = 0;
   StatusCounts status_counts{};
+  std::size_t skipped_frames = 0;
   vision::Frame frame;
 
   void start(Vocabulary vocabulary, const LoopDetectorParams& params) {
@@ -147,16 +148,26 @@ bool SequenceDetector::next(SequenceFrame& out) {
   Impl& d = *impl_;
   if (!d.source.next(d.frame)) return false;
   const auto start = std::chrono::steady_clock::now();
-  const vision::Features features =
-      vision::extract_features(*d.extractor, d.frame.image, d.frame.name);
+  // An unreadable frame (skip_unreadable) still takes its entry, with no
+  // features: it matches nothing, and the entries after it keep the frames'
+  // indices.
+  vision::Features features;
+  if (d.frame.unreadable.empty())
+    features = vision::extract_features(*d.extractor, d.frame.image, d.frame.name);
+  else
+    features.descriptors = DescriptorMatrix(d.extractor->code_size());
   out.features_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   out.result = d.detector->process(features);
   out.file = d.frame.name;
+  out.unreadable = d.frame.unreadable;
   d.files.push_back(d.frame.name);
   d.scales.push_back(d.frame.scale);
   d.detector->set_label(out.result.query, frame_label(d.frame.name, d.frame.scale));
-  ++d.status_counts[static_cast<std::size_t>(out.result.status)];
+  if (out.unreadable.empty())
+    ++d.status_counts[static_cast<std::size_t>(out.result.status)];
+  else
+    ++d.skipped_frames;
 
   out.match_file.clear();
   out.inlier_points.clear();
@@ -204,6 +215,10 @@ std::size_t SequenceDetector::frames_processed() const noexcept {
 
 const StatusCounts& SequenceDetector::status_counts() const noexcept {
   return impl_->status_counts;
+}
+
+std::size_t SequenceDetector::skipped_frames() const noexcept {
+  return impl_->skipped_frames;
 }
 
 std::size_t SequenceDetector::unreadable_frames() const noexcept {

@@ -143,12 +143,22 @@ std::vector<PrCurvePoint> curve_in_recall_order(std::vector<PrCurvePoint> curve)
 
 RunFeatures extract_run_features(const LoopRun& run, const SweepProgress& progress) {
   const auto extractor = make_run_extractor(run);
+  vision::ImageSourceOptions options = vision::limit_for_extractor(run.source, *extractor);
+  // A run that skipped unreadable frames is re-run the same way: each keeps
+  // its entry, without features.
+  options.skip_unreadable =
+      std::any_of(run.frames.begin(), run.frames.end(),
+                  [](const FrameRecord& f) { return f.status == kUnreadableFrameStatus; });
   vision::ImageSource source =
-      from_run(run, [&] { return vision::ImageSource(run.inputs, run.source); });
+      from_run(run, [&] { return vision::ImageSource(run.inputs, options); });
   RunFeatures out;
   vision::Frame frame;
   while (source.next(frame)) {
-    out.features.push_back(vision::extract_features(*extractor, frame.image, frame.name));
+    if (frame.unreadable.empty()) {
+      out.features.push_back(vision::extract_features(*extractor, frame.image, frame.name));
+    } else {
+      out.features.emplace_back().descriptors = DescriptorMatrix(extractor->code_size());
+    }
     out.names.push_back(frame.name);
     if (progress) progress("extracting features", out.features.size(), run.frames.size());
   }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +20,7 @@
 #include <opencv2/videoio/registry.hpp>
 
 #include "binbow/error.h"
+#include "binbow/vision/features.h"
 #include "core/file_io.h"
 #include "vision/image_header.h"
 #include "vision/jpeg_check.h"
@@ -130,8 +132,38 @@ void check_pixel_count(const std::string& path, const char* what, std::uint64_t 
   }
 }
 
-// The checks of read_grey_image, then decoding with `imread_flags`.
-cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint64_t max_pixels) {
+// The size limit_width() gives a frame of `width` x `height`.
+std::uint64_t pixels_after_max_width(std::uint64_t width, std::uint64_t height, int max_width) {
+  if (max_width <= 0 || width <= static_cast<std::uint64_t>(max_width)) return width * height;
+  const double scale = static_cast<double>(max_width) / static_cast<double>(width);
+  const auto scaled_height =
+      std::max<long long>(1, std::llround(static_cast<double>(height) * scale));
+  return static_cast<std::uint64_t>(max_width) * static_cast<std::uint64_t>(scaled_height);
+}
+
+// Throws FileError naming `path` when a frame of `width` x `height` (already
+// within max_pixels) reaches feature extraction with more pixels than
+// options.max_extracted_pixels.
+void check_extracted_pixels(const std::string& path, const char* what, std::uint64_t width,
+                            std::uint64_t height, const ImageSourceOptions& options) {
+  if (options.max_extracted_pixels == 0) return;
+  const std::uint64_t pixels = pixels_after_max_width(width, height, options.max_width);
+  if (pixels <= options.max_extracted_pixels) return;
+  std::string size = describe_size(width, height) + " pixels";
+  if (pixels != width * height)
+    size += " (" + std::to_string(pixels) + " after downscaling to the maximum width)";
+  const std::string reason = options.extraction_limit_reason.empty()
+                                 ? "the limit for feature extraction"
+                                 : options.extraction_limit_reason;
+  throw FileError(path, std::string(what) + " of " + size + " is more than " +
+                            std::to_string(options.max_extracted_pixels) + " pixels, " + reason +
+                            "; downscale it (--max-width) or raise the limit (--max-pixels)");
+}
+
+// The checks of read_grey_image (and check_extracted_pixels when `options`
+// is given), then decoding with `imread_flags`.
+cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint64_t max_pixels,
+                           const ImageSourceOptions* options = nullptr) {
   const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
   if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
@@ -142,6 +174,8 @@ cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint6
                     "(unknown format, or a damaged header)");
   }
   check_pixel_count(path, "image header", declared->width, declared->height, max_pixels);
+  if (options != nullptr)
+    check_extracted_pixels(path, "image", declared->width, declared->height, *options);
   // Found by fuzzing: a 172-byte TIFF of 12090x6 pixels in strips of 65530
   // rows made OpenCV allocate 3 GB for one strip.
   if (declared->block_width != 0)
@@ -225,6 +259,20 @@ cv::Mat read_video_frame(const std::string& path, long long frame) {
 }
 
 }  // namespace
+
+ImageSourceOptions limit_for_extractor(ImageSourceOptions options,
+                                       const FeatureExtractor& extractor) {
+  if (options.max_extracted_pixels != 0 || !(extractor.bytes_per_pixel() > 0)) return options;
+  options.max_extracted_pixels = extractor.max_pixels();
+  char reason[160];
+  std::snprintf(reason, sizeof reason,
+                "the most %s extracts within %.3g GiB of memory (about %g bytes a pixel)",
+                extractor.name().c_str(),
+                static_cast<double>(kDefaultExtractionMemoryBytes) / (1 << 30),
+                extractor.bytes_per_pixel());
+  options.extraction_limit_reason = reason;
+  return options;
+}
 
 cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
   return to_grey(read_checked_image(path, cv::IMREAD_GRAYSCALE, max_pixels));
@@ -338,10 +386,15 @@ struct ImageSource::Impl {
       next_sample += video_step;
       if (!keep_next()) continue;
       cv::Mat image;
+      std::string name = video_path + "#" + std::to_string(video_frame);
+      const std::size_t index = frames_kept++;
       if (!capture.retrieve(image) || image.empty()) {
-        throw FileError(video_path, "cannot decode frame " + std::to_string(video_frame));
+        const std::string problem = "cannot decode frame " + std::to_string(video_frame);
+        if (!options.skip_unreadable) throw FileError(video_path, problem);
+        deliver_unreadable(frame, std::move(name), index, problem);
+        return true;
       }
-      deliver(frame, to_grey(image), video_path + "#" + std::to_string(video_frame));
+      deliver(frame, to_grey(image), std::move(name), index);
       return true;
     }
     // The backend stops at the first frame it cannot decode: what the
@@ -363,6 +416,8 @@ struct ImageSource::Impl {
     if (width >= 0 && height >= 0 && width < 1e12 && height < 1e12) {
       check_pixel_count(path, "video", static_cast<std::uint64_t>(width),
                         static_cast<std::uint64_t>(height), options.max_pixels);
+      check_extracted_pixels(path, "video frame", static_cast<std::uint64_t>(width),
+                             static_cast<std::uint64_t>(height), options);
     }
     const double declared = capture.get(cv::CAP_PROP_FRAME_COUNT);
     video_declared_frames =
@@ -371,11 +426,21 @@ struct ImageSource::Impl {
     video_step = (options.video_fps > 0 && fps > options.video_fps) ? fps / options.video_fps : 1;
   }
 
-  void deliver(Frame& frame, const cv::Mat& grey, std::string name) {
+  void deliver(Frame& frame, const cv::Mat& grey, std::string name, std::size_t index) {
     frame.image = limit_width(grey, options.max_width);
     frame.name = std::move(name);
-    frame.index = frames_kept++;
+    frame.index = index;
     frame.scale = static_cast<double>(frame.image.cols) / grey.cols;
+    frame.unreadable.clear();
+  }
+
+  static void deliver_unreadable(Frame& frame, std::string name, std::size_t index,
+                                 std::string problem) {
+    frame.image.release();
+    frame.name = std::move(name);
+    frame.index = index;
+    frame.scale = 1;
+    frame.unreadable = std::move(problem);
   }
 
   bool next(Frame& frame) {
@@ -391,7 +456,18 @@ struct ImageSource::Impl {
         continue;
       }
       if (!keep_next()) continue;
-      deliver(frame, read_grey_image(input.path, options.max_pixels), input.path);
+      // The index is taken first: a frame that fails keeps it, so the frames
+      // after it are numbered as in the sequence.
+      const std::size_t index = frames_kept++;
+      cv::Mat image;
+      try {
+        image = read_checked_image(input.path, cv::IMREAD_GRAYSCALE, options.max_pixels, &options);
+      } catch (const FileError& e) {
+        if (!options.skip_unreadable) throw;
+        deliver_unreadable(frame, input.path, index, e.problem());
+        return true;
+      }
+      deliver(frame, to_grey(image), input.path, index);
       return true;
     }
   }

@@ -1,4 +1,5 @@
 // Feature extractors backed by OpenCV's Feature2D: ORB and any binary descriptor.
+#include <limits>
 #include <mutex>
 
 #include "binbow/error.h"
@@ -15,6 +16,13 @@ constexpr int kMinimumSide = 16;
 bool too_small(const cv::Mat& image) {
   return image.cols < kMinimumSide || image.rows < kMinimumSide;
 }
+
+// Peak memory per pixel of extract(), measured (getrusage's peak resident
+// memory, above the decoded image) on 1, 4 and 16 MP images and rounded up;
+// docs/limits.md has the numbers.
+constexpr double kOrbBytesPerPixel = 4;      // 8-level pyramid, Harris scores
+constexpr double kAkazeBytesPerPixel = 120;  // about 20 float images of the nonlinear scale space
+constexpr double kBriskBytesPerPixel = 6;    // octaves and intra-octaves, AGAST scores
 
 // An OpenCV failure on a valid image becomes a binbow::Error naming the extractor.
 [[noreturn]] void rethrow_opencv(const std::string& name, const cv::Exception& e) {
@@ -53,6 +61,7 @@ class OrbExtractor final : public FeatureExtractor {
 
   std::size_t code_size() const override { return 32; }
   std::string name() const override { return "orb"; }
+  double bytes_per_pixel() const override { return kOrbBytesPerPixel; }
 
  private:
   OrbOptions options_;
@@ -60,8 +69,12 @@ class OrbExtractor final : public FeatureExtractor {
 
 class OpenCvExtractor final : public FeatureExtractor {
  public:
-  OpenCvExtractor(cv::Ptr<cv::Feature2D> detector, std::string name, int max_features)
-      : detector_(std::move(detector)), name_(std::move(name)), max_features_(max_features) {
+  OpenCvExtractor(cv::Ptr<cv::Feature2D> detector, std::string name, int max_features,
+                  double bytes_per_pixel)
+      : detector_(std::move(detector)),
+        name_(std::move(name)),
+        max_features_(max_features),
+        bytes_per_pixel_(bytes_per_pixel) {
     if (!detector_) throw InvalidArgument("make_opencv_extractor: null cv::Feature2D");
     if (detector_->descriptorType() != CV_8U) {
       throw InvalidArgument("make_opencv_extractor: " + name_ +
@@ -91,24 +104,34 @@ class OpenCvExtractor final : public FeatureExtractor {
 
   std::size_t code_size() const override { return code_size_; }
   std::string name() const override { return name_; }
+  double bytes_per_pixel() const override { return bytes_per_pixel_; }
 
  private:
   cv::Ptr<cv::Feature2D> detector_;
   std::string name_;
   int max_features_;
+  double bytes_per_pixel_;
   std::size_t code_size_ = 0;
   mutable std::mutex mutex_;
 };
 
 }  // namespace
 
+std::uint64_t FeatureExtractor::max_pixels(std::uint64_t memory_bytes) const {
+  const double per_pixel = bytes_per_pixel();
+  if (!(per_pixel > 0)) return std::numeric_limits<std::uint64_t>::max();
+  return static_cast<std::uint64_t>(static_cast<double>(memory_bytes) / per_pixel);
+}
+
 std::unique_ptr<FeatureExtractor> make_orb_extractor(const OrbOptions& options) {
   return std::make_unique<OrbExtractor>(options);
 }
 
 std::unique_ptr<FeatureExtractor> make_opencv_extractor(cv::Ptr<cv::Feature2D> detector,
-                                                        std::string name, int max_features) {
-  return std::make_unique<OpenCvExtractor>(std::move(detector), std::move(name), max_features);
+                                                        std::string name, int max_features,
+                                                        double bytes_per_pixel) {
+  return std::make_unique<OpenCvExtractor>(std::move(detector), std::move(name), max_features,
+                                           bytes_per_pixel);
 }
 
 std::unique_ptr<FeatureExtractor> make_extractor(const std::string& name, int max_features) {
@@ -122,8 +145,10 @@ std::unique_ptr<FeatureExtractor> make_extractor(const std::string& name, int ma
     if (max_features > 0) options.max_features = max_features;
     return make_brief_extractor(options);
   }
-  if (name == "akaze") return make_opencv_extractor(cv::AKAZE::create(), "akaze", max_features);
-  if (name == "brisk") return make_opencv_extractor(cv::BRISK::create(), "brisk", max_features);
+  if (name == "akaze")
+    return make_opencv_extractor(cv::AKAZE::create(), "akaze", max_features, kAkazeBytesPerPixel);
+  if (name == "brisk")
+    return make_opencv_extractor(cv::BRISK::create(), "brisk", max_features, kBriskBytesPerPixel);
   std::string expected;
   for (const std::string& known : extractor_names())
     expected += (expected.empty() ? "" : ", ") + known;

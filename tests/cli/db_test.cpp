@@ -112,6 +112,45 @@ TEST(CliDb, BuildDefaultsToTheBundledVocabulary) {
       << output;
 }
 
+// A truncated JPEG among the images stops db build and db query, unless
+// --skip-unreadable: then it is an entry without features, so the entries
+// keep the images' order (db add likewise), and queries skip it.
+TEST(CliDb, SkipUnreadableGoesOnWithoutTheDamagedImage) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  std::vector<std::uint8_t> bytes = test::read_file(folder + "/2.jpg");
+  bytes.resize(bytes.size() / 2);
+  const std::string damaged = dir.file("2.jpg");
+  test::write_file(damaged, bytes);
+  const std::string images = "'" + folder + "/1.jpg' '" + damaged + "' '" + folder + "/3.jpg'";
+  const std::string database = dir.file("d.bbdb");
+  std::string output;
+  EXPECT_EQ(run_cli("db build -o '" + database + "' " + images, &output), 1) << output;
+  EXPECT_NE(output.find("binbow: error: " + damaged + ": damaged JPEG"), std::string::npos)
+      << output;
+  ASSERT_EQ(run_cli("db build --skip-unreadable -o '" + database + "' " + images, &output), 0)
+      << output;
+  EXPECT_NE(output.find("binbow: warning: " + damaged + ": damaged JPEG"), std::string::npos)
+      << output;
+  EXPECT_NE(output.find("skipped frames: 1\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("3 entries"), std::string::npos) << output;
+  const Database built = Database::load(database);
+  EXPECT_EQ(built.label(1), damaged);
+  EXPECT_EQ(built.label(2), folder + "/3.jpg");
+
+  EXPECT_EQ(run_cli("db query '" + database + "' " + images, &output), 1) << output;
+  ASSERT_EQ(run_cli("db query --skip-unreadable '" + database + "' " + images, &output), 0)
+      << output;
+  EXPECT_NE(output.find("query: " + folder + "/3.jpg\n"), std::string::npos) << output;
+  EXPECT_EQ(output.find("query: " + damaged), std::string::npos) << output;
+  EXPECT_NE(output.find("skipped frames: 1\n"), std::string::npos) << output;
+
+  EXPECT_EQ(run_cli("db add '" + database + "' '" + damaged + "'", &output), 1) << output;
+  ASSERT_EQ(run_cli("db add --skip-unreadable '" + database + "' '" + damaged + "'", &output), 0)
+      << output;
+  EXPECT_NE(output.find("added 3\t" + damaged + "\n"), std::string::npos) << output;
+}
+
 TEST(CliDb, AddsAndRemovesEntriesInPlace) {
   TempDir dir;
   const std::string folder = samples_folder();

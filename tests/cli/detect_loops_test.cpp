@@ -1,7 +1,8 @@
 // `binbow detect-loops` on videos (the image-source options, the loop
 // detector's frequency from the frames processed per second, the report's
 // pictures of video frames), its summary of frame statuses and the warning
-// when no frame can have a candidate; `binbow features` on a video.
+// when no frame can have a candidate, --skip-unreadable; `binbow features` on
+// a video.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "binbow/loop/evaluation.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -413,6 +415,117 @@ TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) 
       << output;
   EXPECT_EQ(output.find("warning"), std::string::npos) << output;
   EXPECT_NE(output.find("frames by status:\n  loop-detected: 0\n"), std::string::npos) << output;
+}
+
+// The corridor's 84 frames as a list whose frame `damaged` (1-based) is a copy
+// cut to half its bytes; writes the list of intact frames too.
+std::vector<std::string> write_list_with_a_truncated_jpeg(const TempDir& dir, int damaged,
+                                                          std::string& damaged_list,
+                                                          std::string& intact_list) {
+  std::vector<std::string> files;
+  for (int i = 1; i <= 84; ++i)
+    files.push_back(samples_folder() + "/" + std::to_string(i) + ".jpg");
+  std::vector<std::uint8_t> bytes = test::read_file(files[damaged - 1]);
+  bytes.resize(bytes.size() / 2);
+  const std::string truncated = dir.file(std::to_string(damaged) + ".jpg");
+  test::write_file(truncated, bytes);
+  damaged_list = dir.file("damaged.txt");
+  intact_list = dir.file("intact.txt");
+  std::ofstream damaged_out(damaged_list), intact_out(intact_list);
+  for (int i = 1; i <= 84; ++i) {
+    intact_out << files[i - 1] << "\n";
+    damaged_out << (i == damaged ? truncated : files[i - 1]) << "\n";
+  }
+  files[damaged - 1] = truncated;
+  return files;
+}
+
+TEST(CliDetectLoops, TruncatedJpegStopsTheRunUnlessSkippedAndKeepsTheFrameNumbers) {
+  TempDir dir;
+  // Frame 50 lies in the corridor's second pass, where loops are found.
+  constexpr int kDamaged = 50;
+  std::string damaged_list, intact_list;
+  const std::vector<std::string> files =
+      write_list_with_a_truncated_jpeg(dir, kDamaged, damaged_list, intact_list);
+  const std::string truncated = files[kDamaged - 1];
+  const std::string gt = test::source_path("data/samples/rtabmap/samples_GT.bmp");
+
+  std::string output;
+  const std::string strict =
+      "detect-loops -o '" + dir.file("strict.csv") + "' '" + damaged_list + "'";
+  EXPECT_EQ(run_cli(strict, &output), 1) << output;
+  EXPECT_NE(output.find("binbow: error: " + truncated + ": damaged JPEG"), std::string::npos)
+      << output;
+
+  ASSERT_EQ(run_cli("detect-loops --skip-unreadable -o '" + dir.file("skipped.csv") + "' '" +
+                        damaged_list + "'",
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("binbow: warning: " + truncated + ": damaged JPEG"), std::string::npos)
+      << output;
+  EXPECT_NE(output.find("skipped frames: 1\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("84 frames, "), std::string::npos) << output;
+  ASSERT_EQ(
+      run_cli("detect-loops -o '" + dir.file("intact.csv") + "' '" + intact_list + "'", &output), 0)
+      << output;
+  EXPECT_EQ(output.find("skipped frames"), std::string::npos) << output;
+
+  // The record keeps every frame at its index, the damaged one as unreadable.
+  const nlohmann::json record = run_record(dir.file("skipped.csv"));
+  ASSERT_EQ(record.at("frames").size(), files.size());
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    EXPECT_EQ(record["frames"][i].at("file"), files[i]) << i;
+    EXPECT_EQ(record["frames"][i].at("status") == "unreadable", i == kDamaged - 1) << i;
+  }
+
+  // Each loop's indices are its files' positions in the list: one frame fewer
+  // would shift every index after the damaged frame.
+  const std::vector<loop::Detection> skipped = loop::read_detections_csv(dir.file("skipped.csv"));
+  const std::vector<loop::Detection> intact = loop::read_detections_csv(dir.file("intact.csv"));
+  ASSERT_FALSE(skipped.empty());
+  std::size_t after_damaged = 0;
+  for (const loop::Detection& d : skipped) {
+    ASSERT_LT(d.query, files.size());
+    ASSERT_LT(d.match, files.size());
+    EXPECT_EQ(d.query_file, files[d.query]);
+    EXPECT_EQ(d.match_file, files[d.match]);
+    EXPECT_NE(d.query, std::size_t{kDamaged - 1});
+    after_damaged += d.query > kDamaged - 1;
+  }
+  EXPECT_GT(after_damaged, 0u) << "no loop after the damaged frame: the check shows nothing";
+  // Against the ground truth the run is as precise as the intact one (a shift
+  // by one frame would turn loops into false positives) and finds nearly as
+  // many loops (the damaged frame's own, and the queries whose temporal
+  // consistency it broke, are missed).
+  std::string intact_result, skipped_result;
+  ASSERT_EQ(run_cli("evaluate --gt '" + gt + "' '" + dir.file("intact.csv") + "'", &intact_result),
+            0)
+      << intact_result;
+  ASSERT_EQ(
+      run_cli("evaluate --gt '" + gt + "' '" + dir.file("skipped.csv") + "'", &skipped_result), 0)
+      << skipped_result;
+  EXPECT_EQ(test::printed_number(skipped_result, "precision"),
+            test::printed_number(intact_result, "precision"))
+      << skipped_result << intact_result;
+  EXPECT_GE(test::printed_number(skipped_result, "recall"),
+            test::printed_number(intact_result, "recall") - 0.1)
+      << skipped_result << intact_result;
+  // Frame for frame, the loops found are the intact run's (only the damaged
+  // frame's own loop is lost on this sequence).
+  for (const loop::Detection& d : skipped)
+    EXPECT_TRUE(std::any_of(
+        intact.begin(), intact.end(),
+        [&](const loop::Detection& e) { return e.query == d.query && e.match == d.match; }))
+        << d.query << " -> " << d.match;
+  EXPECT_GE(skipped.size() + 3, intact.size());
+  // The sweep re-runs the frames as the run read them: the damaged one skipped.
+  ASSERT_EQ(
+      run_cli("evaluate --sweep --gt '" + gt + "' '" + dir.file("skipped.csv") + "'", &output), 0)
+      << output;
+  EXPECT_NE(output.find("query " + std::to_string(kDamaged - 1) + ": unreadable"),
+            std::string::npos)
+      << output;
 }
 
 TEST(CliFeatures, ReadsTheFirstFrameOfAVideoOrFolderWithTheSourceOptions) {

@@ -7,6 +7,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "binbow/loop/evaluation.h"
 #include "support/test_support.h"
@@ -85,6 +87,27 @@ TEST(CliHostileInputs, PixelLimitFlagRefusesLargerImages) {
   EXPECT_EQ(status, 1) << out;
   EXPECT_NE(out.find("declares 512x384 pixels, more than the limit of 1000"), std::string::npos)
       << out;
+}
+
+// A solid-colour PNG is a few hundred KB at any size, yet AKAZE would take
+// about 120 bytes per pixel: 12 GB for 10000x10000, 3 GB for 25 MP. Both are
+// refused from the header, naming the file, unless downscaled.
+TEST(CliHostileInputs, AkazeRefusesImagesAboveItsMemoryBudget) {
+  test::TempDir dir;
+  for (const auto& [side, name] :
+       {std::pair<int, std::string>{10000, "100mp.png"}, {5000, "25mp.png"}}) {
+    ASSERT_TRUE(cv::imwrite(dir.file(name), cv::Mat(side, side, CV_8UC1, cv::Scalar(90))));
+    const std::string size = std::to_string(side) + "x" + std::to_string(side);
+    expect_error("features --descriptor akaze " + dir.file(name), dir.file(name),
+                 "image of " + size +
+                     " pixels is more than 17895697 pixels, the most akaze "
+                     "extracts within 2 GiB");
+  }
+  int status = -1;
+  const std::string out =
+      run("features --descriptor akaze --max-width 2000 " + dir.file("25mp.png"), &status);
+  EXPECT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("(2000x2000)"), std::string::npos) << out;
 }
 
 // Bug report: `evaluate --gt photo.jpg` (512x384) exited 0 with a warning.

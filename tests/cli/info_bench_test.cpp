@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -183,6 +184,33 @@ TEST(CliBench, TimesEveryStageOnRealFrames) {
   EXPECT_NE(out.find("hamming kernel: " + std::string(hamming_kernel_name()) + "\n"),
             std::string::npos)
       << out;
+}
+
+// Ten million entries take gigabytes: refused with the estimate before the
+// database is filled, here under a 3 GB address-space limit (`ulimit -v`,
+// which the estimate counts with the machine's available memory), instead
+// of dying out of memory.
+TEST(CliBench, RefusesADatabaseSizeBeyondTheAvailableMemory) {
+#if defined(__SANITIZE_ADDRESS__)
+  // Its shadow memory is a reservation of terabytes, which `ulimit -v` forbids.
+  GTEST_SKIP() << "an AddressSanitizer build cannot run under an address-space limit; the "
+                  "release build runs this test";
+#endif
+  const std::string frames = test::source_path("data/samples/rtabmap/samples");
+  std::string out;
+  const int status =
+      test::run_command("ulimit -v 3000000 && '" + test::cli_path() +
+                            "' bench --database-size 10000000 --stride 20 '" + frames + "'",
+                        &out);
+  EXPECT_EQ(status, 1) << out;
+  const std::regex refusal(
+      "binbow: error: --database-size 10000000 needs about ([0-9.]+) GiB; this machine has "
+      "([0-9.]+) GiB available");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, refusal)) << out;
+  EXPECT_GT(std::stod(m[1]), 3.0) << out;
+  EXPECT_LT(std::stod(m[2]), 3.0) << out;
+  EXPECT_EQ(out.find("database add"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -337,5 +337,30 @@ TEST(Extractors, OpenCvConversionsRoundTrip) {
   EXPECT_THROW(make_opencv_extractor(cv::SIFT::create(), "sift"), InvalidArgument);
 }
 
+// Each extractor's measured memory per pixel (docs/limits.md) sets the most
+// pixels it extracts within the default budget: only AKAZE's is below the
+// decoder's 100 MP (a 16 MP image, measured at 1.8 GB, passes; 25 MP does not).
+TEST(FeatureExtractor, MemoryPerPixelSetsEachExtractorsPixelLimit) {
+  for (const std::string& name : extractor_names()) {
+    const auto extractor = make_extractor(name);
+    ASSERT_GT(extractor->bytes_per_pixel(), 0) << name;
+    EXPECT_EQ(extractor->max_pixels(),
+              static_cast<std::uint64_t>(static_cast<double>(kDefaultExtractionMemoryBytes) /
+                                         extractor->bytes_per_pixel()))
+        << name;
+    EXPECT_EQ(extractor->max_pixels(std::uint64_t{1} << 20),
+              static_cast<std::uint64_t>((1 << 20) / extractor->bytes_per_pixel()))
+        << name;
+    if (name != "akaze") {
+      EXPECT_GE(extractor->max_pixels(), kDefaultMaxImagePixels) << name;
+    }
+  }
+  const auto akaze = make_extractor("akaze");
+  EXPECT_GT(akaze->max_pixels(), 16'000'000u);
+  EXPECT_LT(akaze->max_pixels(), 25'000'000u);
+  EXPECT_EQ(make_opencv_extractor(cv::ORB::create(), "orb")->max_pixels(), UINT64_MAX);
+  EXPECT_EQ(make_opencv_extractor(cv::ORB::create(), "orb", 0, 4)->bytes_per_pixel(), 4);
+}
+
 }  // namespace
 }  // namespace binbow::vision

@@ -9,11 +9,13 @@
 #include <sys/stat.h>
 
 #include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "binbow/error.h"
+#include "binbow/vision/features.h"
 #include "support/test_support.h"
 #include "vision/image_header.h"
 #include "vision/natural_order.h"
@@ -699,6 +701,123 @@ TEST(ReadGreyImage, JpegWithDamagedScanDataIsAnError) {
   EXPECT_GE(refused, 27u);
   // The second one decodes with a warning-free stream but a DC term of 1116.
   EXPECT_THROW(read_grey_image(dir.file("damaged1.jpg")), FileError);
+}
+
+}  // namespace
+}  // namespace binbow::vision
+
+namespace binbow::vision {
+namespace {
+
+// A solid grey PNG: a few hundred KB however large (a decompression bomb's shape).
+void write_solid_png(const std::string& path, int width, int height) {
+  ASSERT_TRUE(cv::imwrite(path, cv::Mat(height, width, CV_8UC1, cv::Scalar(128))));
+}
+
+// The FileError `source.next` throws, which must name `path`.
+std::string refusal_of(ImageSource& source, const std::string& path) {
+  Frame frame;
+  try {
+    source.next(frame);
+  } catch (const FileError& e) {
+    EXPECT_EQ(e.path(), path);
+    return e.what();
+  }
+  ADD_FAILURE() << "no FileError for " << path;
+  return {};
+}
+
+TEST(ImageSource, ImagesAboveTheExtractorsMemoryBudgetAreRefusedBeforeDecoding) {
+  TempDir dir;
+  const auto akaze = make_extractor("akaze");
+  const ImageSourceOptions options = limit_for_extractor({}, *akaze);
+  ASSERT_EQ(options.max_extracted_pixels, akaze->max_pixels());
+  const std::string limit = std::to_string(akaze->max_pixels());
+  // 100 MP (the decoder's limit) and 25 MP: AKAZE would need 12 and 3 GB.
+  for (const auto& [side, size] :
+       {std::pair<int, std::string>{10000, "10000x10000"}, {5000, "5000x5000"}}) {
+    const std::string path = dir.file(size + ".png");
+    write_solid_png(path, side, side);
+    ImageSource source({path}, options);
+    const std::string message = refusal_of(source, path);
+    for (const std::string& part : {"image of " + size + " pixels is more than " + limit +
+                                        " pixels, the most akaze extracts within 2 GiB",
+                                    std::string("--max-width"), std::string("--max-pixels")})
+      EXPECT_NE(message.find(part), std::string::npos) << message;
+  }
+  // Downscaled below the limit, it is read.
+  ImageSourceOptions narrow = options;
+  narrow.max_width = 1000;
+  ImageSource downscaled({dir.file("5000x5000.png")}, narrow);
+  Frame frame;
+  ASSERT_TRUE(downscaled.next(frame));
+  EXPECT_EQ(frame.image.size(), cv::Size(1000, 1000));
+  // A limit set beforehand is kept: the caller accepts the memory.
+  ImageSourceOptions raised;
+  raised.max_extracted_pixels = 30'000'000;
+  ASSERT_EQ(limit_for_extractor(raised, *akaze).max_extracted_pixels, 30'000'000u);
+  ImageSource accepted({dir.file("5000x5000.png")}, limit_for_extractor(raised, *akaze));
+  ASSERT_TRUE(accepted.next(frame));
+  EXPECT_EQ(frame.image.size(), cv::Size(5000, 5000));
+  // The extractors whose memory per pixel is small are bound by max_pixels alone.
+  for (const char* name : {"orb", "brief", "brisk"}) {
+    ImageSource source({dir.file("5000x5000.png")}, limit_for_extractor({}, *make_extractor(name)));
+    EXPECT_TRUE(source.next(frame)) << name;
+  }
+  // An extractor built elsewhere has no known cost, so no limit of its own.
+  const auto unknown = make_opencv_extractor(cv::AKAZE::create(), "custom");
+  EXPECT_EQ(limit_for_extractor({}, *unknown).max_extracted_pixels, 0u);
+}
+
+TEST(ImageSource, VideoFramesAboveTheExtractionLimitAreRefusedWhenOpened) {
+  TempDir dir;
+  const std::string path = dir.file("clip.avi");
+  cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 5, cv::Size(64, 48),
+                         true);
+  ASSERT_TRUE(writer.isOpened());
+  for (int k = 0; k < 3; ++k) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(50 * k)));
+  writer.release();
+  ImageSourceOptions options;
+  options.max_extracted_pixels = 64 * 48 - 1;
+  ImageSource source({path}, options);
+  EXPECT_NE(refusal_of(source, path).find("video frame of 64x48 pixels is more than 3071 pixels"),
+            std::string::npos);
+  options.max_width = 32;  // 32x24 after downscaling
+  ImageSource downscaled({path}, options);
+  EXPECT_EQ(read_all_names(downscaled).size(), 3u);
+}
+
+TEST(ImageSource, SkipUnreadableDeliversTheFrameEmptyAtItsIndex) {
+  TempDir dir;
+  ASSERT_TRUE(cv::imwrite(dir.file("1.png"), colour_image(1)));
+  ASSERT_TRUE(cv::imwrite(dir.file("2.jpg"), colour_image(2)));
+  std::vector<std::uint8_t> jpeg = test::read_file(dir.file("2.jpg"));
+  jpeg.resize(jpeg.size() / 2);
+  test::write_file(dir.file("2.jpg"), jpeg);
+  ASSERT_TRUE(cv::imwrite(dir.file("3.png"), colour_image(3)));
+  ImageSourceOptions options;
+  options.skip_unreadable = true;
+  ImageSource source({dir.path()}, options);
+  Frame frame;
+  ASSERT_TRUE(source.next(frame));
+  EXPECT_TRUE(frame.unreadable.empty());
+  ASSERT_TRUE(source.next(frame));
+  EXPECT_EQ(frame.name, dir.file("2.jpg"));
+  EXPECT_EQ(frame.index, 1u);
+  EXPECT_TRUE(frame.image.empty());
+  EXPECT_EQ(frame.unreadable.rfind("damaged JPEG", 0), 0u) << frame.unreadable;
+  ASSERT_TRUE(source.next(frame));
+  EXPECT_EQ(filename(frame.name), "3.png");
+  EXPECT_EQ(frame.index, 2u);
+  EXPECT_TRUE(frame.unreadable.empty());
+  EXPECT_FALSE(source.next(frame));
+
+  // Strict, the error names the file and the frames after it keep their index.
+  ImageSource strict({dir.path()});
+  ASSERT_TRUE(strict.next(frame));
+  expect_file_error_naming(dir.file("2.jpg"), [&] { strict.next(frame); });
+  ASSERT_TRUE(strict.next(frame));
+  EXPECT_EQ(frame.index, 2u);
 }
 
 }  // namespace

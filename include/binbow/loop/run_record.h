@@ -20,9 +20,14 @@
 
 namespace binbow::loop {
 
+// The run record's status of a frame that could not be read and was skipped
+// (ImageSourceOptions::skip_unreadable): it keeps its index, has no
+// features and matches nothing.
+inline constexpr const char* kUnreadableFrameStatus = "unreadable";
+
 struct FrameRecord {
   std::string file;
-  std::string status;    // to_string(LoopStatus)
+  std::string status;    // to_string(LoopStatus), or kUnreadableFrameStatus
   long long match = -1;  // candidate or loop, -1 if none
   double score = 0;
   double normalised_score = 0;

@@ -26,7 +26,10 @@ struct SequenceOptions {
   // `descriptor` and `max_features` are not used. Shared: extract() is const
   // and thread-safe.
   std::shared_ptr<const vision::FeatureExtractor> extractor;
-  vision::ImageSourceOptions source;  // stride, max width, video rate, ...
+  // Stride, max width, video rate, skip_unreadable, ...; frames above what
+  // the extractor handles within its memory budget are refused unless
+  // max_extracted_pixels is set (vision::limit_for_extractor).
+  vision::ImageSourceOptions source;
   // A parameter file (JSON or YAML, LoopDetectorParams::load) whose keys
   // override the defaults; empty: the defaults alone. Ignored when the
   // SequenceDetector is given parameters.
@@ -41,6 +44,10 @@ extern const char* const kStageNames[kStageCount];
 // One frame of the sequence and what the detector made of it.
 struct SequenceFrame {
   std::string file;  // vision::Frame::name: a path, or "video.mp4#N"
+  // With ImageSourceOptions::skip_unreadable, why the frame could not be read
+  // (vision::Frame::unreadable): it was processed without features, so it
+  // matches nothing and keeps its index. Empty for a frame read.
+  std::string unreadable;
   LoopResult result;
   double features_ms = 0;  // feature extraction
   // For a detection: the match's file, and the RANSAC inliers in pixels of
@@ -105,7 +112,11 @@ class SequenceDetector {
   // Frames in the sequence when known before reading, else -1.
   long long size() const;
   std::size_t frames_processed() const noexcept;
+  // Frames by status; unreadable frames are not counted here but in
+  // skipped_frames().
   const StatusCounts& status_counts() const noexcept;
+  // Frames that could not be read and were skipped (skip_unreadable).
+  std::size_t skipped_frames() const noexcept;
   // Video frames the containers declared but could not be decoded.
   std::size_t unreadable_frames() const noexcept;
   const LoopDetector& detector() const noexcept;

@@ -16,6 +16,7 @@
 // VINS-Fusion (brief_k10L6, brief_lite.voc.gz) describe our BRIEF descriptors.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,11 +44,26 @@ struct Features {
   DescriptorMatrix descriptors;
 };
 
+// The memory one extraction may take by default: what sets each extractor's
+// pixel limit (FeatureExtractor::max_pixels). AKAZE's nonlinear scale space
+// takes about 110 bytes per pixel, so a 100-megapixel image would need 11 GB.
+inline constexpr std::uint64_t kDefaultExtractionMemoryBytes = std::uint64_t{2} << 30;
+
 // Extractors are immutable after construction: extract() may be called from
 // several threads at once.
 class FeatureExtractor {
  public:
   virtual ~FeatureExtractor() = default;
+  // Peak memory extract() takes per pixel of the image, in bytes, measured on
+  // 1, 4 and 16 MP images (docs/limits.md): ORB 4, BRIEF 1, BRISK 6, AKAZE
+  // 120. 0 when not known (an extractor built elsewhere).
+  virtual double bytes_per_pixel() const { return 0; }
+  // The most pixels extract() should be given for its memory to stay within
+  // `memory_bytes`: memory_bytes / bytes_per_pixel(), UINT64_MAX when that is
+  // not known. extract() itself does not refuse larger images (the caller
+  // chose them); ImageSource refuses such files before decoding them when
+  // told the limit (ImageSourceOptions::max_extracted_pixels).
+  std::uint64_t max_pixels(std::uint64_t memory_bytes = kDefaultExtractionMemoryBytes) const;
   // `image` is 8-bit grey (CV_8UC1); throws InvalidArgument otherwise. An
   // empty (0×0) image, one without corners, or (OpenCV-backed extractors) one
   // smaller than 16×16 gives empty Features, not an error.
@@ -109,11 +125,13 @@ std::unique_ptr<FeatureExtractor> make_brief_extractor(const BriefOptions& optio
 // Any OpenCV binary-descriptor Feature2D (AKAZE with MLDB: 61 bytes, BRISK: 64
 // bytes, ORB, ...) whose descriptors are CV_8U rows; `name` is what name()
 // returns; `max_features` > 0 keeps the strongest keypoints by response before
-// describing them. Calls to the shared cv::Feature2D are serialised by a mutex,
+// describing them; `bytes_per_pixel` is what bytes_per_pixel() returns (0: not
+// known). Calls to the shared cv::Feature2D are serialised by a mutex,
 // as OpenCV does not promise that it is thread-safe. Throws InvalidArgument
 // for a null detector or one whose descriptors are not bytes.
 std::unique_ptr<FeatureExtractor> make_opencv_extractor(cv::Ptr<cv::Feature2D> detector,
-                                                        std::string name, int max_features = 0);
+                                                        std::string name, int max_features = 0,
+                                                        double bytes_per_pixel = 0);
 // "orb", "brief", "akaze" or "brisk" with default options except the number
 // of features (≤ 0: the extractor's default; AKAZE and BRISK keep the
 // strongest `max_features` when > 0). Throws InvalidArgument for other names.

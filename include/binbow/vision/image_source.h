@@ -18,7 +18,12 @@ struct Frame {
   // Pixels of `image` per pixel of the file or video frame: below 1 when
   // max_width downscaled it. Divide image coordinates by it for the file's.
   double scale = 1;
+  // With ImageSourceOptions::skip_unreadable, why this frame could not be
+  // read (FileError::problem; `image` is then empty); empty for a frame read.
+  std::string unreadable;
 };
+
+class FeatureExtractor;
 
 // The default largest image (or video frame) decoded, in pixels: a 10000 ×
 // 10000 image. Decoding allocates at least a byte per pixel, often more.
@@ -43,7 +48,26 @@ struct ImageSourceOptions {
   // Images and video frames with more pixels are refused (FileError) from
   // their header, before anything is decoded. Must be ≥ 1.
   std::uint64_t max_pixels = kDefaultMaxImagePixels;
+  // Frames that would reach feature extraction with more pixels — counted
+  // after max_width's downscaling — are refused too, from the header, with
+  // `extraction_limit_reason` in the message (e.g. "akaze extracts within
+  // 2 GiB ..."). 0: no such limit. limit_for_extractor() sets both.
+  std::uint64_t max_extracted_pixels = 0;
+  std::string extraction_limit_reason;
+  // An image that cannot be read (damaged, truncated, over a limit) or a
+  // video frame that cannot be decoded is delivered as a frame with an empty
+  // image and Frame::unreadable set, keeping its index, instead of an error.
+  // Inputs that cannot be listed or opened (a missing file, a video that
+  // does not open) are still errors.
+  bool skip_unreadable = false;
 };
+
+// `options` with max_extracted_pixels (and its reason) set to what
+// `extractor` extracts within kDefaultExtractionMemoryBytes
+// (FeatureExtractor::max_pixels), unless max_extracted_pixels is already set
+// or the extractor's memory per pixel is not known.
+ImageSourceOptions limit_for_extractor(ImageSourceOptions options,
+                                       const FeatureExtractor& extractor);
 
 // A sequence of frames from several inputs, in order. Each input is an image
 // file (any format OpenCV reads), a directory (its image files, not
@@ -64,8 +88,9 @@ class ImageSource {
   ~ImageSource();
 
   // The next frame, or false at the end. Throws FileError naming the file
-  // when an image cannot be decoded or a video cannot be opened; the source
-  // can continue with the next frame after such an error.
+  // when an image cannot be decoded (unless skip_unreadable) or a video
+  // cannot be opened; the source can continue with the next frame after such
+  // an error, which keeps the index of the frame that failed.
   bool next(Frame& frame);
   // Number of frames, when known before reading (-1 otherwise).
   long long size() const;
