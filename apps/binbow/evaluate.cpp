@@ -64,9 +64,9 @@ struct RunInputs {
 
 RunInputs read_run_inputs(const loop::LoopRun& run) {
   RunInputs inputs;
-  const auto extractor = vision::make_extractor(run.descriptor, run.max_features);
-  if (!run.online_vocabulary)
-    load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), inputs.vocabulary);
+  // The run record names the extractor the run used: the vocabulary must fit it.
+  std::string descriptor = run.descriptor;
+  if (!run.online_vocabulary) load_loop_vocabulary(run.vocabulary, descriptor, inputs.vocabulary);
   StageProgress progress;
   inputs.features =
       loop::extract_run_features(run, [&](const std::string& stage, std::size_t done,
