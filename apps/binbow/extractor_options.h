@@ -56,7 +56,7 @@ inline void add_vocabulary_extractor_options(CLI::App* command, std::string& des
       ->add_option("--descriptor", descriptor,
                    "Binary descriptor: " + names +
                        ". Default: the extractor the vocabulary records, else " +
-                       kDefaultDescriptor + "; a vocabulary that records another one is an error")
+                       kDefaultDescriptor + "; it must not contradict the vocabulary's")
       ->check(CLI::IsMember(vision::extractor_names()));
   add_features_option(command, features);
 }
