@@ -186,3 +186,11 @@ def test_a_damaged_pickled_loop_detector_is_an_error():
         binbow.LoopDetector.__new__(binbow.LoopDetector).__setstate__((bytes(damaged), vocabulary))
     with pytest.raises(ValueError, match="invalid pickled binbow.LoopDetector"):
         binbow.LoopDetector.__new__(binbow.LoopDetector).__setstate__((data,))
+
+
+def test_detect_loops_takes_the_extractor_the_vocabulary_records():
+    brief = binbow.Vocabulary.default("brief")
+    results = binbow.detect_loops(sample_frames()[:3], vocabulary=brief)
+    assert results.descriptor == "brief" and len(results) == 3
+    with pytest.raises(ValueError, match="trained on brief descriptors, not orb"):
+        binbow.detect_loops(sample_frames()[:3], vocabulary=brief, descriptor="orb")
