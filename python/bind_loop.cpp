@@ -137,12 +137,8 @@ class PythonLoopDetector {
   // A saved state (.bbld): online without a vocabulary, else with the one it ran with.
   static std::unique_ptr<PythonLoopDetector> load(const Path& path,
                                                   const std::optional<Vocabulary>& vocabulary) {
-    loop::LoopDetector detector = vocabulary ? loop::LoopDetector::load(path.string(), *vocabulary)
-                                             : loop::LoopDetector::load(path.string());
-    const std::size_t code_size = detector.online_vocabulary() != nullptr
-                                      ? detector.online_vocabulary()->code_size()
-                                      : detector.database().vocabulary().code_size();
-    return std::make_unique<PythonLoopDetector>(std::move(detector), code_size);
+    return adopt(vocabulary ? loop::LoopDetector::load(path.string(), *vocabulary)
+                            : loop::LoopDetector::load(path.string()));
   }
   void save(const Path& path) const {
     const std::lock_guard<std::mutex> lock(mutex_);
@@ -164,14 +160,17 @@ class PythonLoopDetector {
         !(state[1].is_none() || py::isinstance<Vocabulary>(state[1])))
       throw py::value_error("invalid pickled binbow.LoopDetector");
     const auto bytes = state[0].cast<py::bytes>();
-    const std::optional<Vocabulary> vocabulary =
-        state[1].is_none() ? std::nullopt : std::optional<Vocabulary>(state[1].cast<Vocabulary>());
     const auto [data, size] = bytes_of(bytes);
-    py::gil_scoped_release release;
     const std::string name = "<pickled binbow.LoopDetector>";
-    loop::LoopDetector detector =
-        vocabulary ? loop::LoopDetector::deserialize(data, size, name, *vocabulary)
-                   : loop::LoopDetector::deserialize(data, size, name);
+    if (state[1].is_none()) {
+      py::gil_scoped_release release;
+      return adopt(loop::LoopDetector::deserialize(data, size, name));
+    }
+    Vocabulary vocabulary = state[1].cast<Vocabulary>();
+    py::gil_scoped_release release;
+    return adopt(loop::LoopDetector::deserialize(data, size, name, std::move(vocabulary)));
+  }
+  static std::unique_ptr<PythonLoopDetector> adopt(loop::LoopDetector detector) {
     const std::size_t code_size = detector.online_vocabulary() != nullptr
                                       ? detector.online_vocabulary()->code_size()
                                       : detector.database().vocabulary().code_size();
