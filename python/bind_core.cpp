@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -18,6 +19,7 @@
 #include "binbow/formats.h"
 #include "binbow/vocabulary.h"
 #include "binding.h"
+#include "core/database_impl.h"
 
 namespace binbow::python {
 namespace {
@@ -139,11 +141,62 @@ Vocabulary build_vocabulary(const py::iterable& images, std::uint32_t branching,
   return Vocabulary::build(views, options);
 }
 
-EntryId add_descriptors(Database& db, const py::object& descriptors,
-                        const std::optional<std::string>& label) {
+// None or a str; taken here rather than by pybind11, whose error would print
+// every argument, the descriptor array included.
+std::string label_argument(const py::handle& label) {
+  if (label.is_none()) return {};
+  if (!py::isinstance<py::str>(label))
+    throw py::type_error("label must be a str or None, got " + type_name(label));
+  return label.cast<std::string>();
+}
+
+EntryId add_descriptors(Database& db, const py::object& descriptors, const py::object& label) {
   const Descriptors d = to_descriptors(descriptors, "descriptors", db.vocabulary().code_size());
+  std::string text = label_argument(label);
   py::gil_scoped_release release;
-  return db.add(d.view, label.value_or(std::string()));
+  return db.add(d.view, std::move(text));
+}
+
+// A non-negative int (not bool): arguments are checked here rather than by
+// pybind11's overload resolution, whose error message prints every argument,
+// a whole descriptor array included.
+std::uint64_t count_argument(const py::handle& value, const std::string& name) {
+  if (!PyLong_Check(value.ptr()) || PyBool_Check(value.ptr()))
+    throw py::type_error(name + " must be an int, got " + type_name(value));
+  const auto number = value.cast<long long>();
+  if (number < 0) throw py::value_error(name + " must be >= 0, got " + std::to_string(number));
+  return static_cast<std::uint64_t>(number);
+}
+
+// The BowVector of `image`: itself, or the transform of its descriptors.
+BowVector bow_of(const Database& db, const py::handle& image) {
+  if (py::isinstance<BowVector>(image)) return image.cast<BowVector>();
+  if (!image.is_none() && !py::isinstance<py::array>(image))
+    throw py::type_error("image must be a BowVector or descriptors (a numpy uint8 array), got " +
+                         type_name(image));
+  const Descriptors d = to_descriptors(image, "descriptors", db.vocabulary().code_size());
+  BowVector bow;
+  py::gil_scoped_release release;
+  db.vocabulary().transform(d.view, bow);
+  return bow;
+}
+
+std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
+    const Database& db, const py::object& image, const py::object& max_results,
+    const py::object& max_entry_id) {
+  const std::uint64_t count = count_argument(max_results, "max_results");
+  EntryId last = kAllEntries;
+  if (!max_entry_id.is_none()) {
+    const std::uint64_t id = count_argument(max_entry_id, "max_entry_id");
+    last = static_cast<EntryId>(std::min<std::uint64_t>(id, kAllEntries));
+  }
+  const BowVector bow = bow_of(db, image);
+  std::vector<QueryResult> results;
+  {
+    py::gil_scoped_release release;
+    results = db.query(bow, static_cast<std::size_t>(count), last);
+  }
+  return results_list(results);
 }
 
 py::bytes database_bytes(const Database& db, bool include_vocabulary) {
@@ -172,6 +225,25 @@ std::string database_repr(const Database& db) {
 }  // namespace
 
 void bind_core(py::module_& m) {
+  // Database's own argument checks, for binbow.distributed.ShardedDatabase to
+  // refuse the same mistakes with the same errors before any shard is called.
+  m.def(
+      "_checked_descriptors",
+      [](const py::object& descriptors, const std::string& what, std::size_t code_size) {
+        if (descriptors.is_none()) return py::object(py::none());
+        return py::object(to_descriptors(descriptors, what, code_size).array);
+      },
+      py::arg("descriptors"), py::arg("what"), py::arg("code_size"));
+  m.def(
+      "_check_bow",
+      [](const BowVector& bow, const Vocabulary& vocabulary) {
+        detail::check_bow_words(bow, vocabulary, "Database::add");
+        detail::check_bow_values(bow, "Database::add");
+      },
+      py::arg("bow"), py::arg("vocabulary"));
+  m.def("_count_argument", &count_argument, py::arg("value"), py::arg("name"));
+  m.def("_label_argument", &label_argument, py::arg("label"));
+
   m.def(
       "hamming",
       [](const py::object& a, const py::object& b) {
@@ -181,8 +253,8 @@ void bind_core(py::module_& m) {
           throw py::value_error(
               "hamming takes two 1-D descriptors of the same length, got shapes " + shape_of(x) +
               " and " + shape_of(y));
-        const auto u = py::array_t<std::uint8_t, py::array::c_style>::ensure(x);
-        const auto v = py::array_t<std::uint8_t, py::array::c_style>::ensure(y);
+        const auto u = contiguous_uint8(x, "a");
+        const auto v = contiguous_uint8(y, "b");
         return hamming_distance(u.data(), v.data(), static_cast<std::size_t>(u.size()));
       },
       py::arg("a"), py::arg("b"),
@@ -233,7 +305,12 @@ void bind_core(py::module_& m) {
       .def_static(
           "load",
           [](const Path& path, const std::string& format) {
-            return load_vocabulary(path.string(), parse_vocabulary_format(format));
+            try {
+              return load_vocabulary(path.string(), parse_vocabulary_format(format));
+            } catch (const FileError& e) {
+              if (e.problem().rfind(kUnknownVocabularyFormat, 0) != 0) throw;
+              throw FileError(e.path(), e.problem() + " with Vocabulary.load(path, format=...)");
+            }
           },
           py::arg("path"), py::arg("format") = "auto", py::call_guard<py::gil_scoped_release>(),
           "Load any supported format (.bbw, DBoW2 YAML, ORBvoc.txt, ORB-SLAM .bin, DBoW3, fbow,\n"
@@ -345,26 +422,18 @@ void bind_core(py::module_& m) {
            "image without features) and add it, with an optional label; returns its entry id.")
       .def(
           "add_bow",
-          [](Database& db, const BowVector& bow, const std::optional<std::string>& label) {
+          [](Database& db, const BowVector& bow, const py::object& label) {
+            std::string text = label_argument(label);
             py::gil_scoped_release release;
-            return db.add(bow, {}, label.value_or(std::string()));
+            return db.add(bow, {}, std::move(text));
           },
           py::arg("bow"), py::arg("label") = py::none(),
           "Add an image already transformed with this database's vocabulary; returns its id.")
-      .def(
-          "query",
-          [](const Database& db, const BowVector& bow, std::size_t max_results,
-             std::optional<EntryId> max_entry_id) {
-            std::vector<QueryResult> results;
-            {
-              py::gil_scoped_release release;
-              results = db.query(bow, max_results, max_entry_id.value_or(kAllEntries));
-            }
-            return results_list(results);
-          },
-          py::arg("bow"), py::arg("max_results") = 10, py::arg("max_entry_id") = py::none(),
-          "Best matches as a list of (entry, score, shared_words), best first; only entries\n"
-          "with id <= max_entry_id when given.")
+      .def("query", &query_database, py::arg("image"), py::arg("max_results") = 10,
+           py::arg("max_entry_id") = py::none(),
+           "Best matches of an image (a BowVector, or its descriptors: uint8 (n, code_size)\n"
+           "array, or None) as a list of (entry, score, shared_words), best first; only\n"
+           "entries with id <= max_entry_id when given.")
       .def(
           "label",
           [](const Database& db, EntryId entry) -> std::optional<std::string> {

@@ -138,16 +138,68 @@ class PythonLoopDetector {
   // A saved state (.bbld): online without a vocabulary, else with the one it ran with.
   static std::unique_ptr<PythonLoopDetector> load(const Path& path,
                                                   const std::optional<Vocabulary>& vocabulary) {
-    loop::LoopDetector detector = vocabulary ? loop::LoopDetector::load(path.string(), *vocabulary)
-                                             : loop::LoopDetector::load(path.string());
+    return adopt(vocabulary ? loop::LoopDetector::load(path.string(), *vocabulary)
+                            : loop::LoopDetector::load(path.string()));
+  }
+  void save(const Path& path) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    detector_.save(path.string());
+  }
+  // Pickled as (the .bbld bytes, the vocabulary or None when online): a
+  // fixed vocabulary is recorded in the bytes by checksum only.
+  py::tuple state() const {
+    std::vector<std::uint8_t> bytes;
+    {
+      py::gil_scoped_release release;
+      const std::lock_guard<std::mutex> lock(mutex_);
+      bytes = detector_.serialize();
+    }
+    return py::make_tuple(to_bytes(bytes), online() ? py::none() : py::cast(vocabulary()));
+  }
+  static std::unique_ptr<PythonLoopDetector> from_state(const py::tuple& state) {
+    if (state.size() != 2 || !py::isinstance<py::bytes>(state[0]) ||
+        !(state[1].is_none() || py::isinstance<Vocabulary>(state[1])))
+      throw py::value_error("invalid pickled binbow.LoopDetector");
+    const auto bytes = state[0].cast<py::bytes>();
+    const auto [data, size] = bytes_of(bytes);
+    const std::string name = "<pickled binbow.LoopDetector>";
+    if (state[1].is_none()) {
+      py::gil_scoped_release release;
+      return adopt(loop::LoopDetector::deserialize(data, size, name));
+    }
+    Vocabulary vocabulary = state[1].cast<Vocabulary>();
+    py::gil_scoped_release release;
+    return adopt(loop::LoopDetector::deserialize(data, size, name, std::move(vocabulary)));
+  }
+  static std::unique_ptr<PythonLoopDetector> adopt(loop::LoopDetector detector) {
     const std::size_t code_size = detector.online_vocabulary() != nullptr
                                       ? detector.online_vocabulary()->code_size()
                                       : detector.database().vocabulary().code_size();
     return std::make_unique<PythonLoopDetector>(std::move(detector), code_size);
   }
-  void save(const Path& path) const {
+  std::string repr() const {
     const std::lock_guard<std::mutex> lock(mutex_);
-    detector_.save(path.string());
+    std::string text = "<binbow.LoopDetector with " + std::to_string(detector_.size()) + " images";
+    if (detector_.forgotten_count() > 0)
+      text += " (" + std::to_string(detector_.forgotten_count()) + " forgotten)";
+    if (online())
+      text += ", online vocabulary of " +
+              std::to_string(detector_.online_vocabulary()->word_count()) + " words>";
+    else
+      text += ", vocabulary " + vocabulary().description() + ">";
+    return text;
+  }
+  void set_label(const py::handle& frame, const std::string& label) {
+    const EntryId id = frame_id(frame, "set_label");
+    const std::lock_guard<std::mutex> lock(mutex_);
+    detector_.set_label(id, label);
+  }
+  std::optional<std::string> label(const py::handle& frame) const {
+    const EntryId id = frame_id(frame, "label");
+    const std::lock_guard<std::mutex> lock(mutex_);
+    std::string label = detector_.label(id);
+    if (label.empty()) return std::nullopt;
+    return label;
   }
 
   loop::SequenceFrame process(const py::object& keypoints, const py::object& descriptors) {
@@ -467,6 +519,14 @@ void bind_detection(py::module_& m) {
            "row i describing keypoint i. An image without features: descriptors None and\n"
            "keypoints None or empty (it is added, and can match nothing).")
       .def("__len__", &PythonLoopDetector::size, "Images processed.")
+      .def("__repr__", &PythonLoopDetector::repr, "Images processed and vocabulary as text.")
+      .def("set_label", &PythonLoopDetector::set_label, py::arg("frame"), py::arg("label"),
+           "Name a processed frame (e.g. its file), or with \"\" remove its name; saved with\n"
+           "the state. ValueError for a frame never processed or forgotten.")
+      .def("label", &PythonLoopDetector::label, py::arg("frame"),
+           "The frame's name, None if it has none (ValueError as set_label).")
+      .def(py::pickle([](const PythonLoopDetector& self) { return self.state(); },
+                      &PythonLoopDetector::from_state))
       .def("clear", &PythonLoopDetector::clear, "Forget every image; the next one is query 0.")
       .def("forget", &PythonLoopDetector::forget, py::arg("frame"),
            "Keyframe culling: never propose this frame again (as a match, in an island or to\n"

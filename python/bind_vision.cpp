@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <cctype>
 #include <climits>
 #include <cstdint>
 #include <memory>
@@ -72,6 +73,12 @@ bool bool_option(const py::handle& value, const std::string& name) {
   return value.cast<bool>();
 }
 
+// Names are case-insensitive ("ORB" is "orb"), as the CLI's --descriptor.
+std::string lower_case(std::string name) {
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name;
+}
+
 bool is_path(const py::handle& object) {
   return py::isinstance<py::str>(object) || py::isinstance<py::bytes>(object) ||
          py::hasattr(object, "__fspath__");
@@ -85,10 +92,17 @@ std::string path_string(const py::handle& object) {
 // A FeatureExtractor made from Python arguments, which it keeps for repr and pickle.
 class PythonExtractor {
  public:
-  PythonExtractor(std::string descriptor, const py::object& max_features, py::dict options)
-      : descriptor_(std::move(descriptor)), options_(std::move(options)) {
+  PythonExtractor(std::string descriptor, const py::object& max_features,
+                  const py::object& max_image_pixels, py::dict options)
+      : descriptor_(lower_case(std::move(descriptor))), options_(std::move(options)) {
     if (!max_features.is_none())
       max_features_ = int_option(max_features, "max_features", 1, kMaxFeatures);
+    if (!max_image_pixels.is_none()) {
+      const long long pixels = integer_option(max_image_pixels, "max_image_pixels");
+      if (pixels < 1)
+        throw py::value_error("max_image_pixels must be >= 1, got " + std::to_string(pixels));
+      max_image_pixels_ = static_cast<std::uint64_t>(pixels);
+    }
     const std::vector<std::string> names = vision::extractor_names();
     if (std::find(names.begin(), names.end(), descriptor_) == names.end())
       throw py::value_error("unknown descriptor '" + descriptor_ + "'; expected one of " +
@@ -109,6 +123,7 @@ class PythonExtractor {
 
   const std::string& descriptor() const { return descriptor_; }
   std::optional<int> max_features() const { return max_features_; }
+  std::uint64_t max_image_pixels() const { return max_image_pixels_; }
   const py::dict& options() const { return options_; }
   const vision::FeatureExtractor& extractor() const { return *extractor_; }
   // For holders that outlive this object (a loop::SequenceDetector).
@@ -152,17 +167,19 @@ class PythonExtractor {
 
   std::string descriptor_;
   std::optional<int> max_features_;
+  std::uint64_t max_image_pixels_ = vision::kDefaultMaxImagePixels;
   py::dict options_;
   std::shared_ptr<const vision::FeatureExtractor> extractor_;
 };
 
-// A grey (H, W) or BGR (H, W, 3) uint8 image, kept alive while `image` views it.
+// A grey (H, W), BGR (H, W, 3) or BGRA (H, W, 4) uint8 image, kept alive
+// while `image` views it. It is only read, so read-only arrays are fine.
 struct Image {
   py::array_t<std::uint8_t, py::array::c_style> array;
-  cv::Mat image;  // grey, or BGR until converted
+  cv::Mat image;  // grey, or BGR/BGRA until converted
 };
 
-Image image_from_array(const py::handle& object) {
+Image image_from_array(const py::handle& object, std::uint64_t max_pixels) {
   if (!py::isinstance<py::array>(object))
     throw py::type_error("image must be a path (str or os.PathLike) or a numpy uint8 array, got " +
                          type_name(object));
@@ -171,16 +188,22 @@ Image image_from_array(const py::handle& object) {
     throw py::type_error("image must be a numpy uint8 array, got dtype " +
                          py::str(array.dtype()).cast<std::string>() +
                          " (8-bit pixels; convert explicitly if that is meant)");
-  if (!(array.ndim() == 2 || (array.ndim() == 3 && array.shape(2) == 3)))
-    throw py::value_error("image must be grey (H, W) or BGR (H, W, 3), got shape " +
+  if (!(array.ndim() == 2 || (array.ndim() == 3 && (array.shape(2) == 3 || array.shape(2) == 4))))
+    throw py::value_error("image must be grey (H, W), BGR (H, W, 3) or BGRA (H, W, 4), got shape " +
                           shape_of(array));
-  if (array.shape(0) > INT_MAX || array.shape(1) > INT_MAX)
+  const auto height = static_cast<std::uint64_t>(array.shape(0));
+  const auto width = static_cast<std::uint64_t>(array.shape(1));
+  if (height != 0 && width > max_pixels / height)
+    throw py::value_error("image of shape " + shape_of(array) + " has " +
+                          std::to_string(width * height) + " pixels, more than the limit of " +
+                          std::to_string(max_pixels) + " (FeatureExtractor(max_image_pixels=...))");
+  if (height > INT_MAX || width > INT_MAX)
     throw py::value_error("image of shape " + shape_of(array) + " is larger than OpenCV takes");
   Image out;
-  out.array = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
-  if (!out.array) throw py::error_already_set();
-  out.image = cv::Mat(static_cast<int>(out.array.shape(0)), static_cast<int>(out.array.shape(1)),
-                      array.ndim() == 2 ? CV_8UC1 : CV_8UC3, out.array.mutable_data());
+  out.array = contiguous_uint8(array, "image");
+  const int type = array.ndim() == 2 ? CV_8UC1 : CV_8UC(static_cast<int>(array.shape(2)));
+  out.image = cv::Mat(static_cast<int>(height), static_cast<int>(width), type,
+                      const_cast<std::uint8_t*>(out.array.data()));
   return out;
 }
 
@@ -213,13 +236,14 @@ py::tuple extract(const PythonExtractor& self, const py::object& image) {
   if (is_path(image)) {
     const std::string path = path_string(image);
     py::gil_scoped_release release;
-    features = self.extractor().extract(vision::read_grey_image(path));
+    features = self.extractor().extract(vision::read_grey_image(path, self.max_image_pixels()));
   } else {
-    Image input = image_from_array(image);
+    Image input = image_from_array(image, self.max_image_pixels());
     py::gil_scoped_release release;
-    if (input.image.channels() == 3) {
+    if (input.image.channels() != 1) {
       cv::Mat grey;
-      cv::cvtColor(input.image, grey, cv::COLOR_BGR2GRAY);
+      cv::cvtColor(input.image, grey,
+                   input.image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
       input.image = grey;
     }
     features = self.extractor().extract(input.image);
@@ -230,6 +254,8 @@ py::tuple extract(const PythonExtractor& self, const py::object& image) {
 std::string extractor_repr(const PythonExtractor& self) {
   std::string text = "binbow.FeatureExtractor(descriptor=\"" + self.descriptor() + "\"";
   if (self.max_features()) text += ", max_features=" + std::to_string(*self.max_features());
+  if (self.max_image_pixels() != vision::kDefaultMaxImagePixels)
+    text += ", max_image_pixels=" + std::to_string(self.max_image_pixels());
   for (const auto& [key, value] : self.options())
     text += ", " + key.cast<std::string>() + "=" + py::repr(value).cast<std::string>();
   return text + ")";
@@ -246,7 +272,8 @@ void bind_vision(py::module_& m) {
   py::class_<PythonExtractor>(
       m, "FeatureExtractor",
       "Keypoints and binary descriptors of images: the CLI's extractors with its defaults.\n\n"
-      "descriptor: \"orb\" (OpenCV ORB, 32 bytes), \"brief\" (the paper's BRIEF, bit for bit\n"
+      "descriptor (case-insensitive): \"orb\" (OpenCV ORB, 32 bytes), \"brief\" (the paper's "
+      "BRIEF, bit for bit\n"
       "DLoopDetector's, 32 bytes), \"akaze\" (61 bytes) or \"brisk\" (64 bytes).\n"
       "max_features: the strongest keypoints kept; None: the extractor's default (ORB 1000,\n"
       "BRIEF 300, AKAZE and BRISK every keypoint found).\n"
@@ -254,18 +281,22 @@ void bind_vision(py::module_& m) {
       "fast_threshold, non_max_suppression, pattern (a YAML/XML pattern file, as the CLI's\n"
       "--pattern) and keep_border_corners (describe corners whose tests leave the image, those\n"
       "tests giving 0 bits, as DLib's BRIEF does; default False); akaze and brisk take none.\n"
-      "An unknown option is a TypeError.\n"
+      "An unknown option is a TypeError. max_image_pixels: the largest image extract takes,\n"
+      "as a file or an array (default 100 million pixels, as the CLI).\n"
       "Immutable: extract may be called from several threads at once.")
       .def(py::init([](const std::string& descriptor, const py::object& max_features,
-                       const py::kwargs& options) {
-             return std::make_unique<PythonExtractor>(descriptor, max_features, py::dict(options));
+                       const py::object& max_image_pixels, const py::kwargs& options) {
+             return std::make_unique<PythonExtractor>(descriptor, max_features, max_image_pixels,
+                                                      py::dict(options));
            }),
            py::arg("descriptor") = "orb", py::arg("max_features") = py::none(),
+           py::arg("max_image_pixels") = py::none(),
            "An extractor of the given descriptor type; see the class docstring for options.")
       .def("extract", &extract, py::arg("image"),
            "(keypoints, descriptors) of an image: a path (str or os.PathLike, read as the CLI\n"
-           "reads images, in grey) or a numpy uint8 array, grey (H, W) or BGR (H, W, 3) as\n"
-           "cv2.imread returns. keypoints: float32 (N, 6) rows x, y, size, angle, response,\n"
+           "reads images, in grey) or a numpy uint8 array (read-only is fine), grey (H, W),\n"
+           "BGR (H, W, 3) as cv2.imread returns, or BGRA (H, W, 4). keypoints: float32 (N, 6) rows "
+           "x, y, size, angle, response,\n"
            "octave; descriptors: uint8 (N, code_size), row i describing keypoint i. An image\n"
            "without corners gives N = 0 (arrays of that shape, not None).")
       .def_property_readonly("descriptor", &PythonExtractor::descriptor,
@@ -278,15 +309,22 @@ void bind_vision(py::module_& m) {
       .def_property_readonly(
           "options", [](const PythonExtractor& self) { return py::dict(self.options()); },
           "The options given besides descriptor and max_features (a copy).")
+      .def_property_readonly("max_image_pixels", &PythonExtractor::max_image_pixels,
+                             "The largest image extract accepts, in pixels (file or array).")
       .def("__repr__", &extractor_repr, "The constructor call that makes this extractor.")
       .def(py::pickle(
           [](const PythonExtractor& self) {
-            return py::make_tuple(self.descriptor(), self.max_features(), self.options());
+            return py::make_tuple(self.descriptor(), self.max_features(), self.options(),
+                                  self.max_image_pixels());
           },
           [](const py::tuple& state) {
-            if (state.size() != 3) throw py::value_error("invalid pickled binbow.FeatureExtractor");
+            // Three fields: pickled before max_image_pixels existed.
+            if (state.size() != 3 && state.size() != 4)
+              throw py::value_error("invalid pickled binbow.FeatureExtractor");
             return std::make_unique<PythonExtractor>(
-                state[0].cast<std::string>(), py::object(state[1]), state[2].cast<py::dict>());
+                state[0].cast<std::string>(), py::object(state[1]),
+                state.size() == 4 ? py::object(state[3]) : py::object(py::none()),
+                state[2].cast<py::dict>());
           }));
 }
 

@@ -5,7 +5,7 @@
 // Inputs are taken strictly: a numpy array of the wrong dtype is a TypeError
 // naming it and a wrong shape a ValueError, never a silent conversion (float
 // SIFT descriptors or out-of-range values would turn into wrong bits). Only
-// a non-contiguous array is copied.
+// a non-contiguous array is copied, within kMaxCopiedBytes.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -38,6 +38,15 @@ std::string shape_of(const py::array& array);
 // The uint8 array of one image's descriptors: `what` names it in errors
 // ("descriptors", "images[3]").
 py::array checked_uint8_array(const py::handle& object, const std::string& what);
+
+// Arrays that are not C-contiguous are copied, up to this many bytes: a view
+// of more (a numpy broadcast or as_strided view can stand for terabytes) is a
+// ValueError asking for C-contiguous rows, never an attempt to allocate it.
+constexpr std::size_t kMaxCopiedBytes = std::size_t{1} << 31;
+
+// `array` (uint8) as C-contiguous rows: itself, or a bounded copy.
+py::array_t<std::uint8_t, py::array::c_style> contiguous_uint8(const py::array& array,
+                                                               const std::string& what);
 
 // Descriptors of one image received from Python, kept alive while the view is used.
 struct Descriptors {

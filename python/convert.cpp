@@ -26,6 +26,27 @@ py::array checked_uint8_array(const py::handle& object, const std::string& what)
   return array;
 }
 
+py::array_t<std::uint8_t, py::array::c_style> contiguous_uint8(const py::array& array,
+                                                               const std::string& what) {
+  if (array.flags() & py::array::c_style)
+    return py::reinterpret_borrow<py::array_t<std::uint8_t, py::array::c_style>>(array);
+  // A strided view may stand for far more bytes than it holds (a broadcast
+  // row has stride 0): its size is checked before anything is allocated.
+  const auto bytes = static_cast<std::size_t>(array.size());
+  if (bytes > kMaxCopiedBytes)
+    throw py::value_error(what + " (dtype " + py::str(array.dtype()).cast<std::string>() +
+                          ", shape " + shape_of(array) +
+                          ") is not C-contiguous and too large to copy (" + std::to_string(bytes) +
+                          " bytes, at most " + std::to_string(kMaxCopiedBytes) +
+                          "); pass C-contiguous rows (numpy.ascontiguousarray)");
+  auto copy = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
+  if (!copy)
+    throw py::value_error(what + " (dtype " + py::str(array.dtype()).cast<std::string>() +
+                          ", shape " + shape_of(array) +
+                          ") could not be copied into C-contiguous rows");
+  return copy;
+}
+
 Descriptors to_descriptors(const py::handle& object, const std::string& what,
                            std::size_t code_size) {
   Descriptors out;
@@ -42,9 +63,7 @@ Descriptors to_descriptors(const py::handle& object, const std::string& what,
                           std::to_string(columns * 8) + " bits) per row, the vocabulary's words " +
                           std::to_string(code_size) + " bytes (" + std::to_string(code_size * 8) +
                           " bits): wrong descriptor type for this vocabulary?");
-  // Copies only an array that is not C-contiguous: the dtype is already uint8.
-  out.array = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
-  if (!out.array) throw py::error_already_set();
+  out.array = contiguous_uint8(array, what);
   out.view = {out.array.data(), static_cast<std::size_t>(out.array.shape(0)), columns};
   return out;
 }

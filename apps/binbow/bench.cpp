@@ -35,7 +35,7 @@ double elapsed_ms(Clock::time_point start) {
 struct BenchArguments {
   std::vector<std::string> inputs;
   std::string vocabulary;
-  std::string descriptor = kDefaultDescriptor;
+  std::string descriptor;  // "": the vocabulary's
   int features = 0;
   std::size_t database_size = 10000;
   int load_repeats = 5;
@@ -78,12 +78,12 @@ void refuse_database_beyond_memory(std::size_t entries, const Vocabulary& vocabu
                         " available");
 }
 
-void run_bench(const BenchArguments& args) {
+void run_bench(BenchArguments args) {
   check_vocabulary_given(args.vocabulary, args.descriptor);
-  const auto extractor = vision::make_extractor(args.descriptor, args.features);
   Vocabulary vocabulary;
   const std::string vocabulary_path =
-      load_loop_vocabulary(args.vocabulary, args.descriptor, extractor->code_size(), vocabulary);
+      load_loop_vocabulary(args.vocabulary, args.descriptor, vocabulary);
+  const auto extractor = vision::make_extractor(args.descriptor, args.features);
 
   // Each stage's samples in milliseconds: per load, per frame, per entry, per query.
   std::vector<loop::StageTiming> timing;
@@ -182,7 +182,7 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--vocab", args->vocabulary,
                   "Vocabulary (any supported format); default: the bundled one for --descriptor "
                   "(orb and brief only)");
-  add_extractor_options(cmd, args->descriptor, args->features);
+  add_vocabulary_extractor_options(cmd, args->descriptor, args->features);
   cmd->add_option("--database-size", args->database_size,
                   "Entries in the database for the add and query timings")
       ->check(CLI::Range(1, 10000000))

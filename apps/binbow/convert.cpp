@@ -38,7 +38,13 @@ void run_convert(const ConvertArguments& args) {
                           std::string(to_string(to)) + " files");
 
   const auto start = std::chrono::steady_clock::now();
-  detail::LoadedVocabulary loaded = detail::load_vocabulary_with_details(args.input, from);
+  detail::LoadedVocabulary loaded;
+  try {
+    loaded = detail::load_vocabulary_with_details(args.input, from);
+  } catch (const FileError& e) {
+    if (e.problem().rfind(kUnknownVocabularyFormat, 0) != 0) throw;
+    throw FileError(e.path(), e.problem() + " with --from");
+  }
   std::printf("read %s: %s%s, %s (%.3f s)\n", args.input.c_str(), to_string(loaded.format),
               loaded.compressed ? " (gzip)" : "", loaded.vocabulary.description().c_str(),
               seconds_since(start));

@@ -28,7 +28,7 @@ struct DbBuildArguments {
   std::string vocabulary;
   std::string output;
   std::vector<std::string> inputs;
-  std::string descriptor = kDefaultDescriptor;
+  std::string descriptor;  // "": the vocabulary's
   int features = 0;
   unsigned levels_up = 4;
   bool no_direct_index = false;
@@ -39,7 +39,7 @@ struct DbBuildArguments {
 // What db query and db add need to read a database and describe images for it.
 struct DbArguments {
   std::string database;
-  std::string descriptor = kDefaultDescriptor;
+  std::string descriptor;  // "": the vocabulary's
   int features = 0;
   std::string vocabulary;
   std::vector<std::string> inputs;
@@ -60,8 +60,9 @@ std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabu
                                                         const std::string& vocabulary_name,
                                                         const std::string& descriptor, int features,
                                                         bool embedded_in_database = false) {
-  auto extractor = vision::make_extractor(descriptor, features);
-  check_vocabulary_fits(vocabulary, vocabulary_name, descriptor, extractor->code_size(),
+  const std::string name = descriptor_for(descriptor, vocabulary);
+  auto extractor = vision::make_extractor(name, features);
+  check_vocabulary_fits(vocabulary, vocabulary_name, name, extractor->code_size(),
                         embedded_in_database);
   return extractor;
 }
@@ -72,8 +73,8 @@ Database load_database(const std::string& path, const std::string& vocabulary) {
                             : Database::load(path, load_vocabulary(vocabulary));
 }
 
-// The extractor of --descriptor, checked against the database's vocabulary:
-// its own (embedded) or the --vocab given.
+// The extractor of --descriptor, else the one the database's vocabulary
+// records, checked against that vocabulary: its own (embedded) or the --vocab given.
 std::unique_ptr<vision::FeatureExtractor> database_extractor(const Database& database,
                                                              const DbArguments& arguments) {
   const bool embedded = arguments.vocabulary.empty();
@@ -117,13 +118,13 @@ AddedImages add_images(Database& database, const vision::FeatureExtractor& extra
   return added;
 }
 
-void run_db_build(const DbBuildArguments& arguments) {
+void run_db_build(DbBuildArguments arguments) {
   check_vocabulary_given(arguments.vocabulary, arguments.descriptor);
   prepare_output_file("-o", arguments.output);
-  const auto extractor = vision::make_extractor(arguments.descriptor, arguments.features);
   Vocabulary vocabulary;
-  const std::string vocabulary_path = load_loop_vocabulary(
-      arguments.vocabulary, arguments.descriptor, extractor->code_size(), vocabulary);
+  const std::string vocabulary_path =
+      load_loop_vocabulary(arguments.vocabulary, arguments.descriptor, vocabulary);
+  const auto extractor = vision::make_extractor(arguments.descriptor, arguments.features);
   Database database(vocabulary, {!arguments.no_direct_index, arguments.levels_up});
   std::size_t features = 0;
   add_images(database, *extractor, arguments.inputs, arguments.source, &features);
@@ -198,8 +199,7 @@ void add_database_options(CLI::App* command, DbArguments& arguments,
                           const std::string& images_help) {
   command->add_option("DB", arguments.database, "Database (.bbdb)")->required();
   command->add_option("IMAGES", arguments.inputs, images_help)->required();
-  add_extractor_options(command, arguments.descriptor, arguments.features,
-                        "as used to build the database");
+  add_vocabulary_extractor_options(command, arguments.descriptor, arguments.features);
   command->add_option("--vocab", arguments.vocabulary,
                       "Vocabulary, for databases built with --external-vocab");
   add_image_source_options(command, arguments.source);
@@ -238,7 +238,7 @@ void add_db_command(CLI::App& app) {
                             "Vocabulary (any format binbow reads); default: the bundled "
                             "data/vocab/<descriptor>_default.bbw");
   build_command->add_option("-o,--output", build->output, "Output database (.bbdb)")->required();
-  add_extractor_options(build_command, build->descriptor, build->features);
+  add_vocabulary_extractor_options(build_command, build->descriptor, build->features);
   build_command
       ->add_option("--direct-index-levels-up", build->levels_up,
                    "Direct index nodes this many levels above the words (the root when more "

@@ -9,6 +9,7 @@
 
 #include "binbow/error.h"
 #include "binbow/formats.h"
+#include "binbow/vision/features.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
@@ -30,7 +31,8 @@ std::string default_vocabulary_name(const std::string& descriptor) {
   throw InvalidArgument(no_default_vocabulary(descriptor));
 }
 
-void check_vocabulary_given(const std::string& vocab_argument, const std::string& descriptor) {
+void check_vocabulary_given(const std::string& vocab_argument, const std::string& given) {
+  const std::string& descriptor = given.empty() ? std::string(vision::kDefaultDescriptor) : given;
   if (vocab_argument.empty() && !has_default_vocabulary(descriptor))
     throw CLI::ValidationError(no_default_vocabulary(descriptor));
 }
@@ -106,12 +108,23 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
   }
 }
 
-std::string load_loop_vocabulary(const std::string& vocab_argument, const std::string& descriptor,
-                                 std::size_t code_size, Vocabulary& vocabulary) {
+std::string descriptor_for(const std::string& given, const Vocabulary& vocabulary) {
+  if (!given.empty()) return given;
+  if (!vocabulary.descriptor().empty()) return vocabulary.descriptor();
+  return vision::kDefaultDescriptor;
+}
+
+std::string load_loop_vocabulary(const std::string& vocab_argument, std::string& descriptor,
+                                 Vocabulary& vocabulary) {
   const std::string path =
-      vocab_argument.empty() ? default_vocabulary_path(descriptor) : vocab_argument;
+      vocab_argument.empty()
+          ? default_vocabulary_path(descriptor.empty() ? std::string(vision::kDefaultDescriptor)
+                                                       : descriptor)
+          : vocab_argument;
   vocabulary = load_vocabulary(path);
-  check_vocabulary_fits(vocabulary, path, descriptor, code_size);
+  descriptor = descriptor_for(descriptor, vocabulary);
+  check_vocabulary_fits(vocabulary, path, descriptor,
+                        vision::make_extractor(descriptor)->code_size());
   std::error_code error;
   const std::filesystem::path absolute = std::filesystem::absolute(path, error);
   return error ? path : absolute.string();

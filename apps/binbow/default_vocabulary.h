@@ -16,7 +16,8 @@ bool has_default_vocabulary(const std::string& descriptor);
 // other descriptors.
 std::string default_vocabulary_name(const std::string& descriptor);
 // A usage error (CLI::ValidationError) saying to pass --vocab when it is
-// empty and `descriptor` has no default vocabulary: checked before any work.
+// empty and `descriptor` (kDefaultDescriptor when empty) has no default
+// vocabulary: checked before any work.
 void check_vocabulary_given(const std::string& vocab_argument, const std::string& descriptor);
 
 // The places searched for it: vocab/ in each of data_directories().
@@ -47,9 +48,19 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
                            const std::string& descriptor, std::size_t code_size,
                            bool embedded_in_database = false);
 
-// --vocab, or the default vocabulary of the descriptor when empty; loads it and
-// checks that it fits (check_vocabulary_fits). Returns the absolute path.
-std::string load_loop_vocabulary(const std::string& vocab_argument, const std::string& descriptor,
-                                 std::size_t code_size, Vocabulary& vocabulary);
+// The extractor of a command with a vocabulary: `given` (--descriptor, ""
+// when not given), else the one the vocabulary records, else
+// kDefaultDescriptor. A --descriptor that conflicts with the one the
+// vocabulary records is refused by check_vocabulary_fits: the words of one
+// extractor do not describe another's descriptors, even of the same size
+// (record the right one with `binbow convert --descriptor`).
+std::string descriptor_for(const std::string& given, const Vocabulary& vocabulary);
+
+// --vocab, or the default vocabulary of `descriptor` (kDefaultDescriptor when
+// empty) when --vocab is empty; loads it, sets `descriptor` by descriptor_for
+// and checks that the vocabulary fits it (check_vocabulary_fits). Returns the
+// absolute path.
+std::string load_loop_vocabulary(const std::string& vocab_argument, std::string& descriptor,
+                                 Vocabulary& vocabulary);
 
 }  // namespace binbow::cli

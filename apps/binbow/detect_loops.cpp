@@ -20,6 +20,7 @@
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
+#include "loop_params_options.h"
 #include "output_options.h"
 #include "progress.h"
 
@@ -37,9 +38,11 @@ struct DetectLoopsArguments {
   // Whether the options a saved state can answer were given.
   bool descriptor_given = false;
   bool vocab_given = false;
-  std::string descriptor = kDefaultDescriptor;
+  std::string descriptor;  // "": the vocabulary's (kDefaultDescriptor online)
   int max_features = 0;
   std::string params;
+  std::string params_overrides;  // the parameter flags, a JSON object
+  bool print_params = false;
   std::string report;
   bool timing = false;
   std::string output;
@@ -108,7 +111,24 @@ void adopt_saved_state(DetectLoopsArguments& arguments, const loop::LoopDetector
   }
 }
 
+// --print-params: the paper's defaults, then --params, then the parameter
+// flags, as a parameter file that --params reads back to the same values.
+void print_params(const DetectLoopsArguments& arguments) {
+  loop::LoopDetectorParams params;
+  if (!arguments.params.empty()) params = loop::LoopDetectorParams::load(arguments.params);
+  if (!arguments.params_overrides.empty())
+    params = loop::LoopDetectorParams::from_json(arguments.params_overrides, "the parameter flags",
+                                                 params);
+  std::cout << params.to_json() << '\n' << std::flush;
+}
+
 void run_detect_loops(DetectLoopsArguments arguments) {
+  if (arguments.print_params) {
+    print_params(arguments);
+    return;
+  }
+  if (arguments.output.empty()) throw CLI::RequiredError("-o,--output");
+  if (arguments.inputs.empty()) throw CLI::RequiredError("inputs");
   // Everything that can be checked is checked before the sequence is read.
   loop::LoopDetectorFileInfo saved;
   if (!arguments.resume_state.empty()) {
@@ -123,11 +143,19 @@ void run_detect_loops(DetectLoopsArguments arguments) {
     prepare_output_file("--save-vocabulary", arguments.save_vocabulary);
   if (!arguments.save_state.empty()) prepare_output_file("--save-state", arguments.save_state);
   if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
+  // The extractor is the vocabulary's unless --descriptor says otherwise.
+  Vocabulary vocabulary;
+  std::string vocabulary_path;
+  if (!arguments.online_vocabulary)
+    vocabulary_path = load_loop_vocabulary(arguments.vocab, arguments.descriptor, vocabulary);
+  else if (arguments.descriptor.empty())
+    arguments.descriptor = kDefaultDescriptor;
   loop::SequenceOptions options;
   options.descriptor = arguments.descriptor;
   options.max_features = arguments.max_features;
   options.source = arguments.source;
   options.params_file = arguments.params;
+  options.params_overrides = arguments.params_overrides;
   options.extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
   loop::LoopRun run;
   run.online_vocabulary = arguments.online_vocabulary;
@@ -141,9 +169,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
       detector = std::make_unique<loop::SequenceDetector>(arguments.inputs,
                                                           arguments.online_options, options);
   } else {
-    Vocabulary vocabulary;
-    run.vocabulary = load_loop_vocabulary(arguments.vocab, arguments.descriptor,
-                                          options.extractor->code_size(), vocabulary);
+    run.vocabulary = vocabulary_path;
     if (!arguments.resume_state.empty())
       detector = std::make_unique<loop::SequenceDetector>(
           arguments.inputs, loop::LoopDetector::load(arguments.resume_state, std::move(vocabulary)),
@@ -209,7 +235,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   if (!no_candidates.empty())
     std::fprintf(stderr,
                  "binbow: warning: %s; set a smaller \"dislocal\" with --params (a JSON file "
-                 "such as {\"dislocal\": 5})\n",
+                 "such as {\"dislocal\": 5}) or --dislocal 5\n",
                  no_candidates.c_str());
   if (arguments.timing) std::cout << loop::format_timing_table(outputs.timing()) << std::flush;
   if (!arguments.report.empty()) {
@@ -302,7 +328,7 @@ void add_detect_loops_command(CLI::App& app) {
                        "With --online-vocabulary: seed of the search trees' random centres")
           ->capture_default_str()};
   for (CLI::Option* option : online_options) option->needs(online);
-  add_extractor_options(command, arguments->descriptor, arguments->max_features);
+  add_vocabulary_extractor_options(command, arguments->descriptor, arguments->max_features);
   CLI::Option* params =
       command->add_option("--params", arguments->params,
                           "Loop detector parameters, JSON or YAML (keys as LoopDetectorParams); "
@@ -317,24 +343,30 @@ void add_detect_loops_command(CLI::App& app) {
                           "vocabulary kind (an online one's words too); new frames continue its "
                           "numbering. A fixed vocabulary must be the one it was run with");
   resume->excludes(params);
+  auto param_flags = std::make_shared<LoopParamFlags>();
+  add_loop_param_flags(command, *param_flags);
+  for (const auto& [key, option] : param_flags->options) resume->excludes(option);
+  command->add_flag("--print-params", arguments->print_params,
+                    "Print the loop detector parameters as a --params file (JSON): the paper's "
+                    "defaults, then --params, then the parameter flags; reads no images (a "
+                    "video's frame rate is not applied: pass --frequency)");
   for (CLI::Option* option : online_options) resume->excludes(option);
   command->add_option("--report", arguments->report, "Write an HTML report into this directory");
   command->add_flag("--timing", arguments->timing,
                     "Print mean, median and max milliseconds per frame of each stage");
-  command
-      ->add_option("-o,--output", arguments->output,
-                   "Detected loops, CSV: query_index,match_index,query_file,match_file,score,"
-                   "inliers (a run record <output>.run.json is written beside it)")
-      ->required();
-  command
-      ->add_option("inputs", arguments->inputs,
-                   "Image files, directories, videos or text lists of images")
-      ->required();
+  command->add_option("-o,--output", arguments->output,
+                      "Detected loops, CSV: query_index,match_index,query_file,match_file,score,"
+                      "inliers (a run record <output>.run.json is written beside it); required "
+                      "unless --print-params");
+  command->add_option("inputs", arguments->inputs,
+                      "Image files, directories, videos or text lists of images (required "
+                      "unless --print-params)");
   add_image_source_options(command, arguments->source);
   add_skip_unreadable_option(command, arguments->source);
-  command->callback([arguments, command] {
+  command->callback([arguments, command, param_flags] {
     DetectLoopsArguments given = *arguments;
-    given.descriptor_given = command->count("--descriptor") > 0;
+    given.params_overrides = loop_param_overrides(*param_flags);
+    given.descriptor_given = !given.descriptor.empty();
     given.vocab_given = command->count("--vocab") > 0;
     run_detect_loops(std::move(given));
   });

@@ -64,9 +64,11 @@ struct RunInputs {
 
 RunInputs read_run_inputs(const loop::LoopRun& run) {
   RunInputs inputs;
-  const auto extractor = loop::make_run_extractor(run);
-  if (!run.online_vocabulary)
-    load_loop_vocabulary(run.vocabulary, run.descriptor, extractor->code_size(), inputs.vocabulary);
+  // The run record names the extractor the run used: one binbow cannot make is
+  // an error naming the record, before the vocabulary is checked against it.
+  loop::make_run_extractor(run);
+  std::string descriptor = run.descriptor;
+  if (!run.online_vocabulary) load_loop_vocabulary(run.vocabulary, descriptor, inputs.vocabulary);
   StageProgress progress;
   inputs.features =
       loop::extract_run_features(run, [&](const std::string& stage, std::size_t done,

@@ -44,4 +44,21 @@ inline void add_extractor_options(CLI::App* command, std::string& descriptor, in
   add_features_option(command, features);
 }
 
+// The extractor options of a command that has a vocabulary: --descriptor is
+// left empty when not given, for descriptor_for() to take the one the
+// vocabulary records (default_vocabulary.h).
+inline void add_vocabulary_extractor_options(CLI::App* command, std::string& descriptor,
+                                             int& features) {
+  std::string names;
+  for (const std::string& name : vision::extractor_names())
+    names += (names.empty() ? "" : ", ") + name;
+  command
+      ->add_option("--descriptor", descriptor,
+                   "Binary descriptor: " + names +
+                       ". Default: the extractor the vocabulary records, else " +
+                       kDefaultDescriptor + "; it must not contradict the vocabulary's")
+      ->check(CLI::IsMember(vision::extractor_names()));
+  add_features_option(command, features);
+}
+
 }  // namespace binbow::cli

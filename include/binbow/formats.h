@@ -30,8 +30,11 @@ VocabularyFormat parse_vocabulary_format(const std::string& name);
 // ORB-SLAM, .vins.bin VINS; load_vocabulary decompresses and looks again).
 // Every format may be gzip-compressed or the first file of a .tar.gz; the
 // format is then the one of the file inside. Throws FileError if the file
-// cannot be read or nothing matches.
+// cannot be read or nothing matches; when nothing matches, its problem()
+// begins with kUnknownVocabularyFormat, so that the CLI and Python can say how
+// to name the format in their own terms (--from, format=).
 VocabularyFormat detect_vocabulary_format(const std::string& path);
+inline constexpr char kUnknownVocabularyFormat[] = "unknown vocabulary format";
 // The format an output file name asks for: .bbw, .txt, .bin (ORB-SLAM binary),
 // .vins.bin (VINS binary), .yml/.yaml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3,
 // .fbow; any of them may be followed by .gz (written gzip-compressed). Throws

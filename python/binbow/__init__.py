@@ -168,7 +168,8 @@ def detect_loops(
     text lists of images. vocabulary: None for Vocabulary.default(descriptor),
     a Vocabulary, or "online": no pre-trained vocabulary, the words grow from
     the sequence itself (LoopDetector.online, `detect-loops --online-vocabulary`).
-    descriptor: the extractor, "orb" (None), "brief", "akaze" or "brisk", with
+    descriptor: the extractor (None: the one the vocabulary records, else
+    "orb"), "orb", "brief", "akaze" or "brisk", with
     the CLI's defaults (max_features: None for the extractor's default), or a
     FeatureExtractor configured otherwise. params: a
     LoopDetectorParams, a parameter file (JSON or YAML, as --params: keys it
@@ -209,9 +210,20 @@ def detect_loops(
         )
     if save_state is not None:
         save_state = _path("save_state", save_state)
-    if descriptor is None:
-        descriptor = "orb"
+    if descriptor is None:  # the vocabulary's extractor, as the CLI takes it
+        recorded = vocabulary.descriptor if isinstance(vocabulary, Vocabulary) else ""
+        descriptor = recorded or "orb"
     name = descriptor.descriptor if isinstance(descriptor, FeatureExtractor) else descriptor
+    recorded = vocabulary.descriptor if isinstance(vocabulary, Vocabulary) else ""
+    if recorded and isinstance(name, str) and name.lower() != recorded:
+        try:
+            FeatureExtractor(name)
+        except ValueError:
+            pass  # an unknown name: refused below as such
+        else:
+            raise ValueError(f"the vocabulary was trained on {recorded} descriptors, not "
+                             f"{name}: pass descriptor=\"{recorded}\" or a vocabulary trained "
+                             f"on {name}")
     vocabulary_file = None
     online = isinstance(vocabulary, str) and vocabulary == "online"
     if online:

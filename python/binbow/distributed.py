@@ -18,6 +18,7 @@ import tempfile
 import numpy as _np
 
 from . import BowVector, Database, Error, Vocabulary
+from ._binbow import _check_bow, _checked_descriptors, _count_argument, _label_argument
 
 __all__ = ["ShardedDatabase"]
 
@@ -50,7 +51,7 @@ class _Shard:
             self.database = Database.load(path, vocabulary)
 
     def add_many(self, items):
-        """Adds (descriptors or BowVector, label) pairs; their shard ids, in order."""
+        """Adds (descriptors or BowVector, label) pairs; (their shard ids, None or the error)."""
         ids = []
         try:
             for item, label in items:
@@ -62,34 +63,30 @@ class _Shard:
             return ids, error
         return ids, None
 
-    def query(self, bow, max_results, max_entry_id):
-        return self.database.query(bow, max_results, max_entry_id)
+    def call(self, method, *arguments):
+        """(result, None) of a Database method, or (None, its exception).
 
-    def remove(self, entry):
-        self.database.remove(entry)
-
-    def label(self, entry):
-        return self.database.label(entry)
-
-    def set_label(self, entry, label):
-        self.database.set_label(entry, label)
-
-    def contains(self, entry):
-        return entry in self.database
-
-    def size(self):
-        return len(self.database)
-
-    def next_entry_id(self):
-        return self.database.next_entry_id
-
-    def options(self):
-        return {"direct_index": self.database.direct_index,
-                "levels_up": self.database.levels_up}
-
-    def save(self, path):
-        # Database.save writes a temporary file and renames it: atomic.
-        self.database.save(path, include_vocabulary=False)
+        The shard's own errors travel as values, so that an exception raised
+        by the actor call itself always means the shard is unreachable.
+        """
+        try:
+            if method == "add_many":
+                return self.add_many(*arguments), None
+            if method == "contains":
+                return arguments[0] in self.database, None
+            if method == "size":
+                return len(self.database), None
+            if method == "next_entry_id":
+                return self.database.next_entry_id, None
+            if method == "options":
+                return {"direct_index": self.database.direct_index,
+                        "levels_up": self.database.levels_up}, None
+            if method == "save":
+                # Database.save writes a temporary file and renames it: atomic.
+                return self.database.save(arguments[0], include_vocabulary=False), None
+            return getattr(self.database, method)(*arguments), None
+        except Exception as error:
+            return None, error
 
 
 def _shard_size(entries, shard, shards):
@@ -97,27 +94,18 @@ def _shard_size(entries, shard, shards):
     return max(0, (entries - shard + shards - 1) // shards)
 
 
-def _check_descriptors(descriptors, code_size, what):
-    """The checks Database.add makes, done before any shard adds anything."""
-    if descriptors is None:
-        return None
-    array = _np.asarray(descriptors)
-    if array.dtype != _np.uint8 or array.ndim != 2 or (array.shape[0] and
-                                                       array.shape[1] != code_size):
-        raise ValueError(
-            f"{what}: descriptors must be a uint8 array of shape (n, {code_size}) (the "
-            f"vocabulary's code size) or a BowVector, got {array.dtype} {array.shape}")
-    return _np.ascontiguousarray(array)
+def _checked_image(image, vocabulary, what):
+    """Database.add's checks and errors, made before any shard adds anything."""
+    if isinstance(image, BowVector):
+        _check_bow(image, vocabulary)
+        return image
+    return _checked_descriptors(image, what, vocabulary.code_size)
 
 
-def _check_bow(bow, word_count, what):
-    words = _np.asarray(bow.words)
-    if len(words) and int(words.max()) >= word_count:
-        raise ValueError(f"{what}: word {int(words.max())} is outside the vocabulary "
-                         f"({word_count} words)")
-    if not _np.all(_np.isfinite(_np.asarray(bow.values))):
-        raise ValueError(f"{what}: the BowVector has a non-finite value")
-    return bow
+def _no_entry(method, entry, entries):
+    """Database's ValueError for an id that does not exist."""
+    return ValueError(f"Database::{method}: entry {entry} does not exist (the database has "
+                      f"ids below {entries})")
 
 
 class ShardedDatabase:
@@ -164,54 +152,92 @@ class ShardedDatabase:
             for shard, argument in enumerate(arguments)
         ]
         self._actor_futures = futures  # keep the actors alive
+        self._lost = {}  # shard: what failed
         self._shards = [self._wait(future, f"starting shard {shard}")
                         for shard, future in enumerate(futures)]
         self.workers = [workers[shard % len(workers)] for shard in range(len(arguments))]
 
-    def _wait(self, future, what):
-        """The result of a Dask future or actor call; binbow.Error on a time out."""
+    def _wait(self, future, what, shard=None, changes=False):
+        """The result of a Dask future or actor call; binbow.Error when it cannot be had.
+
+        A shard that cannot be reached (its worker died) is lost for good, and so
+        is one that timed out while changing: its entries are unknown.
+        """
         try:
             return future.result(timeout=self._timeout)
         except (TimeoutError, _distributed().TimeoutError) as error:
-            raise Error(f"ShardedDatabase: {what} took more than {self._timeout:g} s "
-                        "(timeout=): is the Dask cluster alive?") from error
+            failure = error
+            reason = f"took more than {self._timeout:g} s (timeout=)"
+            lost = changes
+        except Exception as error:  # a worker that died: CommClosedError, lost actor, ...
+            failure = error
+            reason = f"failed ({type(error).__name__}: {error})"
+            lost = True
+        if lost and shard is not None:
+            self._lost.setdefault(shard, f"{what} {reason}")
+        raise Error(f"ShardedDatabase: {what} {reason}: is the Dask cluster alive? "
+                    "A shard lost with its worker can only come back from the last save "
+                    "(ShardedDatabase.load)") from failure
 
-    def _call_all(self, what, method, arguments):
-        """Calls `method` on every shard with its own arguments (None: skip); the results."""
-        futures = {shard: getattr(self._shards[shard], method)(*argument)
+    def _check_usable(self, what):
+        """binbow.Error if a shard was lost: its entries would silently be missing."""
+        if self._lost:
+            shard, reason = min(self._lost.items())
+            raise Error(f"ShardedDatabase.{what}: shard {shard} was lost ({reason}); its "
+                        "entries are gone, so this database no longer answers as one "
+                        "Database: load the last save (ShardedDatabase.load)")
+
+    def _call_all(self, what, method, arguments, changes=False):
+        """Calls `method` on every shard with its own arguments (None: skip); the results.
+
+        Every answer is awaited before any error is raised, so that every lost
+        shard is known; a shard's own error (ValueError, OSError, ...) is raised as is.
+        """
+        futures = {shard: self._shards[shard].call(method, *argument)
                    for shard, argument in enumerate(arguments) if argument is not None}
-        return {shard: self._wait(future, f"{what} on shard {shard}")
-                for shard, future in futures.items()}
+        answers, failure = {}, None
+        for shard, future in futures.items():
+            try:
+                answers[shard] = self._wait(future, f"{what} on shard {shard}", shard, changes)
+            except Error as error:
+                failure = failure or error
+        if failure is not None:
+            raise failure
+        for shard, (_, error) in answers.items():
+            if error is not None:
+                raise error
+        return {shard: value for shard, (value, _) in answers.items()}
 
-    def _locate(self, entry, what):
+    def _on_entry(self, method, entry, *arguments, changes=False):
+        """Calls `method` for a global entry id on its shard, with Database's errors."""
+        self._check_usable(method)
         if isinstance(entry, bool) or not isinstance(entry, (int, _np.integer)):
-            raise TypeError(f"ShardedDatabase.{what}: entry must be an integer id, "
+            raise TypeError(f"ShardedDatabase.{method}: entry must be an integer id, "
                             f"got {type(entry).__name__}")
         entry = int(entry)
         if entry < 0 or entry >= self._entries:
-            raise ValueError(f"ShardedDatabase.{what}: no entry {entry} (ids are 0 to "
-                             f"{self._entries - 1})")
-        return self._shards[entry % self._shard_count], entry // self._shard_count
-
-    def _on_entry(self, method, entry, *arguments):
-        """Calls `method` for a global entry id on its shard; errors name the global id."""
-        shard, local = self._locate(entry, method)
-        what = f"ShardedDatabase.{method}({entry})"
+            raise _no_entry(method, entry, self._entries)
+        shard, local = entry % self._shard_count, entry // self._shard_count
+        per_shard = [None] * self._shard_count
+        per_shard[shard] = (local, *arguments)
         try:
-            return self._wait(getattr(shard, method)(local, *arguments), what)
-        except (ValueError, TypeError) as error:
-            raise type(error)(f"{what}: on shard {entry % self._shard_count} as its entry "
-                              f"{local}: {error}") from error
+            return self._call_all(method, method, per_shard, changes)[shard]
+        except ValueError as error:
+            if "was removed" in str(error):  # the shard names its own id
+                raise ValueError(f"Database::{method}: entry {entry} was removed") from None
+            raise
 
     def add(self, image, label=None):
         """Adds one image (descriptors or a BowVector); its id, as Database.add gives."""
-        return self.add_many([image], None if label is None else [label])[0]
+        return self._add([image], None if label is None else [label], "add",
+                         lambda index: "descriptors")[0]
 
     def add_many(self, images, labels=None):
         """Adds images (descriptors or BowVectors) in order, one round trip per shard.
 
         Returns their ids: the next ids in order, as repeated Database.add calls give.
-        Everything is checked before any shard adds anything.
+        Everything is checked before any shard adds anything, with Database.add's
+        errors (descriptors are named images[i]).
         """
         images = list(images)
         if labels is not None:
@@ -219,34 +245,32 @@ class ShardedDatabase:
             if len(labels) != len(images):
                 raise ValueError(f"ShardedDatabase.add_many: {len(images)} images but "
                                  f"{len(labels)} labels")
-        checked = []
-        for index, image in enumerate(images):
-            what = f"ShardedDatabase.add_many: image {index}"
-            if isinstance(image, BowVector):
-                checked.append(_check_bow(image, self._vocabulary.word_count, what))
-            else:
-                checked.append(_check_descriptors(image, self._vocabulary.code_size, what))
-            label = None if labels is None else labels[index]
-            if label is not None and not isinstance(label, str):
-                raise TypeError(f"{what}: label must be a str or None, got "
-                                f"{type(label).__name__}")
+        return self._add(images, labels, "add_many", lambda index: f"images[{index}]")
+
+    def _add(self, images, labels, what, name):
+        self._check_usable(what)
+        checked = [_checked_image(image, self._vocabulary, name(index))
+                   for index, image in enumerate(images)]
+        if labels is not None:
+            labels = [_label_argument(label) or None for label in labels]
         first = self._entries
         batches = [[] for _ in range(self._shard_count)]
         for index, image in enumerate(checked):
             label = None if labels is None else labels[index]
             batches[(first + index) % self._shard_count].append((image, label))
-        answers = self._call_all("add_many", "add_many",
-                                 [(batch,) if batch else None for batch in batches])
+        answers = self._call_all(what, "add_many",
+                                 [(batch,) if batch else None for batch in batches], changes=True)
         failures = [(shard, error) for shard, (_, error) in answers.items() if error is not None]
         if failures:
             shard, error = failures[0]
-            raise Error(f"ShardedDatabase.add_many: shard {shard} failed ({error}); shards "
+            self._lost.setdefault(shard, f"{what} failed part way ({error})")
+            raise Error(f"ShardedDatabase.{what}: shard {shard} failed ({error}); shards "
                         "that added their part keep it, so ids no longer match a single "
                         "Database: load the last save") from error
         for shard, (local_ids, _) in answers.items():
             expected = _shard_size(first, shard, self._shard_count)
             if local_ids and local_ids[0] != expected:
-                raise Error(f"ShardedDatabase.add_many: shard {shard} gave id {local_ids[0]}, "
+                raise Error(f"ShardedDatabase.{what}: shard {shard} gave id {local_ids[0]}, "
                             f"expected {expected}: another client changed it")
         self._entries = first + len(images)
         return list(range(first, self._entries))
@@ -254,9 +278,11 @@ class ShardedDatabase:
     def transform(self, image):
         """The BowVector of descriptors (a BowVector is returned as is)."""
         if isinstance(image, BowVector):
-            return _check_bow(image, self._vocabulary.word_count, "ShardedDatabase.query")
-        return self._vocabulary.transform(
-            _check_descriptors(image, self._vocabulary.code_size, "ShardedDatabase.query"))
+            return image
+        if image is not None and not isinstance(image, _np.ndarray):
+            raise TypeError("image must be a BowVector or descriptors (a numpy uint8 array), "
+                            f"got {type(image).__name__}")
+        return self._vocabulary.transform(image)
 
     def query(self, image, max_results=10, max_entry_id=None):
         """Best matches as (entry, score, shared_words), best first, as Database.query.
@@ -266,14 +292,10 @@ class ShardedDatabase:
         overall top list is in its shard's top list, and scores do not depend on the
         shard, so the result equals one Database's, ties (by increasing id) included.
         """
-        if isinstance(max_results, bool) or not isinstance(max_results, int) or max_results < 0:
-            raise ValueError(f"ShardedDatabase.query: max_results must be a non-negative "
-                             f"integer, got {max_results!r}")
-        if max_entry_id is not None and (isinstance(max_entry_id, bool)
-                                         or not isinstance(max_entry_id, (int, _np.integer))
-                                         or max_entry_id < 0):
-            raise ValueError(f"ShardedDatabase.query: max_entry_id must be None or a "
-                             f"non-negative integer, got {max_entry_id!r}")
+        self._check_usable("query")
+        max_results = _count_argument(max_results, "max_results")
+        if max_entry_id is not None:
+            max_entry_id = _count_argument(max_entry_id, "max_entry_id")
         bow = self.transform(image)
         if max_results == 0 or len(bow) == 0:
             return []
@@ -303,7 +325,7 @@ class ShardedDatabase:
 
     def remove(self, entry):
         """Removes an entry; its id is never reused. ValueError if it does not exist."""
-        self._on_entry("remove", entry)
+        self._on_entry("remove", entry, changes=True)
 
     def label(self, entry):
         """The entry's label, None if it has none."""
@@ -311,7 +333,7 @@ class ShardedDatabase:
 
     def set_label(self, entry, label):
         """Sets (or with "", removes) an entry's label."""
-        self._on_entry("set_label", entry, label)
+        self._on_entry("set_label", entry, label, changes=True)
 
     def __contains__(self, entry):
         try:
@@ -320,6 +342,7 @@ class ShardedDatabase:
             return False
 
     def __len__(self):
+        self._check_usable("__len__")
         return sum(self._call_all("len", "size", [()] * self._shard_count).values())
 
     @property
@@ -341,14 +364,27 @@ class ShardedDatabase:
         """Saves shard-<i>.bbdb per shard (written by its worker) and manifest.json.
 
         `folder` must be reachable at the same path from the workers and the
-        client (a shared file system when they are on several machines). Every
-        file is written to a temporary name and renamed, so each is whole.
+        client (a shared file system when they are on several machines). A
+        database that lost a shard is refused (binbow.Error) before anything is
+        written. The shards write beside the previous save and their files
+        replace it only once every shard has written: a shard lost during the
+        save leaves the previous save as it was.
         """
+        self._check_usable("save")
         folder = os.path.abspath(os.fspath(folder))
+        # Every shard must answer before any writes (binbow.Error otherwise).
+        options = self._call_all("save", "options", [()] * self._shard_count)[0]
         os.makedirs(folder, exist_ok=True)
         files = [f"shard-{shard}.bbdb" for shard in range(self._shard_count)]
-        self._call_all("save", "save", [(os.path.join(folder, name),) for name in files])
-        options = self._wait(self._shards[0].options(), "save")
+        staged = [os.path.join(folder, f".{name}.saving") for name in files]
+        try:
+            self._call_all("save", "save", [(path,) for path in staged])
+            for path, name in zip(staged, files):
+                os.replace(path, os.path.join(folder, name))
+        finally:
+            for path in staged:
+                if os.path.isfile(path):
+                    os.unlink(path)
         manifest = {
             "format": _FORMAT,
             "version": _FORMAT_VERSION,

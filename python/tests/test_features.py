@@ -113,8 +113,8 @@ def test_strict_arguments(grey):
         extractor.extract(grey.astype(np.float32))
     with pytest.raises(TypeError, match="int16"):
         extractor.extract(grey.astype(np.int16))
-    with pytest.raises(ValueError, match=r"\(384, 512, 4\)"):
-        extractor.extract(np.zeros((384, 512, 4), np.uint8))
+    with pytest.raises(ValueError, match=r"\(384, 512, 2\)"):
+        extractor.extract(np.zeros((384, 512, 2), np.uint8))
     with pytest.raises(ValueError, match=r"\(384,\)"):
         extractor.extract(np.zeros(384, np.uint8))
     with pytest.raises(TypeError, match="list"):

@@ -182,7 +182,7 @@ VocabularyFormat detect_vocabulary_format(const std::string& path) {
   throw FileError(path,
                   "unknown vocabulary format: neither its first bytes nor its extension "
                   "match " +
-                      format_list() + " (use --from to say which)");
+                      format_list() + "; name its format");
 }
 
 VocabularyFormat format_for_output(const std::string& path) {
@@ -260,7 +260,8 @@ LoadedVocabulary load_vocabulary_with_details(const std::string& path, Vocabular
     format = format_from_content(contained.data, contained.size, contained.size);
     if (format == VocabularyFormat::kAuto) format = format_from_extension(path);
     if (format == VocabularyFormat::kAuto)
-      throw FileError(path, "unknown vocabulary format inside the compressed file (use --from)");
+      throw FileError(path,
+                      "unknown vocabulary format inside the compressed file; name its format");
   }
   loaded.format = format;
   if (format == VocabularyFormat::kBinbow) {
@@ -272,6 +273,10 @@ LoadedVocabulary load_vocabulary_with_details(const std::string& path, Vocabular
   loaded.descriptor_text = parsed.descriptor_text;
   loaded.word_ids_match = parsed.word_ids_match;
   loaded.vocabulary = vocabulary_from_parsed(parsed, path);
+  // ORB-SLAM's files hold ORB words (its FORB): recorded, so that commands
+  // take the extractor from the vocabulary. The other formats cannot say.
+  if (format == VocabularyFormat::kOrbSlamText || format == VocabularyFormat::kOrbSlamBinary)
+    loaded.vocabulary = loaded.vocabulary.with_descriptor("orb");
   return loaded;
 }
 

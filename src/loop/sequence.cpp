@@ -84,10 +84,15 @@ struct SequenceDetector::Impl {
           "; use a vocabulary trained on " + extractor->name() + " descriptors");
     detector = std::make_unique<LoopDetector>(std::move(vocabulary), params);
   }
-  // The defaults for the source's frame rate, then the parameter file's keys.
+  // The defaults for the source's frame rate, then the parameter file's keys,
+  // then the overrides'.
   LoopDetectorParams params_of(const SequenceOptions& options) const {
-    return options.params_file.empty() ? defaults
-                                       : LoopDetectorParams::load(options.params_file, defaults);
+    const LoopDetectorParams from_file =
+        options.params_file.empty() ? defaults
+                                    : LoopDetectorParams::load(options.params_file, defaults);
+    if (options.params_overrides.empty()) return from_file;
+    return LoopDetectorParams::from_json(options.params_overrides, "the parameter flags",
+                                         from_file);
   }
 
   void start(OnlineVocabularyOptions vocabulary_options, const LoopDetectorParams& params) {

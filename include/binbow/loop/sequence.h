@@ -34,6 +34,9 @@ struct SequenceOptions {
   // override the defaults; empty: the defaults alone. Ignored when the
   // SequenceDetector is given parameters.
   std::string params_file;
+  // A JSON object of parameter keys applied after params_file's (the CLI's
+  // parameter flags, --min-inliers ...); empty: none.
+  std::string params_overrides;
 };
 
 // Stage times of one frame in kStageNames order: features, transform,
@@ -69,7 +72,8 @@ using StatusCounts =
 // Parameters, unless given: for a video, LoopDetectorParams::for_frequency of
 // the frames processed per second (ImageSource::frame_rate(): the video's
 // rate, capped by video_fps, divided by the stride); for images, which have
-// no rate, the paper's 1 Hz defaults; then the keys of options.params_file.
+// no rate, the paper's 1 Hz defaults; then the keys of options.params_file,
+// then those of options.params_overrides.
 class SequenceDetector {
  public:
   // Throws FileError for unreadable inputs or parameter files,
