@@ -65,7 +65,8 @@ void verify_loop_state(const std::string& path, const loop::LoopDetectorFileInfo
       return;
     }
   } else {
-    load_loop_vocabulary(vocab_argument, info.descriptor, info.code_size, vocabulary);
+    std::string descriptor = info.descriptor;
+    load_loop_vocabulary(vocab_argument, descriptor, vocabulary);
   }
   loop::LoopDetector::load(path, std::move(vocabulary));
 }
