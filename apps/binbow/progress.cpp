@@ -34,12 +34,15 @@ void Progress::update(std::size_t done) {
     std::fflush(stderr);
     return;
   }
-  if (total_ == 0) return;
-  const int decile = static_cast<int>(10 * done / total_);
-  if (decile == last_decile_) return;
-  last_decile_ = decile;
-  std::fprintf(stderr, "%s: %zu/%zu (%d%%) %.1fs\n", label_.c_str(), done, total_, decile * 10,
-               seconds);
+  // A log: a plain line now and then for long stages, none for short ones.
+  if (now - last_draw_ < kLogInterval) return;
+  last_draw_ = now;
+  if (total_ > 0)
+    std::fprintf(stderr, "%s: %zu/%zu (%zu%%) %.1fs\n", label_.c_str(), done, total_,
+                 100 * done / total_, seconds);
+  else
+    std::fprintf(stderr, "%s: %zu %.1fs\n", label_.c_str(), done, seconds);
+  std::fflush(stderr);
 }
 
 void Progress::finish() {

@@ -1,5 +1,6 @@
-// A progress line on stderr: redrawn in place on a terminal, one line per
-// 10% step otherwise (logs stay short).
+// A progress line on stderr: redrawn in place on a terminal. Elsewhere (a log
+// file, CI) no redraws: a plain line every kLogInterval while a stage runs,
+// so that short runs log only the closing "LABEL: N done in Ts" line.
 #pragma once
 
 #include <chrono>
@@ -16,11 +17,12 @@ class Progress {
   void update(std::size_t done);
   void finish();
 
+  static constexpr std::chrono::seconds kLogInterval{10};
+
  private:
   std::string label_;
   std::size_t total_;
   std::size_t done_ = 0;
-  int last_decile_ = -1;
   bool tty_;
   bool finished_ = false;
   std::chrono::steady_clock::time_point start_, last_draw_;

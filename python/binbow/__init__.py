@@ -102,15 +102,17 @@ Vocabulary.default = staticmethod(_default_vocabulary)
 
 
 class _CliProgress:
-    """The CLI's progress line on stderr: redrawn in place on a terminal, one
-    line per 10 % otherwise (logs stay short), and a closing line."""
+    """The CLI's progress line on stderr: redrawn in place on a terminal;
+    elsewhere (a log file, CI) no redraws, a plain line every LOG_INTERVAL
+    seconds while a stage runs; and a closing line."""
+
+    LOG_INTERVAL = 10.0
 
     def __init__(self, label):
         self._label = label
         self._tty = _sys.stderr.isatty()
         self._start = _time.monotonic()
         self._last_draw = self._start
-        self._last_decile = -1
         self._done = 0
 
     def __call__(self, done, total):
@@ -129,14 +131,15 @@ class _CliProgress:
                 _sys.stderr.write(f"\r{self._label} {done} {seconds:.1f}s")
             _sys.stderr.flush()
             return
-        if not total:
+        if now - self._last_draw < self.LOG_INTERVAL:
             return
-        decile = 10 * done // total
-        if decile != self._last_decile:
-            self._last_decile = decile
-            _sys.stderr.write(
-                f"{self._label}: {done}/{total} ({decile * 10}%) {seconds:.1f}s\n"
-            )
+        self._last_draw = now
+        if total:
+            percent = 100 * done // total
+            _sys.stderr.write(f"{self._label}: {done}/{total} ({percent}%) {seconds:.1f}s\n")
+        else:
+            _sys.stderr.write(f"{self._label}: {done} {seconds:.1f}s\n")
+        _sys.stderr.flush()
 
     def finish(self):
         seconds = _time.monotonic() - self._start

@@ -27,9 +27,15 @@ import binbow  # noqa: E402
 
 
 def similarity_scores(similarity):
-    """The run's matrix with the cells above the diagonal (no earlier image) as NaN."""
+    """The run's matrix with the cells that hold no pair of an image with an earlier one as NaN.
+
+    Above the diagonal there is no earlier image; on it neither, unless a cell
+    bins several frames: an unbinned diagonal of zeros would draw as a black
+    line through the plot.
+    """
     scores = similarity.scores.copy()
-    scores[np.triu_indices(similarity.cells, k=1)] = np.nan
+    first_masked = 0 if similarity.bin == 1 else 1
+    scores[np.triu_indices(similarity.cells, k=first_masked)] = np.nan
     return scores
 
 

@@ -1,6 +1,10 @@
 """python/examples run on the bundled sample."""
+import importlib.util
 import subprocess
 import sys
+from types import SimpleNamespace
+
+import numpy as np
 
 from conftest import SAMPLES, SOURCE_DIR, require_module
 
@@ -32,3 +36,28 @@ def test_detect_and_plot_reports_errors_plainly(tmp_path):
     assert result.returncode == 1
     assert result.stderr.startswith("detect_and_plot.py: error: ") and "missing" in result.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def load_example(name):
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_detect_and_plot_leaves_cells_without_an_earlier_image_blank():
+    require_module("matplotlib", "python3-matplotlib")
+    example = load_example("detect_and_plot")
+    cells = 6
+    scores = np.tril(np.full((cells, cells), 0.5, dtype=np.float32), k=-1)
+    # One frame a cell: the diagonal pairs an image with itself, never scored
+    # (0), and drawn it would be a black line through the colour map.
+    shown = example.similarity_scores(SimpleNamespace(scores=scores, cells=cells, bin=1))
+    assert np.isnan(np.diag(shown)).all()
+    assert np.isnan(shown[np.triu_indices(cells, k=1)]).all()
+    assert (shown[np.tril_indices(cells, k=-1)] == 0.5).all()
+    # Binned cells: the diagonal holds pairs of frames within one bin.
+    np.fill_diagonal(scores, 0.25)
+    shown = example.similarity_scores(SimpleNamespace(scores=scores, cells=cells, bin=4))
+    assert (np.diag(shown) == 0.25).all()
+    assert np.isnan(shown[np.triu_indices(cells, k=1)]).all()

@@ -180,10 +180,14 @@ std::string pr_curve_svg(const LoopReport& report) {
           << " detections</title></circle>";
       const double label_x = std::max(px, previous_label_x + kLineHeight);
       previous_label_x = label_x;
-      svg << "<line x1='" << px << "' y1='" << py + 4 << "' x2='" << label_x << "' y2='" << py + 14
+      // In the lower half a label runs upwards, so that it stays inside the
+      // plot, clear of the axis labels and the legend.
+      const double direction = py > top + ph / 2 ? -1 : 1;
+      svg << "<line x1='" << px << "' y1='" << py + 4 * direction << "' x2='" << label_x << "' y2='"
+          << py + 14 * direction
           << "' stroke='#9ab'/><text class='pt' font-size='10' fill='#1f3f7f' transform='translate("
-          << label_x - 4 << ' ' << py + 16 << ") rotate(90)'>" << symbol << '=' << values
-          << "</text>";
+          << label_x - 4 * direction << ' ' << py + 16 * direction << ") rotate(" << 90 * direction
+          << ")'>" << symbol << '=' << values << "</text>";
       first = last + 1;
     }
   }
@@ -199,15 +203,24 @@ std::string pr_curve_svg(const LoopReport& report) {
         << "' r='6' fill='none' stroke='#d03030' stroke-width='2'><title>this run: precision "
         << format("%.3f", report.result.precision) << ", recall "
         << format("%.3f", report.result.recall) << "</title></circle>";
-  // Legend.
+  // Legend: an entry only for a mark the chart draws.
   const double ly = h - 22;
-  svg << "<circle cx='" << left + 6 << "' cy='" << ly << "' r='3.5' fill='#1f5fbf'/><text x='"
-      << left + 14 << "' y='" << ly + 4 << "' font-size='11'>swept " << symbol
-      << "</text><circle cx='" << left + 110 << "' cy='" << ly
-      << "' r='6' fill='none' stroke='#d03030' stroke-width='2'/><text x='" << left + 120 << "' y='"
-      << ly + 4 << "' font-size='11'>this run</text><circle cx='" << left + 200 << "' cy='" << ly
-      << "' r='7' fill='none' stroke='#17702b' stroke-width='2'/><text x='" << left + 212 << "' y='"
-      << ly + 4 << "' font-size='11'>highest recall at 100% precision</text>";
+  double lx = left;
+  const auto legend_entry = [&](const std::string& marker_style, double radius,
+                                const std::string& label) {
+    const double text_x = lx + 2 * radius + 8;  // clear of the marker's stroke
+    svg << "<g class='legend'><circle cx='" << lx + radius + 1 << "' cy='" << ly << "' r='"
+        << radius << "' " << marker_style << "/><text x='" << text_x << "' y='" << ly + 4
+        << "' font-size='11'>" << label << "</text></g>";
+    // About 6 px a character at 11 px, then a gap.
+    lx = text_x + 6.2 * static_cast<double>(label.size()) + 24;
+  };
+  if (!points.empty()) legend_entry("fill='#1f5fbf'", 3.5, "swept " + symbol);
+  if (report.has_result)
+    legend_entry("fill='none' stroke='#d03030' stroke-width='2'", 6, "this run");
+  if (full_precision_point(report.curve) != nullptr)
+    legend_entry("fill='none' stroke='#17702b' stroke-width='2'", 7,
+                 "highest recall at 100% precision");
   svg << "</svg>";
   return svg.str();
 }
@@ -311,14 +324,22 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
   const cv::Scalar green = colour(20, 170, 40), red = colour(225, 20, 20),
                    orange = colour(255, 140, 0), unjudged = colour(170, 40, 230);
   const bool known_truth = report.truth.frames() > 0;
+  // The marks drawn, for the legend.
+  struct {
+    int true_loops = 0, false_loops = 0, unjudged_loops = 0, missed_loops = 0,
+        missed_candidates = 0;
+  } drawn;
   for (const MissedLoop& miss : report.missed) {
     if (miss.query >= m.frames) continue;
     const int y = top + int(m.cell(miss.query)) * zoom + zoom / 2;
     const std::vector<cv::Point> arrow = {{left - 12, y - 4}, {left - 4, y}, {left - 12, y + 4}};
     cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
-    if (miss.match >= 0 && static_cast<std::size_t>(miss.match) < m.frames)
+    ++drawn.missed_loops;
+    if (miss.match >= 0 && static_cast<std::size_t>(miss.match) < m.frames) {
       cv::drawMarker(canvas, centre(miss.query, static_cast<std::size_t>(miss.match)), orange,
                      cv::MARKER_TILTED_CROSS, 2 * radius, stroke, cv::LINE_AA);
+      ++drawn.missed_candidates;
+    }
   }
   for (const ReportLoop& loop : report.loops) {
     const Detection& d = loop.detection;
@@ -328,6 +349,9 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
                : loop.verdict == 0 ? red
                                    : unjudged,
                stroke, cv::LINE_AA);
+    ++(loop.verdict == 1   ? drawn.true_loops
+       : loop.verdict == 0 ? drawn.false_loops
+                           : drawn.unjudged_loops);
   }
 
   // Axes: frame numbers, query i down, earlier image j across.
@@ -357,30 +381,42 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
   }
   cv::rectangle(canvas, cv::Rect(left - 1, y - 11, bar + 2, 12), colour(140, 140, 140));
   text("0", {left - 14, y});
-  text(format(">= %.3g", full), {left + bar + 6, y});
+  const std::string scale_end = format(">= %.3g", full);
+  text(scale_end, {left + bar + 6, y});
   if (known_truth) {
     cv::rectangle(canvas, cv::Rect(left - 1, y + 5, bar + 2, 12), colour(140, 140, 140));
-    text("not the same place", {left + bar + 80, y});
-    text("same place (ground truth)", {left + bar + 80, y + 16});
+    // Past the scale's end value, whatever its width, so that they never touch.
+    const int names_x = left + bar + 6 + text_width(scale_end) + 24;
+    text("not the same place", {names_x, y});
+    text("same place (ground truth)", {names_x, y + 16});
   }
+  // An entry for each kind of mark the matrix shows, none for marks it lacks.
   y += 42;
   int x = left;
-  if (known_truth) {
+  const auto entry = [&](const std::string& label, int marker_width) {
+    text(label, {x + marker_width, y});
+    x += marker_width + text_width(label) + 24;
+  };
+  if (drawn.true_loops > 0) {
     cv::circle(canvas, {x + 6, y - 4}, 6, green, 2, cv::LINE_AA);
-    text("true loop", {x + 18, y});
-    x += 100;
+    entry("true loop", 18);
+  }
+  if (drawn.false_loops > 0) {
     cv::circle(canvas, {x + 6, y - 4}, 6, red, 2, cv::LINE_AA);
-    text("false loop", {x + 18, y});
-    x += 105;
+    entry("false loop", 18);
+  }
+  if (drawn.unjudged_loops > 0) {
+    cv::circle(canvas, {x + 6, y - 4}, 6, unjudged, 2, cv::LINE_AA);
+    entry("loop detected (no ground truth given: evaluate --report judges them)", 18);
+  }
+  if (drawn.missed_candidates > 0) {
     cv::drawMarker(canvas, {x + 6, y - 4}, orange, cv::MARKER_TILTED_CROSS, 12, 2, cv::LINE_AA);
-    text("missed loop: its best candidate", {x + 18, y});
-    x += 250;
+    entry("missed loop: its best candidate", 18);
+  }
+  if (drawn.missed_loops > 0) {
     const std::vector<cv::Point> arrow = {{x, y - 8}, {x + 8, y - 4}, {x, y}};
     cv::fillConvexPoly(canvas, arrow, orange, cv::LINE_AA);
-    text("missed loop", {x + 14, y});
-  } else {
-    cv::circle(canvas, {x + 6, y - 4}, 6, unjudged, 2, cv::LINE_AA);
-    text("loop detected (no ground truth given: evaluate --report judges them)", {x + 18, y});
+    entry("missed loop", 14);
   }
   y += 26;
   std::string note = std::to_string(m.frames) + " frames";

@@ -4,6 +4,8 @@
 // run record's correspondences, and the report page that shows them.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -366,6 +368,113 @@ TEST(LoopReport, PageShowsMissesSimilaritySweepTable) {
   EXPECT_EQ(plain.find("id='similarity'"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir.file("plain/similarity.png")));
   EXPECT_NE(plain.find("id='missed'"), std::string::npos);
+}
+
+// The precision–recall chart of a page: its <svg> element.
+std::string pr_chart(const std::string& html) {
+  const std::size_t start = html.find("<svg");
+  if (start == std::string::npos) return "";
+  return html.substr(start, html.find("</svg>", start) - start);
+}
+
+std::size_t occurrences(const std::string& text, const std::string& part) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+
+TEST(PrCurveChart, LegendNamesOnlyTheMarksDrawn) {
+  LoopReport report;
+  report.curve = {point(0.2, 0.9, 0.3), point(0.3, 0.8, 0.5)};  // never 100% precision
+  report.curve_parameter = "alpha";
+  test::TempDir dir;
+  std::string chart = pr_chart(read_text(write_loop_report(dir.file("a"), report)));
+  ASSERT_FALSE(chart.empty());
+  EXPECT_EQ(occurrences(chart, "<g class='legend'>"), 1u) << chart;
+  EXPECT_NE(chart.find("swept α"), std::string::npos);
+  EXPECT_EQ(chart.find("this run"), std::string::npos) << "no run result is drawn";
+  EXPECT_EQ(chart.find("highest recall at 100% precision"), std::string::npos)
+      << "no point has 100% precision";
+
+  report.has_result = true;
+  report.result.precision = 1;
+  report.result.recall = 0.5;
+  report.curve.push_back(point(0.4, 1, 0.5));
+  chart = pr_chart(read_text(write_loop_report(dir.file("b"), report)));
+  EXPECT_EQ(occurrences(chart, "<g class='legend'>"), 3u) << chart;
+  EXPECT_NE(chart.find("id='full-precision-point'"), std::string::npos);
+  EXPECT_NE(chart.find("highest recall at 100% precision"), std::string::npos);
+  EXPECT_NE(chart.find("this run"), std::string::npos);
+}
+
+TEST(PrCurveChart, PointLabelsStayInsideThePlotAndApart) {
+  LoopReport report;
+  report.curve_parameter = "alpha";
+  report.curve = {point(0.1, 0.05, 0.9), point(0.2, 0.3, 0.8), point(0.3, 0.6, 0.6),
+                  point(0.4, 0.95, 0.3), point(0.5, 1, 0.1)};
+  test::TempDir dir;
+  const std::string chart = pr_chart(read_text(write_loop_report(dir.file("r"), report)));
+  double left = 0, top = 0, width = 0, height = 0;
+  ASSERT_EQ(
+      std::sscanf(chart.c_str() + chart.find("<rect "),
+                  "<rect x='%lf' y='%lf' width='%lf' height='%lf'", &left, &top, &width, &height),
+      4)
+      << chart;
+  std::vector<std::pair<double, double>> anchors;
+  for (std::size_t at = chart.find("class='pt'"); at != std::string::npos;
+       at = chart.find("class='pt'", at + 1)) {
+    double x = 0, y = 0, angle = 0;
+    const std::size_t transform = chart.find("translate(", at);
+    ASSERT_EQ(
+        std::sscanf(chart.c_str() + transform, "translate(%lf %lf) rotate(%lf)", &x, &y, &angle),
+        3);
+    const std::size_t begin = chart.find('>', at) + 1;
+    const std::string label = chart.substr(begin, chart.find('<', begin) - begin);
+    std::size_t characters = 0;  // UTF-8: count the lead bytes
+    for (const char c : label) characters += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+    // Rotated by ±90°, a label runs down or up from its anchor; at 10 px,
+    // a character takes at most about 6 px.
+    const double end = y + (angle > 0 ? 1 : -1) * 6.0 * static_cast<double>(characters);
+    EXPECT_GE(std::min(y, end), top) << label;
+    EXPECT_LE(std::max(y, end), top + height) << label << " runs into the axis labels";
+    for (const auto& [other_x, other_y] : anchors)
+      EXPECT_FALSE(std::abs(other_x - x) < 10 && std::abs(other_y - y) < 10) << label;
+    anchors.emplace_back(x, y);
+  }
+  EXPECT_EQ(anchors.size(), report.curve.size());
+}
+
+// Pixels of the similarity figure in the red of false loops.
+std::size_t red_pixels(const std::vector<unsigned char>& png) {
+  const cv::Mat image = cv::imdecode(png, cv::IMREAD_COLOR);
+  std::size_t n = 0;
+  for (int r = 0; r < image.rows; ++r)
+    for (int c = 0; c < image.cols; ++c) {
+      const cv::Vec3b& p = image.at<cv::Vec3b>(r, c);  // BGR
+      n += p[2] > 180 && p[1] < 90 && p[0] < 90;
+    }
+  return n;
+}
+
+TEST(SimilarityFigure, LegendShowsOnlyTheMarksDrawn) {
+  std::mt19937_64 rng(5);
+  const Vocabulary vocabulary = small_vocabulary(rng);
+  const GroundTruth truth = hand_made_truth();
+  std::vector<SequenceFrame> frames(12);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    frames[i].file = "frame" + std::to_string(i) + ".png";
+    frames[i].result.query = static_cast<EntryId>(i);
+  }
+  frames[5].result.status = LoopStatus::kLoopDetected;
+  frames[5].result.has_candidate = true;
+  frames[5].result.match = 0;
+  LoopReport report = make_loop_report(frames, LoopDetectorParams{}, &truth,
+                                       similarity_matrix(vocabulary, random_frames(12, rng)));
+  ASSERT_EQ(report.loops.size(), 1u);
+  ASSERT_EQ(report.loops[0].verdict, 1);
+  EXPECT_EQ(red_pixels(similarity_png(report)), 0u) << "a false-loop mark with no false loop";
+  report.loops[0].verdict = 0;
+  EXPECT_GT(red_pixels(similarity_png(report)), 0u);
 }
 
 }  // namespace
