@@ -93,6 +93,15 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
                           std::to_string(vocabulary.code_size() * 8) + "-bit descriptors, but " +
                           descriptor + " gives " + std::to_string(code_size * 8) +
                           "-bit descriptors (--descriptor)");
+  bool any_weight = false;
+  for (WordId word = 0; word < vocabulary.word_count() && !any_weight; ++word)
+    any_weight = vocabulary.word_weight(word) > 0;
+  if (vocabulary.word_count() > 0 && !any_weight)
+    std::fprintf(stderr,
+                 "binbow: warning: %s: every word weighs 0 (all stop words): every image becomes "
+                 "an empty bag of words and no place can be recognised; rebuild the vocabulary "
+                 "('binbow build-vocab') or convert it from a file that has its weights\n",
+                 vocabulary_name.c_str());
   if (vocabulary.descriptor().empty()) {
     if (embedded_in_database) return;
     std::fprintf(stderr,

@@ -41,7 +41,8 @@ std::string default_vocabulary_path(const std::string& descriptor);
 // Throws InvalidArgument, naming `vocabulary_name` and saying what to pass
 // instead, unless the vocabulary fits descriptors of extractor `descriptor`
 // with `code_size` bytes: same length, and trained on that extractor when
-// the vocabulary records one. When it records none, prints a warning naming
+// the vocabulary records one. Warns when every word weighs 0 (legal, but no
+// image can be told from another). When it records none, prints a warning naming
 // `descriptor` and how to record the right extractor, unless the vocabulary
 // is `embedded_in_database` (db build warned when it read the file).
 void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,

@@ -14,8 +14,8 @@
 #include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
-#include "formats/loader.h"
 #include "default_vocabulary.h"
+#include "formats/loader.h"
 
 namespace binbow::cli {
 

@@ -4,10 +4,12 @@
 // same extractors with the same default.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "binbow/vocabulary.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -42,6 +44,30 @@ void expect_usage_error(const std::string& arguments, const std::string& command
   EXPECT_NE(output.find(what), std::string::npos) << output;
   EXPECT_NE(output.find("\nRun '" + command + " --help' for usage.\n"), std::string::npos)
       << output;
+}
+
+// A vocabulary whose words all weigh 0 is read (legal), but nothing can be
+// recognised with it: every command that uses it says so.
+TEST(CliUsage, AVocabularyOfZeroWeightsIsWarnedAbout) {
+  TempDir dir;
+  VocabularyTree tree = Vocabulary::load(test::source_path("data/vocab/orb_default.bbw")).to_tree();
+  std::fill(tree.weights.begin(), tree.weights.end(), 0.0f);
+  Vocabulary::from_tree(tree).save(dir.file("zero.bbw"));
+  std::string output;
+  ASSERT_EQ(run_cli("detect-loops --vocab " + quoted(dir.file("zero.bbw")) + " -o " +
+                        quoted(dir.file("loops.csv")) + " " + quoted(short_sequence(dir, 3)),
+                    &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("binbow: warning: " + dir.file("zero.bbw") + ": every word weighs 0"),
+            std::string::npos)
+      << output;
+  ASSERT_EQ(run_cli("detect-loops -o " + quoted(dir.file("loops.csv")) + " " +
+                        quoted(short_sequence(dir, 3)),
+                    &output),
+            0)
+      << output;
+  EXPECT_EQ(output.find("every word weighs 0"), std::string::npos) << output;
 }
 
 TEST(CliUsage, AMistypedCommandIsNamedWithTheNearestOne) {

@@ -211,7 +211,10 @@ TEST(VocabularyFile, StructuralChecksCatchForgedTreesEvenWithoutChecksums) {
 // Words weigh 0 (a stop word) or more under every weighting: a negative
 // weight means nothing, and a vocabulary of stop words only turns every
 // image into an empty BoW vector (then no loop is ever found).
-TEST(VocabularyFile, NegativeOrAllZeroWeightsAreRejected) {
+// Negative weights mean nothing in any weighting: refused. All words at 0 is
+// legal but useless: read (databases and states saved with one still load);
+// the commands warn.
+TEST(VocabularyFile, NegativeWeightsAreRejectedAllZeroAreRead) {
   test::TempDir dir;
   for (const Weighting weighting :
        {Weighting::kTfIdf, Weighting::kIdf, Weighting::kTf, Weighting::kBinary}) {
@@ -228,8 +231,11 @@ TEST(VocabularyFile, NegativeOrAllZeroWeightsAreRejected) {
         detail::store_le<float>(bytes.data() + section_offset(bytes, 3) + 4 * word, weight);
       recompute_section_crc(bytes, 3);
       test::write_file(dir.file("weights.bbw"), bytes);
-      expect_file_error(dir.file("weights.bbw"),
-                        weight < 0 ? "the weight of word 0 is negative" : "every word weighs 0");
+      if (weight < 0) {
+        expect_file_error(dir.file("weights.bbw"), "the weight of word 0 is negative");
+      } else {
+        EXPECT_EQ(Vocabulary::load(dir.file("weights.bbw")).word_weight(0), 0.0f);
+      }
     }
     // One stop word among others is fine.
     std::vector<std::uint8_t> bytes = good;

@@ -262,7 +262,7 @@ TEST(Detections, CsvRoundTripWithAwkwardNames) {
 
 TEST(Detections, MalformedCsvNamesTheLine) {
   TempDir dir;
-  write_text(dir.file("a.csv"), "query,match\n");
+  write_text(dir.file("a.csv"), "first,second\n1,0\n");
   EXPECT_THROW(read_detections_csv(dir.file("a.csv")), FileError);
   write_text(dir.file("b.csv"),
              "query_index,match_index,query_file,match_file,score,inliers\n1,0,a,b,0.5,12\n"
