@@ -19,6 +19,7 @@
 #include "binbow/loop/similarity.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
+#include "loop/same_result.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -69,24 +70,7 @@ OnlineVocabularyOptions online_orb() {
   return options;
 }
 
-// Everything a LoopResult says but the times, bit for bit.
-void expect_same_result(const LoopResult& a, const LoopResult& b) {
-  SCOPED_TRACE("frame " + std::to_string(a.query));
-  EXPECT_EQ(a.status, b.status);
-  EXPECT_EQ(a.query, b.query);
-  EXPECT_EQ(a.has_candidate, b.has_candidate);
-  EXPECT_EQ(a.match, b.match);
-  EXPECT_EQ(a.score, b.score);
-  EXPECT_EQ(a.normalisation_score, b.normalisation_score);
-  EXPECT_EQ(a.normalised_score, b.normalised_score);
-  EXPECT_EQ(a.island_score, b.island_score);
-  EXPECT_EQ(a.island_first, b.island_first);
-  EXPECT_EQ(a.island_last, b.island_last);
-  EXPECT_EQ(a.consistent_queries, b.consistent_queries);
-  EXPECT_EQ(a.correspondences, b.correspondences);
-  EXPECT_EQ(a.exhaustive_fallback_used, b.exhaustive_fallback_used);
-  EXPECT_EQ(a.inliers, b.inliers);
-}
+using test::expect_same_result;
 
 std::vector<LoopResult> run_all(LoopDetector detector) {
   std::vector<LoopResult> results;

@@ -17,6 +17,7 @@
 #include "binbow/vision/image_source.h"
 #include "core/crc32c.h"
 #include "core/little_endian.h"
+#include "loop/same_result.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"
 
@@ -38,26 +39,7 @@ const std::vector<Features>& sample_features(const std::string& descriptor) {
   return features;
 }
 
-// Everything a LoopResult says but the times.
-void expect_same_result(const LoopResult& a, const LoopResult& b) {
-  SCOPED_TRACE("frame " + std::to_string(a.query));
-  EXPECT_EQ(a.status, b.status);
-  EXPECT_EQ(a.query, b.query);
-  EXPECT_EQ(a.features, b.features);
-  EXPECT_EQ(a.has_candidate, b.has_candidate);
-  EXPECT_EQ(a.match, b.match);
-  // Bit-identical, not merely close.
-  EXPECT_EQ(a.score, b.score);
-  EXPECT_EQ(a.normalisation_score, b.normalisation_score);
-  EXPECT_EQ(a.normalised_score, b.normalised_score);
-  EXPECT_EQ(a.island_score, b.island_score);
-  EXPECT_EQ(a.island_first, b.island_first);
-  EXPECT_EQ(a.island_last, b.island_last);
-  EXPECT_EQ(a.consistent_queries, b.consistent_queries);
-  EXPECT_EQ(a.correspondences, b.correspondences);
-  EXPECT_EQ(a.exhaustive_fallback_used, b.exhaustive_fallback_used);
-  EXPECT_EQ(a.inliers, b.inliers);
-}
+using test::expect_same_result;
 
 // Runs every frame without stopping, then again stopping after each of
 // `stops` frames (save, load, resume), and compares every result.

@@ -1,0 +1,35 @@
+// Comparing loop detector results: detectors that must behave alike (a saved
+// and restored one, one that forgot a frame at another time) give the same
+// results to the bit.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "binbow/loop/loop_detector.h"
+
+namespace binbow::test {
+
+// Everything a LoopResult says but the times; scores bit-identical, not
+// merely close.
+inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult& b) {
+  SCOPED_TRACE("frame " + std::to_string(a.query));
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.query, b.query);
+  EXPECT_EQ(a.features, b.features);
+  EXPECT_EQ(a.has_candidate, b.has_candidate);
+  EXPECT_EQ(a.match, b.match);
+  EXPECT_EQ(a.score, b.score);
+  EXPECT_EQ(a.normalisation_score, b.normalisation_score);
+  EXPECT_EQ(a.normalised_score, b.normalised_score);
+  EXPECT_EQ(a.island_score, b.island_score);
+  EXPECT_EQ(a.island_first, b.island_first);
+  EXPECT_EQ(a.island_last, b.island_last);
+  EXPECT_EQ(a.consistent_queries, b.consistent_queries);
+  EXPECT_EQ(a.correspondences, b.correspondences);
+  EXPECT_EQ(a.exhaustive_fallback_used, b.exhaustive_fallback_used);
+  EXPECT_EQ(a.inliers, b.inliers);
+}
+
+}  // namespace binbow::test
