@@ -122,7 +122,8 @@ string(STRIP "${output}" flags)
 separate_arguments(flags UNIX_COMMAND "${flags}")
 set(program ${WORK_DIR}/dbow2-pkgconfig)
 run("building the dbow2 consumer with pkg-config" ${CXX} -std=c++11 -O1
-    -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2/main.cpp -o ${program} ${flags})
+    -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2/main.cpp -o ${program} ${flags}
+    -Wl,-rpath,${prefix}/${LIBDIR})
 run("running the dbow2 consumer (pkg-config)" ${program} ${orbvoc}
     ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
 if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
