@@ -94,21 +94,27 @@ inline void load_brief_pattern(const std::uint8_t* data, std::size_t size) {
     throw std::logic_error("accepted a pattern wider than kMaxBriefPatternRadius");
 }
 
-// Every query's earlier matches are earlier, increasing, and is_loop agrees.
+// Every query's ranges are earlier, increasing, disjoint and not adjacent
+// (else they would be one), they add up to pair_count(), and is_loop agrees
+// at both ends of each range and just past it.
 inline void check_accepted(const loop::GroundTruth& truth) {
-  std::size_t queries_with_loops = 0;
-  for (std::size_t q = 0; q < truth.frames(); ++q) {
-    const Span<std::uint32_t> matches = truth.earlier_matches(q);
-    if (!matches.empty()) ++queries_with_loops;
-    for (std::size_t i = 0; i < matches.size(); ++i) {
-      if (matches[i] >= q || (i > 0 && matches[i - 1] >= matches[i]))
-        throw std::logic_error("earlier matches not earlier and increasing");
-      if (!truth.is_loop(q, matches[i]) || !truth.is_loop(matches[i], q))
-        throw std::logic_error("is_loop disagrees with earlier_matches");
+  std::size_t pairs = 0;
+  const std::vector<std::size_t> queries = truth.loop_queries();
+  if (queries.size() != truth.queries_with_loops())
+    throw std::logic_error("queries_with_loops disagrees with loop_queries");
+  for (const std::size_t q : queries) {
+    const Span<loop::FrameRange> ranges = truth.earlier_match_ranges(q);
+    if (ranges.empty()) throw std::logic_error("a loop query without ranges");
+    for (std::size_t i = 0; i < ranges.size(); ++i) {
+      const loop::FrameRange r = ranges[i];
+      if (r.first >= r.end || r.end > q || (i > 0 && ranges[i - 1].end >= r.first))
+        throw std::logic_error("ranges not earlier, increasing, disjoint and apart");
+      if (!truth.is_loop(q, r.first) || !truth.is_loop(r.end - 1, q) || truth.is_loop(q, r.end))
+        throw std::logic_error("is_loop disagrees with earlier_match_ranges");
+      pairs += r.size();
     }
   }
-  if (queries_with_loops != truth.queries_with_loops())
-    throw std::logic_error("queries_with_loops disagrees with earlier_matches");
+  if (pairs != truth.pair_count()) throw std::logic_error("pair_count disagrees with the ranges");
 }
 
 inline void load_ground_truth(const std::uint8_t* data, std::size_t size, const char* suffix) {

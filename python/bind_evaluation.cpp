@@ -97,13 +97,21 @@ void bind_evaluation(py::module_& m) {
            "Whether the two images show the same place.")
       .def("has_loop", &loop::GroundTruth::has_loop, py::arg("query"),
            "Whether the image shares a place with an earlier one.")
+      .def("earlier_matches", &loop::GroundTruth::earlier_matches, py::arg("query"),
+           "Earlier images sharing a place with the query, increasing.")
       .def(
-          "earlier_matches",
+          "earlier_match_ranges",
           [](const loop::GroundTruth& t, std::size_t query) {
-            const Span<std::uint32_t> matches = t.earlier_matches(query);
-            return std::vector<std::uint32_t>(matches.begin(), matches.end());
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
+            for (const loop::FrameRange& r : t.earlier_match_ranges(query))
+              ranges.emplace_back(r.first, r.end);
+            return ranges;
           },
-          py::arg("query"), "Earlier images sharing a place with the query, increasing.")
+          py::arg("query"),
+          "The same images as (first, end) ranges of consecutive frames, end excluded: "
+          "compact when a query matches many.")
+      .def_property_readonly("range_count", &loop::GroundTruth::range_count,
+                             "Number of ranges stored: what the ground truth's memory follows.")
       .def_property_readonly("queries_with_loops", &loop::GroundTruth::queries_with_loops,
                              "Number of images that share a place with an earlier one.")
       .def_property_readonly("pair_count", &loop::GroundTruth::pair_count,

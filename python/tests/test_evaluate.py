@@ -51,6 +51,11 @@ def test_ground_truth_base_and_pairs(tmp_path):
     made = binbow.GroundTruth(5, [(3, 1), (4, 2)])
     assert made.frames == 5 and made.pair_count == 2 and made.queries_with_loops == 2
     assert [made.has_loop(q) for q in range(5)] == [False, False, False, True, True]
+    # Consecutive earlier frames are one range, [first, end).
+    block = binbow.GroundTruth(9, [(8, 1), (8, 2), (8, 3), (8, 6), (2, 8)])
+    assert block.earlier_match_ranges(8) == [(1, 4), (6, 7)]
+    assert block.earlier_matches(8) == [1, 2, 3, 6]
+    assert block.range_count == 2 and block.pair_count == 4
     with pytest.raises(ValueError):
         binbow.GroundTruth(3, [(5, 1)])
 

@@ -11,9 +11,6 @@
 namespace binbow::loop {
 namespace {
 
-using detail::add_pair;
-using detail::LaterEarlier;
-
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
@@ -29,29 +26,30 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 GroundTruth::GroundTruth(std::size_t frames,
                          const std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
   if (frames > kMaxGroundTruthFrames) throw InvalidArgument("ground truth too large");
-  LaterEarlier later_earlier;
-  later_earlier.reserve(pairs.size());
+  binbow::detail::RunCollector runs(frames);
   for (const auto& [a, b] : pairs) {
     if (a >= frames || b >= frames)
       throw InvalidArgument("ground-truth pair (" + std::to_string(a) + ", " + std::to_string(b) +
                             ") outside " + std::to_string(frames) + " frames");
-    add_pair(a, b, frames, later_earlier);
+    runs.add(a, b);
   }
-  *this = from_later_earlier(frames, std::move(later_earlier));
+  *this = from_runs(frames, runs.take());
 }
 
-GroundTruth GroundTruth::from_later_earlier(std::size_t frames, LaterEarlier pairs) {
-  if (!std::is_sorted(pairs.begin(), pairs.end())) std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+GroundTruth GroundTruth::from_runs(std::size_t frames,
+                                   const std::vector<binbow::detail::LaterRun>& runs) {
   GroundTruth truth;
   truth.frames_ = frames;
-  truth.later_.reserve(pairs.size());
-  truth.earlier_.reserve(pairs.size());
-  for (const auto& [later, earlier] : pairs) {
-    if (truth.later_.empty() || truth.later_.back() != later) ++truth.queries_with_loops_;
-    truth.later_.push_back(later);
-    truth.earlier_.push_back(earlier);
+  truth.ranges_.reserve(runs.size());
+  for (const binbow::detail::LaterRun& run : runs) {
+    if (truth.queries_.empty() || truth.queries_.back() != run.later) {
+      truth.queries_.push_back(run.later);
+      truth.range_begin_.push_back(truth.ranges_.size());
+    }
+    truth.ranges_.push_back({run.first, run.end});
+    truth.pair_count_ += run.end - run.first;
   }
+  truth.range_begin_.push_back(truth.ranges_.size());
   return truth;
 }
 
@@ -70,7 +68,7 @@ GroundTruth GroundTruth::load(const std::string& path, const GroundTruthOptions&
     } else {
       loaded = detail::read_ground_truth_pairs(path, options);
     }
-    return from_later_earlier(loaded.frames, std::move(loaded.pairs));
+    return from_runs(loaded.frames, loaded.runs);
   } catch (const InvalidArgument& e) {
     throw FileError(path, e.what());
   }
@@ -79,28 +77,36 @@ GroundTruth GroundTruth::load(const std::string& path, const GroundTruthOptions&
 bool GroundTruth::is_loop(std::size_t query, std::size_t match) const {
   const std::size_t later = std::max(query, match), earlier = std::min(query, match);
   if (later >= frames_ || later == earlier) return false;
-  const Span<std::uint32_t> m = earlier_matches(later);
-  return std::binary_search(m.begin(), m.end(), static_cast<std::uint32_t>(earlier));
+  const Span<FrameRange> ranges = earlier_match_ranges(later);
+  // The last range starting at or before `earlier` is the only one that can hold it.
+  const auto after = std::upper_bound(
+      ranges.begin(), ranges.end(), earlier,
+      [](std::size_t frame, const FrameRange& range) { return frame < range.first; });
+  return after != ranges.begin() && earlier < (after - 1)->end;
 }
 
 bool GroundTruth::has_loop(std::size_t query) const {
-  return !earlier_matches(query).empty();
+  return !earlier_match_ranges(query).empty();
 }
 
 std::vector<std::size_t> GroundTruth::loop_queries() const {
-  std::vector<std::size_t> queries;
-  queries.reserve(queries_with_loops_);
-  for (const std::uint32_t later : later_)
-    if (queries.empty() || queries.back() != later) queries.push_back(later);
-  return queries;
+  return {queries_.begin(), queries_.end()};
 }
 
-Span<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
+Span<FrameRange> GroundTruth::earlier_match_ranges(std::size_t query) const {
   if (query >= frames_) return {};
-  const auto [first, last] =
-      std::equal_range(later_.begin(), later_.end(), static_cast<std::uint32_t>(query));
-  const auto offset = static_cast<std::size_t>(first - later_.begin());
-  return {earlier_.data() + offset, static_cast<std::size_t>(last - first)};
+  const auto it =
+      std::lower_bound(queries_.begin(), queries_.end(), static_cast<std::uint32_t>(query));
+  if (it == queries_.end() || *it != query) return {};
+  const auto i = static_cast<std::size_t>(it - queries_.begin());
+  return {ranges_.data() + range_begin_[i], range_begin_[i + 1] - range_begin_[i]};
+}
+
+std::vector<std::uint32_t> GroundTruth::earlier_matches(std::size_t query) const {
+  std::vector<std::uint32_t> matches;
+  for (const FrameRange& range : earlier_match_ranges(query))
+    for (std::uint32_t j = range.first; j < range.end; ++j) matches.push_back(j);
+  return matches;
 }
 
 }  // namespace binbow::loop

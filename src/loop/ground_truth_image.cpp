@@ -18,15 +18,16 @@ LoadedGroundTruth read_ground_truth_image(const std::string& path,
   LoadedGroundTruth loaded;
   loaded.frames = cut_to_run(static_cast<std::size_t>(image.rows), options);
   // Row q lists the earlier images that share a place with q, merged from
-  // row q left of the diagonal and column q above it: increasing, without
-  // duplicates, so the pairs come out sorted and exactly as many as there are.
+  // row q left of the diagonal and column q above it: increasing, so the
+  // runs come out sorted and whole.
+  RunCollector runs(loaded.frames);
   const int n = static_cast<int>(loaded.frames);
   for (int q = 0; q < n; ++q) {
     const std::uint8_t* row = image.ptr<std::uint8_t>(q);
     for (int j = 0; j < q; ++j)
-      if (row[j] != 0 || image.ptr<std::uint8_t>(j)[q] != 0)
-        loaded.pairs.emplace_back(static_cast<std::uint32_t>(q), static_cast<std::uint32_t>(j));
+      if (row[j] != 0 || image.ptr<std::uint8_t>(j)[q] != 0) runs.add(q, j);
   }
+  loaded.runs = runs.take();
   return loaded;
 }
 

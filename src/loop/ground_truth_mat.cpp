@@ -23,13 +23,14 @@ constexpr std::size_t kMaxFrames = kMaxGroundTruthFrames;
 constexpr std::size_t kMatBlockBytes = std::size_t{128} << 20;
 
 // Cells of a dense block as "non-zero?", whatever the MATLAB class.
+// Column by column, rows increasing: the order RunCollector keeps compact.
 template <class T>
 void collect_nonzero(const void* data, std::size_t rows, std::size_t first_column,
-                     std::size_t columns, std::size_t frames, LaterEarlier& pairs) {
+                     std::size_t columns, RunCollector& runs) {
   const T* cells = static_cast<const T*>(data);
   for (std::size_t c = 0; c < columns; ++c)
     for (std::size_t r = 0; r < rows; ++r)
-      if (cells[c * rows + r] != T(0)) add_pair(r, first_column + c, frames, pairs);
+      if (cells[c * rows + r] != T(0)) runs.add(first_column + c, r);
 }
 
 struct MatCloser {
@@ -78,6 +79,8 @@ class ElementChain {
   // Elements after the array flags, dimensions and name.
   std::size_t data_elements() const { return elements_ > 4 ? elements_ - 4 : 0; }
   const Element& data_element(std::size_t i) const { return data_[i]; }
+  // Where data element i's bytes start (after its tag, or inside a small one's).
+  std::uint64_t data_position(std::size_t i) const { return data_at_[i]; }
 
   // The tag's two words, in the file's byte order already read.
   void on_tag(std::uint32_t first, std::uint32_t second) {
@@ -91,8 +94,11 @@ class ElementChain {
         throw FileError(path_, "variable at byte " + std::to_string(offset_) + ": element " +
                                    std::to_string(elements_) + " declares " +
                                    std::to_string(bytes) + " bytes, more than its matrix holds");
+      if (data_elements() < data_.size()) {
+        data_[data_elements()] = {first & 0xffff, bytes};
+        data_at_[data_elements()] = next_tag_ + (small ? 4 : 8);
+      }
       next_tag_ += small ? 8 : 8 + (bytes + 7) / 8 * 8;
-      if (data_elements() < data_.size()) data_[data_elements()] = {first & 0xffff, bytes};
     }
     ++elements_;
   }
@@ -103,6 +109,7 @@ class ElementChain {
   std::uint64_t next_tag_ = 0, end_ = 1;
   std::size_t elements_ = 0;
   std::array<Element, 4> data_{};
+  std::array<std::uint64_t, 4> data_at_{};
 };
 
 // The bytes of one number of a level-5 numeric data type; 0 for the others.
@@ -126,6 +133,19 @@ std::uint64_t mat_number_bytes(std::uint32_t type) {
       return 0;
   }
 }
+
+// Where a variable lies in the file, as the element walk found it: what the
+// single-pass reader of a compressed dense matrix needs.
+struct VariableLayout {
+  std::uint64_t offset = 0;  // of its tag in the file
+  std::uint64_t bytes = 0;   // after the tag
+  bool compressed = false;
+  bool swapped = false;  // big-endian numbers
+  // The real part, first data element: its level-5 type, bytes, and position
+  // in the variable's (inflated) stream.
+  ElementChain::Element real{};
+  std::uint64_t real_at = 0;
+};
 
 struct Level5Reader {
   const std::string& path;
@@ -222,7 +242,8 @@ struct Level5Reader {
 
   // Inflates a compressed variable once, keeping only its first bytes:
   // matio would read a damaged stream as zeros, or size arrays from it.
-  void check_compressed(std::ifstream& in, std::uint64_t offset, std::uint64_t bytes) const {
+  void check_compressed(std::ifstream& in, std::uint64_t offset, std::uint64_t bytes,
+                        VariableLayout& layout) const {
     z_stream stream{};
     if (inflateInit(&stream) != Z_OK) fail(offset, "cannot start zlib");
     std::unique_ptr<z_stream, int (*)(z_streamp)> guard(&stream, inflateEnd);
@@ -286,6 +307,10 @@ struct Level5Reader {
     if (matrix_class == kMxSparseClass && inflated > sparse_limit)
       fail(offset, "a compressed sparse matrix expanding " + std::to_string(inflated) +
                        " bytes, more than " + std::to_string(sparse_limit));
+    if (chain.data_elements() > 0) {
+      layout.real = chain.data_element(0);
+      layout.real_at = chain.data_position(0);
+    }
   }
 };
 
@@ -294,7 +319,7 @@ struct Level5Reader {
 // element chain is walked first: every element is a matrix or a compressed
 // matrix that fits in the file, with a plausible head, and every compressed
 // one inflates to what it declares.
-void check_level5_elements(const std::string& path) {
+std::vector<VariableLayout> check_level5_elements(const std::string& path) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw FileError(path, std::string("cannot open: ") + std::strerror(errno));
   const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
@@ -309,7 +334,7 @@ void check_level5_elements(const std::string& path) {
   // file (found by fuzzing: a level-5 file whose text said "MATLAB 7.3").
   const unsigned version =
       swapped ? header[124] << 8 | header[125] : header[125] << 8 | header[124];
-  if (version == 0x0200) return;  // 7.3: HDF5 inside, which matio checks
+  if (version == 0x0200) return {};  // 7.3: HDF5 inside, which matio checks
   // matio reads any other version as a level-4 file from byte 0, allocating
   // a name as long as bytes 16-19 say (found by fuzzing: 744 MB).
   if (version != 0x0100) {
@@ -320,6 +345,7 @@ void check_level5_elements(const std::string& path) {
                               "-v6 and -v7) and -v7.3 files (0x0200)");
   }
   const Level5Reader reader{path, swapped};
+  std::vector<VariableLayout> layouts;
   std::uint64_t offset = 128;
   while (offset < size) {
     unsigned char tag[8];
@@ -336,8 +362,13 @@ void check_level5_elements(const std::string& path) {
       throw FileError(path, "truncated: element at byte " + std::to_string(offset) + " needs " +
                                 std::to_string(bytes) + " bytes, file ends after " +
                                 std::to_string(size - offset - 8));
+    VariableLayout& layout = layouts.emplace_back();
+    layout.offset = offset;
+    layout.bytes = bytes;
+    layout.compressed = type == kMiCompressed;
+    layout.swapped = swapped;
     if (type == kMiCompressed) {
-      reader.check_compressed(in, offset, bytes);
+      reader.check_compressed(in, offset, bytes, layout);
     } else {
       unsigned char head[512];
       const auto head_size = static_cast<std::size_t>(std::min<std::uint64_t>(bytes, sizeof head));
@@ -358,17 +389,117 @@ void check_level5_elements(const std::string& path) {
     }
     offset = type == kMiCompressed ? end : (end + 7) / 8 * 8;  // compressed ones are not padded
   }
+  return layouts;
+}
+
+// Reads the cells of a compressed dense matrix in one pass over its zlib
+// stream (matio inflates a compressed variable from its start for every
+// block it is asked for, so a large matrix read block by block costs passes
+// growing with its size). Cells are column by column, rows increasing;
+// non-zero cells within rows_read × columns_read go to `runs`.
+void read_compressed_dense(const std::string& path, const VariableLayout& layout, std::size_t rows,
+                           std::size_t columns, std::size_t rows_read, std::size_t columns_read,
+                           RunCollector& runs) {
+  const auto fail = [&](const std::string& what) {
+    throw FileError(path, "variable at byte " + std::to_string(layout.offset) + ": " + what);
+  };
+  const std::uint64_t number_bytes = mat_number_bytes(layout.real.type);
+  if (number_bytes == 0 || layout.real.bytes != std::uint64_t{rows} * columns * number_bytes)
+    fail("a dense matrix whose " + std::to_string(layout.real.bytes) + " bytes of type " +
+         std::to_string(layout.real.type) + " do not hold its " + std::to_string(rows) + "x" +
+         std::to_string(columns) + " cells");
+  // A cell is zero when all its bytes are, but for the sign bit of a
+  // floating-point number (-0.0 is zero; NaN is not).
+  const bool floating = layout.real.type == 7 || layout.real.type == 9;
+  const std::size_t sign_byte = layout.swapped ? 0 : number_bytes - 1;
+  const auto nonzero = [&](const unsigned char* cell) {
+    for (std::size_t i = 0; i < number_bytes; ++i) {
+      const unsigned char byte =
+          floating && i == sign_byte ? static_cast<unsigned char>(cell[i] & 0x7f) : cell[i];
+      if (byte != 0) return true;
+    }
+    return false;
+  };
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(layout.offset + 8));
+  z_stream stream{};
+  if (inflateInit(&stream) != Z_OK) fail("cannot start zlib");
+  std::unique_ptr<z_stream, int (*)(z_streamp)> guard(&stream, inflateEnd);
+  std::vector<unsigned char> input(256 << 10), output(1 << 20);
+  const std::uint64_t data_begin = layout.real_at;
+  // Only the columns read: the stream is left once they are.
+  const std::uint64_t data_end = data_begin + std::uint64_t{columns_read} * rows * number_bytes;
+  std::uint64_t inflated = 0, left = layout.bytes;
+  unsigned char partial[8];
+  std::size_t partial_size = 0;
+  std::size_t row = 0, column = 0;
+  constexpr std::size_t kNoStretch = SIZE_MAX;
+  std::size_t stretch = kNoStretch;  // the first row of non-zero cells going on
+  int status = Z_OK;
+  while (status != Z_STREAM_END && inflated < data_end) {
+    if (stream.avail_in == 0) {
+      if (left == 0) fail("a compressed variable cut short");
+      const auto chunk = static_cast<std::size_t>(std::min<std::uint64_t>(left, input.size()));
+      if (!in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(chunk)))
+        fail("a compressed variable cut short");
+      left -= chunk;
+      stream.next_in = input.data();
+      stream.avail_in = static_cast<uInt>(chunk);
+    }
+    stream.next_out = output.data();
+    stream.avail_out = static_cast<uInt>(output.size());
+    status = inflate(&stream, Z_NO_FLUSH);
+    if (status != Z_OK && status != Z_STREAM_END)
+      fail("a compressed variable whose zlib stream is damaged");
+    const std::uint64_t produced = output.size() - stream.avail_out;
+    // The part of this output inside the cells.
+    const std::uint64_t from = std::max(inflated, data_begin);
+    const std::uint64_t to = std::min(inflated + produced, data_end);
+    for (std::uint64_t at = from; at < to;) {
+      const unsigned char* bytes = output.data() + (at - inflated);
+      const unsigned char* cell_bytes = bytes;
+      if (partial_size > 0 || to - at < number_bytes - partial_size) {
+        const auto take =
+            static_cast<std::size_t>(std::min<std::uint64_t>(number_bytes - partial_size, to - at));
+        std::memcpy(partial + partial_size, bytes, take);
+        partial_size += take;
+        at += take;
+        if (partial_size < number_bytes) break;
+        cell_bytes = partial;
+        partial_size = 0;
+      } else {
+        at += number_bytes;
+      }
+      // A stretch of non-zero cells in a column is added at once.
+      if (row < rows_read && nonzero(cell_bytes)) {
+        if (stretch == kNoStretch) stretch = row;
+      } else if (stretch != kNoStretch) {
+        runs.add_line(column, stretch, row);
+        stretch = kNoStretch;
+      }
+      if (++row == rows) {
+        if (stretch != kNoStretch) runs.add_line(column, stretch, std::min(rows, rows_read));
+        stretch = kNoStretch;
+        row = 0;
+        ++column;
+      }
+    }
+    inflated += produced;
+  }
+  if (inflated < data_end) fail("a compressed matrix whose cells end early");
 }
 
 }  // namespace
 
 LoadedGroundTruth read_ground_truth_mat(const std::string& path,
                                         const GroundTruthOptions& options) {
-  check_level5_elements(path);
+  const std::vector<VariableLayout> layouts = check_level5_elements(path);
   std::unique_ptr<mat_t, MatCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) throw FileError(path, "not a readable MATLAB .mat file");
   std::unique_ptr<matvar_t, VarFreer> var;
-  while (true) {
+  // matio reads the variables in file order, as the element walk listed them.
+  std::size_t index = 0;
+  for (;; ++index) {
     var.reset(Mat_VarReadNextInfo(file.get()));
     if (!var) throw FileError(path, "no two-dimensional numeric or logical variable");
     if (var->rank == 2 && var->dims != nullptr && var->class_type != MAT_C_CHAR &&
@@ -384,7 +515,7 @@ LoadedGroundTruth read_ground_truth_mat(const std::string& path,
                               std::to_string(columns) + ", too large for a ground truth");
   LoadedGroundTruth loaded;
   loaded.frames = cut_to_run(std::max(rows, columns), options);
-  LaterEarlier& pairs = loaded.pairs;
+  RunCollector runs(loaded.frames);
   // Cells beyond the run's frames are not read at all.
   const std::size_t rows_read = std::min(rows, loaded.frames);
   const std::size_t columns_read = std::min(columns, loaded.frames);
@@ -403,7 +534,7 @@ LoadedGroundTruth read_ground_truth_mat(const std::string& path,
       for (std::size_t k = begin; k < end; ++k) {
         if (static_cast<std::size_t>(sparse->ir[k]) >= rows)
           throw FileError(path, "damaged sparse variable '" + name + "'");
-        add_pair(static_cast<std::size_t>(sparse->ir[k]), c, loaded.frames, pairs);
+        runs.add(c, static_cast<std::size_t>(sparse->ir[k]));
       }
     }
   } else {
@@ -430,6 +561,11 @@ LoadedGroundTruth read_ground_truth_mat(const std::string& path,
       default:
         throw FileError(path, "variable '" + name + "' has an unsupported class");
     }
+    if (index < layouts.size() && layouts[index].compressed) {
+      read_compressed_dense(path, layouts[index], rows, columns, rows_read, columns_read, runs);
+      loaded.runs = runs.take();
+      return loaded;
+    }
     const std::size_t block_columns =
         std::max<std::size_t>(1, kMatBlockBytes / std::max<std::size_t>(1, rows_read * cell_bytes));
     std::vector<std::uint8_t> buffer;
@@ -441,32 +577,32 @@ LoadedGroundTruth read_ground_truth_mat(const std::string& path,
       int edge[2] = {static_cast<int>(rows_read), static_cast<int>(count)};
       if (Mat_VarReadData(file.get(), var.get(), buffer.data(), start, stride, edge) != 0)
         throw FileError(path, "cannot read variable '" + name + "' (truncated or damaged)");
-      const std::size_t f = loaded.frames;
       switch (var->class_type) {
         case MAT_C_DOUBLE:
-          collect_nonzero<double>(buffer.data(), rows_read, first, count, f, pairs);
+          collect_nonzero<double>(buffer.data(), rows_read, first, count, runs);
           break;
         case MAT_C_SINGLE:
-          collect_nonzero<float>(buffer.data(), rows_read, first, count, f, pairs);
+          collect_nonzero<float>(buffer.data(), rows_read, first, count, runs);
           break;
         case MAT_C_INT64:
         case MAT_C_UINT64:
-          collect_nonzero<std::uint64_t>(buffer.data(), rows_read, first, count, f, pairs);
+          collect_nonzero<std::uint64_t>(buffer.data(), rows_read, first, count, runs);
           break;
         case MAT_C_INT32:
         case MAT_C_UINT32:
-          collect_nonzero<std::uint32_t>(buffer.data(), rows_read, first, count, f, pairs);
+          collect_nonzero<std::uint32_t>(buffer.data(), rows_read, first, count, runs);
           break;
         case MAT_C_INT16:
         case MAT_C_UINT16:
-          collect_nonzero<std::uint16_t>(buffer.data(), rows_read, first, count, f, pairs);
+          collect_nonzero<std::uint16_t>(buffer.data(), rows_read, first, count, runs);
           break;
         default:
-          collect_nonzero<std::uint8_t>(buffer.data(), rows_read, first, count, f, pairs);
+          collect_nonzero<std::uint8_t>(buffer.data(), rows_read, first, count, runs);
           break;
       }
     }
   }
+  loaded.runs = runs.take();
   return loaded;
 }
 

@@ -56,6 +56,8 @@ LoadedGroundTruth read_ground_truth_pairs(const std::string& path,
                       "add a comment line saying \"0-based\" or \"1-based\", or give the base");
   }
   LoadedGroundTruth loaded;
+  // Without the run's frame count, the largest index says how many there are.
+  RunCollector runs(options.frames > 0 ? options.frames : kMaxFrames);
   std::size_t frames = 0, line_number = 0;
   std::istringstream lines(text);
   std::string line;
@@ -83,11 +85,11 @@ LoadedGroundTruth read_ground_truth_pairs(const std::string& path,
     const std::size_t query = parse(a), match = parse(b);
     if (fields >> extra)
       throw FileError(path, "line " + std::to_string(line_number) + ": more than two fields");
-    // Without the run's frame count, the largest index says how many there are.
-    add_pair(query, match, options.frames > 0 ? options.frames : kMaxFrames, loaded.pairs);
+    runs.add(query, match);
     frames = std::max({frames, query + 1, match + 1});
   }
   loaded.frames = options.frames > 0 ? options.frames : frames;
+  loaded.runs = runs.take();
   return loaded;
 }
 

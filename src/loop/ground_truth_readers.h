@@ -1,41 +1,35 @@
 // The ground-truth file readers behind GroundTruth::load, one per format
 // (image, MATLAB .mat, text pairs), each in a file of its own so that it can
 // be read, tested and fuzzed alone. Each returns the frame count the file
-// declares (cut to the run's frames when known) and its (later, earlier)
-// pairs, throwing FileError naming the file and the problem.
+// declares (cut to the run's frames when known) and its same-place runs,
+// throwing FileError naming the file and the problem.
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "binbow/loop/ground_truth.h"
+#include "loop/ground_truth_runs.h"
 
 namespace binbow::loop::detail {
 
-// (later, earlier) index pairs, as GroundTruth::from_later_earlier takes them.
-using LaterEarlier = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
+using binbow::detail::LaterRun;
+using binbow::detail::RunCollector;
 
-// What a ground-truth file holds: its frame count and its pairs.
+// What a ground-truth file holds: its frame count and its runs, as
+// RunCollector::take() gives them.
 struct LoadedGroundTruth {
   std::size_t frames = 0;
-  LaterEarlier pairs;
+  std::vector<LaterRun> runs;
 };
 
 // The frames of a ground truth declaring `declared` frames, cut to the run's
 // `frames` when known.
 inline std::size_t cut_to_run(std::size_t declared, const GroundTruthOptions& options) {
   return options.frames > 0 ? std::min(declared, options.frames) : declared;
-}
-
-// Adds the pair (a, b) unless it is on the diagonal or outside `frames`.
-inline void add_pair(std::size_t a, std::size_t b, std::size_t frames, LaterEarlier& pairs) {
-  if (a == b || a >= frames || b >= frames) return;
-  pairs.emplace_back(static_cast<std::uint32_t>(std::max(a, b)),
-                     static_cast<std::uint32_t>(std::min(a, b)));
 }
 
 // A square greyscale image: row = query, column = match, non-zero = same place.

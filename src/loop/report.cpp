@@ -290,8 +290,9 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
   if (report.truth.frames() > 0)
     for (const std::size_t q : report.truth.loop_queries()) {
       if (q >= m.frames) break;
-      for (const std::uint32_t j : report.truth.earlier_matches(q))
-        truth_cells[m.cell(q) * m.cells + m.cell(j)] = 1;
+      for (const FrameRange& range : report.truth.earlier_match_ranges(q))
+        for (std::size_t c = m.cell(range.first); c <= m.cell(range.end - 1); ++c)
+          truth_cells[m.cell(q) * m.cells + c] = 1;
     }
   const auto mix = [](const cv::Vec3b& a, const cv::Vec3b& b, double t) {
     cv::Vec3b out;
@@ -479,12 +480,14 @@ std::string sweep_table(const LoopReport& report) {
 // "31–35 (5)": the earlier images sharing the query's place.
 std::string truth_matches(const GroundTruth& truth, std::size_t query) {
   if (query >= truth.frames()) return "–";
-  const Span<std::uint32_t> matches = truth.earlier_matches(query);
-  if (matches.empty()) return "–";
-  const std::uint32_t first = matches[0], last = matches[matches.size() - 1];
+  const Span<FrameRange> ranges = truth.earlier_match_ranges(query);
+  if (ranges.empty()) return "–";
+  const std::uint32_t first = ranges[0].first, last = ranges[ranges.size() - 1].end - 1;
+  std::size_t count = 0;
+  for (const FrameRange& range : ranges) count += range.size();
   return first == last ? std::to_string(first)
                        : std::to_string(first) + "–" + std::to_string(last) + " (" +
-                             std::to_string(matches.size()) + ")";
+                             std::to_string(count) + ")";
 }
 
 std::string missed_section(const LoopReport& report) {

@@ -11,6 +11,10 @@
 
 #include "binbow/span.h"
 
+namespace binbow::detail {
+struct LaterRun;
+}
+
 namespace binbow::loop {
 
 // The largest ground-truth image decoded by default, in pixels (10000 ×
@@ -35,11 +39,23 @@ struct GroundTruthOptions {
   std::uint64_t max_image_pixels = kDefaultMaxGroundTruthImagePixels;
 };
 
+// Consecutive frames [first, end).
+struct FrameRange {
+  std::uint32_t first = 0;
+  std::uint32_t end = 0;
+  std::uint32_t size() const noexcept { return end - first; }
+  friend bool operator==(const FrameRange& a, const FrameRange& b) {
+    return a.first == b.first && a.end == b.end;
+  }
+};
+
 // Which images of an N-image sequence show the same place. "Same place" is
 // symmetric, so (i, j) and (j, i) are one fact; the diagonal is ignored. A
 // query i has a loop when it shares a place with an earlier image j < i.
-// Stored sparsely: memory and every operation depend on the number of pairs,
-// never on N (a pair "49999999 0" costs what "1 0" does).
+// Stored as ranges of consecutive earlier images per query: memory and every
+// operation depend on the number of ranges, never on N nor on the pairs they
+// hold (a pair "49999999 0" costs what "1 0" does, and an all-ones 10,000²
+// matrix takes 10,000 ranges, not 50 million pairs).
 class GroundTruth {
  public:
   GroundTruth() = default;
@@ -60,24 +76,30 @@ class GroundTruth {
   bool is_loop(std::size_t query, std::size_t match) const;
   // Whether `query` shares a place with an earlier image.
   bool has_loop(std::size_t query) const;
-  // Earlier images sharing a place with `query`, increasing.
-  Span<std::uint32_t> earlier_matches(std::size_t query) const;
-  std::size_t queries_with_loops() const noexcept { return queries_with_loops_; }
+  // Earlier images sharing a place with `query`, as increasing, disjoint,
+  // non-adjacent ranges (empty if none).
+  Span<FrameRange> earlier_match_ranges(std::size_t query) const;
+  // The same images one by one, increasing: as many as the ranges hold.
+  std::vector<std::uint32_t> earlier_matches(std::size_t query) const;
+  std::size_t queries_with_loops() const noexcept { return queries_.size(); }
   // The queries that have a loop, increasing (queries_with_loops() of them).
   std::vector<std::size_t> loop_queries() const;
-  std::size_t pair_count() const noexcept { return earlier_.size(); }
+  // The number of (later, earlier) same-place pairs.
+  std::size_t pair_count() const noexcept { return pair_count_; }
+  // The number of ranges stored (what memory follows).
+  std::size_t range_count() const noexcept { return ranges_.size(); }
 
  private:
-  // From (later, earlier) pairs, later > earlier and every index < frames (not
-  // checked), duplicates allowed; sorted already is the fast path.
-  static GroundTruth from_later_earlier(std::size_t frames,
-                                        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs);
+  // From runs sorted by (later, first), merged (disjoint, non-adjacent).
+  static GroundTruth from_runs(std::size_t frames,
+                               const std::vector<binbow::detail::LaterRun>& runs);
 
   std::size_t frames_ = 0;
-  std::size_t queries_with_loops_ = 0;
-  // Pair i is (later_[i], earlier_[i]), sorted by later then earlier.
-  std::vector<std::uint32_t> later_;
-  std::vector<std::uint32_t> earlier_;
+  std::size_t pair_count_ = 0;
+  // Query queries_[i] has the ranges ranges_[range_begin_[i] .. range_begin_[i + 1]).
+  std::vector<std::uint32_t> queries_;
+  std::vector<std::size_t> range_begin_;
+  std::vector<FrameRange> ranges_;
 };
 
 }  // namespace binbow::loop
