@@ -10,6 +10,7 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/explanation.h"
 #include "binbow/loop/misses.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/run_record.h"
@@ -210,6 +211,20 @@ void run_evaluate(const EvaluateArguments& arguments) {
               : loop::similarity_matrix(inputs->vocabulary, inputs->features.features);
       progress("similarity matrix", 1, 1);
       progress.finish();
+    }
+    if (inputs) {
+      // Detection re-run with its decisions recorded: why each false loop and miss.
+      StageProgress progress;
+      const loop::RunExplanations explained = loop::explain_run(
+          *run, inputs->features, inputs->vocabulary, truth, loop::kExplainedPictures,
+          [&](const std::string& stage, std::size_t done, std::size_t total) {
+            progress(stage, done, total);
+          });
+      progress.finish();
+      report.has_explanations = true;
+      report.explanations = explained.cases;
+      report.explanations_note = explained.note;
+      if (!explained.note.empty()) std::fprintf(stderr, "warning: %s\n", explained.note.c_str());
     }
     // The run's loops by (query, match): one lookup per detection, not a scan.
     std::map<std::pair<std::size_t, std::size_t>, const loop::LoopRecord*> recorded;

@@ -38,8 +38,10 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
   const double min_inliers = params.min_inliers;
   std::vector<CheckMeasure> measures;
   // check_fundamental fits nothing below max(8, min_inliers) correspondences.
-  measures.push_back({"correspondences", correspondences, "min_inliers", std::max(8.0, min_inliers),
-                      correspondences >= std::max(8.0, min_inliers), true});
+  const double needed = std::max(8.0, min_inliers);
+  measures.push_back({"correspondences", correspondences,
+                      min_inliers >= 8 ? "min_inliers" : "max(8, min_inliers)", needed,
+                      correspondences >= needed, true});
   const auto inliers = static_cast<double>(check.fit.inliers.size());
   measures.push_back(
       {"inliers", inliers, "min_inliers", min_inliers, inliers >= min_inliers, true});
@@ -71,17 +73,17 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
   else
     text += " (exhaustive matching)";
   const std::vector<CheckMeasure> measures = check_measures(check, params);
-  std::string failed, all;
+  std::string failed, passed;
   for (const CheckMeasure& m : measures) {
     // Below the correspondences needed, nothing was fitted: no inliers to compare.
     if (&m != &measures.front() && !measures.front().passed) break;
-    (m.passed ? all : failed) += ", " + to_string(m);
+    std::string& list = m.passed ? passed : failed;
+    list += (list.empty() ? "" : ", ") + to_string(m);
   }
-  if (!check.fit.inliers.empty() || measures.front().passed)
-    text += ", " + std::to_string(check.fit.inliers.size()) + " inliers";
-  if (check.fit.consistent) return text + ": accepted" + all;
+  if (measures.front().passed) text += ", " + std::to_string(check.fit.inliers.size()) + " inliers";
+  if (check.fit.consistent) return text + ": accepted (" + passed + ")";
   if (failed.empty()) return text + ": rejected by the estimator (no consistent model)";
-  return text + ": rejected" + failed;
+  return text + ": rejected: " + failed;
 }
 
 const char* to_string(ExplainedStage stage) {
@@ -146,9 +148,15 @@ class Explainer {
       lost(ExplainedStage::kNoGroundTruth, "the query has no ground-truth loop");
     if (e_.false_loop) {
       const TrailCheck* accepted = t_.checks.empty() ? nullptr : &t_.checks.back();
-      std::string why = "false loop with " + std::to_string(t_.match) + " accepted: ";
-      why += accepted != nullptr ? "geometric check " + describe_check(*accepted, p_)
-                                 : "no geometric check (geometric_check none)";
+      std::string why = "false loop with " + std::to_string(t_.match) + " (η " +
+                        number(accepted != nullptr ? accepted->normalised_score : 0) +
+                        ", temporal consistency " + std::to_string(t_.temporal.chain_after - 1) +
+                        " ≥ k " + std::to_string(p_.k) + ") accepted by the geometric check: ";
+      if (accepted != nullptr)
+        why += describe_check(*accepted, p_);
+      else
+        why = "false loop with " + std::to_string(t_.match) +
+              " accepted without a geometric check (geometric_check none)";
       e_.reason = e_.stage == ExplainedStage::kNoGroundTruth ? why : why + "; " + e_.reason;
       if (accepted != nullptr)
         draw(*accepted, false);
@@ -488,13 +496,16 @@ RunExplanations explain_run(const LoopRun& run, const RunFeatures& features,
     const bool has_loop = i < truth.frames() && !truth.earlier_matches(i).empty();
     if (false_loop || (has_loop && !(detected && !false_loop))) {
       LoopExplanation e = explain_frame(trail, truth, params, &detector);
-      if (out.pictured < max_pictured && e.drawn_match >= 0) {
+      if (out.pictured < max_pictured) {
         ++out.pictured;
-        const auto match = static_cast<std::size_t>(e.drawn_match);
         e.query_file = features.names[i];
-        e.match_file = match < features.names.size() ? features.names[match] : "";
         const double qs = i < features.scales.size() ? features.scales[i] : 1;
-        const double ms = match < features.scales.size() ? features.scales[match] : 1;
+        double ms = 1;
+        if (e.drawn_match >= 0 && static_cast<std::size_t>(e.drawn_match) < features.names.size()) {
+          const auto match = static_cast<std::size_t>(e.drawn_match);
+          e.match_file = features.names[match];
+          if (match < features.scales.size()) ms = features.scales[match];
+        }
         for (ExplainedCorrespondence& c : e.correspondences) {
           c.points[0] = static_cast<float>(c.points[0] / qs);
           c.points[1] = static_cast<float>(c.points[1] / qs);

@@ -121,7 +121,7 @@ LoopExplanation explain_frame(const LoopDecisionTrail& trail, const GroundTruth&
 
 struct RunExplanations {
   // Every false loop and every miss, in frame order. The first `pictured`
-  // keep their correspondences for a picture; the others only their text.
+  // keep their files and correspondences for a picture; the others only their text.
   std::vector<LoopExplanation> cases;
   std::size_t pictured = 0;
   // Empty, or what differs between the re-run and the record (the
