@@ -163,6 +163,13 @@ class Explainer {
       else
         e_.drawn_match = t_.match;
     }
+    if (e_.drawn_match < 0 && e_.true_match < 0 && e_.missed) {
+      // Nothing was checked: show the query beside a ground-truth match still.
+      e_.true_match = matches_[0];
+      for (const std::uint32_t j : matches_)
+        if (static_cast<long long>(j) + p_.dislocal < static_cast<long long>(t_.query))
+          e_.true_match = j;
+    }
     if (e_.drawn_match < 0 && e_.true_match >= 0) e_.drawn_match = e_.true_match;
     return std::move(e_);
   }

@@ -520,8 +520,11 @@ std::string missed_section(const LoopReport& report) {
     const char* right = miss.candidate_right == 1   ? "<span class='tp'>yes</span>"
                         : miss.candidate_right == 0 ? "<span class='fp'>no</span>"
                                                     : "–";
-    html << "<tr id='missed-" << miss.query << "'><td class='n'>" << miss.query << "</td><td>"
-         << escape(miss.file) << "</td>";
+    const std::string query = std::to_string(miss.query);
+    html << "<tr id='missed-" << miss.query << "'><td class='n'>"
+         << (report.has_explanations ? "<a href='#explain-row-" + query + "'>" + query + "</a>"
+                                     : query)
+         << "</td><td>" << escape(miss.file) << "</td>";
     if (known_truth) html << "<td class='n'>" << truth_matches(report.truth, miss.query) << "</td>";
     html << "<td class='n'>" << (miss.features < 0 ? "unknown" : std::to_string(miss.features))
          << "</td><td class='s'>" << (miss.status.empty() ? "unknown" : escape(miss.status))
@@ -571,10 +574,16 @@ std::string explained_image(const LoopExplanation& e) {
       cv::circle(canvas, pa, 2, cv::Scalar(40, 40, 230), cv::FILLED, cv::LINE_AA);
       cv::circle(canvas, pb, 2, cv::Scalar(40, 40, 230), cv::FILLED, cv::LINE_AA);
     }
+  // Thick inlier lines while few, so that they stand out; thin when many would merge.
+  const int inlier_width =
+      std::count_if(e.correspondences.begin(), e.correspondences.end(),
+                    [](const ExplainedCorrespondence& c) { return c.inlier; }) > 40
+          ? 1
+          : 2;
   for (const ExplainedCorrespondence& c : e.correspondences)
     if (c.inlier) {
       const auto [pa, pb] = ends(c);
-      cv::line(canvas, pa, pb, cv::Scalar(60, 210, 60), 2, cv::LINE_AA);
+      cv::line(canvas, pa, pb, cv::Scalar(60, 210, 60), inlier_width, cv::LINE_AA);
       cv::circle(canvas, pa, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
       cv::circle(canvas, pb, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
     }
@@ -593,9 +602,9 @@ std::string explained_figure(const LoopExplanation& e) {
   html << "<figure class='explain' id='explain-" << e.query << "'><figcaption><b>query " << e.query;
   if (e.drawn_match >= 0) html << " ↔ " << e.drawn_match;
   html << "</b> (" << escape(case_name(e))
-       << (e.drawn_match == e.detected_match ? ", the reported loop"
-           : e.drawn_match == e.true_match   ? ", a ground-truth match"
-                                             : "")
+       << (e.drawn_match >= 0 && e.drawn_match == e.detected_match ? ", the reported loop"
+           : e.drawn_match == e.true_match                         ? ", a ground-truth match"
+                                                                   : "")
        << "): <span class='why'>" << escape(e.reason) << "</span></figcaption>";
   try {
     html << "<img alt='query " << e.query << " and image " << e.drawn_match << "' src='"
