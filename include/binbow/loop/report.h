@@ -2,7 +2,9 @@
 // (inline CSS, SVG and base64 images; nothing fetched) with the
 // precision–recall curve and its sweep table, the similarity matrix with the
 // ground truth and the detections over it, every missed ground-truth loop
-// and why, the parameters, the per-stage timing, the table of detections
+// and why, every false loop and miss explained stage by stage with the two
+// frames and their correspondences (explanation.h), the parameters, the
+// per-stage timing, the table of detections
 // and, for each loop, the two images side by side with the inlier
 // correspondences drawn.
 #pragma once
