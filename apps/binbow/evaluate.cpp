@@ -215,16 +215,20 @@ void run_evaluate(const EvaluateArguments& arguments) {
     if (inputs) {
       // Detection re-run with its decisions recorded: why each false loop and miss.
       StageProgress progress;
-      const loop::RunExplanations explained = loop::explain_run(
-          *run, inputs->features, inputs->vocabulary, truth, loop::kExplainedPictures,
-          [&](const std::string& stage, std::size_t done, std::size_t total) {
-            progress(stage, done, total);
-          });
+      try {
+        const loop::RunExplanations explained = loop::explain_run(
+            *run, inputs->features, inputs->vocabulary, truth, loop::kExplainedPictures,
+            [&](const std::string& stage, std::size_t done, std::size_t total) {
+              progress(stage, done, total);
+            });
+        report.has_explanations = true;
+        report.explanations = explained.cases;
+        report.explanations_note = explained.note;
+        if (!explained.note.empty()) std::fprintf(stderr, "warning: %s\n", explained.note.c_str());
+      } catch (const Error& e) {  // the report is still worth writing
+        std::fprintf(stderr, "note: no explanations in the report: %s\n", e.what());
+      }
       progress.finish();
-      report.has_explanations = true;
-      report.explanations = explained.cases;
-      report.explanations_note = explained.note;
-      if (!explained.note.empty()) std::fprintf(stderr, "warning: %s\n", explained.note.c_str());
     }
     // The run's loops by (query, match): one lookup per detection, not a scan.
     std::map<std::pair<std::size_t, std::size_t>, const loop::LoopRecord*> recorded;

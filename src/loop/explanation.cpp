@@ -502,7 +502,9 @@ RunExplanations explain_run(const LoopRun& run, const RunFeatures& features,
                                          !truth.is_loop(i, static_cast<std::size_t>(trail.match)));
     const bool has_loop = i < truth.frames() && !truth.earlier_matches(i).empty();
     if (false_loop || (has_loop && !(detected && !false_loop))) {
-      LoopExplanation e = explain_frame(trail, truth, params, &detector);
+      // Re-checks cost a few RANSAC runs each: bounded for runs with many misses.
+      LoopExplanation e = explain_frame(
+          trail, truth, params, out.cases.size() < kMaxRecheckedCases ? &detector : nullptr);
       if (out.pictured < max_pictured) {
         ++out.pictured;
         e.query_file = features.names[i];

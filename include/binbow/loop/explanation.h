@@ -129,6 +129,10 @@ struct RunExplanations {
   std::string note;
 };
 
+// explain_run re-checks ground-truth matches (and keeps correspondences) for
+// this many cases at most; later ones are explained from the trail alone.
+inline constexpr std::size_t kMaxRecheckedCases = 500;
+
 // Re-runs the recorded run's detection over its features (as
 // sweep_parameter does, with the run's parameters), recording each frame's
 // trail, and explains every false loop and every miss against `truth`. At
