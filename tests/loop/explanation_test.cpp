@@ -10,6 +10,7 @@
 #include <regex>
 #include <sstream>
 
+#include "binbow/loop/report.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
 #include "support/test_support.h"
@@ -180,6 +181,37 @@ TEST(Explanation, WrongLoopIsBothFalseAndMissed) {
   EXPECT_TRUE(contains(e.reason, "ground-truth match 3: its island")) << e.reason;
 }
 
+TEST(Explanation, ReportDrawsTheFirstCasesAndListsEveryOne) {
+  LoopReport report;
+  report.title = "explained";
+  report.has_result = true;
+  report.has_explanations = true;
+  const GroundTruth truth(50, {{40, 12}});
+  for (std::size_t i = 0; i < kExplainedPictures + 5; ++i) {
+    LoopExplanation e = explain_frame(full_trail(9, false), truth, LoopDetectorParams{});
+    e.query = i;
+    report.explanations.push_back(e);
+  }
+  test::TempDir dir;
+  std::ifstream in(write_loop_report(dir.path(), report));
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string page = buffer.str();
+  const auto count = [&](const std::string& pattern) {
+    const std::regex expression(pattern);
+    return std::distance(std::sregex_iterator(page.begin(), page.end(), expression),
+                         std::sregex_iterator());
+  };
+  EXPECT_EQ(count("<tr id='explain-row-\\d+'>"), long(kExplainedPictures + 5));
+  EXPECT_EQ(count("<figure class='explain'"), long(kExplainedPictures));
+  EXPECT_TRUE(contains(page, "are listed in the table only"));
+  EXPECT_TRUE(contains(page, "9 inliers &lt; min_inliers 12"));
+  // The check's tests as a table: failed ones marked.
+  EXPECT_TRUE(contains(page,
+                       "<tr><td>inliers</td><td class='n'>9</td><td>min_inliers</td><td "
+                       "class='n'>12</td><td><span class='fp'>failed</span></td></tr>"));
+}
+
 // The features of rtabmap-samples with the bundled ORB vocabulary.
 struct Sequence {
   Vocabulary vocabulary = Vocabulary::load(test::source_path("data/vocab/orb_default.bbw"));
@@ -275,6 +307,9 @@ TEST(DecisionTrail, ReportExplainsFalseLoopsAndMissesThroughTheCommandLine) {
                        "island [^<]* scores below the chosen island")));
   // Query 58's true match 17 gives no correspondence that passes the ratio test.
   EXPECT_TRUE(contains(page, "geometric check of ground-truth match 17: 0 correspondences"));
+  // A true match the detector never checked (its chain was too short) is checked for the report.
+  EXPECT_TRUE(contains(page, "been checked (run for this explanation, same parameters)"));
+  EXPECT_TRUE(contains(page, "this check was run for the report with the run's parameters"));
   // Pictures: a figure with the two images per case.
   const std::size_t figure = page.find("<figure class='explain' id='explain-58'>");
   ASSERT_NE(figure, std::string::npos);
