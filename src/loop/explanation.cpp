@@ -391,7 +391,8 @@ class Explainer {
   // it through?
   void recheck() {
     if (detector_ == nullptr || e_.has_check || t_.features == 0 ||
-        p_.geometric_check == GeometricCheck::kNone)
+        p_.geometric_check == GeometricCheck::kNone || t_.query >= detector_->size() ||
+        detector_->is_forgotten(t_.query))
       return;
     for (const TrailCheck& c : t_.checks)
       if (is_true(c.entry)) return;
@@ -432,7 +433,9 @@ class Explainer {
     e_.check_correspondences = check.correspondences.size();
     e_.check_inliers = check.fit.inliers.size();
     e_.drawn_match = check.entry;
-    if (detector_ == nullptr || detector_->is_forgotten(check.entry)) return;
+    if (detector_ == nullptr || t_.query >= detector_->size() || check.entry >= detector_->size() ||
+        detector_->is_forgotten(t_.query) || detector_->is_forgotten(check.entry))
+      return;
     const Span<vision::Keypoint> q = detector_->keypoints(t_.query);
     const Span<vision::Keypoint> m = detector_->keypoints(check.entry);
     std::unordered_set<std::uint64_t> inliers;
