@@ -428,7 +428,6 @@ class Explainer {
   void draw(const TrailCheck& check, bool rerun) {
     e_.has_check = true;
     e_.check_rerun = rerun;
-    e_.check_text = describe_check(check, p_);
     e_.measures = check_measures(check, p_);
     e_.check_correspondences = check.correspondences.size();
     e_.check_inliers = check.fit.inliers.size();

@@ -101,7 +101,6 @@ struct LoopExplanation {
   long long drawn_match = -1;
   bool has_check = false;
   bool check_rerun = false;
-  std::string check_text;              // describe_check() of it
   std::vector<CheckMeasure> measures;  // check_measures() of it
   std::size_t check_correspondences = 0, check_inliers = 0;
   // Its correspondences for the picture, at most kExplainedCorrespondences
