@@ -10,6 +10,7 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/explanation.h"
 #include "binbow/loop/misses.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/run_record.h"
@@ -209,6 +210,24 @@ void run_evaluate(const EvaluateArguments& arguments) {
                     inputs->features.features, run->online_options)
               : loop::similarity_matrix(inputs->vocabulary, inputs->features.features);
       progress("similarity matrix", 1, 1);
+      progress.finish();
+    }
+    if (inputs) {
+      // Detection re-run with its decisions recorded: why each false loop and miss.
+      StageProgress progress;
+      try {
+        const loop::RunExplanations explained = loop::explain_run(
+            *run, inputs->features, inputs->vocabulary, truth, loop::kExplainedPictures,
+            [&](const std::string& stage, std::size_t done, std::size_t total) {
+              progress(stage, done, total);
+            });
+        report.has_explanations = true;
+        report.explanations = explained.cases;
+        report.explanations_note = explained.note;
+        if (!explained.note.empty()) std::fprintf(stderr, "warning: %s\n", explained.note.c_str());
+      } catch (const Error& e) {  // the report is still worth writing
+        std::fprintf(stderr, "note: no explanations in the report: %s\n", e.what());
+      }
       progress.finish();
     }
     // The run's loops by (query, match): one lookup per detection, not a scan.

@@ -39,14 +39,12 @@ DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
   return options;
 }
 
-void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
-                                const DescriptorView& query_descriptors,
-                                const FeatureVector& query_nodes) const {
-  if (params.geometric_check == GeometricCheck::kNone) {
-    result.status = LoopStatus::kLoopDetected;
-    return;
-  }
-  const EntryId match = result.match;
+TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
+                                               const DescriptorView& query_descriptors,
+                                               const FeatureVector& query_nodes,
+                                               EntryId match) const {
+  TrailCheck out;
+  out.entry = match;
   const Span<Keypoint> match_keypoints{frames[match].keypoints.data(),
                                        frames[match].keypoints.size()};
   const DescriptorView match_descriptors = descriptors_of(match);
@@ -68,6 +66,7 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   if (params.geometric_check == GeometricCheck::kDirectIndex) {
     correspondences = match_direct_index(query_descriptors, query_nodes, match_descriptors,
                                          database.feature_vector(match), matching);
+    out.direct_index_correspondences = static_cast<long long>(correspondences.size());
   } else {
     correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
   }
@@ -77,11 +76,30 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
       params.exhaustive_fallback) {
     correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
     fit = check_fundamental(query_keypoints, match_keypoints, correspondences, check);
-    result.exhaustive_fallback_used = true;
+    out.exhaustive_fallback_used = true;
   }
-  result.correspondences = correspondences.size();
-  result.inliers = std::move(fit.inliers);
-  result.status = fit.consistent ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+  out.correspondences = std::move(correspondences);
+  out.fit = std::move(fit);
+  return out;
+}
+
+void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
+                                const DescriptorView& query_descriptors,
+                                const FeatureVector& query_nodes) const {
+  if (params.geometric_check == GeometricCheck::kNone) {
+    result.status = LoopStatus::kLoopDetected;
+    return;
+  }
+  TrailCheck check = geometric_check(query_keypoints, query_descriptors, query_nodes, result.match);
+  if (check.exhaustive_fallback_used) result.exhaustive_fallback_used = true;
+  result.correspondences = check.correspondences.size();
+  result.status =
+      check.fit.consistent ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+  if (trail != nullptr) {
+    check.normalised_score = result.normalised_score;
+    trail->checks.push_back(check);
+  }
+  result.inliers = std::move(check.fit.inliers);
 }
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, LoopDetectorParams params) {
@@ -158,6 +176,14 @@ std::vector<QueryResult> LoopDetector::Impl::query(const BowVector& bow, LoopRes
     const double factor = normalisation_factor(result);
     result.normalised_score = factor > 0 ? result.score / factor : 0;
   }
+  if (trail != nullptr) {
+    trail->queried = true;
+    trail->newest_candidate = newest_candidate;
+    trail->normalisation_score = result.normalisation_score;
+    const double factor = normalisation_factor(result);
+    for (const QueryResult& r : found)
+      trail->candidates.push_back({r.entry, r.score, factor > 0 ? r.score / factor : 0});
+  }
   return found;
 }
 
@@ -191,13 +217,16 @@ void LoopDetector::Impl::select_island(const std::vector<QueryResult>& found, Lo
   }
   detail::compute_islands(candidates, params.max_intra_island_gap, params.min_matches_per_island,
                           islands);
+  if (trail != nullptr) record_islands();
   const detail::Island* island = detail::best_island(islands);
   if (island == nullptr) {
     result.status = LoopStatus::kNoIslands;
     return;
   }
-  result.consistent_queries =
-      window.update(*island, params.skip_featureless_frames ? featured_frames : result.query);
+  const EntryId position = params.skip_featureless_frames ? featured_frames : result.query;
+  const detail::TemporalWindow::State before = window.state();
+  result.consistent_queries = window.update(*island, position);
+  if (trail != nullptr) record_temporal(*island, before, position, result.consistent_queries);
   result.match = island->best_entry;
   result.normalised_score = island->best_score;
   result.score = island->best_score * factor;
@@ -236,6 +265,35 @@ void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_
   }
 }
 
+void LoopDetector::Impl::record_islands() {
+  // Runs of every length: the trail shows the short ones the detector dropped.
+  std::vector<detail::Candidate> all = candidates;
+  std::vector<detail::Island> runs;
+  detail::compute_islands(all, params.max_intra_island_gap, 1, runs);
+  for (const detail::Island& i : runs)
+    trail->islands.push_back({i.first, i.last, i.score, i.best_entry, i.best_score,
+                              i.length() >= params.min_matches_per_island});
+}
+
+void LoopDetector::Impl::record_temporal(const detail::Island& chosen,
+                                         const detail::TemporalWindow::State& before,
+                                         EntryId position, int chain_after) {
+  for (std::size_t i = 0; i < trail->islands.size(); ++i)
+    if (trail->islands[i].first == chosen.first) trail->chosen_island = static_cast<int>(i);
+  trail->temporal_tested = true;
+  TrailTemporal& t = trail->temporal;
+  t.chain_before = before.consistent;
+  t.previous_query = before.last_query;
+  t.query = position;
+  t.previous_first = before.last_first;
+  t.previous_last = before.last_last;
+  // As TemporalWindow::update measures it.
+  const auto as_signed = [](EntryId e) { return static_cast<long long>(e); };
+  t.island_gap = std::max(as_signed(before.last_first) - as_signed(chosen.last),
+                          as_signed(chosen.first) - as_signed(before.last_last));
+  t.chain_after = chain_after;
+}
+
 void LoopDetector::Impl::insert(BowVector& bow, const FeatureVector& nodes,
                                 Span<Keypoint> image_keypoints, const DescriptorView& descriptors) {
   database.add(bow, nodes);
@@ -251,7 +309,45 @@ void LoopDetector::Impl::insert(BowVector& bow, const FeatureVector& nodes,
 }
 
 LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView& descriptors) {
-  Impl& d = *impl_;
+  return impl_->run(keypoints, descriptors);
+}
+
+LoopResult LoopDetector::process(const Features& features, LoopDecisionTrail& trail) {
+  return process(Span<Keypoint>{features.keypoints.data(), features.keypoints.size()},
+                 features.descriptors.view(), trail);
+}
+
+LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView& descriptors,
+                                 LoopDecisionTrail& trail) {
+  trail = {};
+  impl_->trail = &trail;
+  // The trail is this call's only, even when it throws.
+  struct Detach {
+    Impl& d;
+    ~Detach() { d.trail = nullptr; }
+  } detach{*impl_};
+  LoopResult result = impl_->run(keypoints, descriptors);
+  trail.query = result.query;
+  trail.status = result.status;
+  trail.features = result.features;
+  trail.match = result.has_candidate ? static_cast<long long>(result.match) : -1;
+  return result;
+}
+
+TrailCheck LoopDetector::check_pair(EntryId query, EntryId match) const {
+  const Impl& d = *impl_;
+  d.check_remembered(query);
+  d.check_remembered(match);
+  const Impl::FrameFeatures& f = d.frames[query];
+  const FeatureVector nodes = d.params.geometric_check == GeometricCheck::kDirectIndex
+                                  ? d.database.feature_vector(query)
+                                  : FeatureVector{};
+  return d.geometric_check({f.keypoints.data(), f.keypoints.size()}, d.descriptors_of(query), nodes,
+                           match);
+}
+
+LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorView& descriptors) {
+  Impl& d = *this;
   d.check_input(keypoints, descriptors);
   LoopResult result;
   Clock::time_point clock = Clock::now();

@@ -46,6 +46,9 @@ struct LoopDetector::Impl {
   // Scratch reused across frames.
   std::vector<detail::Candidate> candidates;
   std::vector<detail::Island> islands;
+  // Set by process(..., trail) for that call only: where each stage records
+  // what it saw. Null otherwise, and then nothing is recorded.
+  LoopDecisionTrail* trail = nullptr;
 
   bool keeps_features() const { return params.geometric_check != GeometricCheck::kNone; }
   DescriptorView descriptors_of(EntryId frame) const {
@@ -70,6 +73,16 @@ struct LoopDetector::Impl {
                      const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
   void verify(LoopResult& result, Span<vision::Keypoint> query_keypoints,
               const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
+  // Stage 6 for one pair: correspondences, then the fundamental matrix.
+  TrailCheck geometric_check(Span<vision::Keypoint> query_keypoints,
+                             const DescriptorView& query_descriptors,
+                             const FeatureVector& query_nodes, EntryId match) const;
+  LoopResult run(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
+  // Record in `trail` the islands of `candidates` (short ones too), and the
+  // temporal test of the chosen island (the window's state before it).
+  void record_islands();
+  void record_temporal(const detail::Island& chosen, const detail::TemporalWindow::State& before,
+                       EntryId position, int chain_after);
   void insert(BowVector& bow, const FeatureVector& nodes, Span<vision::Keypoint> image_keypoints,
               const DescriptorView& descriptors);
 };

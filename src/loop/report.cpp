@@ -523,8 +523,11 @@ std::string missed_section(const LoopReport& report) {
     const char* right = miss.candidate_right == 1   ? "<span class='tp'>yes</span>"
                         : miss.candidate_right == 0 ? "<span class='fp'>no</span>"
                                                     : "–";
-    html << "<tr id='missed-" << miss.query << "'><td class='n'>" << miss.query << "</td><td>"
-         << escape(miss.file) << "</td>";
+    const std::string query = std::to_string(miss.query);
+    html << "<tr id='missed-" << miss.query << "'><td class='n'>"
+         << (report.has_explanations ? "<a href='#explain-row-" + query + "'>" + query + "</a>"
+                                     : query)
+         << "</td><td>" << escape(miss.file) << "</td>";
     if (known_truth) html << "<td class='n'>" << truth_matches(report.truth, miss.query) << "</td>";
     html << "<td class='n'>" << (miss.features < 0 ? "unknown" : std::to_string(miss.features))
          << "</td><td class='s'>" << (miss.status.empty() ? "unknown" : escape(miss.status))
@@ -541,6 +544,137 @@ std::string missed_section(const LoopReport& report) {
          << "</td></tr>";
   }
   html << "</table>\n";
+  return html.str();
+}
+
+// The two frames of an explained case side by side, rejected
+// correspondences in thin red, inliers in green over them, as a data URL.
+// Throws FileError if an image cannot be read.
+std::string explained_image(const LoopExplanation& e) {
+  const cv::Mat query = vision::read_frame(e.query_file, vision::FramePixels::kBgr);
+  // No image to pair it with (no candidate at all): the query alone.
+  const cv::Mat match = e.match_file.empty()
+                            ? cv::Mat(query.rows, 1, CV_8UC3, cv::Scalar(255, 255, 255))
+                            : vision::read_frame(e.match_file, vision::FramePixels::kBgr);
+  const double sq = double(kPairHeight) / query.rows, sm = double(kPairHeight) / match.rows;
+  cv::Mat a, b;
+  cv::resize(query, a, cv::Size(std::max(1, int(query.cols * sq)), kPairHeight), 0, 0,
+             cv::INTER_AREA);
+  cv::resize(match, b, cv::Size(std::max(1, int(match.cols * sm)), kPairHeight), 0, 0,
+             cv::INTER_AREA);
+  cv::Mat canvas(kPairHeight, a.cols + b.cols + 8, CV_8UC3, cv::Scalar(255, 255, 255));
+  a.copyTo(canvas(cv::Rect(0, 0, a.cols, a.rows)));
+  b.copyTo(canvas(cv::Rect(a.cols + 8, 0, b.cols, b.rows)));
+  const auto ends = [&](const ExplainedCorrespondence& c) {
+    return std::make_pair(
+        cv::Point2f(c.points[0] * float(sq), c.points[1] * float(sq)),
+        cv::Point2f(c.points[2] * float(sm) + float(a.cols + 8), c.points[3] * float(sm)));
+  };
+  for (const ExplainedCorrespondence& c : e.correspondences)
+    if (!c.inlier) {
+      const auto [pa, pb] = ends(c);
+      cv::line(canvas, pa, pb, cv::Scalar(40, 40, 230), 1, cv::LINE_AA);
+      cv::circle(canvas, pa, 2, cv::Scalar(40, 40, 230), cv::FILLED, cv::LINE_AA);
+      cv::circle(canvas, pb, 2, cv::Scalar(40, 40, 230), cv::FILLED, cv::LINE_AA);
+    }
+  // Thick inlier lines while few, so that they stand out; thin when many would merge.
+  const int inlier_width =
+      std::count_if(e.correspondences.begin(), e.correspondences.end(),
+                    [](const ExplainedCorrespondence& c) { return c.inlier; }) > 40
+          ? 1
+          : 2;
+  for (const ExplainedCorrespondence& c : e.correspondences)
+    if (c.inlier) {
+      const auto [pa, pb] = ends(c);
+      cv::line(canvas, pa, pb, cv::Scalar(60, 210, 60), inlier_width, cv::LINE_AA);
+      cv::circle(canvas, pa, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
+      cv::circle(canvas, pb, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
+    }
+  std::vector<unsigned char> jpeg;
+  cv::imencode(".jpg", canvas, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
+  return "data:image/jpeg;base64," + base64(jpeg);
+}
+
+std::string case_name(const LoopExplanation& e) {
+  if (e.false_loop && e.missed) return "false loop, missed";
+  return e.false_loop ? "false loop" : "missed";
+}
+
+std::string explained_figure(const LoopExplanation& e) {
+  std::ostringstream html;
+  html << "<figure class='explain' id='explain-" << e.query << "'><figcaption><b>query " << e.query;
+  if (e.drawn_match >= 0) html << " ↔ " << e.drawn_match;
+  html << "</b> (" << escape(case_name(e))
+       << (e.drawn_match >= 0 && e.drawn_match == e.detected_match ? ", the reported loop"
+           : e.drawn_match == e.true_match                         ? ", a ground-truth match"
+                                                                   : "")
+       << "): <span class='why'>" << escape(e.reason) << "</span></figcaption>";
+  try {
+    html << "<img alt='query " << e.query << " and image " << e.drawn_match << "' src='"
+         << explained_image(e) << "'>";
+  } catch (const FileError& error) {
+    html << "<p>(images not readable: " << escape(error.what()) << ")</p>";
+  }
+  if (e.has_check) {
+    std::size_t inliers = 0;
+    for (const ExplainedCorrespondence& c : e.correspondences) inliers += c.inlier;
+    html << "<p class='legend'><span style='color:#2a9d2a'>&#9644; inliers</span> (" << inliers
+         << " of " << e.check_inliers << " drawn), <span style='color:#e02828'>&#9644; rejected "
+         << "correspondences</span> (" << e.correspondences.size() - inliers << " of "
+         << e.check_correspondences - e.check_inliers << " drawn)"
+         << (e.check_rerun ? "; this check was run for the report with the run's parameters "
+                             "(the detector never checked this pair)"
+                           : "")
+         << "</p><table class='measures'><tr><th>test</th><th>value</th><th>parameter</th>"
+            "<th>threshold</th><th>result</th></tr>";
+    for (const CheckMeasure& m : e.measures)
+      html << "<tr><td>" << escape(m.name) << "</td><td class='n'>"
+           << format(m.whole ? "%.0f" : "%.3f", m.value) << "</td><td>" << escape(m.parameter)
+           << "</td><td class='n'>" << format(m.whole ? "%.0f" : "%.3f", m.threshold) << "</td><td>"
+           << (m.passed ? "<span class='tp'>passed</span>" : "<span class='fp'>failed</span>")
+           << "</td></tr>";
+    html << "</table>";
+  }
+  html << "<ol class='steps'>";
+  for (const std::string& step : e.steps) html << "<li>" << escape(step) << "</li>";
+  html << "</ol></figure>\n";
+  return html.str();
+}
+
+std::string explained_section(const LoopReport& report) {
+  const auto& cases = report.explanations;
+  std::ostringstream html;
+  html << "<h2 id='explained'>Why: every false loop and every miss (" << cases.size() << ")</h2>";
+  if (!report.explanations_note.empty())
+    html << "<p class='note'>" << escape(report.explanations_note) << "</p>";
+  if (cases.empty()) {
+    html << "<p>No false loop and no miss.</p>\n";
+    return html.str();
+  }
+  html << "<p>Each case names the stage that accepted the false loop or lost the ground-truth "
+          "match, with the numbers it compared (detection re-run with the run's parameters). "
+       << "The first " << std::min(cases.size(), kExplainedPictures)
+       << " cases are drawn below (at most " << kExplainedPictures
+       << "); every case is a row of this table.</p>";
+  html << "<table id='explained-table'><tr><th>query</th><th>case</th><th>reported</th>"
+          "<th>ground-truth match</th><th>stage</th><th>why</th></tr>";
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const LoopExplanation& e = cases[i];
+    const std::string query = std::to_string(e.query);
+    html << "<tr id='explain-row-" << e.query << "'><td class='n'>"
+         << (i < kExplainedPictures ? "<a href='#explain-" + query + "'>" + query + "</a>" : query)
+         << "</td><td>" << (e.false_loop ? "<span class='fp'>" : "<span>") << escape(case_name(e))
+         << "</span></td><td class='n'>"
+         << (e.detected_match < 0 ? "–" : std::to_string(e.detected_match)) << "</td><td class='n'>"
+         << (e.true_match < 0 ? "–" : std::to_string(e.true_match)) << "</td><td class='s'>"
+         << to_string(e.stage) << "</td><td>" << escape(e.reason) << "</td></tr>";
+  }
+  html << "</table>\n";
+  for (std::size_t i = 0; i < cases.size() && i < kExplainedPictures; ++i)
+    html << explained_figure(cases[i]);
+  if (cases.size() > kExplainedPictures)
+    html << "<p>Cases after the first " << kExplainedPictures
+         << " are listed in the table only, to keep the page small.</p>\n";
   return html.str();
 }
 
@@ -561,6 +695,8 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
        << "figure{margin:10px 0 18px}figcaption{font-size:13px;max-width:900px}img{max-width:100%}"
        << ".side{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}"
        << "tr.best td{background:#e3f4e6;font-weight:bold}td.s{white-space:nowrap}"
+       << "figure.explain{border-top:1px solid #ddd;padding-top:8px}figcaption .why{color:#444}"
+       << "ol.steps{font-size:13px;margin:4px 0}p.legend{font-size:13px;margin:4px 0}"
        << "</style></head><body>\n<h1>" << escape(report.title) << "</h1>\n";
 
   if (!report.facts.empty()) {
@@ -606,6 +742,7 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
   }
   if (!report.similarity.empty()) html << similarity_section(report, directory);
   if (report.has_result) html << missed_section(report);
+  if (report.has_explanations) html << explained_section(report);
   if (!report.params_json.empty())
     html << "<h2>Parameters</h2><pre id='params'>" << escape(report.params_json) << "</pre>\n";
   if (!report.timing.empty()) {

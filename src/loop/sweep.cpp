@@ -160,6 +160,7 @@ RunFeatures extract_run_features(const LoopRun& run, const SweepProgress& progre
       out.features.emplace_back().descriptors = DescriptorMatrix(extractor->code_size());
     }
     out.names.push_back(frame.name);
+    out.scales.push_back(frame.scale);
     if (progress) progress("extracting features", out.features.size(), run.frames.size());
   }
   if (out.features.size() != run.frames.size())

@@ -21,6 +21,7 @@
 
 #include "binbow/database.h"
 #include "binbow/descriptors.h"
+#include "binbow/loop/decision_trail.h"
 #include "binbow/online_vocabulary.h"
 #include "binbow/span.h"
 #include "binbow/types.h"
@@ -272,6 +273,22 @@ class LoopDetector {
   // An image without features is added too (it can match nothing).
   LoopResult process(const vision::Features& features);
   LoopResult process(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
+  // The same, also recording in `trail` (cleared first) every candidate,
+  // island, temporal test and geometric check with its numbers: what the
+  // report's explanations read. The result is the plain process()'s; only
+  // this form pays for the recording (copies of at most max_db_results
+  // candidates and of each check's correspondences).
+  LoopResult process(const vision::Features& features, LoopDecisionTrail& trail);
+  LoopResult process(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors,
+                     LoopDecisionTrail& trail);
+  // The geometric check (stage 6) of image `query` against image `match`,
+  // both processed and remembered, exactly as process() runs it with these
+  // parameters (direct index, exhaustive fallback, estimator, thresholds):
+  // for a pair the detector never verified, e.g. a ground-truth match that
+  // stopped at an earlier stage. normalised_score is left 0. With
+  // GeometricCheck::kNone no features are kept: a check without
+  // correspondences. InvalidArgument for an image not processed or forgotten.
+  TrailCheck check_pair(EntryId query, EntryId match) const;
 
   // Images processed, forgotten ones included: the next image gets this id.
   std::size_t size() const noexcept;

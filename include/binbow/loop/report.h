@@ -2,7 +2,9 @@
 // (inline CSS, SVG and base64 images; nothing fetched) with the
 // precision–recall curve and its sweep table, the similarity matrix with the
 // ground truth and the detections over it, every missed ground-truth loop
-// and why, the parameters, the per-stage timing, the table of detections
+// and why, every false loop and miss explained stage by stage with the two
+// frames and their correspondences (explanation.h), the parameters, the
+// per-stage timing, the table of detections
 // and, for each loop, the two images side by side with the inlier
 // correspondences drawn.
 #pragma once
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/explanation.h"
 #include "binbow/loop/misses.h"
 #include "binbow/loop/run_record.h"
 #include "binbow/loop/sequence.h"
@@ -45,7 +48,19 @@ struct LoopReport {
   // `truth` and the loops over it; empty: no figure.
   SimilarityMatrix similarity;
   GroundTruth truth;  // for the figure; frames() == 0: not known
+  // Every false loop and every miss explained (explain_run), shown in the
+  // "Why" section (id 'explained'): a table row each ('explain-row-<query>'),
+  // and for the first kExplainedPictures a figure ('explain-<query>') with the
+  // two images, inliers and rejected correspondences drawn, and every
+  // stage's numbers. has_explanations false: no section (no run to re-run).
+  bool has_explanations = false;
+  std::vector<LoopExplanation> explanations;
+  std::string explanations_note;  // shown above them when not empty
 };
+
+// Explained cases drawn with pictures; the others are table rows, so that
+// the page stays small (each picture is ~50–100 KB).
+inline constexpr std::size_t kExplainedPictures = 40;
 
 // Writes DIRECTORY/index.html (creating the directory), atomically, and
 // DIRECTORY/similarity.png when the report has a similarity matrix.

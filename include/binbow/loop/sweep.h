@@ -69,6 +69,7 @@ std::vector<PrCurvePoint> sweep_parameter(const LoopRun& run, const Vocabulary& 
 struct RunFeatures {
   std::vector<vision::Features> features;  // frame i
   std::vector<std::string> names;          // vision::Frame::name of frame i
+  std::vector<double> scales;              // vision::Frame::scale of frame i (file pixels × it)
 };
 // The run's feature extractor (its descriptor and max_features).
 std::unique_ptr<vision::FeatureExtractor> make_run_extractor(const LoopRun& run);
