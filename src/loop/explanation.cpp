@@ -24,7 +24,7 @@ std::string island_text(const TrailIsland& island) {
 }
 
 // "31–35": the ground-truth matches of the query, as a range.
-std::string matches_text(Span<std::uint32_t> matches) {
+std::string matches_text(const std::vector<std::uint32_t>& matches) {
   if (matches.empty()) return "none";
   return entry_range(matches[0], matches[matches.size() - 1]) +
          (matches.size() > 2 ? " (" + std::to_string(matches.size()) + " images)" : "");
@@ -465,7 +465,7 @@ class Explainer {
   const GroundTruth& truth_;
   const LoopDetectorParams& p_;
   const LoopDetector* detector_;
-  Span<std::uint32_t> matches_;
+  std::vector<std::uint32_t> matches_;
   LoopExplanation e_;
   bool decided_ = false;
 };
@@ -502,7 +502,7 @@ RunExplanations explain_run(const LoopRun& run, const RunFeatures& features,
     const bool detected = trail.status == LoopStatus::kLoopDetected;
     const bool false_loop = detected && (i >= truth.frames() ||
                                          !truth.is_loop(i, static_cast<std::size_t>(trail.match)));
-    const bool has_loop = i < truth.frames() && !truth.earlier_matches(i).empty();
+    const bool has_loop = truth.has_loop(i);
     if (false_loop || (has_loop && !(detected && !false_loop))) {
       // Re-checks cost a few RANSAC runs each: bounded for runs with many misses.
       LoopExplanation e = explain_frame(
