@@ -114,6 +114,13 @@ Route make_route(const std::vector<std::string>& photographs, const RouteOptions
                           std::to_string(options.min_place_corners) +
                           " corners (larger or more textured photographs, or smaller frames)");
   Route route = plan_route(std::move(names), std::move(places), options);
+  const std::uint64_t pairs = route.loop_pair_count();
+  if (pairs > kMaxRoutePairs)
+    throw InvalidArgument("make-route: the ground truth would list " + std::to_string(pairs) +
+                          " pairs, more than " + std::to_string(kMaxRoutePairs) + ": " +
+                          std::to_string(route.places.size()) +
+                          " places are revisited too often in " + std::to_string(options.frames) +
+                          " frames (fewer frames, or more photographs)");
 
   detail::prepare_output_directory(directory);
   const std::string frames = (fs::path(directory) / "frames").string();

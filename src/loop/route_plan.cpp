@@ -181,6 +181,20 @@ std::vector<std::pair<std::size_t, std::size_t>> Route::loop_pairs() const {
   return pairs;
 }
 
+std::uint64_t Route::loop_pair_count() const {
+  // Per place: all pairs of its frames minus the pairs within one visit.
+  std::vector<std::uint64_t> place_frames(places.size(), 0);
+  std::uint64_t within_visits = 0, run = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    ++place_frames[frames[i].place];
+    run = i > 0 && frames[i].visit == frames[i - 1].visit ? run + 1 : 1;
+    within_visits += run - 1;
+  }
+  std::uint64_t all = 0;
+  for (const std::uint64_t n : place_frames) all += n * (n - 1) / 2;
+  return all - within_visits;
+}
+
 std::array<cv::Point2d, 4> Route::view_corners(std::size_t frame) const {
   return corners(frames.at(frame).homography, options.width, options.height);
 }

@@ -96,6 +96,7 @@ TEST(Route, GroundTruthListsExactlyTheOverlappingViewsOfDifferentVisits) {
       }
     }
   EXPECT_EQ(overlapping, truth.size());
+  EXPECT_EQ(route.loop_pair_count(), truth.size());
   // Views of one place share a large part, never a sliver.
   EXPECT_GE(smallest_overlap, 0.25);
   std::cout << "pairs " << truth.size() << ", smallest overlap " << smallest_overlap << "\n";
@@ -219,6 +220,12 @@ TEST(Route, RefusesANonEmptyDirectoryAndPhotographsWithoutPlaces) {
   EXPECT_NE(out.find("not empty"), std::string::npos) << out;
   EXPECT_EQ(test::run_cli("make-route -o " + dir.file("r") + " " + dir.file("flat.png"), &out), 1);
   EXPECT_NE(out.find("no place"), std::string::npos) << out;
+  // One place revisited over a long route: quadratically many pairs.
+  EXPECT_EQ(test::run_cli("make-route --frames 10000 -o " + dir.file("r") + " " + dir.file("a.png"),
+                          &out),
+            1);
+  EXPECT_NE(out.find("more than 20000000"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.file("r/frames")));
   EXPECT_EQ(
       test::run_cli("make-route --width 8 -o " + dir.file("r") + " " + dir.file("a.png"), &out), 1);
   EXPECT_NE(out.find("width"), std::string::npos) << out;

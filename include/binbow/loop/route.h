@@ -92,6 +92,8 @@ struct Route {
   // indices, of frames of different visits to one place; sorted by query,
   // then match.
   std::vector<std::pair<std::size_t, std::size_t>> loop_pairs() const;
+  // loop_pairs().size(), counted without listing them.
+  std::uint64_t loop_pair_count() const;
   // Where frame i's four corners (top-left, top-right, bottom-right,
   // bottom-left, at the pixel edges) land in its photograph.
   std::array<cv::Point2d, 4> view_corners(std::size_t frame) const;
@@ -115,6 +117,11 @@ Route plan_route(std::vector<std::string> photographs, std::vector<RoutePlace> p
 // from its place's photograph (grey, as route_places had it).
 cv::Mat render_route_frame(const Route& route, std::size_t index, const cv::Mat& photograph);
 
+// The most ground-truth pairs make_route writes (~15 bytes each): they grow
+// with the square of the visits per place, so a long route over few places
+// is refused rather than filling the disk.
+inline constexpr std::uint64_t kMaxRoutePairs = 20'000'000;
+
 // (frames written, frames in all).
 using RouteProgress = std::function<void(std::size_t, std::size_t)>;
 
@@ -130,7 +137,9 @@ using RouteProgress = std::function<void(std::size_t, std::size_t)>;
 //                           (`binbow evaluate --gt` reads it), written last:
 //                           a route without it is incomplete
 // Throws FileError naming a photograph that cannot be read or a file that
-// cannot be written; InvalidArgument when the photographs give no place.
+// cannot be written; InvalidArgument when the photographs give no place or
+// the ground truth would have more than kMaxRoutePairs pairs (before any
+// frame is written).
 Route make_route(const std::vector<std::string>& photographs, const RouteOptions& options,
                  const std::string& directory, const RouteProgress& progress = {});
 
