@@ -30,7 +30,7 @@ class RouteRandom {
   std::mt19937_64 engine_;
 };
 
-// A camera pose relative to its place: the view's centre offset (in view
+// A camera pose relative to its place: the view's centre offset (in frame
 // sizes), zoom (view size / frame size; > 1 sees more), roll (radians) and
 // perspective (the depth slope across the half width and height).
 struct Pose {
@@ -86,10 +86,13 @@ std::array<cv::Point2d, 4> corners(const Matrix& h, int width, int height) {
   return {apply(h, 0, 0), apply(h, width, 0), apply(h, width, height), apply(h, 0, height)};
 }
 
+// Inside the cell with a margin of 2 pixels, so that bilinear sampling
+// near the view's edge never reads a pixel of the next cell.
 bool inside(const Matrix& h, const cv::Rect2d& cell, int width, int height) {
+  constexpr double kMargin = 2;
   for (const cv::Point2d& p : corners(h, width, height))
-    if (!(p.x >= cell.x && p.y >= cell.y && p.x <= cell.x + cell.width &&
-          p.y <= cell.y + cell.height))
+    if (!(p.x >= cell.x + kMargin && p.y >= cell.y + kMargin &&
+          p.x <= cell.x + cell.width - kMargin && p.y <= cell.y + cell.height - kMargin))
       return false;
   return true;
 }

@@ -73,7 +73,8 @@ struct RouteFrame {
   std::size_t visit = 0;  // visits numbered in route order from 0
   bool revisit = false;   // the place was visited before
   // Row-major 3×3 homography from frame pixels (x, y, 1) to photograph
-  // pixels; the frame's four corners map inside the place's cell.
+  // pixels; the frame's four corners map inside the place's cell, 2 pixels
+  // from its edges (what the frame's pixels are interpolated from).
   std::array<double, 9> homography{};
   // Photometric: v' = gain × 255 × (v / 255)^gamma + bias, then Gaussian
   // blur of blur_sigma pixels, then Gaussian noise of noise_sigma grey levels
