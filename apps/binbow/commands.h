@@ -16,6 +16,7 @@ void add_evaluate_command(CLI::App& app);
 void add_db_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
+void add_make_route_command(CLI::App& app);
 // Prints `binbow info` lines for a .bbdb file, after checking the whole file
 // with `verify`; false if `path` is not one.
 bool print_database_info(const std::string& path, bool verify);

@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   binbow::cli::add_db_command(app);
   binbow::cli::add_bench_command(app);
   binbow::cli::add_demo_command(app);
+  binbow::cli::add_make_route_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
