@@ -20,7 +20,7 @@
 #include "binbow/vision/features.h"
 #include "core/file_io.h"
 #include "vision/image_header.h"
-#include "vision/jpeg_check.h"
+#include "vision/jpeg_decoder.h"
 #include "vision/media_module.h"
 #include "vision/natural_order.h"
 #include "vision/regular_file.h"
@@ -85,12 +85,20 @@ double reported_frame_rate(const media::Video& video) {
   return std::isfinite(fps) && fps > 0 ? fps : 0;
 }
 
-cv::Mat limit_width(const cv::Mat& image, int max_width) {
-  if (max_width <= 0 || image.cols <= max_width) return image;
-  const double scale = static_cast<double>(max_width) / image.cols;
-  const int height = std::max(1, static_cast<int>(std::lround(image.rows * scale)));
+// The frame size max_width gives a file or video frame of `width` x `height`.
+cv::Size size_after_max_width(int width, int height, int max_width) {
+  if (max_width <= 0 || width <= max_width) return {width, height};
+  const double scale = static_cast<double>(max_width) / width;
+  return {max_width, std::max(1, static_cast<int>(std::lround(height * scale)))};
+}
+
+// `image` (the file's `file_size`, or smaller when libjpeg scaled it down
+// while decoding) at the size max_width gives the file.
+cv::Mat limit_width(const cv::Mat& image, cv::Size file_size, int max_width) {
+  const cv::Size size = size_after_max_width(file_size.width, file_size.height, max_width);
+  if (image.size() == size) return image;
   cv::Mat resized;
-  cv::resize(image, resized, cv::Size(max_width, height), 0, 0, cv::INTER_AREA);
+  cv::resize(image, resized, size, 0, 0, cv::INTER_AREA);
   return resized;
 }
 
@@ -141,9 +149,12 @@ void check_extracted_pixels(const std::string& path, const char* what, std::uint
 }
 
 // The checks of read_grey_image (and check_extracted_pixels when `options`
-// is given), then decoding to grey or BGR.
+// is given), then decoding to grey or BGR. With `options`, a JPEG may be
+// decoded smaller, down to its size after options->max_width; `file_size`
+// then receives the size the file declares.
 cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max_pixels,
-                           const ImageSourceOptions* options = nullptr) {
+                           const ImageSourceOptions* options = nullptr,
+                           cv::Size* file_size = nullptr) {
   const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
   if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
@@ -167,13 +178,17 @@ cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max
                     "image header declares " + describe_size(declared->width, declared->height) +
                         " pixels, more than " + std::to_string(bytes.size()) + " bytes can hold");
   }
-  if (std::strcmp(declared->format, "jpeg") == 0) {
-    const std::string problem = jpeg_decoding_problem(data, bytes.size());
-    if (!problem.empty()) throw FileError(path, "damaged JPEG: " + problem);
-  }
   cv::Mat image;
+  cv::Size full_size;
+  if (std::strcmp(declared->format, "jpeg") == 0) {
+    DecodedJpeg decoded =
+        decode_jpeg(data, bytes.size(), grey, options != nullptr ? options->max_width : 0);
+    if (!decoded.problem.empty()) throw FileError(path, "damaged JPEG: " + decoded.problem);
+    image = std::move(decoded.image);  // empty for the CMYK JPEGs OpenCV converts
+    full_size = decoded.full_size;
+  }
   try {
-    image = media_module().decode_image(data, bytes.size(), grey);
+    if (image.empty()) image = media_module().decode_image(data, bytes.size(), grey);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot decode image: " + e.msg);
   }
@@ -184,6 +199,7 @@ cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max
   // The decoder read the same header; a larger result means this reader was misled.
   check_pixel_count(path, "decoded image", static_cast<std::uint64_t>(image.cols),
                     static_cast<std::uint64_t>(image.rows), max_pixels);
+  if (file_size != nullptr) *file_size = full_size.empty() ? image.size() : full_size;
   return image;
 }
 
@@ -361,7 +377,8 @@ struct ImageSource::Impl {
         deliver_unreadable(frame, std::move(name), index, problem);
         return true;
       }
-      deliver(frame, to_grey(image), std::move(name), index);
+      const cv::Mat grey = to_grey(image);
+      deliver(frame, grey, grey.size(), std::move(name), index);
       return true;
     }
     // The backend stops at the first frame it cannot decode: what the
@@ -393,11 +410,13 @@ struct ImageSource::Impl {
     video_step = (options.video_fps > 0 && fps > options.video_fps) ? fps / options.video_fps : 1;
   }
 
-  void deliver(Frame& frame, const cv::Mat& grey, std::string name, std::size_t index) {
-    frame.image = limit_width(grey, options.max_width);
+  // `grey` of a file or video frame of `file_size`.
+  void deliver(Frame& frame, const cv::Mat& grey, cv::Size file_size, std::string name,
+               std::size_t index) {
+    frame.image = limit_width(grey, file_size, options.max_width);
     frame.name = std::move(name);
     frame.index = index;
-    frame.scale = static_cast<double>(frame.image.cols) / grey.cols;
+    frame.scale = static_cast<double>(frame.image.cols) / file_size.width;
     frame.unreadable.clear();
   }
 
@@ -427,14 +446,15 @@ struct ImageSource::Impl {
       // after it are numbered as in the sequence.
       const std::size_t index = frames_kept++;
       cv::Mat image;
+      cv::Size file_size;
       try {
-        image = read_checked_image(input.path, true, options.max_pixels, &options);
+        image = read_checked_image(input.path, true, options.max_pixels, &options, &file_size);
       } catch (const FileError& e) {
         if (!options.skip_unreadable) throw;
         deliver_unreadable(frame, input.path, index, e.problem());
         return true;
       }
-      deliver(frame, to_grey(image), input.path, index);
+      deliver(frame, to_grey(image), file_size, input.path, index);
       return true;
     }
   }
