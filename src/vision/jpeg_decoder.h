@@ -40,9 +40,9 @@ struct DecodedJpeg {
 // checks. A single-scan (baseline) JPEG is decoded and checked in one pass; a
 // progressive one is checked first, then decoded. With `max_width` > 0,
 // libjpeg scales the image down in its inverse DCT by 2, 4 or 8, as far as
-// it stays at least max_width wide (much faster than decoding it whole and
-// resizing). Reuses one libjpeg decompressor per thread. The caller bounds
-// the image size from the header first.
+// it stays at least twice max_width wide (much faster than decoding it whole;
+// the caller resizes the rest of the way). Reuses one libjpeg decompressor per thread. The caller
+// bounds the image size from the header first.
 DecodedJpeg decode_jpeg(const std::uint8_t* data, std::size_t size, bool grey, int max_width = 0);
 
 // The Exif orientation (1-8, TIFF's tag 274) of a JPEG's first APP1 Exif
