@@ -150,8 +150,8 @@ void check_extracted_pixels(const std::string& path, const char* what, std::uint
 
 // The checks of read_grey_image (and check_extracted_pixels when `options`
 // is given), then decoding to grey or BGR. With `options`, a JPEG may be
-// decoded smaller, down to its size after options->max_width; `file_size`
-// then receives the size the file declares.
+// decoded smaller, down to twice its size after options->max_width;
+// `file_size` receives the size of the whole image (as oriented).
 cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max_pixels,
                            const ImageSourceOptions* options = nullptr,
                            cv::Size* file_size = nullptr) {
