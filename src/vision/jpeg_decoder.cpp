@@ -6,8 +6,8 @@
 #include <cstring>
 #include <new>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
+#if defined(__x86_64__)
+#include <immintrin.h>
 #endif
 
 #include <jpeglib.h>
@@ -81,39 +81,12 @@ bool check_all(jpeg_decompress_struct& info, ErrorManager& errors, const std::ui
   return true;
 }
 
-using DecodeMcu = boolean (*)(j_decompress_ptr, JBLOCKROW*);
-
-// One libjpeg decompressor, kept per thread: creating one allocates its
-// memory pools, a measurable part of decoding a small frame.
-struct Decompressor {
-  jpeg_decompress_struct info{};
-  ErrorManager errors{};
-  DecodeMcu decode_mcu = nullptr;  // libjpeg's, wrapped by checked_decode_mcu
-  // Per component of the scan: the largest possible magnitude of each
-  // quantised coefficient (coefficient_possible's bound, divided out), and
-  // twice that.
-  std::uint16_t limits[MAX_COMPS_IN_SCAN][DCTSIZE2] = {};
-  std::uint16_t spans[MAX_COMPS_IN_SCAN][DCTSIZE2] = {};
-
-  Decompressor() {
-    info.err = jpeg_std_error(&errors.base);
-    errors.base.error_exit = fail;
-    errors.base.emit_message = emit;
-    info.client_data = this;
-    if (setjmp(errors.escape) != 0) throw std::bad_alloc();  // the only failure
-    jpeg_create_decompress(&info);
-  }
-  ~Decompressor() { jpeg_destroy_decompress(&info); }
-  Decompressor(const Decompressor&) = delete;
-  Decompressor& operator=(const Decompressor&) = delete;
-};
-
 // coefficient_possible over a block, as |c| <= limit <=> (c + limit) mod
 // 2^16 <= 2 limit (limit < 2^15): one add and one unsigned comparison per
-// coefficient, 8 at a time. Most coefficients are 0, and checking them one
-// by one would cost a third of the decoding.
+// coefficient, 8 or 16 at a time. Most coefficients are 0, and checking them
+// one by one would cost a third of the decoding.
 bool block_within(const JCOEF* block, const std::uint16_t* limits, const std::uint16_t* spans) {
-#if defined(__SSE2__)
+#if defined(__x86_64__)
   __m128i outside = _mm_setzero_si128();
   for (int k = 0; k < DCTSIZE2; k += 8) {
     const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(block + k));
@@ -131,6 +104,58 @@ bool block_within(const JCOEF* block, const std::uint16_t* limits, const std::ui
 #endif
 }
 
+#if defined(__x86_64__)
+__attribute__((target("avx2"))) bool block_within_avx2(const JCOEF* block,
+                                                       const std::uint16_t* limits,
+                                                       const std::uint16_t* spans) {
+  __m256i outside = _mm256_setzero_si256();
+  for (int k = 0; k < DCTSIZE2; k += 16) {
+    const __m256i c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(block + k));
+    const __m256i limit = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(limits + k));
+    const __m256i span = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(spans + k));
+    outside = _mm256_or_si256(outside, _mm256_subs_epu16(_mm256_add_epi16(c, limit), span));
+  }
+  return _mm256_testz_si256(outside, outside) != 0;
+}
+#endif
+
+using BlockCheck = bool (*)(const JCOEF*, const std::uint16_t*, const std::uint16_t*);
+
+BlockCheck best_block_check() {
+#if defined(__x86_64__)
+  if (__builtin_cpu_supports("avx2")) return block_within_avx2;
+#endif
+  return block_within;
+}
+
+using DecodeMcu = boolean (*)(j_decompress_ptr, JBLOCKROW*);
+
+// One libjpeg decompressor, kept per thread: creating one allocates its
+// memory pools, a measurable part of decoding a small frame.
+struct Decompressor {
+  jpeg_decompress_struct info{};
+  ErrorManager errors{};
+  DecodeMcu decode_mcu = nullptr;  // libjpeg's, wrapped by checked_decode_mcu
+  // Per component of the scan: the largest possible magnitude of each
+  // quantised coefficient (coefficient_possible's bound, divided out), and
+  // twice that.
+  std::uint16_t limits[MAX_COMPS_IN_SCAN][DCTSIZE2] = {};
+  std::uint16_t spans[MAX_COMPS_IN_SCAN][DCTSIZE2] = {};
+  BlockCheck block_check = best_block_check();
+
+  Decompressor() {
+    info.err = jpeg_std_error(&errors.base);
+    errors.base.error_exit = fail;
+    errors.base.emit_message = emit;
+    info.client_data = this;
+    if (setjmp(errors.escape) != 0) throw std::bad_alloc();  // the only failure
+    jpeg_create_decompress(&info);
+  }
+  ~Decompressor() { jpeg_destroy_decompress(&info); }
+  Decompressor(const Decompressor&) = delete;
+  Decompressor& operator=(const Decompressor&) = delete;
+};
+
 // libjpeg's decode_mcu, then the check of every block of the MCU: all
 // components, also those a grey output does not need (they are
 // entropy-decoded all the same).
@@ -139,7 +164,8 @@ boolean checked_decode_mcu(j_decompress_ptr info, JBLOCKROW* blocks) {
   if (!decompressor->decode_mcu(info, blocks)) return FALSE;
   for (int b = 0; b < info->blocks_in_MCU; ++b) {
     const int in_scan = info->MCU_membership[b];
-    if (!block_within(blocks[b][0], decompressor->limits[in_scan], decompressor->spans[in_scan])) {
+    if (!decompressor->block_check(blocks[b][0], decompressor->limits[in_scan],
+                                   decompressor->spans[in_scan])) {
       const jpeg_component_info* component = info->cur_comp_info[in_scan];
       ErrorManager& errors = decompressor->errors;
       std::snprintf(errors.message, sizeof errors.message,
