@@ -88,11 +88,12 @@ void BM_CvImdecodeGrey(benchmark::State& state) {
 }
 BENCHMARK(BM_CvImdecodeGrey)->Unit(benchmark::kMicrosecond);
 
-// Frames wanted 256 wide (--max-width 256): binbow's ImageSource decodes at
-// half size in libjpeg's inverse DCT; OpenCV reads whole, then resizes.
-void BM_BinbowImageSourceMaxWidth256(benchmark::State& state) {
+// Frames wanted 128 wide (--max-width 128): binbow's ImageSource decodes at
+// half size in libjpeg's inverse DCT, then resizes; OpenCV reads whole, then
+// resizes.
+void BM_BinbowImageSourceMaxWidth128(benchmark::State& state) {
   ImageSourceOptions options;
-  options.max_width = 256;
+  options.max_width = 128;
   std::size_t i = 0;
   for (auto _ : state) {
     ImageSource source({files()[i++ % files().size()]}, options);
@@ -102,17 +103,17 @@ void BM_BinbowImageSourceMaxWidth256(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
 }
-BENCHMARK(BM_BinbowImageSourceMaxWidth256)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BinbowImageSourceMaxWidth128)->Unit(benchmark::kMicrosecond);
 
-void BM_CvImreadGreyResize256(benchmark::State& state) {
+void BM_CvImreadGreyResize128(benchmark::State& state) {
   run(state, [](std::size_t i) {
     const cv::Mat full = cv::imread(files()[i], cv::IMREAD_GRAYSCALE);
-    cv::Mat half;
-    cv::resize(full, half, cv::Size(256, full.rows * 256 / full.cols), 0, 0, cv::INTER_AREA);
-    return half;
+    cv::Mat small;
+    cv::resize(full, small, cv::Size(128, full.rows * 128 / full.cols), 0, 0, cv::INTER_AREA);
+    return small;
   });
 }
-BENCHMARK(BM_CvImreadGreyResize256)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CvImreadGreyResize128)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace binbow::vision
