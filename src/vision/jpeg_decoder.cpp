@@ -12,8 +12,15 @@
 
 #include <jpeglib.h>
 // libjpeg's module interfaces: each MCU's coefficients are checked as the
-// entropy decoder (jpeg_entropy_decoder::decode_mcu) delivers them.
+// entropy decoder (jpeg_entropy_decoder::decode_mcu) delivers them. Where the
+// -dev package does not install this header, every JPEG is checked in a
+// separate pass first.
+#if __has_include(<jpegint.h>)
 #include <jpegint.h>
+#define BINBOW_JPEG_ONE_PASS_CHECK 1
+#else
+#define BINBOW_JPEG_ONE_PASS_CHECK 0
+#endif
 
 namespace binbow::vision {
 namespace {
@@ -156,6 +163,7 @@ struct Decompressor {
   Decompressor& operator=(const Decompressor&) = delete;
 };
 
+#if BINBOW_JPEG_ONE_PASS_CHECK
 // libjpeg's decode_mcu, then the check of every block of the MCU: all
 // components, also those a grey output does not need (they are
 // entropy-decoded all the same).
@@ -177,6 +185,25 @@ boolean checked_decode_mcu(j_decompress_ptr info, JBLOCKROW* blocks) {
   }
   return TRUE;
 }
+
+// Wraps the entropy decoder of a started single-scan decompression with
+// checked_decode_mcu, for the quantisation tables of its scan.
+void check_while_decoding(Decompressor& decompressor) {
+  jpeg_decompress_struct& info = decompressor.info;
+  for (int c = 0; c < info.comps_in_scan; ++c) {
+    const JQUANT_TBL* table = info.cur_comp_info[c]->quant_table;
+    for (int k = 0; k < DCTSIZE2; ++k) {
+      // A quantiser of 0 makes every coefficient 0 once dequantised.
+      const unsigned quantiser = table != nullptr ? table->quantval[k] : 1;
+      const unsigned limit = quantiser == 0 ? 32767 : (1024 + quantiser) / quantiser;
+      decompressor.limits[c][k] = static_cast<std::uint16_t>(limit);
+      decompressor.spans[c][k] = static_cast<std::uint16_t>(2 * limit);
+    }
+  }
+  decompressor.decode_mcu = info.entropy->decode_mcu;
+  info.entropy->decode_mcu = checked_decode_mcu;
+}
+#endif
 
 // Reads big- or little-endian integers inside [data, data + size).
 struct TiffBytes {
@@ -273,27 +300,17 @@ Outcome decode(Decompressor& decompressor, const std::uint8_t* data, std::size_t
   jpeg_mem_src(&info, data, static_cast<unsigned long>(size));
   jpeg_read_header(&info, TRUE);
   if (info.num_components == 4) return Outcome::kForOpenCV;
-  if (!checked && jpeg_has_multiple_scans(&info)) return Outcome::kCheckedElsewhere;
+  if (!checked && (!BINBOW_JPEG_ONE_PASS_CHECK || jpeg_has_multiple_scans(&info)))
+    return Outcome::kCheckedElsewhere;
   info.out_color_space = grey ? JCS_GRAYSCALE : JCS_EXT_BGR;
   full_size = cv::Size(static_cast<int>(info.image_width), static_cast<int>(info.image_height));
   info.scale_num = 1;
   info.scale_denom = static_cast<unsigned>(scale_denominator(info.image_width, max_width));
   jpeg_start_decompress(&info);
+#if BINBOW_JPEG_ONE_PASS_CHECK
   // A single scan: no block is decoded before the first scanline is read.
-  if (!checked) {
-    for (int c = 0; c < info.comps_in_scan; ++c) {
-      const JQUANT_TBL* table = info.cur_comp_info[c]->quant_table;
-      for (int k = 0; k < DCTSIZE2; ++k) {
-        // A quantiser of 0 makes every coefficient 0 once dequantised.
-        const unsigned quantiser = table != nullptr ? table->quantval[k] : 1;
-        const unsigned limit = quantiser == 0 ? 32767 : (1024 + quantiser) / quantiser;
-        decompressor.limits[c][k] = static_cast<std::uint16_t>(limit);
-        decompressor.spans[c][k] = static_cast<std::uint16_t>(2 * limit);
-      }
-    }
-    decompressor.decode_mcu = info.entropy->decode_mcu;
-    info.entropy->decode_mcu = checked_decode_mcu;
-  }
+  if (!checked) check_while_decoding(decompressor);
+#endif
   image.create(static_cast<int>(info.output_height), static_cast<int>(info.output_width),
                grey ? CV_8UC1 : CV_8UC3);
   constexpr JDIMENSION kRowsAtOnce = 4;  // libjpeg's rec_outbuf_height is at most 4
