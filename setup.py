@@ -7,8 +7,9 @@ prefix: the `binbow` CLI, built by the same CMake run, is binbow/bin/binbow
 and the bundled data (default vocabularies, the demo's sample sequence, each
 with its license notice) binbow/share/binbow, where the CLI looks for it
 (<exe>/../share/binbow); the `binbow` console script and `python -m binbow`
-exec that CLI (binbow/_cli.py). The version is the one of CMakeLists.txt's
-project(VERSION).
+exec that CLI (binbow/_cli.py). The image/video module (OpenCV's imgcodecs and
+videoio, loaded on first use) is binbow/lib/binbow/binbow_media.so. The
+version is the one of CMakeLists.txt's project(VERSION).
 """
 import os
 import re
@@ -72,6 +73,13 @@ class BuildWithCMake(build_ext):
         packaged_cli.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(cli, packaged_cli)
         packaged_cli.chmod(0o755)
+        # The image/video module, loaded on first use from <package>/lib/binbow.
+        media = build_dir / "python" / "binbow" / "lib" / "binbow" / "binbow_media.so"
+        if not media.is_file():
+            sys.exit(f"setup.py: CMake built no image/video module at {media}")
+        packaged_media = target.parent / "lib" / "binbow" / "binbow_media.so"
+        packaged_media.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(media, packaged_media)
 
 
 class BuildWithData(build_py):

@@ -16,6 +16,8 @@ install(TARGETS binbow_dbow2 EXPORT binbowDbow2Targets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS binbow RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The image/video module, loaded by binbow::vision on first use (src/media/).
+install(TARGETS binbow_media LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/binbow)
 install(DIRECTORY include/binbow DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT binbowCoreTargets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
@@ -36,7 +38,7 @@ install(FILES ${CMAKE_CURRENT_BINARY_DIR}/binbowConfig.cmake
 # pkg-config files for builds without CMake, relocatable (the prefix is found
 # from the file's own folder). No -std= flag: binbow needs C++17 or later,
 # which the consumer chooses. Dependencies binbow's headers do not show
-# (zlib, matio, libjpeg) are private requirements of shared libraries, and
+# (zlib, libjpeg) are private requirements of shared libraries, and
 # public ones of static libraries, which cannot link without them.
 file(RELATIVE_PATH BINBOW_PC_TO_PREFIX /prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig /prefix)
 if(BUILD_SHARED_LIBS)

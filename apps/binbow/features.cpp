@@ -8,7 +8,6 @@
 #include <vector>
 
 #include <opencv2/features2d.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "binbow/error.h"
@@ -18,6 +17,7 @@
 #include "extractor_options.h"
 #include "image_source_options.h"
 #include "output_options.h"
+#include "vision/media_module.h"
 
 namespace binbow::cli {
 namespace {
@@ -67,7 +67,7 @@ void draw_features(const cv::Mat& image, const vision::Features& features,
                     cv::DrawMatchesFlags::DRAW_RICH_KEYPOINTS);
   bool written = false;
   try {
-    written = cv::imwrite(path, canvas);
+    written = vision::media_module().write_image(path, canvas);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot write image: " + e.msg);
   }
@@ -77,7 +77,7 @@ void draw_features(const cv::Mat& image, const vision::Features& features,
 void run_features(const FeaturesArguments& arguments) {
   check_options_apply(arguments);
   if (!arguments.draw.empty()) {
-    if (!cv::haveImageWriter(arguments.draw)) {
+    if (!vision::media_module().have_image_writer(arguments.draw)) {
       throw CLI::ValidationError(
           "--draw",
           arguments.draw + ": OpenCV has no image writer for this extension (use .png or .jpg)");

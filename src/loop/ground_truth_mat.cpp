@@ -14,6 +14,7 @@
 
 #include "binbow/error.h"
 #include "loop/ground_truth_readers.h"
+#include "vision/media_module.h"
 
 namespace binbow::loop::detail {
 namespace {
@@ -34,10 +35,10 @@ void collect_nonzero(const void* data, std::size_t rows, std::size_t first_colum
 }
 
 struct MatCloser {
-  void operator()(mat_t* m) const { Mat_Close(m); }
+  void operator()(mat_t* m) const { vision::media_module().mat_close(m); }
 };
 struct VarFreer {
-  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+  void operator()(matvar_t* v) const { vision::media_module().mat_var_free(v); }
 };
 
 // The level-5 data types that stand at the top of a .mat file, and the ones
@@ -494,13 +495,15 @@ void read_compressed_dense(const std::string& path, const VariableLayout& layout
 LoadedGroundTruth read_ground_truth_mat(const std::string& path,
                                         const GroundTruthOptions& options) {
   const std::vector<VariableLayout> layouts = check_level5_elements(path);
-  std::unique_ptr<mat_t, MatCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
+  // matio comes with the image/video module: it links HDF5.
+  const media::Api& matio = vision::media_module();
+  std::unique_ptr<mat_t, MatCloser> file(matio.mat_open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) throw FileError(path, "not a readable MATLAB .mat file");
   std::unique_ptr<matvar_t, VarFreer> var;
   // matio reads the variables in file order, as the element walk listed them.
   std::size_t index = 0;
   for (;; ++index) {
-    var.reset(Mat_VarReadNextInfo(file.get()));
+    var.reset(matio.mat_var_read_next_info(file.get()));
     if (!var) throw FileError(path, "no two-dimensional numeric or logical variable");
     if (var->rank == 2 && var->dims != nullptr && var->class_type != MAT_C_CHAR &&
         var->class_type != MAT_C_CELL && var->class_type != MAT_C_STRUCT &&
@@ -520,7 +523,7 @@ LoadedGroundTruth read_ground_truth_mat(const std::string& path,
   const std::size_t rows_read = std::min(rows, loaded.frames);
   const std::size_t columns_read = std::min(columns, loaded.frames);
   if (var->class_type == MAT_C_SPARSE) {
-    if (Mat_VarReadDataAll(file.get(), var.get()) != 0 || var->data == nullptr)
+    if (matio.mat_var_read_data_all(file.get(), var.get()) != 0 || var->data == nullptr)
       throw FileError(path, "cannot read sparse variable '" + name + "'");
     const auto* sparse = static_cast<const mat_sparse_t*>(var->data);
     if (sparse->jc == nullptr || sparse->ir == nullptr ||
@@ -575,7 +578,7 @@ LoadedGroundTruth read_ground_truth_mat(const std::string& path,
       int start[2] = {0, static_cast<int>(first)};
       int stride[2] = {1, 1};
       int edge[2] = {static_cast<int>(rows_read), static_cast<int>(count)};
-      if (Mat_VarReadData(file.get(), var.get(), buffer.data(), start, stride, edge) != 0)
+      if (matio.mat_var_read_data(file.get(), var.get(), buffer.data(), start, stride, edge) != 0)
         throw FileError(path, "cannot read variable '" + name + "' (truncated or damaged)");
       switch (var->class_type) {
         case MAT_C_DOUBLE:

@@ -5,13 +5,13 @@
 #include <filesystem>
 #include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "binbow/error.h"
 #include "binbow/loop/sweep.h"
 #include "binbow/vision/image_source.h"
 #include "core/file_io.h"
+#include "vision/media_module.h"
 
 namespace binbow::loop {
 namespace {
@@ -104,7 +104,7 @@ std::string pair_image(const ReportLoop& loop) {
     cv::circle(canvas, pb, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
   }
   std::vector<unsigned char> jpeg;
-  cv::imencode(".jpg", canvas, jpeg, {cv::IMWRITE_JPEG_QUALITY, 80});
+  vision::media_module().encode_image(".jpg", canvas, 80, jpeg);
   return "data:image/jpeg;base64," + base64(jpeg);
 }
 
@@ -428,7 +428,7 @@ std::vector<unsigned char> similarity_png(const LoopReport& report) {
   text(note, {left, y}, 0.4, colour(100, 100, 100));
 
   std::vector<unsigned char> bytes;
-  cv::imencode(".png", canvas, bytes);
+  vision::media_module().encode_image(".png", canvas, -1, bytes);
   return bytes;
 }
 

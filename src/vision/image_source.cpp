@@ -14,16 +14,14 @@
 #include <system_error>
 #include <utility>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
-#include <opencv2/videoio/registry.hpp>
 
 #include "binbow/error.h"
 #include "binbow/vision/features.h"
 #include "core/file_io.h"
 #include "vision/image_header.h"
-#include "vision/jpeg_check.h"
+#include "vision/jpeg_decoder.h"
+#include "vision/media_module.h"
 #include "vision/natural_order.h"
 #include "vision/regular_file.h"
 
@@ -69,48 +67,38 @@ cv::Mat to_grey(const cv::Mat& image) {
   return grey;
 }
 
-// The video-file backends of this OpenCV, in order of preference. CAP_ANY
-// would also try camera backends (gPhoto2 probes USB devices and leaks) and
-// CAP_IMAGES, which reads a file name as a printf pattern.
-const std::vector<int>& file_backends() {
-  static const std::vector<int> backends = [] {
-    std::vector<int> available;
-    for (const int backend : {cv::CAP_FFMPEG, cv::CAP_GSTREAMER, cv::CAP_OPENCV_MJPEG}) {
-      if (cv::videoio_registry::hasBackend(static_cast<cv::VideoCaptureAPIs>(backend))) {
-        available.push_back(backend);
-      }
-    }
-    if (available.empty()) available.push_back(cv::CAP_ANY);
-    return available;
-  }();
-  return backends;
-}
-
-// Opens a video file with the first backend that can; throws FileError.
-void open_video_file(cv::VideoCapture& capture, const std::string& path) {
-  bool opened = false;
+// Opens a video file with the first file backend that can; throws FileError.
+std::unique_ptr<media::Video> open_video_file(const std::string& path) {
+  std::unique_ptr<media::Video> video;
   try {
-    for (const int backend : file_backends()) {
-      if ((opened = capture.open(path, backend))) break;
-    }
+    video = media_module().open_video(path);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot open video: " + e.msg);
   }
-  if (!opened) throw FileError(path, "cannot open as an image or a video");
+  if (!video) throw FileError(path, "cannot open as an image or a video");
+  return video;
 }
 
 // The frame rate a video reports, 0 if none.
-double reported_frame_rate(const cv::VideoCapture& capture) {
-  const double fps = capture.get(cv::CAP_PROP_FPS);
+double reported_frame_rate(const media::Video& video) {
+  const double fps = video.fps();
   return std::isfinite(fps) && fps > 0 ? fps : 0;
 }
 
-cv::Mat limit_width(const cv::Mat& image, int max_width) {
-  if (max_width <= 0 || image.cols <= max_width) return image;
-  const double scale = static_cast<double>(max_width) / image.cols;
-  const int height = std::max(1, static_cast<int>(std::lround(image.rows * scale)));
+// The frame size max_width gives a file or video frame of `width` x `height`.
+cv::Size size_after_max_width(int width, int height, int max_width) {
+  if (max_width <= 0 || width <= max_width) return {width, height};
+  const double scale = static_cast<double>(max_width) / width;
+  return {max_width, std::max(1, static_cast<int>(std::lround(height * scale)))};
+}
+
+// `image` (the file's `file_size`, or smaller when libjpeg scaled it down
+// while decoding) at the size max_width gives the file.
+cv::Mat limit_width(const cv::Mat& image, cv::Size file_size, int max_width) {
+  const cv::Size size = size_after_max_width(file_size.width, file_size.height, max_width);
+  if (image.size() == size) return image;
   cv::Mat resized;
-  cv::resize(image, resized, cv::Size(max_width, height), 0, 0, cv::INTER_AREA);
+  cv::resize(image, resized, size, 0, 0, cv::INTER_AREA);
   return resized;
 }
 
@@ -161,9 +149,12 @@ void check_extracted_pixels(const std::string& path, const char* what, std::uint
 }
 
 // The checks of read_grey_image (and check_extracted_pixels when `options`
-// is given), then decoding with `imread_flags`.
-cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint64_t max_pixels,
-                           const ImageSourceOptions* options = nullptr) {
+// is given), then decoding to grey or BGR. With `options`, a JPEG may be
+// decoded smaller, down to twice its size after options->max_width;
+// `file_size` receives the size of the whole image (as oriented).
+cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max_pixels,
+                           const ImageSourceOptions* options = nullptr,
+                           cv::Size* file_size = nullptr) {
   const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
   if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
@@ -187,15 +178,17 @@ cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint6
                     "image header declares " + describe_size(declared->width, declared->height) +
                         " pixels, more than " + std::to_string(bytes.size()) + " bytes can hold");
   }
-  if (std::strcmp(declared->format, "jpeg") == 0) {
-    const std::string problem = jpeg_decoding_problem(data, bytes.size());
-    if (!problem.empty()) throw FileError(path, "damaged JPEG: " + problem);
-  }
   cv::Mat image;
+  cv::Size full_size;
+  if (std::strcmp(declared->format, "jpeg") == 0) {
+    DecodedJpeg decoded =
+        decode_jpeg(data, bytes.size(), grey, options != nullptr ? options->max_width : 0);
+    if (!decoded.problem.empty()) throw FileError(path, "damaged JPEG: " + decoded.problem);
+    image = std::move(decoded.image);  // empty for the CMYK JPEGs OpenCV converts
+    full_size = decoded.full_size;
+  }
   try {
-    image = cv::imdecode(
-        cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
-        imread_flags);
+    if (image.empty()) image = media_module().decode_image(data, bytes.size(), grey);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot decode image: " + e.msg);
   }
@@ -206,6 +199,7 @@ cv::Mat read_checked_image(const std::string& path, int imread_flags, std::uint6
   // The decoder read the same header; a larger result means this reader was misled.
   check_pixel_count(path, "decoded image", static_cast<std::uint64_t>(image.cols),
                     static_cast<std::uint64_t>(image.rows), max_pixels);
+  if (file_size != nullptr) *file_size = full_size.empty() ? image.size() : full_size;
   return image;
 }
 
@@ -233,21 +227,10 @@ bool split_video_frame_name(const std::string& name, std::string& video, long lo
 }
 
 cv::Mat read_video_frame(const std::string& path, long long frame) {
-  cv::VideoCapture capture;
-  open_video_file(capture, path);
+  const std::unique_ptr<media::Video> video = open_video_file(path);
   cv::Mat image;
   try {
-    // Seeking is exact for intra-only codecs and OpenCV's FFmpeg backend; a
-    // backend that cannot seek, or lands elsewhere, is read from the start.
-    const auto target = static_cast<double>(frame);
-    const bool sought = frame == 0 || (capture.set(cv::CAP_PROP_POS_FRAMES, target) &&
-                                       capture.get(cv::CAP_PROP_POS_FRAMES) == target);
-    if (!sought) {
-      open_video_file(capture, path);
-      long long skipped = 0;
-      while (skipped < frame && capture.grab()) ++skipped;
-    }
-    capture.read(image);
+    if (video->seek(frame) && video->grab()) video->retrieve(image);
   } catch (const cv::Exception& e) {
     throw FileError(path, "cannot read frame " + std::to_string(frame) + ": " + e.msg);
   }
@@ -275,7 +258,7 @@ ImageSourceOptions limit_for_extractor(ImageSourceOptions options,
 }
 
 cv::Mat read_grey_image(const std::string& path, std::uint64_t max_pixels) {
-  return to_grey(read_checked_image(path, cv::IMREAD_GRAYSCALE, max_pixels));
+  return to_grey(read_checked_image(path, true, max_pixels));
 }
 
 cv::Mat read_frame(const std::string& name, FramePixels pixels) {
@@ -286,8 +269,8 @@ cv::Mat read_frame(const std::string& name, FramePixels pixels) {
       fs::is_regular_file(video, error)) {
     return to_pixels(read_video_frame(video, frame), pixels);
   }
-  const int flags = pixels == FramePixels::kGrey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR;
-  return to_pixels(read_checked_image(name, flags, kDefaultMaxImagePixels), pixels);
+  return to_pixels(read_checked_image(name, pixels == FramePixels::kGrey, kDefaultMaxImagePixels),
+                   pixels);
 }
 
 struct ImageSource::Impl {
@@ -303,7 +286,7 @@ struct ImageSource::Impl {
   std::size_t frames_seen = 0;  // before the stride
   std::size_t frames_kept = 0;
   // The video being read, if any.
-  cv::VideoCapture capture;
+  std::unique_ptr<media::Video> video;
   std::string video_path;
   long long video_frame = -1;
   long long video_declared_frames = 0;  // CAP_PROP_FRAME_COUNT; 0 when unknown
@@ -335,10 +318,10 @@ struct ImageSource::Impl {
     } else if (has_list_extension(path)) {
       if (list != nullptr) throw FileError(*list, "lists '" + path + "'; lists do not nest");
       add_list(path);
-    } else if (cv::haveImageReader(path)) {
+    } else if (media_module().have_image_reader(path)) {
       inputs.push_back({path, false});
     } else {
-      inputs.push_back({path, true});  // anything else: let cv::VideoCapture try
+      inputs.push_back({path, true});  // anything else: let the video backends try
     }
   }
 
@@ -380,7 +363,7 @@ struct ImageSource::Impl {
   bool keep_next() { return frames_seen++ % options.stride == 0; }
 
   bool next_video_frame(Frame& frame) {
-    while (capture.grab()) {
+    while (video->grab()) {
       ++video_frame;
       if (static_cast<double>(video_frame) + 1e-9 < next_sample) continue;
       next_sample += video_step;
@@ -388,13 +371,14 @@ struct ImageSource::Impl {
       cv::Mat image;
       std::string name = video_path + "#" + std::to_string(video_frame);
       const std::size_t index = frames_kept++;
-      if (!capture.retrieve(image) || image.empty()) {
+      if (!video->retrieve(image) || image.empty()) {
         const std::string problem = "cannot decode frame " + std::to_string(video_frame);
         if (!options.skip_unreadable) throw FileError(video_path, problem);
         deliver_unreadable(frame, std::move(name), index, problem);
         return true;
       }
-      deliver(frame, to_grey(image), std::move(name), index);
+      const cv::Mat grey = to_grey(image);
+      deliver(frame, grey, grey.size(), std::move(name), index);
       return true;
     }
     // The backend stops at the first frame it cannot decode: what the
@@ -402,7 +386,7 @@ struct ImageSource::Impl {
     if (video_declared_frames > video_frame + 1) {
       unreadable_frames += static_cast<std::size_t>(video_declared_frames - (video_frame + 1));
     }
-    capture.release();
+    video.reset();
     return false;
   }
 
@@ -410,27 +394,29 @@ struct ImageSource::Impl {
     video_path = path;
     video_frame = -1;
     next_sample = 0;
-    open_video_file(capture, path);
-    const double width = capture.get(cv::CAP_PROP_FRAME_WIDTH);
-    const double height = capture.get(cv::CAP_PROP_FRAME_HEIGHT);
+    video = open_video_file(path);
+    const double width = video->width();
+    const double height = video->height();
     if (width >= 0 && height >= 0 && width < 1e12 && height < 1e12) {
       check_pixel_count(path, "video", static_cast<std::uint64_t>(width),
                         static_cast<std::uint64_t>(height), options.max_pixels);
       check_extracted_pixels(path, "video frame", static_cast<std::uint64_t>(width),
                              static_cast<std::uint64_t>(height), options);
     }
-    const double declared = capture.get(cv::CAP_PROP_FRAME_COUNT);
+    const double declared = video->frame_count();
     video_declared_frames =
         std::isfinite(declared) && declared > 0 && declared < 1e15 ? std::llround(declared) : 0;
-    const double fps = reported_frame_rate(capture);
+    const double fps = reported_frame_rate(*video);
     video_step = (options.video_fps > 0 && fps > options.video_fps) ? fps / options.video_fps : 1;
   }
 
-  void deliver(Frame& frame, const cv::Mat& grey, std::string name, std::size_t index) {
-    frame.image = limit_width(grey, options.max_width);
+  // `grey` of a file or video frame of `file_size`.
+  void deliver(Frame& frame, const cv::Mat& grey, cv::Size file_size, std::string name,
+               std::size_t index) {
+    frame.image = limit_width(grey, file_size, options.max_width);
     frame.name = std::move(name);
     frame.index = index;
-    frame.scale = static_cast<double>(frame.image.cols) / grey.cols;
+    frame.scale = static_cast<double>(frame.image.cols) / file_size.width;
     frame.unreadable.clear();
   }
 
@@ -445,7 +431,7 @@ struct ImageSource::Impl {
 
   bool next(Frame& frame) {
     for (;;) {
-      if (capture.isOpened()) {
+      if (video) {
         if (next_video_frame(frame)) return true;
         continue;
       }
@@ -460,14 +446,15 @@ struct ImageSource::Impl {
       // after it are numbered as in the sequence.
       const std::size_t index = frames_kept++;
       cv::Mat image;
+      cv::Size file_size;
       try {
-        image = read_checked_image(input.path, cv::IMREAD_GRAYSCALE, options.max_pixels, &options);
+        image = read_checked_image(input.path, true, options.max_pixels, &options, &file_size);
       } catch (const FileError& e) {
         if (!options.skip_unreadable) throw;
         deliver_unreadable(frame, input.path, index, e.problem());
         return true;
       }
-      deliver(frame, to_grey(image), input.path, index);
+      deliver(frame, to_grey(image), file_size, input.path, index);
       return true;
     }
   }
@@ -515,9 +502,7 @@ double ImageSource::frame_rate() const {
   for (Impl::Input& input : impl_->inputs) {
     if (!input.video) return 0;
     if (input.frame_rate < 0) {
-      cv::VideoCapture capture;
-      open_video_file(capture, input.path);
-      input.frame_rate = reported_frame_rate(capture);
+      input.frame_rate = reported_frame_rate(*open_video_file(input.path));
     }
     if (input.frame_rate == 0 || (rate != 0 && input.frame_rate != rate)) return 0;
     rate = input.frame_rate;

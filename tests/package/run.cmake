@@ -86,7 +86,7 @@ foreach(consumer core vision)
     set(private_requirements zlib)
   else()
     set(module binbow-vision)
-    set(private_requirements matio libjpeg)
+    set(private_requirements libjpeg)
   endif()
   # The consumer chooses its C++ standard (C++17 or later).
   run("pkg-config --cflags ${module}" pkg-config --cflags ${module})
