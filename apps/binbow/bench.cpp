@@ -124,7 +124,7 @@ void run_bench(BenchArguments args) {
       progress.update(frames.size());
     }
     // After the loop: stage() may move the samples `features` refers to.
-    stage("features, wall time per frame, " + std::to_string(pipeline.threads()) + " threads") =
+    stage("features, wall/frame, " + std::to_string(pipeline.threads()) + " threads") =
         std::move(delivered);
   }
   if (frames.empty()) throw InvalidArgument("bench: the input has no frames");
