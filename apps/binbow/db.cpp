@@ -94,9 +94,6 @@ struct AddedImages {
   std::size_t skipped = 0;
 };
 
-// Adds every frame of the inputs, labelled with its name. A frame skipped as
-// unreadable is added without features (it matches nothing), so that entries
-// keep the frames' order and numbering, as in detect-loops.
 // The frames of `inputs` described by `extractor`, read ahead on `threads`
 // threads.
 vision::FramePipeline described_frames(const std::vector<std::string>& inputs,
@@ -107,6 +104,9 @@ vision::FramePipeline described_frames(const std::vector<std::string>& inputs,
   return vision::FramePipeline(std::move(source), std::move(extractor), {threads, 0});
 }
 
+// Adds every frame of the inputs, labelled with its name. A frame skipped as
+// unreadable is added without features (it matches nothing), so that entries
+// keep the frames' order and numbering, as in detect-loops.
 AddedImages add_images(Database& database,
                        const std::shared_ptr<const vision::FeatureExtractor>& extractor,
                        const std::vector<std::string>& inputs,
