@@ -25,6 +25,7 @@
 #include "binbow/loop/sequence.h"
 #include "binbow/loop/similarity.h"
 #include "binbow/vision/features.h"
+#include "binbow/vision/frame_pipeline.h"
 #include "binding.h"
 #include "core/output_path.h"
 
@@ -604,9 +605,13 @@ detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> v
              const py::object& descriptor, const py::object& max_features, const py::object& params,
              long long stride, long long max_width, double video_fps, const py::object& progress,
              bool online, const std::string& resume_state, const std::string& save_state,
-             bool skip_unreadable) {
+             bool skip_unreadable, long long threads) {
   loop::SequenceOptions options;
   options.source = source_options(stride, max_width, video_fps, skip_unreadable);
+  if (threads < 0 || threads > vision::kMaxPipelineThreads)
+    throw py::value_error("threads must be in [0, " + std::to_string(vision::kMaxPipelineThreads) +
+                          "], got " + std::to_string(threads));
+  options.threads = static_cast<unsigned>(threads);
   if (const auto extractor = extractor_of(descriptor)) {
     if (!max_features.is_none())
       throw py::value_error(
@@ -778,7 +783,7 @@ void bind_sequences(py::module_& m) {
         py::arg("descriptor"), py::arg("max_features"), py::arg("params"), py::arg("stride"),
         py::arg("max_width"), py::arg("video_fps"), py::arg("progress"), py::arg("online") = false,
         py::arg("resume_state") = "", py::arg("save_state") = "",
-        py::arg("skip_unreadable") = false,
+        py::arg("skip_unreadable") = false, py::arg("threads") = 0,
         "binbow.detect_loops once its arguments are resolved (use that): the frames and\n"
         "the parameters used.");
   m.def(

@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git ccache
   libopencv-dev libjpeg-dev libmatio-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  opencv-doc
   libcli11-dev nlohmann-json3-dev
   pybind11-dev python3-dev python3-numpy
   python3-pytest python3-opencv python3-matplotlib python3-pip python3-setuptools python3-wheel

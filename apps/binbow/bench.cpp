@@ -15,12 +15,14 @@
 #include "binbow/loop/loop_detector.h"
 #include "binbow/loop/run_record.h"
 #include "binbow/vision/features.h"
+#include "binbow/vision/frame_pipeline.h"
 #include "binbow/vision/image_source.h"
 #include "commands.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
 #include "progress.h"
+#include "threads_options.h"
 
 namespace binbow::cli {
 
@@ -40,6 +42,7 @@ struct BenchArguments {
   std::size_t database_size = 10000;
   int load_repeats = 5;
   vision::ImageSourceOptions source;
+  unsigned threads = 0;
 };
 
 struct Frame {
@@ -83,7 +86,8 @@ void run_bench(BenchArguments args) {
   Vocabulary vocabulary;
   const std::string vocabulary_path =
       load_loop_vocabulary(args.vocabulary, args.descriptor, vocabulary);
-  const auto extractor = vision::make_extractor(args.descriptor, args.features);
+  const std::shared_ptr<const vision::FeatureExtractor> extractor =
+      vision::make_extractor(args.descriptor, args.features);
 
   // Each stage's samples in milliseconds: per load, per frame, per entry, per query.
   std::vector<loop::StageTiming> timing;
@@ -102,16 +106,26 @@ void run_bench(BenchArguments args) {
   std::vector<Frame> frames;
   auto& features = stage("features");
   {
-    vision::ImageSource source(args.inputs, vision::limit_for_extractor(args.source, *extractor));
-    const long long total = source.size();
+    vision::FramePipeline pipeline(
+        vision::ImageSource(args.inputs, vision::limit_for_extractor(args.source, *extractor)),
+        extractor, {args.threads, 0});
+    // Between frames delivered in order: what extraction costs a frame when
+    // the pipeline's threads share the work.
+    std::vector<double> delivered;
+    const long long total = pipeline.size();
     Progress progress("features", total > 0 ? static_cast<std::size_t>(total) : 0);
-    vision::Frame frame;
-    while (source.next(frame)) {
-      const auto start = Clock::now();
-      frames.push_back({vision::extract_features(*extractor, frame.image, frame.name)});
-      features.push_back(elapsed_ms(start));
+    vision::ExtractedFrame frame;
+    auto last = Clock::now();
+    while (pipeline.next(frame)) {
+      delivered.push_back(elapsed_ms(last));
+      last = Clock::now();
+      frames.push_back({std::move(frame.features)});
+      features.push_back(frame.features_ms);
       progress.update(frames.size());
     }
+    // After the loop: stage() may move the samples `features` refers to.
+    stage("features, wall/frame, " + std::to_string(pipeline.threads()) + " threads") =
+        std::move(delivered);
   }
   if (frames.empty()) throw InvalidArgument("bench: the input has no frames");
 
@@ -188,6 +202,7 @@ void add_bench_command(CLI::App& app) {
       ->check(CLI::Range(1, 10000000))
       ->capture_default_str();
   add_image_source_options(cmd, args->source);
+  add_threads_option(cmd, args->threads);
   cmd->callback([args] { run_bench(*args); });
 }
 

@@ -12,6 +12,7 @@
 #include "binbow/error.h"
 #include "binbow/formats.h"
 #include "binbow/vision/features.h"
+#include "binbow/vision/frame_pipeline.h"
 #include "binbow/vision/image_source.h"
 #include "commands.h"
 #include "default_vocabulary.h"
@@ -19,6 +20,7 @@
 #include "image_source_options.h"
 #include "output_options.h"
 #include "progress.h"
+#include "threads_options.h"
 #include "vision/regular_file.h"
 
 namespace binbow::cli {
@@ -34,6 +36,7 @@ struct DbBuildArguments {
   bool no_direct_index = false;
   bool external_vocabulary = false;
   vision::ImageSourceOptions source;
+  unsigned threads = 0;
 };
 
 // What db query and db add need to read a database and describe images for it.
@@ -44,6 +47,7 @@ struct DbArguments {
   std::string vocabulary;
   std::vector<std::string> inputs;
   vision::ImageSourceOptions source;
+  unsigned threads = 0;
 };
 
 struct DbQueryArguments : DbArguments {
@@ -56,10 +60,11 @@ struct DbRemoveArguments {
   std::string vocabulary;
 };
 
-std::unique_ptr<vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
-                                                        const std::string& vocabulary_name,
-                                                        const std::string& descriptor, int features,
-                                                        bool embedded_in_database = false) {
+std::shared_ptr<const vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
+                                                              const std::string& vocabulary_name,
+                                                              const std::string& descriptor,
+                                                              int features,
+                                                              bool embedded_in_database = false) {
   const std::string name = descriptor_for(descriptor, vocabulary);
   auto extractor = vision::make_extractor(name, features);
   check_vocabulary_fits(vocabulary, vocabulary_name, name, extractor->code_size(),
@@ -75,8 +80,8 @@ Database load_database(const std::string& path, const std::string& vocabulary) {
 
 // The extractor of --descriptor, else the one the database's vocabulary
 // records, checked against that vocabulary: its own (embedded) or the --vocab given.
-std::unique_ptr<vision::FeatureExtractor> database_extractor(const Database& database,
-                                                             const DbArguments& arguments) {
+std::shared_ptr<const vision::FeatureExtractor> database_extractor(const Database& database,
+                                                                   const DbArguments& arguments) {
   const bool embedded = arguments.vocabulary.empty();
   return extractor_for(database.vocabulary(), embedded ? arguments.database : arguments.vocabulary,
                        arguments.descriptor, arguments.features, embedded);
@@ -89,27 +94,34 @@ struct AddedImages {
   std::size_t skipped = 0;
 };
 
+// The frames of `inputs` described by `extractor`, read ahead on `threads`
+// threads.
+vision::FramePipeline described_frames(const std::vector<std::string>& inputs,
+                                       const vision::ImageSourceOptions& options,
+                                       std::shared_ptr<const vision::FeatureExtractor> extractor,
+                                       unsigned threads) {
+  vision::ImageSource source(inputs, vision::limit_for_extractor(options, *extractor));
+  return vision::FramePipeline(std::move(source), std::move(extractor), {threads, 0});
+}
+
 // Adds every frame of the inputs, labelled with its name. A frame skipped as
 // unreadable is added without features (it matches nothing), so that entries
 // keep the frames' order and numbering, as in detect-loops.
-AddedImages add_images(Database& database, const vision::FeatureExtractor& extractor,
+AddedImages add_images(Database& database,
+                       const std::shared_ptr<const vision::FeatureExtractor>& extractor,
                        const std::vector<std::string>& inputs,
-                       const vision::ImageSourceOptions& options, std::size_t* features) {
-  vision::ImageSource source(inputs, vision::limit_for_extractor(options, extractor));
-  const long long known = source.size();
+                       const vision::ImageSourceOptions& options, unsigned threads,
+                       std::size_t* features) {
+  vision::FramePipeline frames = described_frames(inputs, options, extractor, threads);
+  const long long known = frames.size();
   Progress progress("adding images", known > 0 ? static_cast<std::size_t>(known) : 0);
   AddedImages added;
-  vision::Frame frame;
-  while (source.next(frame)) {
-    vision::Features extracted;
-    if (warn_if_unreadable(frame.name, frame.unreadable)) {
-      extracted.descriptors = DescriptorMatrix(extractor.code_size());
-      ++added.skipped;
-    } else {
-      extracted = vision::extract_features(extractor, frame.image, frame.name);
-    }
-    if (features != nullptr) *features += extracted.descriptors.rows();
-    const EntryId entry = database.add(extracted.descriptors.view(), frame.name);
+  vision::ExtractedFrame extracted;
+  while (frames.next(extracted)) {
+    const vision::Frame& frame = extracted.frame;
+    if (warn_if_unreadable(frame.name, frame.unreadable)) ++added.skipped;
+    if (features != nullptr) *features += extracted.features.descriptors.rows();
+    const EntryId entry = database.add(extracted.features.descriptors.view(), frame.name);
     added.entries.emplace_back(entry, frame.name);
     progress.update(added.entries.size());
   }
@@ -124,10 +136,11 @@ void run_db_build(DbBuildArguments arguments) {
   Vocabulary vocabulary;
   const std::string vocabulary_path =
       load_loop_vocabulary(arguments.vocabulary, arguments.descriptor, vocabulary);
-  const auto extractor = vision::make_extractor(arguments.descriptor, arguments.features);
+  const std::shared_ptr<const vision::FeatureExtractor> extractor =
+      vision::make_extractor(arguments.descriptor, arguments.features);
   Database database(vocabulary, {!arguments.no_direct_index, arguments.levels_up});
   std::size_t features = 0;
-  add_images(database, *extractor, arguments.inputs, arguments.source, &features);
+  add_images(database, extractor, arguments.inputs, arguments.source, arguments.threads, &features);
   if (database.size() == 0) throw InvalidArgument("db build: no images found in the inputs");
   database.save(arguments.output, !arguments.external_vocabulary);
   std::printf("%s: %zu entries, %zu features, vocabulary %s (%s)\n", arguments.output.c_str(),
@@ -137,18 +150,18 @@ void run_db_build(DbBuildArguments arguments) {
 void run_db_query(const DbQueryArguments& arguments) {
   const Database database = load_database(arguments.database, arguments.vocabulary);
   const auto extractor = database_extractor(database, arguments);
-  vision::ImageSource source(arguments.inputs,
-                             vision::limit_for_extractor(arguments.source, *extractor));
-  vision::Frame frame;
+  vision::FramePipeline frames =
+      described_frames(arguments.inputs, arguments.source, extractor, arguments.threads);
+  vision::ExtractedFrame extracted;
   BowVector bow;
   std::size_t skipped = 0;
-  for (std::size_t queries = 0; source.next(frame);) {
+  for (std::size_t queries = 0; frames.next(extracted);) {
+    const vision::Frame& frame = extracted.frame;
     if (warn_if_unreadable(frame.name, frame.unreadable)) {
       ++skipped;
       continue;
     }
-    const vision::Features features = vision::extract_features(*extractor, frame.image, frame.name);
-    database.vocabulary().transform(features.descriptors.view(), bow);
+    database.vocabulary().transform(extracted.features.descriptors.view(), bow);
     const auto results = database.query(bow, arguments.top);
     std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",
                 frame.name.c_str());
@@ -167,8 +180,8 @@ void run_db_add(const DbArguments& arguments) {
   const bool vocabulary_included = Database::inspect(arguments.database).vocabulary_included;
   Database database = load_database(arguments.database, arguments.vocabulary);
   const auto extractor = database_extractor(database, arguments);
-  const AddedImages added =
-      add_images(database, *extractor, arguments.inputs, arguments.source, nullptr);
+  const AddedImages added = add_images(database, extractor, arguments.inputs, arguments.source,
+                                       arguments.threads, nullptr);
   database.save(arguments.database, vocabulary_included);
   for (const auto& [entry, label] : added.entries)
     std::printf("added %u\t%s\n", entry, label.c_str());
@@ -204,6 +217,7 @@ void add_database_options(CLI::App* command, DbArguments& arguments,
                       "Vocabulary, for databases built with --external-vocab");
   add_image_source_options(command, arguments.source);
   add_skip_unreadable_option(command, arguments.source);
+  add_threads_option(command, arguments.threads);
 }
 
 }  // namespace
@@ -256,6 +270,7 @@ void add_db_command(CLI::App& app) {
       ->required();
   add_image_source_options(build_command, build->source);
   add_skip_unreadable_option(build_command, build->source);
+  add_threads_option(build_command, build->threads);
   build_command->callback([build] { run_db_build(*build); });
 
   auto query = std::make_shared<DbQueryArguments>();

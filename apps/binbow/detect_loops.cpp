@@ -23,6 +23,7 @@
 #include "loop_params_options.h"
 #include "output_options.h"
 #include "progress.h"
+#include "threads_options.h"
 
 namespace binbow::cli {
 namespace {
@@ -48,6 +49,7 @@ struct DetectLoopsArguments {
   std::string output;
   std::vector<std::string> inputs;
   vision::ImageSourceOptions source;
+  unsigned threads = 0;
 };
 
 std::string absolute(const std::string& path) {
@@ -156,6 +158,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   options.source = arguments.source;
   options.params_file = arguments.params;
   options.params_overrides = arguments.params_overrides;
+  options.threads = arguments.threads;
   options.extractor = vision::make_extractor(arguments.descriptor, arguments.max_features);
   loop::LoopRun run;
   run.online_vocabulary = arguments.online_vocabulary;
@@ -363,6 +366,7 @@ void add_detect_loops_command(CLI::App& app) {
                       "unless --print-params)");
   add_image_source_options(command, arguments->source);
   add_skip_unreadable_option(command, arguments->source);
+  add_threads_option(command, arguments->threads);
   command->callback([arguments, command, param_flags] {
     DetectLoopsArguments given = *arguments;
     given.params_overrides = loop_param_overrides(*param_flags);

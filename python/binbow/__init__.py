@@ -163,6 +163,7 @@ def detect_loops(
     resume_state=None,
     save_state=None,
     skip_unreadable=False,
+    threads=0,
 ):
     """Loop closures of an image sequence: what `binbow detect-loops` finds.
 
@@ -185,6 +186,9 @@ def detect_loops(
     warning (UserWarning naming the file and the reason) instead of an error:
     its LoopResult keeps the frame's index, with status "unreadable" and
     .unreadable the reason, and matches nothing (as `--skip-unreadable`).
+    threads: threads reading and describing frames ahead of the detector, which
+    takes them in order (0: every core; as `--threads`): the results are the
+    same for any number.
 
     save_state: a .bbld file to save the detector's state to after the last
     frame (LoopDetector.save; its folder is created). resume_state: a .bbld
@@ -254,6 +258,7 @@ def detect_loops(
     frames, used, similarity = _detect_loops(
         paths, vocabulary, descriptor, max_features, params, stride, max_width, video_fps,
         callback, online, resume_state or "", save_state or "", bool(skip_unreadable),
+        threads,
     )
     for frame in frames:
         if frame.unreadable:

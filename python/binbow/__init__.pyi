@@ -384,6 +384,7 @@ def detect_loops(
     resume_state: Optional[_StrPath] = None,
     save_state: Optional[_StrPath] = None,
     skip_unreadable: bool = False,
+    threads: int = 0,
 ) -> LoopResults: ...
 def write_report(
     folder: _StrPath,

@@ -217,3 +217,30 @@ def test_skip_unreadable_keeps_the_frame_numbers_as_the_cli(tmp_path):
 
     run_cli("detect-loops", "--skip-unreadable", "-o", str(tmp_path / "loops.csv"), str(frame_list))
     assert_same_loops(skipped, csv_rows(tmp_path / "loops.csv"))
+
+
+def test_any_number_of_threads_gives_one_threads_results(tmp_path, results):
+    one = binbow.detect_loops(FOLDER, threads=1, save_state=tmp_path / "one.bbld")
+    many = binbow.detect_loops(FOLDER, threads=3, save_state=tmp_path / "many.bbld")
+    assert len(as_rows(one)) > 5, "too few loops to compare"
+    for run in (many, results):  # results: every core
+        assert as_rows(run) == as_rows(one)
+        assert [(r.status, r.score, r.island_score, r.file) for r in run] == [
+            (r.status, r.score, r.island_score, r.file) for r in one
+        ]
+    assert (tmp_path / "many.bbld").read_bytes() == (tmp_path / "one.bbld").read_bytes()
+    # Stopped early, the threads reading ahead are joined: no hang.
+    seen = []
+
+    def stop(done, total):
+        seen.append(done)
+        if done == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        binbow.detect_loops(FOLDER, progress=stop, threads=4)
+    assert seen == [1, 2]
+    with pytest.raises(ValueError, match="threads"):
+        binbow.detect_loops(FOLDER, threads=-1)
+    with pytest.raises(ValueError, match="threads"):
+        binbow.detect_loops(FOLDER, threads=100_000)

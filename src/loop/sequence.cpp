@@ -1,6 +1,5 @@
 #include "binbow/loop/sequence.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -58,11 +57,14 @@ LoopDetectorParams defaults_for(double frame_rate) {
 struct SequenceDetector::Impl {
   Impl(const std::vector<std::string>& inputs, const SequenceOptions& options)
       : extractor(extractor_of(options)),
-        source(inputs, vision::limit_for_extractor(options.source, *extractor)),
-        defaults(defaults_for(source.frame_rate())) {}
+        frames(vision::ImageSource(inputs, vision::limit_for_extractor(options.source, *extractor)),
+               extractor, {options.threads, 0}),
+        frame_rate(frames.frame_rate()),
+        defaults(defaults_for(frame_rate)) {}
 
   std::shared_ptr<const vision::FeatureExtractor> extractor;
-  vision::ImageSource source;
+  vision::FramePipeline frames;
+  double frame_rate;
   LoopDetectorParams defaults;
   bool params_given = false;
   bool resumed = false;  // from a saved detector, which brought its parameters
@@ -74,7 +76,7 @@ struct SequenceDetector::Impl {
   EntryId first_entry = 0;
   StatusCounts status_counts{};
   std::size_t skipped_frames = 0;
-  vision::Frame frame;
+  vision::ExtractedFrame extracted;
 
   void start(Vocabulary vocabulary, const LoopDetectorParams& params) {
     if (vocabulary.code_size() != extractor->code_size())
@@ -151,24 +153,19 @@ SequenceDetector::~SequenceDetector() = default;
 
 bool SequenceDetector::next(SequenceFrame& out) {
   Impl& d = *impl_;
-  if (!d.source.next(d.frame)) return false;
-  const auto start = std::chrono::steady_clock::now();
   // An unreadable frame (skip_unreadable) still takes its entry, with no
   // features: it matches nothing, and the entries after it keep the frames'
   // indices.
-  vision::Features features;
-  if (d.frame.unreadable.empty())
-    features = vision::extract_features(*d.extractor, d.frame.image, d.frame.name);
-  else
-    features.descriptors = DescriptorMatrix(d.extractor->code_size());
-  out.features_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (!d.frames.next(d.extracted)) return false;
+  const vision::Frame& frame = d.extracted.frame;
+  const vision::Features& features = d.extracted.features;
+  out.features_ms = d.extracted.features_ms;
   out.result = d.detector->process(features);
-  out.file = d.frame.name;
-  out.unreadable = d.frame.unreadable;
-  d.files.push_back(d.frame.name);
-  d.scales.push_back(d.frame.scale);
-  d.detector->set_label(out.result.query, frame_label(d.frame.name, d.frame.scale));
+  out.file = frame.name;
+  out.unreadable = frame.unreadable;
+  d.files.push_back(frame.name);
+  d.scales.push_back(frame.scale);
+  d.detector->set_label(out.result.query, frame_label(frame.name, frame.scale));
   if (out.unreadable.empty())
     ++d.status_counts[static_cast<std::size_t>(out.result.status)];
   else
@@ -185,7 +182,7 @@ bool SequenceDetector::next(SequenceFrame& out) {
       parse_frame_label(d.detector->label(out.result.match), out.match_file, scale);
     }
     const Span<vision::Keypoint> match_points = d.detector->keypoints(out.result.match);
-    const auto query_scale = static_cast<float>(d.frame.scale);
+    const auto query_scale = static_cast<float>(frame.scale);
     const auto match_scale = static_cast<float>(scale);
     out.inlier_points.reserve(out.result.inliers.size());
     for (const vision::Correspondence& c : out.result.inliers) {
@@ -206,12 +203,12 @@ std::string SequenceDetector::frequency_origin() const {
   if (impl_->resumed) return "the saved state";
   if (impl_->params_given) return "the parameters given";
   if (params().frequency != impl_->defaults.frequency) return "--params";
-  if (impl_->source.frame_rate() > 0) return "video frames processed per second";
+  if (impl_->frame_rate > 0) return "video frames processed per second";
   return "the paper's default; images have no frame rate";
 }
 
 long long SequenceDetector::size() const {
-  return impl_->source.size();
+  return impl_->frames.size();
 }
 
 std::size_t SequenceDetector::frames_processed() const noexcept {
@@ -227,7 +224,7 @@ std::size_t SequenceDetector::skipped_frames() const noexcept {
 }
 
 std::size_t SequenceDetector::unreadable_frames() const noexcept {
-  return impl_->source.unreadable_frames();
+  return impl_->frames.unreadable_frames();
 }
 
 const LoopDetector& SequenceDetector::detector() const noexcept {

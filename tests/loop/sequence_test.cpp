@@ -12,6 +12,7 @@
 #include "binbow/loop/run_record.h"
 #include "binbow/loop/sequence.h"
 #include "binbow/loop/sweep.h"
+#include "loop/same_result.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -66,6 +67,33 @@ TEST(Sequence, EqualsTheDetectorRunFrameByFrame) {
   EXPECT_GT(loops, 0u) << "the bundled sample closes loops";
   EXPECT_EQ(sequence.status_counts(), counts);
   EXPECT_EQ(sequence.frequency_origin(), "the paper's default; images have no frame rate");
+}
+
+TEST(Sequence, AnyNumberOfThreadsGivesOneThreadsRun) {
+  SequenceOptions one_thread = brief_options();
+  one_thread.threads = 1;
+  one_thread.source.max_width = 400;  // a scale, so that inliers are converted
+  SequenceDetector one(samples(), brief_vocabulary(), one_thread);
+  const std::vector<SequenceFrame> expected = detect_sequence(one);
+  std::size_t loops = 0;
+  for (const SequenceFrame& frame : expected) loops += frame.result.detection();
+  ASSERT_GT(loops, 5u) << "too few loops to compare";
+  for (const unsigned threads : {2u, 5u}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    SequenceOptions options = one_thread;
+    options.threads = threads;
+    SequenceDetector many(samples(), brief_vocabulary(), options);
+    const std::vector<SequenceFrame> got = detect_sequence(many);
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      test::expect_same_result(got[i].result, expected[i].result);
+      EXPECT_EQ(got[i].file, expected[i].file);
+      EXPECT_EQ(got[i].match_file, expected[i].match_file);
+      EXPECT_EQ(got[i].inlier_points, expected[i].inlier_points);
+    }
+    EXPECT_EQ(many.status_counts(), one.status_counts());
+    EXPECT_EQ(many.detector().size(), one.detector().size());
+  }
 }
 
 TEST(Sequence, InlierPointsAreInPixelsOfTheFiles) {

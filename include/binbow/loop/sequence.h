@@ -14,6 +14,7 @@
 
 #include "binbow/loop/loop_detector.h"
 #include "binbow/vision/features.h"
+#include "binbow/vision/frame_pipeline.h"
 #include "binbow/vision/image_source.h"
 #include "binbow/vocabulary.h"
 
@@ -37,6 +38,11 @@ struct SequenceOptions {
   // A JSON object of parameter keys applied after params_file's (the CLI's
   // parameter flags, --min-inliers ...); empty: none.
   std::string params_overrides;
+  // Threads reading and describing frames ahead of the detector
+  // (vision::FramePipeline), which takes them in order: every result is the
+  // same for any number. 0: every hardware thread; 1: none besides the
+  // caller's.
+  unsigned threads = 0;
 };
 
 // Stage times of one frame in kStageNames order: features, transform,
@@ -67,7 +73,10 @@ using StatusCounts =
     std::array<std::size_t, static_cast<std::size_t>(LoopStatus::kNoGeometricConsistency) + 1>;
 
 // Reads the inputs (images, folders, videos, lists: vision::ImageSource) and
-// runs a LoopDetector over their frames, one next() call per frame.
+// runs a LoopDetector over their frames, one next() call per frame. Frames
+// are read and described ahead on options.threads threads
+// (vision::FramePipeline); the detector takes them in order, so frames,
+// errors and the detector's state are those of one thread.
 //
 // Parameters, unless given: for a video, LoopDetectorParams::for_frequency of
 // the frames processed per second (ImageSource::frame_rate(): the video's
