@@ -591,7 +591,7 @@ std::string explained_image(const LoopExplanation& e) {
       cv::circle(canvas, pb, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
     }
   std::vector<unsigned char> jpeg;
-  cv::imencode(".jpg", canvas, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
+  vision::media_module().encode_image(".jpg", canvas, 85, jpeg);
   return "data:image/jpeg;base64," + base64(jpeg);
 }
 

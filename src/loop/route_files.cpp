@@ -1,7 +1,6 @@
 #include <cinttypes>
 #include <cstdio>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
@@ -10,6 +9,7 @@
 #include "binbow/vision/image_source.h"
 #include "core/file_io.h"
 #include "core/output_path.h"
+#include "vision/media_module.h"
 
 namespace binbow::loop {
 namespace {
@@ -81,7 +81,7 @@ std::string frame_name(std::size_t index) {
 
 void write_frame(const std::string& path, const cv::Mat& image, int quality) {
   std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality}))
+  if (!vision::media_module().encode_image(".jpg", image, quality, bytes))
     throw FileError(path, "cannot encode the frame as JPEG");
   // Plain writes: thousands of frames, each synced, would take minutes;
   // ground_truth.txt, written last and atomically, marks the route complete.
