@@ -48,6 +48,7 @@ struct DbArguments {
 
 struct DbQueryArguments : DbArguments {
   std::size_t top = 10;
+  bool fast = false;
 };
 
 struct DbRemoveArguments {
@@ -149,7 +150,9 @@ void run_db_query(const DbQueryArguments& arguments) {
     }
     const vision::Features features = vision::extract_features(*extractor, frame.image, frame.name);
     database.vocabulary().transform(features.descriptors.view(), bow);
-    const auto results = database.query(bow, arguments.top);
+    QueryOptions options;
+    if (arguments.fast) options.mode = QueryMode::kFast;
+    const auto results = database.query(bow, arguments.top, kAllEntries, options);
     std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",
                 frame.name.c_str());
     for (std::size_t rank = 0; rank < results.size(); ++rank) {
@@ -266,6 +269,10 @@ void add_db_command(CLI::App& app) {
   query_command->add_option("--top", query->top, "Number of results per query")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  query_command->add_flag(
+      "--fast", query->fast,
+      "Fast mode for large databases: candidates from each query's rarest words, every score "
+      "exact (an entry can be missed, never misranked; keeps a copy of each entry's words)");
   query_command->callback([query] { run_db_query(*query); });
 
   auto add = std::make_shared<DbArguments>();

@@ -71,6 +71,34 @@ struct DatabaseOptions {
 
 inline constexpr EntryId kAllEntries = std::numeric_limits<EntryId>::max();
 
+// How a query finds its best entries. Either way every reported score (and
+// shared_words) is exact: what vocabulary().score(query, entry) returns, to
+// the last bit.
+enum class QueryMode {
+  // Reads every posting of the query's words: the best entries, always.
+  kExact,
+  // Reads the postings of the query's rarest words only (about 5% of the
+  // exact query's postings, the words that tell images apart), keeps the
+  // entries that score best on them as candidates, then computes the exact
+  // score of every candidate by looking it up in each of the query's rows.
+  // An entry can only be missing, never ranked by a wrong score: one the
+  // exact query would rank first scores so high on the rare words that it
+  // is a candidate unless thousands of entries beat it there. Worth it when
+  // a query reads millions of postings (large databases of images that
+  // share most words); on small databases it is about as fast as kExact.
+  kFast,
+};
+
+struct QueryOptions {
+  QueryMode mode = QueryMode::kExact;
+  // Threads one query may use (0: one per core); the index's parts are
+  // shared between them, and the result does not depend on their number,
+  // to the last bit. A database too small to gain from it (under ~4M
+  // postings per thread) uses fewer. Servers answering many queries at
+  // once get more from threads = 1 per query.
+  unsigned threads = 0;
+};
+
 // What the header of a .bbdb file says (Database::inspect).
 struct DatabaseFileInfo {
   std::uint32_t version = 0;
@@ -127,8 +155,15 @@ class Database {
   // considered (inclusive; DBoW2's max_id excludes it: pass max_id − 1). Entries sharing no word
   // with the query are not returned, so an empty `bow` or `max_results` = 0 give an empty result.
   // Throws InvalidArgument for a word id outside the vocabulary.
+  // The same as query(bow, max_results, max_entry_id, QueryOptions{}).
   std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
                                  EntryId max_entry_id = kAllEntries) const;
+  std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
+                                 EntryId max_entry_id, const QueryOptions& options) const;
+  std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
+                                 const QueryOptions& options) const {
+    return query(bow, max_results, kAllEntries, options);
+  }
 
   // Removes an entry; throws InvalidArgument if it does not exist (never
   // added, or already removed).
