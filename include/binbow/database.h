@@ -77,15 +77,16 @@ inline constexpr EntryId kAllEntries = std::numeric_limits<EntryId>::max();
 enum class QueryMode {
   // Reads every posting of the query's words: the best entries, always.
   kExact,
-  // Reads the postings of the query's rarest words only (about 5% of the
-  // exact query's postings, the words that tell images apart), keeps the
-  // entries that score best on them as candidates, then computes the exact
-  // score of every candidate by looking it up in each of the query's rows.
-  // An entry can only be missing, never ranked by a wrong score: one the
-  // exact query would rank first scores so high on the rare words that it
-  // is a candidate unless thousands of entries beat it there. Worth it when
-  // a query reads millions of postings (large databases of images that
-  // share most words); on small databases it is about as fast as kExact.
+  // Reads the postings of the query's rarest words only (an eighth of the
+  // exact query's postings, the words that tell images apart; small
+  // databases are read whole), keeps the 500 entries that score best on
+  // them as candidates, then computes the exact score of every candidate
+  // from a copy of its BoW vector. An entry can only be missing, never
+  // ranked by a wrong score. The first fast query makes that copy of every
+  // entry (8 bytes per word: ~7.5 KiB per ORB-1000 image, about doubling
+  // memory_usage()); add, remove and clear keep it up to date. Worth it
+  // when a query reads millions of postings (large databases of images
+  // that share most words; docs/benchmarks.md has the speed and agreement).
   kFast,
 };
 

@@ -393,7 +393,7 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
 
 // Fast mode: the share of the query's postings read to find candidates (in
 // its rarest words), and how many candidates are scored exactly.
-constexpr double kFastPostingShare = 1.0 / 16;
+constexpr double kFastPostingShare = 1.0 / 8;
 constexpr std::size_t kFastCandidates = 500;
 // Small indexes are read whole (the candidates are then the exact best).
 constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 18;
@@ -457,6 +457,7 @@ void rescore(EntryId entry, Span<BowEntry> words, const QueryWordSet& query,
 template <class Term>
 std::vector<QueryResult> fast_query(const QueryContext& c) {
   const Span<BowEntry> rare = rare_words(c);
+  if (rare.size() == c.words.size()) return exact_query<Term>(c);  // a small index, read whole
   // Candidates from the segments' rare words; the tail, small, is scored in full.
   std::vector<BestResults> best = c.per_worker(c.keep, &WorkerScratch::best);
   std::vector<BestResults> candidates =
