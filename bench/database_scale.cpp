@@ -1,4 +1,4 @@
-// The image database at scale: 10k → 100k → 1M entries of real images on the
+// The image database at scale: 10k → 200k → 1M entries of real images on the
 // trained k=10 L=6 ORB vocabulary (scripts/make_benchmark_vocabulary.sh; its
 // path in BINBOW_BENCH_VOCABULARY, as for bench_transform).
 //
@@ -13,8 +13,9 @@
 //
 // The benchmarks run in order on one growing database: BM_Fill/N adds entries
 // until there are N (the time is the add calls alone: their mean is the
-// counter add_us), BM_Query/N answers the queries (top 10, the median
-// is query_ms), BM_QueryBounds/100000 measures what pruned or stop-listed
+// counter add_us), BM_Query/N answers the queries (top 10: exact on one
+// thread and on every core, and fast; see there), BM_QueryBounds/200000
+// measures what pruned or stop-listed
 // queries would read (see there), and BM_SaveLoad saves the largest database to a .bbdb file
 // (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it
 // back and checks that the loaded database answers every query identically,
@@ -329,7 +330,9 @@ bool same_scores(const std::vector<QueryResult>& a, const std::vector<QueryResul
 // (query_fast_ms) and what it loses: the share of queries whose top 10 is
 // the exact top 10 (fast_same_top10), and whose first result is a copy of
 // the same photograph as the exact first (fast_same_place_top1). Times are
-// wall-clock medians of the 148 queries (_cpu: this thread's CPU time).
+// wall-clock medians of the 148 queries (_cpu: this thread's CPU time). The
+// first fast query copies every entry's BoW vector (and add keeps copying),
+// so memory counters include that copy from the first BM_Query on.
 void BM_Query(benchmark::State& state) {
   Scale* s = scale_or_skip(state);
   if (s == nullptr) return;
