@@ -15,9 +15,10 @@
 // posting), and every 8 segments of one size merge into one while it spans at
 // most 65,536 entry ids (so entries stay 16-bit at any size). add() is
 // O(words of the image) amortised; a query costs O(postings of the query's
-// words), plus one row lookup per query word and segment. A query scores one
-// segment (or the tail) at a time, so each querying thread keeps 768 KiB of
-// sums and counts, whatever the database's size.
+// words), plus one row lookup per query word and segment. A query thread
+// scores one segment (or the tail) at a time, so it keeps 768 KiB of sums
+// and counts, whatever the database's size; a query on several threads
+// (QueryOptions::threads) hands the segments out between them.
 //
 // Removal: remove() marks the entry dead at once (it never appears in a
 // result again); its postings are dropped when the tail becomes a segment,

@@ -118,7 +118,7 @@ BowVector image_of(const std::map<WordId, float>& place, ZipfWords& zipf, std::s
 }
 
 TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
-  // Large enough (~9M postings) that a query shares its segments between
+  // Large enough (~13M postings, ~900 words per image) that a query shares its segments between
   // threads, with ties (repeated images), removals and max_entry_id.
   for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kDotProduct}) {
     DatabaseOptions options;
@@ -129,7 +129,7 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
     for (int p = 0; p < 300; ++p) places.push_back(place_words(zipf, 900));
     std::vector<BowVector> bows;
     std::vector<bool> live;
-    for (std::size_t i = 0; i < 9'000; ++i) {
+    for (std::size_t i = 0; i < 14'000; ++i) {
       bows.push_back(i % 7 == 3 ? bows[i - 1] : image_of(places[i % places.size()], zipf, 200));
       live.push_back(true);
       database.add(bows.back());
