@@ -183,7 +183,7 @@ BowVector bow_of(const Database& db, const py::handle& image) {
 
 std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
     const Database& db, const py::object& image, const py::object& max_results,
-    const py::object& max_entry_id) {
+    const py::object& max_entry_id, bool fast) {
   const std::uint64_t count = count_argument(max_results, "max_results");
   EntryId last = kAllEntries;
   if (!max_entry_id.is_none()) {
@@ -194,7 +194,9 @@ std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
   std::vector<QueryResult> results;
   {
     py::gil_scoped_release release;
-    results = db.query(bow, static_cast<std::size_t>(count), last);
+    QueryOptions options;
+    if (fast) options.mode = QueryMode::kFast;
+    results = db.query(bow, static_cast<std::size_t>(count), last, options);
   }
   return results_list(results);
 }
@@ -430,10 +432,13 @@ void bind_core(py::module_& m) {
           py::arg("bow"), py::arg("label") = py::none(),
           "Add an image already transformed with this database's vocabulary; returns its id.")
       .def("query", &query_database, py::arg("image"), py::arg("max_results") = 10,
-           py::arg("max_entry_id") = py::none(),
+           py::arg("max_entry_id") = py::none(), py::arg("fast") = false,
            "Best matches of an image (a BowVector, or its descriptors: uint8 (n, code_size)\n"
            "array, or None) as a list of (entry, score, shared_words), best first; only\n"
-           "entries with id <= max_entry_id when given.")
+           "entries with id <= max_entry_id when given. fast=True: candidates from the\n"
+           "image's rarest words, each scored exactly (an entry can be missed, never\n"
+           "misranked), for large databases; the first such query keeps a copy of every\n"
+           "entry's words. Runs without the GIL, on every core.")
       .def(
           "label",
           [](const Database& db, EntryId entry) -> std::optional<std::string> {

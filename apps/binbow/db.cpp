@@ -52,6 +52,7 @@ struct DbArguments {
 
 struct DbQueryArguments : DbArguments {
   std::size_t top = 10;
+  bool fast = false;
 };
 
 struct DbRemoveArguments {
@@ -162,7 +163,9 @@ void run_db_query(const DbQueryArguments& arguments) {
       continue;
     }
     database.vocabulary().transform(extracted.features.descriptors.view(), bow);
-    const auto results = database.query(bow, arguments.top);
+    QueryOptions options;
+    if (arguments.fast) options.mode = QueryMode::kFast;
+    const auto results = database.query(bow, arguments.top, kAllEntries, options);
     std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",
                 frame.name.c_str());
     for (std::size_t rank = 0; rank < results.size(); ++rank) {
@@ -281,6 +284,10 @@ void add_db_command(CLI::App& app) {
   query_command->add_option("--top", query->top, "Number of results per query")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  query_command->add_flag(
+      "--fast", query->fast,
+      "Fast mode for large databases: candidates from each query's rarest words, every score "
+      "exact (an entry can be missed, never misranked; keeps a copy of each entry's words)");
   query_command->callback([query] { run_db_query(*query); });
 
   auto add = std::make_shared<DbArguments>();

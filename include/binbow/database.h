@@ -15,9 +15,10 @@
 // posting), and every 8 segments of one size merge into one while it spans at
 // most 65,536 entry ids (so entries stay 16-bit at any size). add() is
 // O(words of the image) amortised; a query costs O(postings of the query's
-// words), plus one row lookup per query word and segment. A query scores one
-// segment (or the tail) at a time, so each querying thread keeps 768 KiB of
-// sums and counts, whatever the database's size.
+// words), plus one row lookup per query word and segment. A query thread
+// scores one segment (or the tail) at a time, so it keeps 768 KiB of sums
+// and counts, whatever the database's size; a query on several threads
+// (QueryOptions::threads) hands the segments out between them.
 //
 // Removal: remove() marks the entry dead at once (it never appears in a
 // result again); its postings are dropped when the tail becomes a segment,
@@ -70,6 +71,35 @@ struct DatabaseOptions {
 };
 
 inline constexpr EntryId kAllEntries = std::numeric_limits<EntryId>::max();
+
+// How a query finds its best entries. Either way every reported score (and
+// shared_words) is exact: what vocabulary().score(query, entry) returns, to
+// the last bit.
+enum class QueryMode {
+  // Reads every posting of the query's words: the best entries, always.
+  kExact,
+  // Reads the postings of the query's rarest words only (an eighth of the
+  // exact query's postings, the words that tell images apart; small
+  // databases are read whole), keeps the 500 entries that score best on
+  // them as candidates, then computes the exact score of every candidate
+  // from a copy of its BoW vector. An entry can only be missing, never
+  // ranked by a wrong score. The first fast query makes that copy of every
+  // entry (8 bytes per word: ~7.5 KiB per ORB-1000 image, about doubling
+  // memory_usage()); add, remove and clear keep it up to date. Worth it
+  // when a query reads millions of postings (large databases of images
+  // that share most words; docs/benchmarks.md has the speed and agreement).
+  kFast,
+};
+
+struct QueryOptions {
+  QueryMode mode = QueryMode::kExact;
+  // Threads one query may use (0: one per core); the index's parts are
+  // shared between them, and the result does not depend on their number,
+  // to the last bit. A database too small to gain from it (under ~4M
+  // postings per thread) uses fewer. Servers answering many queries at
+  // once get more from threads = 1 per query.
+  unsigned threads = 0;
+};
 
 // What the header of a .bbdb file says (Database::inspect).
 struct DatabaseFileInfo {
@@ -127,8 +157,15 @@ class Database {
   // considered (inclusive; DBoW2's max_id excludes it: pass max_id − 1). Entries sharing no word
   // with the query are not returned, so an empty `bow` or `max_results` = 0 give an empty result.
   // Throws InvalidArgument for a word id outside the vocabulary.
+  // The same as query(bow, max_results, max_entry_id, QueryOptions{}).
   std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
                                  EntryId max_entry_id = kAllEntries) const;
+  std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
+                                 EntryId max_entry_id, const QueryOptions& options) const;
+  std::vector<QueryResult> query(const BowVector& bow, std::size_t max_results,
+                                 const QueryOptions& options) const {
+    return query(bow, max_results, kAllEntries, options);
+  }
 
   // Removes an entry; throws InvalidArgument if it does not exist (never
   // added, or already removed).

@@ -284,14 +284,18 @@ class ShardedDatabase:
                             f"got {type(image).__name__}")
         return self._vocabulary.transform(image)
 
-    def query(self, image, max_results=10, max_entry_id=None):
+    def query(self, image, max_results=10, max_entry_id=None, fast=False):
         """Best matches as (entry, score, shared_words), best first, as Database.query.
 
         The image (descriptors or BowVector) is transformed once here; every shard
         returns its own top `max_results` and the lists are merged: any entry of the
         overall top list is in its shard's top list, and scores do not depend on the
         shard, so the result equals one Database's, ties (by increasing id) included.
+        With fast=True every shard answers in Database's fast mode (exact scores,
+        candidates from the rarest words); the merge is the same.
         """
+        if not isinstance(fast, bool):
+            raise TypeError(f"fast must be a bool, got {type(fast).__name__}")
         self._check_usable("query")
         max_results = _count_argument(max_results, "max_results")
         if max_entry_id is not None:
@@ -303,9 +307,9 @@ class ShardedDatabase:
         arguments = []
         for shard in range(n):
             if max_entry_id is None:
-                arguments.append((bow, max_results, None))
+                arguments.append((bow, max_results, None, fast))
             elif max_entry_id >= shard:
-                arguments.append((bow, max_results, (int(max_entry_id) - shard) // n))
+                arguments.append((bow, max_results, (int(max_entry_id) - shard) // n, fast))
             else:
                 arguments.append(None)
         answers = self._call_all("query", "query", arguments)

@@ -30,6 +30,28 @@ def test_query_equals_brute_force_and_remove():
         db.remove(7)
 
 
+def test_fast_queries_report_exact_scores():
+    rng = np.random.default_rng(4)
+    images = [clustered(rng, 200) for _ in range(60)]
+    voc = binbow.Vocabulary.build(images[:10], branching=6, levels=3, seed=1)
+    db = binbow.Database(voc)
+    for image in images:
+        db.add(image)
+    db.remove(3)
+    bows = [voc.transform(image) for image in images]
+    for q in (0, 3, 17):
+        exact = db.query(bows[q], 10)
+        fast = db.query(bows[q], 10, fast=True)
+        assert fast and len(fast) <= len(exact)
+        for entry, score, _ in fast:
+            assert entry != 3
+            assert score == voc.score(bows[q], bows[entry])
+        assert fast[0] == exact[0]
+        assert db.query(bows[q], 10, 5, True) == db.query(bows[q], 10, max_entry_id=5, fast=True)
+    with pytest.raises(TypeError):
+        db.query(bows[0], 10, fast="yes")
+
+
 def test_labels(vocabulary, images):
     db = binbow.Database(vocabulary)
     first = db.add(images[0], label="a.png")

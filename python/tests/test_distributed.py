@@ -58,6 +58,11 @@ def test_queries_equal_one_database_with_ties(client, vocabulary, shards):
     assert [entry for entry, _, _ in tied] == [2, 10, 12, 13]
     assert_same_answers(single, sharded, bows[:4] + [bows[7]], (None, 0, 5, 12, 100))
     assert sharded.query(images[2], 4) == tied  # descriptors are transformed on the client
+    for bow in bows[:4]:  # fast mode on every shard: exact scores, merged as usual
+        exact = {entry: (score, shared) for entry, score, shared in single.query(bow, 100)}
+        fast = sharded.query(bow, 5, fast=True)
+        assert fast and fast[0] == single.query(bow, 1)[0]
+        assert all(exact[entry] == (score, shared) for entry, score, shared in fast)
     assert len(sharded) == len(images) and sharded.next_entry_id == len(images)
 
 

@@ -520,6 +520,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
       detail::push_back(lists[group], first_block_logs[group],
                         {key_base | (word >> detail::kGroupBits), words[appended].value}, arena);
     }
+    if (forward_built) forward.append(Span<BowEntry>(words, n));
   } catch (...) {
     // The lists that got this entry end with it; undo them.
     for (std::size_t i = 0; i < appended; ++i) --tail_lists[detail::group_of(words[i].word)].size;
@@ -527,12 +528,50 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     word_counts.resize(entry);
     if (direct.size() > entry) direct.resize(entry);
     if (labels.size() > entry) labels.resize(entry);
+    if (forward_built) forward.truncate(entry);
     throw;
   }
   alive[entry] = 1;
   ++live_entries;
   tail_postings += n;
   return entry;
+}
+
+void Database::Impl::build_forward_index() const {
+  if (forward_built.load(std::memory_order_acquire)) return;
+  std::lock_guard<std::mutex> lock(forward_mutex);
+  if (forward_built.load(std::memory_order_relaxed)) return;
+  detail::ForwardIndex built;
+  for (std::size_t entry = 0; entry < alive.size(); ++entry)
+    built.append_empty(alive[entry] != 0 ? word_counts[entry] : 0);
+  // Each entry's words come in increasing order: it lives in one segment or
+  // in the tail, visited word by word.
+  for (const auto& segment : segments) {
+    const std::uint32_t* offsets = segment->offsets.data();
+    const std::uint16_t* entries = segment->entries16.data();
+    const float* weights = segment->weights.data();
+    for (std::size_t word = 0; word < word_capacity; ++word) {
+      const std::uint32_t row = row_order.row(static_cast<WordId>(word));
+      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
+        const EntryId entry = segment->first_entry + entries[i];
+        if (alive[entry] != 0) built.add_word(entry, static_cast<WordId>(word), weights[i]);
+      }
+    }
+  }
+  const std::uint32_t high_mask = (1u << high_bits) - 1;
+  for (std::size_t word = 0; word < word_capacity && tail_postings > 0; ++word) {
+    const detail::TailList list = tail_lists[detail::group_of(static_cast<WordId>(word))];
+    if (list.size == 0) continue;
+    const detail::TailPosting* postings = arena.at(list.block);
+    const auto high = static_cast<std::uint32_t>(word >> detail::kGroupBits);
+    for (std::uint32_t i = 0; i < list.size; ++i) {
+      if ((postings[i].key & high_mask) != high) continue;
+      const EntryId entry = tail_first_entry + (postings[i].key >> high_bits);
+      if (alive[entry] != 0) built.add_word(entry, static_cast<WordId>(word), postings[i].weight);
+    }
+  }
+  forward = std::move(built);
+  forward_built.store(true, std::memory_order_release);
 }
 
 void Database::Impl::freeze_tail_if_full() {
@@ -835,6 +874,7 @@ void Database::remove(EntryId entry) {
     if (thinned.dead_postings * 3 > thinned.postings()) impl_->compact(segment);
   }
   if (!impl_->direct.empty()) impl_->direct[entry] = {};
+  if (impl_->forward_built) impl_->forward.drop(entry);
   if (!impl_->labels.empty()) std::string().swap(impl_->labels[entry]);
 }
 
@@ -894,6 +934,7 @@ void Database::clear() {
   std::vector<std::string>().swap(impl_->labels);
   impl_->live_entries = 0;
   impl_->values = {};
+  impl_->forward.clear();
 }
 
 std::size_t Database::memory_usage() const {
@@ -909,6 +950,7 @@ std::size_t Database::memory_usage() const {
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
              segment->postings() * (sizeof(std::uint16_t) + sizeof(float));
   bytes += impl.arena.memory_usage();
+  if (impl.forward_built) bytes += impl.forward.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();
   for (const auto& label : impl.labels)
     if (label.capacity() > 15) bytes += label.capacity() + 1;  // beyond the small-string buffer

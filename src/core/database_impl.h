@@ -3,11 +3,13 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <string>
 #include <vector>
@@ -17,6 +19,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/forward_index.h"
 #include "core/scoring.h"
 #include "writer_priority_mutex.h"
 
@@ -332,6 +335,10 @@ struct Database::Impl {
   // The segment that holds `entry`, or segments.size() when the tail does.
   std::size_t segment_of(EntryId entry) const noexcept;
   bool is_live(EntryId entry) const noexcept { return entry < alive.size() && alive[entry] != 0; }
+  // Builds `forward` from the inverted index unless it is built: called by
+  // queries (shared lock held), so that only databases queried in fast
+  // mode pay its memory.
+  void build_forward_index() const;
 
   Vocabulary vocabulary;  // empty over word ids
   DatabaseOptions options;
@@ -360,6 +367,12 @@ struct Database::Impl {
   std::vector<std::uint32_t> word_counts;           // postings the entry put in the index
   std::vector<detail::PackedFeatureVector> direct;  // empty without a direct index
   std::vector<std::string> labels;                  // empty until a label is set
+
+  // Each entry's BoW vector, for fast queries: built by the first one, then
+  // kept up to date by add, remove and clear.
+  mutable detail::ForwardIndex forward;
+  mutable std::atomic<bool> forward_built{false};
+  mutable std::mutex forward_mutex;
 
   std::size_t live_entries = 0;
   // Of every value added or loaded (removals do not narrow it): whether a

@@ -7,6 +7,8 @@
 #include <memory>
 #include <mutex>
 #include <shared_mutex>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #if defined(__SSE2__)
@@ -15,6 +17,7 @@
 
 #include "binbow/database.h"
 #include "core/database_impl.h"
+#include "core/parallel_for.h"
 #include "core/scoring.h"
 
 namespace binbow {
@@ -35,9 +38,56 @@ struct EntryScore {
 #pragma pack(pop)
 static_assert(sizeof(EntryScore) == 12);
 
-struct QueryScratch {
+// The query's words as a bitmap over word ids, with the count of set bits
+// before each 64-bit block: a word's position in the query in a few
+// instructions, from 1 bit per word id (68 KiB for 540k words, in cache).
+class QueryWordSet {
+ public:
+  void assign(Span<BowEntry> words) {
+    const std::size_t blocks = words.empty() ? 0 : words[words.size() - 1].word / 64 + 1;
+    bits_.assign(blocks, 0);
+    ranks_.resize(blocks);
+    for (const BowEntry& e : words) bits_[e.word / 64] |= std::uint64_t{1} << (e.word % 64);
+    std::uint32_t rank = 0;
+    for (std::size_t b = 0; b < blocks; ++b) {
+      ranks_[b] = rank;
+      rank += static_cast<std::uint32_t>(__builtin_popcountll(bits_[b]));
+    }
+    absent_ = rank;
+  }
+  // The word's position in the query, or the query's size if it lacks it.
+  std::uint32_t position(WordId word) const noexcept {
+    const std::size_t block = word / 64;
+    if (block >= bits_.size()) return absent_;
+    const std::uint64_t bits = bits_[block];
+    const std::uint64_t bit = std::uint64_t{1} << (word % 64);
+    if ((bits & bit) == 0) return absent_;
+    return ranks_[block] + static_cast<std::uint32_t>(__builtin_popcountll(bits & (bit - 1)));
+  }
+
+ private:
+  std::vector<std::uint64_t> bits_;
+  std::vector<std::uint32_t> ranks_;
+  std::uint32_t absent_ = 0;
+};
+
+// What one thread of a query writes: its part sums, its best results and
+// (fast mode) its best candidates.
+struct WorkerScratch {
   std::vector<EntryScore> scores;
   std::vector<QueryResult> best;
+  std::vector<QueryResult> candidates;
+  std::vector<std::uint16_t> relative;  // a segment's candidates, entry - first entry
+};
+
+// Owned by the thread that calls query(); the threads it starts for that
+// query use one WorkerScratch each, so their buffers outlive them.
+struct QueryScratch {
+  std::vector<WorkerScratch> workers;
+  std::vector<BowEntry> rare_words;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> word_postings;  // (postings, position)
+  QueryWordSet query_words;
+  std::vector<float> query_values;
 };
 
 thread_local QueryScratch scratch;
@@ -71,15 +121,15 @@ constexpr std::size_t kPrefetchAhead = 8;
 
 // Entries are increasing within a row, so `last_entry` cuts it short.
 template <class Term>
-void accumulate_segment(const detail::Segment& segment, detail::RowOrder order,
-                        const BowVector& bow, EntryId last_entry, PartScores scores) {
+void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
+                        EntryId last_entry, PartScores scores) {
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint16_t* entries = segment.entries16.data();
   const float* weights = segment.weights.data();
   const bool cut = last_entry < segment.end_entry - 1;
   const auto last = static_cast<std::uint16_t>(cut ? last_entry - segment.first_entry : 0);
   const std::size_t n = bow.size();
-  const BowEntry* query = bow.begin();
+  const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + 2 * kPrefetchAhead < n)
       __builtin_prefetch(offsets + order.row(query[q + 2 * kPrefetchAhead].word));
@@ -110,6 +160,7 @@ struct IndexView {
   EntryId tail_first_entry;
   const std::uint8_t* alive;
   std::size_t entry_count;
+  const detail::ForwardIndex* forward;  // built for fast queries
 };
 
 // Calls take(i) for the postings of a group list whose key has the given
@@ -143,14 +194,14 @@ inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t 
 // in increasing entry order: the word's own are picked out by their high
 // bits.
 template <class Term>
-void accumulate_tail(const IndexView& index, const BowVector& bow, EntryId last_entry,
+void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_entry,
                      PartScores scores) {
   const detail::TailList* lists = index.tail_lists;
   const unsigned bits = index.high_bits;
   const std::uint32_t mask = (1u << bits) - 1;
   const std::uint64_t key_end = (std::uint64_t{last_entry} - index.tail_first_entry + 1) << bits;
   const std::size_t n = bow.size();
-  const BowEntry* query = bow.begin();
+  const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + 2 * kPrefetchAhead < n)
       __builtin_prefetch(lists + detail::group_of(query[q + 2 * kPrefetchAhead].word));
@@ -225,6 +276,15 @@ class BestResults {
     }
   }
 
+  // Offers an entry by its sum of terms.
+  void offer_sum(EntryId entry, double sum, std::uint32_t shared) {
+    offer({entry, finish(sum), shared});
+  }
+  // Offers every result another BestResults kept.
+  void take_results(const BestResults& other) {
+    for (const QueryResult& result : other.results_) offer(result);
+  }
+
   // Best first.
   std::vector<QueryResult> sorted() {
     std::sort(results_.begin(), results_.end(), better_);
@@ -256,91 +316,272 @@ class BestResults {
   std::vector<QueryResult>& results_;
 };
 
-// Every term is computed and summed exactly as Vocabulary::score does (or,
-// for MinimumTerm, as its exact equal), in the same order (increasing word
-// id), so scores agree to the last bit: each entry lives in one segment or in
-// the tail, whose pass visits the query's words in order.
+// The context of one query: what it searches, how it ranks, and the
+// calling thread's buffers (a worker thread's own thread_local ones would
+// die with it).
+struct QueryContext {
+  const IndexView& index;
+  Span<BowEntry> words;  // sorted by word id
+  EntryId last_entry;
+  Scoring scoring;
+  bool minimums;  // L1 terms summed as minimums (MinimumTerm)
+  double base;
+  std::size_t keep;              // results wanted, at most the live entries
+  std::size_t visible_segments;  // those with an entry ≤ last_entry: a prefix
+  bool tail_visible;
+  unsigned workers;
+  QueryScratch& buffers;
+
+  std::size_t parts() const noexcept { return visible_segments + (tail_visible ? 1 : 0); }
+  EntryId part_first(std::size_t part) const noexcept {
+    return part < visible_segments ? index.segments[part]->first_entry : index.tail_first_entry;
+  }
+  std::size_t part_span(std::size_t part) const noexcept {
+    const std::size_t end = std::size_t{last_entry} + 1;
+    const std::size_t part_end =
+        part < visible_segments ? index.segments[part]->end_entry : index.entry_count;
+    return std::min(part_end, end) - part_first(part);
+  }
+  PartScores scores(unsigned worker) const {
+    std::vector<EntryScore>& sums = buffers.workers[worker].scores;
+    if (sums.size() < detail::kSegmentSpan) sums.resize(detail::kSegmentSpan);
+    return PartScores{sums.data()};
+  }
+  // One BestResults per worker, keeping `keep_results` in `storage`.
+  std::vector<BestResults> per_worker(std::size_t keep_results,
+                                      std::vector<QueryResult> WorkerScratch::*storage) const {
+    std::vector<BestResults> results;
+    results.reserve(workers);
+    for (unsigned w = 0; w < workers; ++w)
+      results.emplace_back(scoring, minimums, base, keep_results, buffers.workers[w].*storage);
+    return results;
+  }
+};
+
+// Sums the terms of `words` for the entries of a part and offers the part's
+// live entries to `best`. Every term is computed and summed exactly as
+// Vocabulary::score does (or, for MinimumTerm, as its exact equal), in the
+// same order (increasing word id), so that with all the query's words the
+// scores agree to the last bit: each entry lives in one segment or in the
+// tail, whose pass visits the words in order.
 template <class Term>
-void score_parts(const IndexView& index, const BowVector& bow, EntryId last_entry,
-                 PartScores scores, BestResults& best) {
-  for (const auto& segment : index.segments) {
-    if (segment->first_entry > last_entry) return;
-    accumulate_segment<Term>(*segment, index.row_order, bow, last_entry, scores);
-    best.take_part(segment->first_entry,
-                   std::min<std::size_t>(segment->end_entry, std::size_t{last_entry} + 1) -
-                       segment->first_entry,
-                   scores, index.alive);
-  }
-  if (index.tail_postings > 0 && index.tail_first_entry <= last_entry) {
-    accumulate_tail<Term>(index, bow, last_entry, scores);
-    best.take_part(index.tail_first_entry,
-                   std::min<std::size_t>(index.entry_count, std::size_t{last_entry} + 1) -
-                       index.tail_first_entry,
-                   scores, index.alive);
-  }
+void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, PartScores scores,
+                BestResults& best) {
+  if (part < c.visible_segments)
+    accumulate_segment<Term>(*c.index.segments[part], c.index.row_order, words, c.last_entry,
+                             scores);
+  else
+    accumulate_tail<Term>(c.index, words, c.last_entry, scores);
+  best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive);
 }
 
-void score_parts(Scoring scoring, bool minimums, const IndexView& index, const BowVector& bow,
-                 EntryId last_entry, PartScores scores, BestResults& best) {
-  switch (scoring) {
-    case Scoring::kL1:
-      if (minimums) return score_parts<MinimumTerm>(index, bow, last_entry, scores, best);
-      return score_parts<ScoringTerm<Scoring::kL1>>(index, bow, last_entry, scores, best);
-    case Scoring::kL2:
-      return score_parts<ScoringTerm<Scoring::kL2>>(index, bow, last_entry, scores, best);
-    case Scoring::kChiSquare:
-      return score_parts<ScoringTerm<Scoring::kChiSquare>>(index, bow, last_entry, scores, best);
-    case Scoring::kKL:
-      return score_parts<ScoringTerm<Scoring::kKL>>(index, bow, last_entry, scores, best);
-    case Scoring::kBhattacharyya:
-      return score_parts<ScoringTerm<Scoring::kBhattacharyya>>(index, bow, last_entry, scores,
-                                                               best);
-    case Scoring::kDotProduct:
-      return score_parts<ScoringTerm<Scoring::kDotProduct>>(index, bow, last_entry, scores, best);
-  }
+// The workers' results, merged: the order is total (ties by entry id), so
+// the best ones do not depend on how the parts were shared.
+std::vector<QueryResult> merged(std::vector<BestResults>& results) {
+  for (std::size_t w = 1; w < results.size(); ++w) results[0].take_results(results[w]);
+  return results[0].sorted();
 }
+
+template <class Term>
+std::vector<QueryResult> exact_query(const QueryContext& c) {
+  std::vector<BestResults> best = c.per_worker(c.keep, &WorkerScratch::best);
+  detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
+    score_part<Term>(c, part, c.words, c.scores(worker), best[worker]);
+  });
+  return merged(best);
+}
+
+// Fast mode: the share of the query's postings read to find candidates (in
+// its rarest words), and how many candidates are scored exactly.
+constexpr double kFastPostingShare = 1.0 / 8;
+constexpr std::size_t kFastCandidates = 500;
+// Small indexes are read whole (the candidates are then the exact best).
+constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 18;
+
+// The query's rarest words, by postings in the visible segments, up to
+// kFastPostingShare of them or kFastMinPostings (at least one word), in word order.
+Span<BowEntry> rare_words(const QueryContext& c) {
+  auto& postings = c.buffers.word_postings;
+  postings.clear();
+  std::uint64_t total = 0;
+  for (std::size_t q = 0; q < c.words.size(); ++q) {
+    const std::uint32_t row = c.index.row_order.row(c.words[q].word);
+    std::uint64_t count = 0;
+    for (std::size_t s = 0; s < c.visible_segments; ++s) {
+      const std::uint32_t* offsets = c.index.segments[s]->offsets.data();
+      count += offsets[row + 1] - offsets[row];
+    }
+    postings.emplace_back(count, static_cast<std::uint32_t>(q));
+    total += count;
+  }
+  std::sort(postings.begin(), postings.end());
+  const auto budget = std::max<std::uint64_t>(
+      static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare), kFastMinPostings);
+  std::size_t taken = 0;
+  for (std::uint64_t read = 0; taken < postings.size(); ++taken) {
+    read += postings[taken].first;
+    if (read > budget && taken > 0) break;
+  }
+  std::sort(postings.begin(), postings.begin() + static_cast<std::ptrdiff_t>(taken),
+            [](const auto& a, const auto& b) { return a.second < b.second; });
+  auto& rare = c.buffers.rare_words;
+  rare.clear();
+  for (std::size_t i = 0; i < taken; ++i) rare.push_back(c.words[postings[i].second]);
+  return {rare.data(), rare.size()};
+}
+
+// The exact score of an entry from its BoW vector: the same terms, summed in
+// the same order (increasing word id), as a pass over the index gives it.
+// `values` holds the query's values and a 0 after them, for absent words.
+template <class Term>
+void rescore(EntryId entry, Span<BowEntry> words, const QueryWordSet& query,
+             const std::vector<float>& values, BestResults& best) {
+  double sum = 0;
+  std::uint32_t shared = 0;
+  const auto absent = static_cast<std::uint32_t>(values.size() - 1);
+  for (const BowEntry& word : words) {
+    const std::uint32_t q = query.position(word.word);
+    if constexpr (std::is_same_v<Term, MinimumTerm>) {
+      // Branch-free: an absent word adds min(0, w) = +0.0, which leaves the
+      // sum as it is (a sum that starts at +0.0 is never -0.0).
+      sum += Term{values[q]}(word.value);
+      shared += q != absent ? 1 : 0;
+    } else if (q != absent) {
+      sum += Term{values[q]}(word.value);
+      ++shared;
+    }
+  }
+  best.offer_sum(entry, sum, shared);
+}
+
+template <class Term>
+std::vector<QueryResult> fast_query(const QueryContext& c) {
+  const Span<BowEntry> rare = rare_words(c);
+  if (rare.size() == c.words.size()) return exact_query<Term>(c);  // a small index, read whole
+  // Candidates from the segments' rare words; the tail, small, is scored in full.
+  std::vector<BestResults> best = c.per_worker(c.keep, &WorkerScratch::best);
+  std::vector<BestResults> candidates =
+      c.per_worker(std::max(kFastCandidates, c.keep), &WorkerScratch::candidates);
+  detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
+    const bool tail = part == c.visible_segments;
+    score_part<Term>(c, part, tail ? c.words : rare, c.scores(worker),
+                     tail ? best[worker] : candidates[worker]);
+  });
+  // Each candidate's exact score, from its BoW vector: the same terms,
+  // summed in the same order, as a pass over the whole index gives it.
+  const std::vector<QueryResult> chosen = merged(candidates);
+  c.buffers.query_words.assign(c.words);
+  std::vector<float>& values = c.buffers.query_values;
+  values.clear();
+  for (const BowEntry& e : c.words) values.push_back(e.value);
+  values.push_back(0.0f);
+  constexpr std::size_t kChunk = 64;
+  detail::parallel_for(c.workers, (chosen.size() + kChunk - 1) / kChunk,
+                       [&](std::size_t chunk, unsigned worker) {
+                         const std::size_t end = std::min(chosen.size(), (chunk + 1) * kChunk);
+                         for (std::size_t i = chunk * kChunk; i < end; ++i)
+                           rescore<Term>(chosen[i].entry, c.index.forward->words(chosen[i].entry),
+                                         c.buffers.query_words, values, best[worker]);
+                       });
+  return merged(best);
+}
+
+template <class Term>
+std::vector<QueryResult> run_query(const QueryContext& c, QueryMode mode) {
+  return mode == QueryMode::kFast ? fast_query<Term>(c) : exact_query<Term>(c);
+}
+
+std::vector<QueryResult> run_query(const QueryContext& c, QueryMode mode) {
+  switch (c.scoring) {
+    case Scoring::kL1:
+      if (c.minimums) return run_query<MinimumTerm>(c, mode);
+      return run_query<ScoringTerm<Scoring::kL1>>(c, mode);
+    case Scoring::kL2:
+      return run_query<ScoringTerm<Scoring::kL2>>(c, mode);
+    case Scoring::kChiSquare:
+      return run_query<ScoringTerm<Scoring::kChiSquare>>(c, mode);
+    case Scoring::kKL:
+      return run_query<ScoringTerm<Scoring::kKL>>(c, mode);
+    case Scoring::kBhattacharyya:
+      return run_query<ScoringTerm<Scoring::kBhattacharyya>>(c, mode);
+    case Scoring::kDotProduct:
+      return run_query<ScoringTerm<Scoring::kDotProduct>>(c, mode);
+  }
+  return {};
+}
+
+// Threads pay off only for large indexes: about one per 4M postings.
+constexpr std::size_t kPostingsPerWorker = std::size_t{1} << 22;
 
 }  // namespace
 
 std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
                                          EntryId max_entry_id) const {
+  return query(bow, max_results, max_entry_id, QueryOptions{});
+}
+
+std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
+                                         EntryId max_entry_id, const QueryOptions& options) const {
+  if (options.mode != QueryMode::kExact && options.mode != QueryMode::kFast)
+    throw InvalidArgument("Database::query: unknown query mode " +
+                          std::to_string(static_cast<int>(options.mode)));
   if (!impl_->over_word_ids) detail::check_bow_words(bow, impl_->vocabulary, "Database::query");
   detail::check_bow_values(bow, "Database::query");
-  std::vector<QueryResult> results;
-  if (bow.empty() || max_results == 0) return results;
+  if (bow.empty() || max_results == 0) return {};
   const Scoring scoring = impl_->scoring;
   const double base = detail::score_base(scoring, bow);
 
   std::shared_lock lock(impl_->mutex);
   // Over word ids, words beyond the capacity are in no entry yet: the index
   // is searched for the others (base() above still counts them, for KL).
-  BowVector indexed_words;
-  const BowVector* searched = &bow;
+  Span<BowEntry> searched(bow.begin(), bow.size());
   if (impl_->over_word_ids && bow[bow.size() - 1].word >= impl_->word_capacity) {
     const auto end =
         std::lower_bound(bow.begin(), bow.end(), impl_->word_capacity,
                          [](const BowEntry& e, std::size_t capacity) { return e.word < capacity; });
-    indexed_words = BowVector(std::vector<BowEntry>(bow.begin(), end));
-    if (indexed_words.empty()) return results;
-    searched = &indexed_words;
+    searched = Span<BowEntry>(bow.begin(), static_cast<std::size_t>(end - bow.begin()));
+    if (searched.empty()) return {};
   }
   const std::size_t entry_count = impl_->alive.size();
-  if (impl_->live_entries == 0) return results;
-  QueryScratch& buffers = scratch;
-  if (buffers.scores.size() < detail::kSegmentSpan) buffers.scores.resize(detail::kSegmentSpan);
+  if (impl_->live_entries == 0) return {};
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
   const IndexView index{impl_->segments,         impl_->tail_lists.data(), impl_->arena,
                         impl_->high_bits,        impl_->row_order,         impl_->tail_postings,
-                        impl_->tail_first_entry, impl_->alive.data(),      entry_count};
+                        impl_->tail_first_entry, impl_->alive.data(),      entry_count,
+                        &impl_->forward};
+  if (options.mode == QueryMode::kFast) impl_->build_forward_index();
+  std::size_t visible = 0;
+  std::size_t postings = impl_->tail_postings;
+  for (const auto& segment : impl_->segments) {
+    if (segment->first_entry > last_entry) break;
+    ++visible;
+    postings += segment->postings();
+  }
+  const bool tail_visible = impl_->tail_postings > 0 && impl_->tail_first_entry <= last_entry;
+  const auto workers = static_cast<unsigned>(
+      std::min<std::size_t>({detail::resolve_thread_count(options.threads),
+                             std::max<std::size_t>(1, postings / kPostingsPerWorker),
+                             std::max<std::size_t>(1, visible + (tail_visible ? 1 : 0))}));
+  QueryScratch& buffers = scratch;
+  if (buffers.workers.size() < workers) buffers.workers.resize(workers);
+  detail::ValueRange query_values;
+  for (const BowEntry& e : searched) query_values.include(e.value);
   const bool minimums =
-      scoring == Scoring::kL1 &&
-      detail::l1_terms_are_minimums(impl_->values, detail::value_range(*searched));
-  BestResults best(scoring, minimums, base, std::min(max_results, impl_->live_entries),
-                   buffers.best);
-  score_parts(scoring, minimums, index, *searched, last_entry, PartScores{buffers.scores.data()},
-              best);
+      scoring == Scoring::kL1 && detail::l1_terms_are_minimums(impl_->values, query_values);
+  const QueryContext context{index,
+                             searched,
+                             last_entry,
+                             scoring,
+                             minimums,
+                             base,
+                             std::min(max_results, impl_->live_entries),
+                             visible,
+                             tail_visible,
+                             workers,
+                             buffers};
+  std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();
-  return best.sorted();
+  return results;
 }
 
 }  // namespace binbow

@@ -90,6 +90,30 @@ TEST(CliDb, QueriesSeveralImagesOneTableEach) {
       << output;
 }
 
+// --fast reports exact scores, and on the real corridor (a small vocabulary:
+// frames share most words) the same top 5 as the exact query for every frame.
+TEST(CliDb, FastQueriesGiveTheExactTablesOnTheCorridor) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  const std::string database = dir.file("corridor.bbdb");
+  std::string output;
+  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
+                        "' -o '" + database + "' '" + folder + "'",
+                    &output),
+            0)
+      << output;
+  std::string exact, fast;
+  ASSERT_EQ(run_cli("db query '" + database + "' '" + folder + "' --top 5", &exact), 0) << exact;
+  ASSERT_EQ(run_cli("db query --fast '" + database + "' '" + folder + "' --top 5", &fast), 0)
+      << fast;
+  std::size_t tables = 0;
+  for (std::size_t at = exact.find("query: "); at != std::string::npos;
+       at = exact.find("query: ", at + 1))
+    ++tables;
+  EXPECT_EQ(tables, 84u);
+  EXPECT_TRUE(fast == exact) << "fast:\n" << fast.substr(0, 2000);
+}
+
 // Without --vocab, db build uses the bundled vocabulary of --descriptor, as
 // detect-loops does.
 TEST(CliDb, BuildDefaultsToTheBundledVocabulary) {

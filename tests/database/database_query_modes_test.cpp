@@ -1,0 +1,275 @@
+// Query options: exact queries on several threads give the one-thread result
+// bit for bit, and fast queries report only exact scores, with the exact
+// best entries on data where images share most words.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "binbow/database.h"
+#include "binbow/error.h"
+#include "binbow/vocabulary.h"
+
+namespace binbow {
+namespace {
+
+constexpr QueryOptions kOneThread{QueryMode::kExact, 1};
+constexpr QueryOptions kFast{QueryMode::kFast, 1};
+
+std::uint64_t bits_of(double score) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &score, sizeof bits);
+  return bits;
+}
+
+std::uint32_t shared_words(const BowVector& a, const BowVector& b) {
+  std::uint32_t shared = 0;
+  for (const BowEntry& e : a)
+    shared += std::binary_search(b.begin(), b.end(), e, [](const BowEntry& x, const BowEntry& y) {
+      return x.word < y.word;
+    });
+  return shared;
+}
+
+void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
+                 const std::string& context) {
+  ASSERT_EQ(actual.size(), expected.size()) << context;
+  for (std::size_t i = 0; i < actual.size(); ++i) {
+    EXPECT_EQ(actual[i].entry, expected[i].entry) << context << " rank " << i;
+    EXPECT_EQ(bits_of(actual[i].score), bits_of(expected[i].score)) << context << " rank " << i;
+    EXPECT_EQ(actual[i].shared_words, expected[i].shared_words) << context << " rank " << i;
+  }
+}
+
+// Every result of a fast query has the brute-force score of its entry, to
+// the last bit, and the results are ordered as a query orders them.
+void expect_exact_scores(const std::vector<QueryResult>& results, Scoring scoring,
+                         const std::vector<BowVector>& bows, const std::vector<bool>& live,
+                         const BowVector& query, EntryId max_entry_id, const std::string& context) {
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const QueryResult& r = results[i];
+    ASSERT_LT(r.entry, bows.size()) << context;
+    EXPECT_TRUE(live[r.entry]) << context << ": entry " << r.entry << " was removed";
+    EXPECT_LE(r.entry, max_entry_id) << context;
+    EXPECT_EQ(bits_of(r.score), bits_of(score_bow(query, bows[r.entry], scoring)))
+        << context << " entry " << r.entry;
+    EXPECT_EQ(r.shared_words, shared_words(query, bows[r.entry])) << context;
+    if (i > 0) {
+      const QueryResult& p = results[i - 1];
+      const bool ordered = scoring == Scoring::kKL ? p.score <= r.score : p.score >= r.score;
+      EXPECT_TRUE(ordered && (p.score != r.score || p.entry < r.entry)) << context << " rank " << i;
+    }
+  }
+}
+
+// Words drawn with probability ~ 1 / rank (Zipf): a few words are in most
+// images, as in photographs of a few scenes, and the rest are rare.
+class ZipfWords {
+ public:
+  ZipfWords(std::size_t word_count, std::uint64_t seed) : rng_(seed) {
+    double total = 0;
+    for (std::size_t w = 0; w < word_count; ++w) cumulative_.push_back(total += 1.0 / (w + 1.0));
+  }
+  WordId next() {
+    const double u = std::uniform_real_distribution<double>(0, cumulative_.back())(rng_);
+    return static_cast<WordId>(std::lower_bound(cumulative_.begin(), cumulative_.end(), u) -
+                               cumulative_.begin());
+  }
+  std::mt19937_64& rng() { return rng_; }
+
+ private:
+  std::mt19937_64 rng_;
+  std::vector<double> cumulative_;
+};
+
+// A place: its words (about `words`, Zipf-drawn) with tf-idf-like weights
+// (rarer words weigh more).
+std::map<WordId, float> place_words(ZipfWords& zipf, std::size_t words) {
+  std::map<WordId, float> place;
+  while (place.size() < words) {
+    const WordId word = zipf.next();
+    place[word] += std::log(2.0f + static_cast<float>(word) / 50.0f);
+  }
+  return place;
+}
+
+// An image of a place: each word kept with probability 0.8, plus `noise`
+// random words, L1-normalised.
+BowVector image_of(const std::map<WordId, float>& place, ZipfWords& zipf, std::size_t noise) {
+  std::map<WordId, float> words;
+  std::bernoulli_distribution keep(0.8);
+  for (const auto& [word, value] : place)
+    if (keep(zipf.rng())) words[word] += value;
+  for (std::size_t i = 0; i < noise; ++i) {
+    const WordId word = zipf.next();
+    words[word] += std::log(2.0f + static_cast<float>(word) / 50.0f);
+  }
+  float total = 0;
+  for (const auto& [word, value] : words) total += value;
+  std::vector<BowEntry> entries;
+  for (const auto& [word, value] : words) entries.push_back({word, value / total});
+  return BowVector(std::move(entries));
+}
+
+TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
+  // Large enough (~13M postings, ~900 words per image) that a query shares its segments between
+  // threads, with ties (repeated images), removals and max_entry_id.
+  for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kDotProduct}) {
+    DatabaseOptions options;
+    options.direct_index = false;
+    Database database = Database::over_word_ids(scoring, options);
+    ZipfWords zipf(60'000, 11);
+    std::vector<std::map<WordId, float>> places;
+    for (int p = 0; p < 300; ++p) places.push_back(place_words(zipf, 900));
+    std::vector<BowVector> bows;
+    std::vector<bool> live;
+    for (std::size_t i = 0; i < 14'000; ++i) {
+      bows.push_back(i % 7 == 3 ? bows[i - 1] : image_of(places[i % places.size()], zipf, 200));
+      live.push_back(true);
+      database.add(bows.back());
+      if (i % 101 == 50) {
+        database.remove(static_cast<EntryId>(i / 2));
+        live[i / 2] = false;
+      }
+    }
+    for (int q = 0; q < 6; ++q) {
+      const BowVector query = image_of(places[q * 37], zipf, 200);
+      const std::string context = std::string(to_string(scoring)) + " query " + std::to_string(q);
+      const auto one = database.query(query, 30, kAllEntries, kOneThread);
+      ASSERT_EQ(one.size(), 30u) << context;
+      expect_exact_scores(one, scoring, bows, live, query, kAllEntries, context);
+      for (unsigned threads : {0u, 2u, 3u, 8u}) {
+        const QueryOptions split{QueryMode::kExact, threads};
+        expect_same(database.query(query, 30, kAllEntries, split), one,
+                    context + ", " + std::to_string(threads) + " threads");
+        expect_same(database.query(query, 30, 4'321, split),
+                    database.query(query, 30, 4'321, kOneThread), context + ", max_entry_id");
+      }
+      expect_same(database.query(query, 30), one, context + ", default options");
+    }
+    // The one-thread result itself is the brute force's top 30.
+    const BowVector query = image_of(places[5], zipf, 200);
+    std::vector<QueryResult> all;
+    for (EntryId e = 0; e < bows.size(); ++e) {
+      if (!live[e]) continue;
+      const std::uint32_t shared = shared_words(query, bows[e]);
+      if (shared > 0) all.push_back({e, score_bow(query, bows[e], scoring), shared});
+    }
+    std::stable_sort(all.begin(), all.end(), [&](const QueryResult& a, const QueryResult& b) {
+      return scoring == Scoring::kKL ? a.score < b.score : a.score > b.score;
+    });
+    all.resize(30);
+    expect_same(database.query(query, 30, kAllEntries, QueryOptions{QueryMode::kExact, 2}), all,
+                std::string(to_string(scoring)) + " brute force");
+  }
+}
+
+TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
+  // Images of 400 places share most of their words (Zipf), as photographs
+  // of a few scenes do; queries are new images of known places.
+  for (Scoring scoring : {Scoring::kL1, Scoring::kL2, Scoring::kChiSquare, Scoring::kKL,
+                          Scoring::kBhattacharyya, Scoring::kDotProduct}) {
+    DatabaseOptions options;
+    options.direct_index = false;
+    Database database = Database::over_word_ids(scoring, options);
+    ZipfWords zipf(80'000, 3);
+    std::vector<std::map<WordId, float>> places;
+    for (int p = 0; p < 400; ++p) places.push_back(place_words(zipf, 700));
+    std::vector<BowVector> bows;
+    std::vector<bool> live;
+    for (std::size_t i = 0; i < 6'000; ++i) {
+      bows.push_back(image_of(places[i % places.size()], zipf, 150));
+      live.push_back(true);
+      database.add(bows.back());
+    }
+    const std::string name = to_string(scoring);
+    int same_top10 = 0, same_place = 0;
+    constexpr int kQueries = 60;
+    for (int q = 0; q < kQueries; ++q) {
+      const BowVector query = image_of(places[(q * 53) % places.size()], zipf, 150);
+      const auto exact = database.query(query, 10, kAllEntries, kOneThread);
+      const auto fast = database.query(query, 10, kAllEntries, kFast);
+      ASSERT_EQ(fast.size(), 10u) << name;
+      expect_exact_scores(fast, scoring, bows, live, query, kAllEntries, name);
+      same_top10 += fast == exact;
+      same_place += fast[0].entry % places.size() == exact[0].entry % places.size();
+      expect_same(database.query(query, 10, kAllEntries, QueryOptions{QueryMode::kFast, 2}), fast,
+                  name + ", fast on 2 threads");
+    }
+    EXPECT_GE(same_top10, kQueries - 1) << name;
+    EXPECT_EQ(same_place, kQueries) << name;
+  }
+}
+
+TEST(DatabaseQueryModes, FastQueriesFollowAddsRemovalsAndBounds) {
+  // Fast queries keep each entry's BoW vector from the first one on: entries
+  // added or removed later, and the bounds of max_entry_id, count as in
+  // exact queries.
+  const Scoring scoring = Scoring::kL1;
+  Database database = Database::over_word_ids(scoring, DatabaseOptions{false, 0});
+  ZipfWords zipf(20'000, 7);
+  std::vector<std::map<WordId, float>> places;
+  for (int p = 0; p < 50; ++p) places.push_back(place_words(zipf, 300));
+  std::vector<BowVector> bows;
+  std::vector<bool> live;
+  const BowVector query = image_of(places[4], zipf, 50);
+  EXPECT_TRUE(database.query(query, 10, kAllEntries, kFast).empty()) << "empty database";
+  const auto add = [&](std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i) {
+      bows.push_back(image_of(places[bows.size() % places.size()], zipf, 50));
+      live.push_back(true);
+      database.add(bows.back());
+    }
+  };
+  const auto check = [&](const std::string& context) {
+    for (EntryId max_id : {kAllEntries, static_cast<EntryId>(bows.size() / 3), EntryId{0}}) {
+      const auto fast = database.query(query, 1'000'000, max_id, kFast);
+      expect_exact_scores(fast, scoring, bows, live, query, max_id, context);
+      const auto exact = database.query(query, 1'000'000, max_id, kOneThread);
+      // More results asked than there are entries: a fast query finds those
+      // that share one of its rare words.
+      EXPECT_LE(fast.size(), exact.size()) << context;
+      EXPECT_EQ(fast.empty(), exact.empty()) << context;
+      const auto fast3 = database.query(query, 3, max_id, kFast);
+      expect_same(fast3, database.query(query, 3, max_id, kOneThread), context + ", top 3");
+    }
+  };
+  add(700);
+  check("first fast query");
+  add(2'500);  // into new segments, after the first fast query
+  check("after adds");
+  for (EntryId e = 0; e < bows.size(); e += 3) {
+    database.remove(e);
+    live[e] = false;
+  }
+  check("after removals");
+  database.add(BowVector());  // an image without words
+  bows.emplace_back();
+  live.push_back(true);
+  check("after an empty image");
+  database.clear();
+  bows.clear();
+  live.clear();
+  EXPECT_TRUE(database.query(query, 10, kAllEntries, kFast).empty()) << "cleared";
+  add(400);
+  check("after clear");
+  EXPECT_TRUE(database.query(BowVector(), 10, kAllEntries, kFast).empty());
+  EXPECT_TRUE(database.query(query, 0, kAllEntries, kFast).empty());
+}
+
+TEST(DatabaseQueryModes, UnknownModeIsRefused) {
+  Database database = Database::over_word_ids(Scoring::kL1, DatabaseOptions{false, 0});
+  database.add(BowVector({{1, 0.5f}}));
+  QueryOptions options;
+  options.mode = static_cast<QueryMode>(7);
+  EXPECT_THROW(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace binbow
