@@ -39,17 +39,14 @@ DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
   return options;
 }
 
-void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
-                                const DescriptorView& query_descriptors,
-                                const FeatureVector& query_nodes) const {
-  if (params.geometric_check == GeometricCheck::kNone) {
-    result.status = LoopStatus::kLoopDetected;
-    return;
-  }
-  const EntryId match = result.match;
-  const Span<Keypoint> match_keypoints{frames[match].keypoints.data(),
-                                       frames[match].keypoints.size()};
-  const DescriptorView match_descriptors = descriptors_of(match);
+FundamentalCheckResult LoopDetector::Impl::check_pair(Span<Keypoint> first_keypoints,
+                                                      const DescriptorView& first_descriptors,
+                                                      const FeatureVector* first_nodes,
+                                                      EntryId second,
+                                                      bool* exhaustive_fallback_used) const {
+  const Span<Keypoint> second_keypoints{frames[second].keypoints.data(),
+                                        frames[second].keypoints.size()};
+  const DescriptorView second_descriptors = descriptors_of(second);
   FundamentalCheckParams check;
   check.min_inliers = params.min_inliers;
   check.max_reprojection_error = params.max_reprojection_error;
@@ -64,24 +61,52 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   matching.max_distance_fraction = params.max_match_distance;
   matching.accept_single_candidate = params.accept_single_candidate;
   matching.mutual = params.mutual_matching;
-  std::vector<Correspondence> correspondences;
-  if (params.geometric_check == GeometricCheck::kDirectIndex) {
-    correspondences = match_direct_index(query_descriptors, query_nodes, match_descriptors,
-                                         database.feature_vector(match), matching);
-  } else {
-    correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
-  }
+  const bool direct = params.geometric_check == GeometricCheck::kDirectIndex;
+  std::vector<Correspondence> correspondences =
+      direct ? match_direct_index(first_descriptors, *first_nodes, second_descriptors,
+                                  database.feature_vector(second), matching)
+             : match_exhaustive(first_descriptors, second_descriptors, matching);
   FundamentalCheckResult fit =
-      check_fundamental(query_keypoints, match_keypoints, correspondences, check);
-  if (!fit.consistent && params.geometric_check == GeometricCheck::kDirectIndex &&
-      params.exhaustive_fallback) {
-    correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
-    fit = check_fundamental(query_keypoints, match_keypoints, correspondences, check);
-    result.exhaustive_fallback_used = true;
+      check_fundamental(first_keypoints, second_keypoints, correspondences, check);
+  if (!fit.consistent && direct && params.exhaustive_fallback) {
+    correspondences = match_exhaustive(first_descriptors, second_descriptors, matching);
+    fit = check_fundamental(first_keypoints, second_keypoints, correspondences, check);
+    if (exhaustive_fallback_used != nullptr) *exhaustive_fallback_used = true;
   }
-  result.correspondences = correspondences.size();
+  return fit;
+}
+
+void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
+                                const DescriptorView& query_descriptors,
+                                const FeatureVector& query_nodes) const {
+  if (params.geometric_check == GeometricCheck::kNone) {
+    result.status = LoopStatus::kLoopDetected;
+    return;
+  }
+  FundamentalCheckResult fit = check_pair(query_keypoints, query_descriptors, &query_nodes,
+                                          result.match, &result.exhaustive_fallback_used);
+  result.correspondences = fit.correspondences;
+  result.inlier_ratio = fit.inlier_ratio;
+  result.inlier_spread = fit.inlier_spread;
+  result.distinct_inliers = fit.distinct_inliers;
+  result.inlier_thickness = fit.inlier_thickness;
   result.inliers = std::move(fit.inliers);
-  result.status = fit.consistent ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+  result.corroboration_needed =
+      fit.consistent && params.min_uncorroborated_inliers > 0 &&
+      result.inliers.size() < static_cast<std::size_t>(params.min_uncorroborated_inliers);
+  if (result.corroboration_needed) corroborate(result);
+  const bool accepted = fit.consistent && (!result.corroboration_needed || result.corroborated);
+  result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+}
+
+void LoopDetector::Impl::corroborate(LoopResult& result) const {
+  result.has_previous_loop = has_previous_loop;
+  result.previous_loop_query = previous_loop_query;
+  result.previous_loop_match = previous_loop_match;
+  const auto distance = [](EntryId a, EntryId b) { return a > b ? a - b : b - a; };
+  const auto limit = static_cast<EntryId>(params.corroboration_distance);
+  result.corroborated = has_previous_loop && distance(result.query, previous_loop_query) <= limit &&
+                        distance(result.match, previous_loop_match) <= limit;
 }
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, LoopDetectorParams params) {
@@ -276,6 +301,11 @@ LoopResult LoopDetector::process(Span<Keypoint> keypoints, const DescriptorView&
     }
   }
 
+  if (result.detection()) {
+    d.has_previous_loop = true;
+    d.previous_loop_query = result.query;
+    d.previous_loop_match = result.match;
+  }
   d.insert(bow, nodes, keypoints, descriptors);
   result.times.insertion_ms = milliseconds_since(clock);
   return result;
@@ -364,6 +394,8 @@ void LoopDetector::clear() {
   d.window.clear();
   d.previous_bow.clear();
   d.featured_frames = 0;
+  d.has_previous_loop = false;
+  d.previous_loop_query = d.previous_loop_match = 0;
   std::vector<Impl::FrameFeatures>().swap(d.frames);
   if (d.online) {
     // Copied first: emplace destroys the old vocabulary, and its options with it.

@@ -35,6 +35,10 @@ struct LoopDetector::Impl {
   // Images with features so far: the time axis of the temporal window when
   // featureless frames are skipped.
   EntryId featured_frames = 0;
+  // The latest loop detected (query, match), which corroborates the next
+  // weak ones (LoopDetectorParams::min_uncorroborated_inliers).
+  bool has_previous_loop = false;
+  EntryId previous_loop_query = 0, previous_loop_match = 0;
   // One per image processed (empty with GeometricCheck::kNone, and once
   // forgotten): arrays of their own, so that forget() frees them at once.
   struct FrameFeatures {
@@ -70,6 +74,13 @@ struct LoopDetector::Impl {
                      const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
   void verify(LoopResult& result, Span<vision::Keypoint> query_keypoints,
               const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
+  // The fundamental-matrix check of two remembered or given images' features.
+  vision::FundamentalCheckResult check_pair(Span<vision::Keypoint> first_keypoints,
+                                            const DescriptorView& first_descriptors,
+                                            const FeatureVector* first_nodes, EntryId second,
+                                            bool* exhaustive_fallback_used) const;
+  // Sets result's corroboration fields (LoopDetectorParams::min_uncorroborated_inliers).
+  void corroborate(LoopResult& result) const;
   void insert(BowVector& bow, const FeatureVector& nodes, Span<vision::Keypoint> image_keypoints,
               const DescriptorView& descriptors);
 };

@@ -144,10 +144,22 @@ struct LoopDetectorParams {
   // correspondences, and minimum inlier_spread() over both images. [0, 1]
   double min_inlier_ratio = 0;
   double min_inlier_spread = 0;
+  // binbow's addition, on by default: a loop whose fundamental matrix has
+  // fewer inliers than this must be corroborated by the loop before it: a
+  // loop was detected at most corroboration_distance queries earlier, with
+  // its match at most corroboration_distance entries from this match. A
+  // camera that is really back at a place keeps recognising it, where a
+  // chance fit of a dozen matches of repeated or distant structure (what
+  // re-encoded, noisy or rescaled frames of another place give) comes
+  // alone or elsewhere. Loops with at least this many inliers stand alone,
+  // so the first loop of a revisit needs them. 0: off (the paper). [0, 1e4]
+  int min_uncorroborated_inliers = 16;
+  int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
 
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
-  // max_distance_between_queries 2 f; at least 1 each where it matters).
+  // max_distance_between_queries 2 f, corroboration_distance 4 f; at least 1
+  // each where it matters).
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
@@ -217,6 +229,21 @@ struct LoopResult {
   bool exhaustive_fallback_used = false;
   // RANSAC inliers: first = feature of the query, second = feature of the match.
   std::vector<vision::Correspondence> inliers;
+  // The measures of the last geometric check of the match
+  // (vision::FundamentalCheckResult; 0 before any check).
+  double inlier_ratio = 0;
+  double inlier_spread = 0;
+  std::size_t distinct_inliers = 0;
+  double inlier_thickness = 0;
+  // The corroboration of a loop with fewer than min_uncorroborated_inliers
+  // inliers (LoopDetectorParams): whether it was needed, the detector's
+  // latest loop before this query (if any: its query and match), and
+  // whether that loop was near enough.
+  bool corroboration_needed = false;
+  bool has_previous_loop = false;
+  EntryId previous_loop_query = 0;
+  EntryId previous_loop_match = 0;
+  bool corroborated = false;
   LoopStageTimes times;
 
   bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }
