@@ -4,9 +4,12 @@
 // scripts/make_variations.sh (ffmpeg, fixed seeds and thread counts). With
 // the DEFAULT parameters and the bundled vocabularies, no case may give a
 // false loop, and each finds at least the true loops the detector found
-// there before the geometric check had its corroboration rule (the counts
-// below). The "tuning" cases chose the defaults; the "validation" cases were
-// only measured afterwards. Through the CLI, as
+// there before weak loops needed corroboration (the counts below), but for
+// one loop fewer in five cases (jpeg_q24 and blur_1.0 / blur_2.0 with BRIEF,
+// exposure_x0.5 and downscale_0.75+jpeg_q16 with ORB: a true loop of 12-14
+// inliers with no loop just before it; docs/loop-detection.md). The
+// "tuning" cases chose the defaults; the "validation" cases were only
+// measured afterwards. Through the CLI, as
 // `scripts/measure_accuracy.sh -s` measures them.
 #include <gtest/gtest.h>
 
@@ -22,9 +25,9 @@ namespace {
 
 struct VariationCase {
   const char* name;
-  const char* part;  // "tuning" or "validation"
-  int min_true_loops_orb;
-  int min_true_loops_brief;
+  const char* part;           // "tuning" or "validation"
+  int min_queries_found_orb;  // queries with a loop whose loop is found
+  int min_queries_found_brief;
 };
 
 void PrintTo(const VariationCase& c, std::ostream* os) {
@@ -44,29 +47,29 @@ std::string variations_folder() {
 }
 
 const VariationCase kCases[] = {
-    VariationCase{"h264_crf18", "tuning", 37, 35},
+    VariationCase{"h264_crf18", "tuning", 38, 35},
     VariationCase{"h264_crf28", "validation", 37, 38},
     VariationCase{"h264_crf35", "tuning", 39, 33},
     VariationCase{"h265_crf18", "validation", 39, 36},
     VariationCase{"h265_crf28", "tuning", 38, 34},
     VariationCase{"h265_crf35", "validation", 37, 33},
-    VariationCase{"jpeg_q8", "validation", 38, 35},
-    VariationCase{"jpeg_q16", "tuning", 39, 35},
-    VariationCase{"jpeg_q24", "validation", 35, 32},
+    VariationCase{"jpeg_q8", "validation", 39, 35},
+    VariationCase{"jpeg_q16", "tuning", 39, 36},
+    VariationCase{"jpeg_q24", "validation", 35, 31},
     VariationCase{"noise_8", "validation", 38, 29},
     VariationCase{"noise_16", "tuning", 40, 17},
     VariationCase{"gamma_0.6", "tuning", 36, 35},
-    VariationCase{"gamma_1.6", "validation", 38, 35},
-    VariationCase{"exposure_x1.5", "tuning", 40, 34},
-    VariationCase{"exposure_x0.5", "validation", 36, 22},
-    VariationCase{"blur_1.0", "validation", 39, 30},
-    VariationCase{"blur_2.0", "tuning", 36, 29},
+    VariationCase{"gamma_1.6", "validation", 38, 36},
+    VariationCase{"exposure_x1.5", "tuning", 40, 35},
+    VariationCase{"exposure_x0.5", "validation", 35, 22},
+    VariationCase{"blur_1.0", "validation", 39, 29},
+    VariationCase{"blur_2.0", "tuning", 36, 28},
     VariationCase{"downscale_0.5", "tuning", 31, 25},
     VariationCase{"downscale_0.75", "validation", 35, 38},
     VariationCase{"upscale_1.5", "tuning", 38, 34},
     VariationCase{"upscale_2", "validation", 37, 29},
     VariationCase{"noise_8+h264_crf28", "tuning", 38, 34},
-    VariationCase{"downscale_0.75+jpeg_q16", "validation", 36, 28},
+    VariationCase{"downscale_0.75+jpeg_q16", "validation", 35, 29},
     VariationCase{"exposure_x1.5+blur_1.0+h265_crf28", "validation", 36, 38},
     VariationCase{"gamma_1.6+upscale_1.5+h264_crf35", "tuning", 35, 30},
 };
@@ -121,14 +124,14 @@ TEST_P(Variation, NoFalseLoopAndNoTrueLoopLostWithDefaults) {
     ASSERT_EQ(line_value(out, "queries with a loop"), "44") << out;
     EXPECT_EQ(line_value(out, "false positives"), "0") << out;
     const int minimum =
-        std::string(descriptor) == "orb" ? c.min_true_loops_orb : c.min_true_loops_brief;
-    EXPECT_GE(std::stoi(line_value(out, "true positives")), minimum) << out;
+        std::string(descriptor) == "orb" ? c.min_queries_found_orb : c.min_queries_found_brief;
+    EXPECT_GE(std::stoi(line_value(out, "queries found")), minimum) << out;
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(RtabmapSamples, Variation, testing::ValuesIn(kCases),
-                         [](const testing::TestParamInfo<VariationCase>& info) {
-                           std::string name = info.param.name;
+                         [](const testing::TestParamInfo<VariationCase>& test) {
+                           std::string name = test.param.name;
                            for (char& ch : name)
                              if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
                            return name;
