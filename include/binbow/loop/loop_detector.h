@@ -10,7 +10,8 @@
 //      consistency), and
 //   4. the best entry of that island and the query have a fundamental matrix
 //      with enough RANSAC inliers (geometric consistency; binbow's default
-//      estimator is MAGSAC++, see LoopDetectorParams).
+//      estimator is MAGSAC++, see LoopDetectorParams), and a weak one (fewer
+//      than min_uncorroborated_inliers) follows a loop near the same match.
 #pragma once
 
 #include <cstddef>
