@@ -94,12 +94,17 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   result.corroboration_needed =
       fit.consistent && params.min_uncorroborated_inliers > 0 &&
       result.inliers.size() < static_cast<std::size_t>(params.min_uncorroborated_inliers);
-  if (result.corroboration_needed) corroborate(result);
+  if (result.corroboration_needed)
+    corroborate(result, query_keypoints, query_descriptors, query_nodes);
   const bool accepted = fit.consistent && (!result.corroboration_needed || result.corroborated);
   result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
 }
 
-void LoopDetector::Impl::corroborate(LoopResult& result) const {
+// The latest loop first; without one near enough, the match's neighbours
+// (match − 1, then match + 1) against the query.
+void LoopDetector::Impl::corroborate(LoopResult& result, Span<Keypoint> query_keypoints,
+                                     const DescriptorView& query_descriptors,
+                                     const FeatureVector& query_nodes) const {
   result.has_previous_loop = has_previous_loop;
   result.previous_loop_query = previous_loop_query;
   result.previous_loop_match = previous_loop_match;
@@ -107,6 +112,21 @@ void LoopDetector::Impl::corroborate(LoopResult& result) const {
   const auto limit = static_cast<EntryId>(params.corroboration_distance);
   result.corroborated = has_previous_loop && distance(result.query, previous_loop_query) <= limit &&
                         distance(result.match, previous_loop_match) <= limit;
+  for (const long long neighbour :
+       {static_cast<long long>(result.match) - 1, static_cast<long long>(result.match) + 1}) {
+    if (result.corroborated) return;
+    if (neighbour < 0 || neighbour >= static_cast<long long>(result.query)) continue;
+    const auto entry = static_cast<EntryId>(neighbour);
+    if (!database.contains(entry) || frames[entry].keypoints.empty()) continue;
+    const FundamentalCheckResult fit =
+        check_pair(query_keypoints, query_descriptors, &query_nodes, entry, nullptr);
+    if (!result.neighbour_checked || fit.inliers.size() > result.neighbour_inliers) {
+      result.corroborating_neighbour = entry;
+      result.neighbour_inliers = fit.inliers.size();
+    }
+    result.neighbour_checked = true;
+    result.corroborated = fit.consistent;
+  }
 }
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, LoopDetectorParams params) {

@@ -80,7 +80,8 @@ struct LoopDetector::Impl {
                                             const FeatureVector* first_nodes, EntryId second,
                                             bool* exhaustive_fallback_used) const;
   // Sets result's corroboration fields (LoopDetectorParams::min_uncorroborated_inliers).
-  void corroborate(LoopResult& result) const;
+  void corroborate(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                   const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
   void insert(BowVector& bow, const FeatureVector& nodes, Span<vision::Keypoint> image_keypoints,
               const DescriptorView& descriptors);
 };

@@ -38,6 +38,9 @@ inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult
   EXPECT_EQ(a.has_previous_loop, b.has_previous_loop);
   EXPECT_EQ(a.previous_loop_query, b.previous_loop_query);
   EXPECT_EQ(a.previous_loop_match, b.previous_loop_match);
+  EXPECT_EQ(a.neighbour_checked, b.neighbour_checked);
+  EXPECT_EQ(a.corroborating_neighbour, b.corroborating_neighbour);
+  EXPECT_EQ(a.neighbour_inliers, b.neighbour_inliers);
   EXPECT_EQ(a.corroborated, b.corroborated);
 }
 

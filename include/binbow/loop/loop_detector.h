@@ -11,7 +11,8 @@
 //   4. the best entry of that island and the query have a fundamental matrix
 //      with enough RANSAC inliers (geometric consistency; binbow's default
 //      estimator is MAGSAC++, see LoopDetectorParams), and a weak one (fewer
-//      than min_uncorroborated_inliers) follows a loop near the same match.
+//      than min_uncorroborated_inliers) follows a loop near the same match or
+//      is confirmed by a neighbour of the match.
 #pragma once
 
 #include <cstddef>
@@ -146,14 +147,16 @@ struct LoopDetectorParams {
   double min_inlier_ratio = 0;
   double min_inlier_spread = 0;
   // binbow's addition, on by default: a loop whose fundamental matrix has
-  // fewer inliers than this must be corroborated by the loop before it: a
+  // fewer inliers than this must be corroborated, by the loop before it (a
   // loop was detected at most corroboration_distance queries earlier, with
-  // its match at most corroboration_distance entries from this match. A
-  // camera that is really back at a place keeps recognising it, where a
-  // chance fit of a dozen matches of repeated or distant structure (what
-  // re-encoded, noisy or rescaled frames of another place give) comes
-  // alone or elsewhere. Loops with at least this many inliers stand alone,
-  // so the first loop of a revisit needs them. 0: off (the paper). [0, 1e4]
+  // its match at most corroboration_distance entries from this match) or
+  // else by a second place: the match's neighbour (match − 1 or match + 1)
+  // also passes the geometric check with the query. A camera that is really
+  // back at a place keeps recognising it and sees what the neighbouring
+  // frames saw, where a chance fit of a dozen matches of repeated or distant
+  // structure (what re-encoded, noisy or rescaled frames of another place
+  // give) comes alone, with one image. Loops with at least this many
+  // inliers stand alone. 0: off (the paper). [0, 1e4]
   int min_uncorroborated_inliers = 16;
   int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
 
@@ -237,13 +240,17 @@ struct LoopResult {
   std::size_t distinct_inliers = 0;
   double inlier_thickness = 0;
   // The corroboration of a loop with fewer than min_uncorroborated_inliers
-  // inliers (LoopDetectorParams): whether it was needed, the detector's
-  // latest loop before this query (if any: its query and match), and
-  // whether that loop was near enough.
+  // inliers (LoopDetectorParams): whether it was needed; the detector's
+  // latest loop before this query (if any: its query and match); whether a
+  // neighbour of the match was checked, the one with the most inliers and
+  // their number; and whether either corroborated the loop.
   bool corroboration_needed = false;
   bool has_previous_loop = false;
   EntryId previous_loop_query = 0;
   EntryId previous_loop_match = 0;
+  bool neighbour_checked = false;
+  EntryId corroborating_neighbour = 0;
+  std::size_t neighbour_inliers = 0;
   bool corroborated = false;
   LoopStageTimes times;
 
