@@ -65,10 +65,12 @@ inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  //
 // Every parameter of the detector, with its valid range in brackets. The
 // defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
 // except binbow's measured departures, each switchable back:
-// accept_single_candidate, exhaustive_fallback, skip_featureless_frames and
-// fundamental_estimator (docs/loop-detection.md has their effect). The
-// DLoopDetector rules: {"accept_single_candidate": true, "exhaustive_fallback":
-// false, "skip_featureless_frames": false, "fundamental_estimator": "ransac"}.
+// accept_single_candidate, exhaustive_fallback, skip_featureless_frames,
+// fundamental_estimator and min_uncorroborated_inliers
+// (docs/loop-detection.md has their effect). The DLoopDetector rules:
+// {"accept_single_candidate": true, "exhaustive_fallback": false,
+// "skip_featureless_frames": false, "fundamental_estimator": "ransac",
+// "min_uncorroborated_inliers": 0}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
