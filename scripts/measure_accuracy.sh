@@ -64,8 +64,10 @@ measure() {
   local label=$1 descriptor=$2 vocab=$3 images=$4 name result
   name=$(tr -c 'A-Za-z0-9.\n' '_' <<<"$label")
   loops="$work/$name.csv"
+  local rate=()  # a video's frames are the images, one per second
+  [[ $images == *.mp4 ]] && rate=(--frequency 1)
   "$binbow" detect-loops --descriptor "$descriptor" --vocab "$vocab" ${params:+--params "$params"} \
-    --frequency 1 -o "$loops" "$images" >/dev/null 2>&1
+    "${rate[@]}" -o "$loops" "$images" >/dev/null 2>&1
   result=$("$binbow" evaluate --gt "$gt" "$loops")
   value() { sed -n "s/^$1: //p" <<<"$result"; }
   printf '%-44s %-9.3f %-9.3f %s/%s (%s)\n' "$label" "$(value precision)" "$(value recall)" \
