@@ -165,6 +165,11 @@ const std::vector<Field>& fields() {
                  "Minimum inliers / correspondences of the fundamental matrix, [0, 1]."),
       real_field("min_inlier_spread", &P::min_inlier_spread,
                  "Minimum share of the image the inliers must cover, [0, 1]."),
+      int_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers,
+                "Fewer inliers need corroboration (a loop just before, or a neighbour of the "
+                "match), [0, 10000] (0: off)."),
+      int_field("corroboration_distance", &P::corroboration_distance,
+                "Frames from the loop before them that weak loops accept, [1, 1e6]."),
   };
   return table;
 }

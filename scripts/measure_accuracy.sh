@@ -5,6 +5,7 @@
 # ablation table of docs/loop-detection.md is made with it:
 #
 #   scripts/measure_accuracy.sh [-b BUILD_DIR] [-w WORK_DIR] [-p PARAMS] [-m] [VOCAB...]
+#   scripts/measure_accuracy.sh -s [-b BUILD_DIR] [-w WORK_DIR] [-p PARAMS] [-m] [CASE...]
 #
 # -p PARAMS  a --params file for detect-loops (JSON or YAML); default: none,
 #            the detector's defaults.
@@ -15,6 +16,11 @@
 #            vocabularies trained here by `binbow build-vocab` (2000 ORB per
 #            image, seed 1) on opencv-doc-samples + dbow2-demo-images, cached in
 #            WORK_DIR (default: build/measure_accuracy).
+# -s         the variation suite instead: rtabmap-samples re-encoded, degraded
+#            and rescaled by scripts/make_variations.sh (made once in
+#            WORK_DIR/variations; needs ffmpeg), one row per CASE (default:
+#            all, `scripts/make_variations.sh -l` lists them) with the
+#            bundled orb_default and brief_default vocabularies.
 # The shared data is read from ../shared/data (or $BINBOW_SHARED_DATA).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,12 +28,14 @@ build=build
 work=
 params=
 misses=0
-while getopts "b:w:p:m" option; do
+suite=0
+while getopts "b:w:p:ms" option; do
   case $option in
     b) build=$OPTARG ;;
     w) work=$OPTARG ;;
     p) params=$(realpath "$OPTARG") ;;
     m) misses=1 ;;
+    s) suite=1 ;;
     *) exit 2 ;;
   esac
 done
@@ -40,8 +48,6 @@ shared=${BINBOW_SHARED_DATA:-../shared/data}
 samples="$shared/rtabmap-samples/samples"
 gt="$shared/rtabmap-samples/samples_GT.bmp"
 [ -d "$samples" ] && [ -f "$gt" ] || { echo "missing $samples or $gt" >&2; exit 1; }
-vocabs=("$@")
-[ ${#vocabs[@]} -gt 0 ] || vocabs=(orb_default brief_default brief_lite kimera orb_L5 orb_L6)
 
 trained_vocabulary() {  # levels -> path
   local path="$work/orb_k10_L$1.bbw"
@@ -53,23 +59,18 @@ trained_vocabulary() {  # levels -> path
   echo "$path"
 }
 
-printf '%-14s %-9s %-9s %s\n' vocabulary precision recall "found/loops (false)"
-for name in "${vocabs[@]}"; do
-  case $name in
-    orb_default) descriptor=orb vocab=data/vocab/orb_default.bbw ;;
-    brief_default) descriptor=brief vocab=data/vocab/brief_default.bbw ;;
-    brief_lite) descriptor=brief vocab=$shared/vins-lite-brief-vocab/brief_lite.voc.gz ;;
-    kimera) descriptor=orb vocab=$shared/kimera-small-voc/small_voc.yml.gz ;;
-    orb_L5) descriptor=orb vocab=$(trained_vocabulary 5) ;;
-    orb_L6) descriptor=orb vocab=$(trained_vocabulary 6) ;;
-    *) echo "unknown vocabulary $name" >&2; exit 2 ;;
-  esac
+# measure LABEL DESCRIPTOR VOCABULARY IMAGES: one row.
+measure() {
+  local label=$1 descriptor=$2 vocab=$3 images=$4 name result
+  name=$(tr -c 'A-Za-z0-9.\n' '_' <<<"$label")
   loops="$work/$name.csv"
+  local rate=()  # a video's frames are the images, one per second
+  [[ $images == *.mp4 ]] && rate=(--frequency 1)
   "$binbow" detect-loops --descriptor "$descriptor" --vocab "$vocab" ${params:+--params "$params"} \
-    -o "$loops" "$samples" >/dev/null 2>&1
+    "${rate[@]}" -o "$loops" "$images" >/dev/null 2>&1
   result=$("$binbow" evaluate --gt "$gt" "$loops")
   value() { sed -n "s/^$1: //p" <<<"$result"; }
-  printf '%-14s %-9.3f %-9.3f %s/%s (%s)\n' "$name" "$(value precision)" "$(value recall)" \
+  printf '%-44s %-9.3f %-9.3f %s/%s (%s)\n' "$label" "$(value precision)" "$(value recall)" \
     "$(value 'queries found')" "$(value 'queries with a loop')" "$(value 'false positives')"
   if [ $misses -eq 1 ]; then
     python3 - "$loops.run.json" "${gt%.bmp}_pairs.txt" "$loops" <<'EOF'
@@ -89,4 +90,37 @@ for i, frame in enumerate(run["frames"]):
           f" inliers {frame.get('inliers', '-')}{wrong}")
 EOF
   fi
+}
+
+if [ $suite -eq 1 ]; then
+  cases=("$@")
+  [ ${#cases[@]} -gt 0 ] || mapfile -t cases < <(scripts/make_variations.sh -l | cut -d' ' -f1)
+  scripts/make_variations.sh "$samples" "$work/variations" "${cases[@]}"
+  printf '%-44s %-9s %-9s %s\n' "case (part) / descriptor" precision recall "found/loops (false)"
+  for name in "${cases[@]}"; do
+    part=$(scripts/make_variations.sh -l | awk -v name="$name" '$1 == name { print $2 }')
+    images="$work/variations/$name"
+    [ -f "$images/video.mp4" ] && images="$images/video.mp4"
+    for descriptor in orb brief; do
+      measure "$name ($part) $descriptor" "$descriptor" "data/vocab/${descriptor}_default.bbw" \
+        "$images"
+    done
+  done
+  exit 0
+fi
+
+vocabs=("$@")
+[ ${#vocabs[@]} -gt 0 ] || vocabs=(orb_default brief_default brief_lite kimera orb_L5 orb_L6)
+printf '%-44s %-9s %-9s %s\n' vocabulary precision recall "found/loops (false)"
+for name in "${vocabs[@]}"; do
+  case $name in
+    orb_default) descriptor=orb vocab=data/vocab/orb_default.bbw ;;
+    brief_default) descriptor=brief vocab=data/vocab/brief_default.bbw ;;
+    brief_lite) descriptor=brief vocab=$shared/vins-lite-brief-vocab/brief_lite.voc.gz ;;
+    kimera) descriptor=orb vocab=$shared/kimera-small-voc/small_voc.yml.gz ;;
+    orb_L5) descriptor=orb vocab=$(trained_vocabulary 5) ;;
+    orb_L6) descriptor=orb vocab=$(trained_vocabulary 6) ;;
+    *) echo "unknown vocabulary $name" >&2; exit 2 ;;
+  esac
+  measure "$name" "$descriptor" "$vocab" "$samples"
 done

@@ -92,14 +92,53 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   }
   TrailCheck check = geometric_check(query_keypoints, query_descriptors, query_nodes, result.match);
   if (check.exhaustive_fallback_used) result.exhaustive_fallback_used = true;
-  result.correspondences = check.correspondences.size();
-  result.status =
-      check.fit.consistent ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+  const FundamentalCheckResult& fit = check.fit;
+  result.correspondences = fit.correspondences;
+  result.inlier_ratio = fit.inlier_ratio;
+  result.inlier_spread = fit.inlier_spread;
+  result.distinct_inliers = fit.distinct_inliers;
+  result.inlier_thickness = fit.inlier_thickness;
+  result.inliers = fit.inliers;
+  result.corroboration_needed =
+      fit.consistent && params.min_uncorroborated_inliers > 0 &&
+      result.inliers.size() < static_cast<std::size_t>(params.min_uncorroborated_inliers);
+  if (result.corroboration_needed)
+    corroborate(result, query_keypoints, query_descriptors, query_nodes);
+  const bool accepted = fit.consistent && (!result.corroboration_needed || result.corroborated);
+  result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
   if (trail != nullptr) {
     check.normalised_score = result.normalised_score;
-    trail->checks.push_back(check);
+    trail->checks.push_back(std::move(check));
   }
-  result.inliers = std::move(check.fit.inliers);
+}
+
+// The latest loop first; without one near enough, the match's neighbours
+// (match − 1, then match + 1) against the query.
+void LoopDetector::Impl::corroborate(LoopResult& result, Span<Keypoint> query_keypoints,
+                                     const DescriptorView& query_descriptors,
+                                     const FeatureVector& query_nodes) const {
+  result.has_previous_loop = has_previous_loop;
+  result.previous_loop_query = previous_loop_query;
+  result.previous_loop_match = previous_loop_match;
+  const auto distance = [](EntryId a, EntryId b) { return a > b ? a - b : b - a; };
+  const auto limit = static_cast<EntryId>(params.corroboration_distance);
+  result.corroborated = has_previous_loop && distance(result.query, previous_loop_query) <= limit &&
+                        distance(result.match, previous_loop_match) <= limit;
+  for (const long long neighbour :
+       {static_cast<long long>(result.match) - 1, static_cast<long long>(result.match) + 1}) {
+    if (result.corroborated) return;
+    if (neighbour < 0 || neighbour >= static_cast<long long>(result.query)) continue;
+    const auto entry = static_cast<EntryId>(neighbour);
+    if (!database.contains(entry) || frames[entry].keypoints.empty()) continue;
+    const FundamentalCheckResult fit =
+        geometric_check(query_keypoints, query_descriptors, query_nodes, entry).fit;
+    if (!result.neighbour_checked || fit.inliers.size() > result.neighbour_inliers) {
+      result.corroborating_neighbour = entry;
+      result.neighbour_inliers = fit.inliers.size();
+    }
+    result.neighbour_checked = true;
+    result.corroborated = fit.consistent;
+  }
 }
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, LoopDetectorParams params) {
@@ -372,6 +411,11 @@ LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorVie
     }
   }
 
+  if (result.detection()) {
+    d.has_previous_loop = true;
+    d.previous_loop_query = result.query;
+    d.previous_loop_match = result.match;
+  }
   d.insert(bow, nodes, keypoints, descriptors);
   result.times.insertion_ms = milliseconds_since(clock);
   return result;
@@ -460,6 +504,8 @@ void LoopDetector::clear() {
   d.window.clear();
   d.previous_bow.clear();
   d.featured_frames = 0;
+  d.has_previous_loop = false;
+  d.previous_loop_query = d.previous_loop_match = 0;
   std::vector<Impl::FrameFeatures>().swap(d.frames);
   if (d.online) {
     // Copied first: emplace destroys the old vocabulary, and its options with it.

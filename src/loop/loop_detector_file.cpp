@@ -17,8 +17,11 @@
 //            5 feature counts (u32 per frame)   6 keypoints (x, y, size,
 //              angle, response f32, octave i32: 24 bytes each)   7 descriptors
 //            (5 to 7 empty with GeometricCheck::kNone, which keeps no features)
+//            8 the latest loop (version 3: u32 query, u32 match; empty
+//              before the first loop)
 // The forgotten frames are the database's removed entries, and have no
-// features. Version 1 (before LoopDetector::forget) has none and still loads.
+// features. Version 1 (before LoopDetector::forget) has none and still loads;
+// versions 1 and 2 have 8 sections and load with no latest loop.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -39,7 +42,7 @@ namespace binbow::loop {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'L', 'D'};
-constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kVersion = 3;
 constexpr std::size_t kHeaderSize = binbow::detail::kSectionedHeaderSize;
 constexpr std::uint32_t kFlagOnline = 1;
 constexpr std::size_t kTemporalStateSize = 16;
@@ -58,11 +61,14 @@ enum Section : std::uint32_t {
   kFeatureCounts,
   kKeypoints,
   kDescriptors,
+  kPreviousLoop,
   kSectionCount,
 };
+// Sections of a version 1 or 2 file: all but the latest loop.
+constexpr std::uint32_t kVersion2SectionCount = kPreviousLoop;
 constexpr const char* kSectionNames[kSectionCount] = {
-    "parameters",        "temporal state", "previous BoW vector", "database",
-    "online vocabulary", "feature counts", "keypoints",           "descriptors"};
+    "parameters",     "temporal state", "previous BoW vector", "database",   "online vocabulary",
+    "feature counts", "keypoints",      "descriptors",         "latest loop"};
 
 struct Header {
   std::uint32_t version = 0;
@@ -100,7 +106,7 @@ class Layout {
     if (std::memcmp(data, kMagic, 8) != 0)
       fail("not a binbow loop detector state (.bbld): wrong magic bytes");
     header_.version = binbow::detail::load_le<std::uint32_t>(data + 8);
-    if (header_.version != 1 && header_.version != kVersion)
+    if (header_.version < 1 || header_.version > kVersion)
       fail("unsupported .bbld format version " + std::to_string(header_.version) +
            " (this binbow reads versions 1 to " + std::to_string(kVersion) + ")");
     if (binbow::detail::load_le<std::uint32_t>(data + 60) != binbow::detail::crc32c(data, 60))
@@ -129,12 +135,14 @@ class Layout {
     if (header_.online && (header_.vocabulary_checksum != 0 || header_.vocabulary_words != 0 ||
                            header_.vocabulary_levels != 0))
       fail("an online state names a fixed vocabulary");
-    if (section_count != kSectionCount)
-      fail("expected " + std::to_string(kSectionCount) + " sections, the header says " +
+    const std::uint32_t expected_sections =
+        header_.version < 3 ? kVersion2SectionCount : kSectionCount;
+    if (section_count != expected_sections)
+      fail("expected " + std::to_string(expected_sections) + " sections, the header says " +
            std::to_string(section_count));
     const std::vector<binbow::detail::Section> table = binbow::detail::read_section_table(
-        data, size, kSectionCount, kSectionNames, [this](const std::string& p) { fail(p); });
-    for (std::uint32_t i = 0; i < kSectionCount; ++i) {
+        data, size, expected_sections, kSectionNames, [this](const std::string& p) { fail(p); });
+    for (std::uint32_t i = 0; i < expected_sections; ++i) {
       if (!binbow::detail::section_intact(table[i]))
         fail(std::string("checksum mismatch in section '") + kSectionNames[i] +
              "': the file is corrupted");
@@ -184,6 +192,22 @@ class Layout {
   detail::TemporalWindow::State window_;
   std::string descriptor_;
 };
+
+// The latest loop: none (an empty section, or a version 1 or 2 file), or a
+// query and an older match among the frames.
+template <typename DetectorImpl>
+void read_previous_loop(const Layout& layout, DetectorImpl& impl) {
+  const binbow::detail::Section& section = layout.section(kPreviousLoop);
+  if (section.size == 0) return;
+  layout.expect_size(kPreviousLoop, 8);
+  const auto query = binbow::detail::load_le<std::uint32_t>(section.data);
+  const auto match = binbow::detail::load_le<std::uint32_t>(section.data + 4);
+  if (query >= layout.header().frames || match >= query)
+    layout.fail("the latest loop names frames that do not exist");
+  impl.has_previous_loop = true;
+  impl.previous_loop_query = query;
+  impl.previous_loop_match = match;
+}
 
 // The previous BoW vector, whose words must be below `word_limit`: the
 // vocabulary's words, or the online vocabulary's ids ever created. A word
@@ -306,6 +330,12 @@ std::vector<std::uint8_t> LoopDetector::serialize() const {
   const std::string& descriptor =
       d.online ? d.online->options().descriptor : d.database.vocabulary().descriptor();
   state.insert(state.end(), descriptor.begin(), descriptor.end());
+  if (d.has_previous_loop) {
+    binbow::detail::put_le<std::uint32_t>(sections[kPreviousLoop],
+                                          static_cast<std::uint32_t>(d.previous_loop_query));
+    binbow::detail::put_le<std::uint32_t>(sections[kPreviousLoop],
+                                          static_cast<std::uint32_t>(d.previous_loop_match));
+  }
   for (const BowEntry& e : d.previous_bow) {
     binbow::detail::put_le<std::uint32_t>(sections[kPreviousBow], e.word);
     binbow::detail::put_le<float>(sections[kPreviousBow], e.value);
@@ -379,6 +409,7 @@ std::unique_ptr<DetectorImpl> restore(const Layout& layout, std::unique_ptr<Dete
   impl->previous_bow = read_previous_bow(layout, word_limit);
   impl->featured_frames = header.featured_frames;
   impl->window.restore(layout.window());
+  read_previous_loop(layout, *impl);
   read_features(layout, impl->keeps_features(), *impl);
   check_direct_index(layout, *impl);
   return impl;

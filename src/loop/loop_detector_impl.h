@@ -35,6 +35,10 @@ struct LoopDetector::Impl {
   // Images with features so far: the time axis of the temporal window when
   // featureless frames are skipped.
   EntryId featured_frames = 0;
+  // The latest loop detected (query, match), which corroborates the next
+  // weak ones (LoopDetectorParams::min_uncorroborated_inliers).
+  bool has_previous_loop = false;
+  EntryId previous_loop_query = 0, previous_loop_match = 0;
   // One per image processed (empty with GeometricCheck::kNone, and once
   // forgotten): arrays of their own, so that forget() frees them at once.
   struct FrameFeatures {
@@ -83,6 +87,9 @@ struct LoopDetector::Impl {
   void record_islands();
   void record_temporal(const detail::Island& chosen, const detail::TemporalWindow::State& before,
                        EntryId position, int chain_after);
+  // Sets result's corroboration fields (LoopDetectorParams::min_uncorroborated_inliers).
+  void corroborate(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                   const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
   void insert(BowVector& bow, const FeatureVector& nodes, Span<vision::Keypoint> image_keypoints,
               const DescriptorView& descriptors);
 };

@@ -122,6 +122,8 @@ const std::vector<Field>& fields() {
       number_field("max_ransac_iterations", &P::max_ransac_iterations),
       number_field("min_inlier_ratio", &P::min_inlier_ratio),
       number_field("min_inlier_spread", &P::min_inlier_spread),
+      number_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers),
+      number_field("corroboration_distance", &P::corroboration_distance),
   };
   return table;
 }
@@ -139,6 +141,7 @@ void scale_to_frequency(LoopDetectorParams& p, double f) {
   p.max_intra_island_gap = scaled(3, 1);
   p.max_distance_between_islands = scaled(3, 0);
   p.max_distance_between_queries = scaled(2, 1);
+  p.corroboration_distance = scaled(4, 1);
 }
 
 LoopDetectorParams from_object(const Json& object, const std::string& name,
@@ -261,6 +264,8 @@ void LoopDetectorParams::validate() const {
   in_range("max_ransac_iterations", max_ransac_iterations, 1, kMaxRansacIterations);
   in_range("min_inlier_ratio", min_inlier_ratio, 0, 1);
   in_range("min_inlier_spread", min_inlier_spread, 0, 1);
+  in_range("min_uncorroborated_inliers", min_uncorroborated_inliers, 0, kMaxMinInliers);
+  in_range("corroboration_distance", corroboration_distance, 1, kMaxFrameDistance);
 }
 
 namespace {

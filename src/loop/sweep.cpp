@@ -111,6 +111,8 @@ std::vector<double> default_sweep_values(const std::string& parameter) {
       {"max_ransac_iterations", {50, 100, 200, 500, 1000, 2000, 5000}},               // 500
       {"min_inlier_ratio", {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}},                        // 0
       {"min_inlier_spread", {0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4}},                     // 0
+      {"min_uncorroborated_inliers", {0, 13, 14, 16, 18, 20, 25, 30}},                // 16
+      {"corroboration_distance", {1, 2, 3, 4, 5, 6, 8, 12}},                          // 4
   };
   const auto found = ranges.find(parameter);
   if (found == ranges.end())

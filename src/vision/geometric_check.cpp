@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <iterator>
 #include <limits>
@@ -270,6 +271,57 @@ double inlier_spread(Span<Keypoint> first, Span<Keypoint> second,
   return std::min(spread_in(first, true), spread_in(second, false));
 }
 
+std::size_t distinct_inliers(Span<Keypoint> first, Span<Keypoint> second,
+                             const std::vector<Correspondence>& inliers) {
+  constexpr float r2 = kDistinctInlierRadius * kDistinctInlierRadius;
+  const auto near = [r2](const Keypoint& a, const Keypoint& b) {
+    const float dx = a.x - b.x, dy = a.y - b.y;
+    return dx * dx + dy * dy <= r2;
+  };
+  std::vector<Correspondence> kept;
+  for (const Correspondence& c : inliers) {
+    if (c.first >= first.size() || c.second >= second.size())
+      throw InvalidArgument("correspondence refers to a keypoint past the end");
+    const bool repeated = std::any_of(kept.begin(), kept.end(), [&](const Correspondence& k) {
+      return near(first[c.first], first[k.first]) || near(second[c.second], second[k.second]);
+    });
+    if (!repeated) kept.push_back(c);
+  }
+  return kept.size();
+}
+
+double inlier_thickness(Span<Keypoint> first, Span<Keypoint> second,
+                        const std::vector<Correspondence>& inliers) {
+  if (inliers.size() < 2) return 0;
+  const auto thickness_in = [&inliers](Span<Keypoint> keypoints, bool use_first) {
+    double mean_x = 0, mean_y = 0;
+    for (const Correspondence& c : inliers) {
+      const std::uint32_t index = use_first ? c.first : c.second;
+      if (index >= keypoints.size())
+        throw InvalidArgument("correspondence refers to a keypoint past the end");
+      mean_x += keypoints[index].x;
+      mean_y += keypoints[index].y;
+    }
+    const double n = static_cast<double>(inliers.size());
+    mean_x /= n;
+    mean_y /= n;
+    double xx = 0, xy = 0, yy = 0;
+    for (const Correspondence& c : inliers) {
+      const Keypoint& k = keypoints[use_first ? c.first : c.second];
+      const double dx = k.x - mean_x, dy = k.y - mean_y;
+      xx += dx * dx;
+      xy += dx * dy;
+      yy += dy * dy;
+    }
+    // Eigenvalues of the 2x2 scatter matrix.
+    const double half_trace = (xx + yy) / 2;
+    const double root = std::sqrt(std::max(0.0, (xx - yy) * (xx - yy) / 4 + xy * xy));
+    const double largest = half_trace + root, smallest = std::max(0.0, half_trace - root);
+    return largest > 0 ? std::sqrt(smallest / largest) : 0.0;
+  };
+  return std::min(thickness_in(first, true), thickness_in(second, false));
+}
+
 FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> second,
                                          const std::vector<Correspondence>& correspondences,
                                          const FundamentalCheckParams& params) {
@@ -279,6 +331,7 @@ FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> se
       !(params.min_inlier_spread >= 0 && params.min_inlier_spread <= 1))
     throw InvalidArgument("fundamental check parameters out of range");
   FundamentalCheckResult result;
+  result.correspondences = correspondences.size();
   const std::size_t needed = static_cast<std::size_t>(std::max(8, params.min_inliers));
   if (correspondences.size() < needed) return result;
 
@@ -307,6 +360,8 @@ FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> se
   result.inlier_ratio =
       static_cast<double>(result.inliers.size()) / static_cast<double>(correspondences.size());
   result.inlier_spread = inlier_spread(first, second, result.inliers);
+  result.distinct_inliers = distinct_inliers(first, second, result.inliers);
+  result.inlier_thickness = inlier_thickness(first, second, result.inliers);
   result.consistent = result.inliers.size() >= static_cast<std::size_t>(params.min_inliers) &&
                       result.inlier_ratio >= params.min_inlier_ratio &&
                       result.inlier_spread >= params.min_inlier_spread;

@@ -225,7 +225,7 @@ TEST(LoopDetectorForget, SavedStateKeepsFramesForgotten) {
     const std::string path = dir.file(std::string(c.name) + ".bbld");
     continued.save(path);
     const LoopDetectorFileInfo info = LoopDetector::inspect(path);
-    EXPECT_EQ(info.version, 2u);
+    EXPECT_EQ(info.version, 3u);
     EXPECT_EQ(info.frames, stop);
     EXPECT_EQ(info.forgotten_frames, culled.size());
 
@@ -277,7 +277,7 @@ TEST(LoopDetectorForget, CliResumesAStateWithForgottenFrames) {
   const std::string cli = test::cli_path();
   std::string output;
   ASSERT_EQ(test::run_command(cli + " info '" + state + "'", &output), 0) << output;
-  EXPECT_NE(output.find("version: 2\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("version: 3\n"), std::string::npos) << output;
   EXPECT_NE(output.find("forgotten_frames: " + std::to_string(culled.size()) + "\n"),
             std::string::npos)
       << output;

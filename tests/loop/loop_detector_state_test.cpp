@@ -3,6 +3,8 @@
 // vocabulary, damaged files and failed saves are refused cleanly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -17,6 +19,7 @@
 #include "binbow/vision/image_source.h"
 #include "core/crc32c.h"
 #include "core/little_endian.h"
+#include "core/sectioned_file.h"
 #include "loop/same_result.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"
@@ -209,6 +212,25 @@ std::vector<std::pair<std::size_t, std::size_t>> sections_of(const std::vector<s
   return sections;
 }
 
+// The same state in the layout of an older version (1 or 2): the sections
+// before the latest loop, which must be empty.
+std::vector<std::uint8_t> as_old_version(const std::vector<std::uint8_t>& bytes,
+                                         std::uint32_t version) {
+  const auto sections = sections_of(bytes);
+  EXPECT_EQ(sections.size(), 9u);
+  EXPECT_EQ(sections[8].second, 0u) << "an older version has no latest loop";
+  std::vector<std::vector<std::uint8_t>> contents;
+  for (std::size_t i = 0; i < 8; ++i)
+    contents.emplace_back(
+        bytes.begin() + static_cast<std::ptrdiff_t>(sections[i].first),
+        bytes.begin() + static_cast<std::ptrdiff_t>(sections[i].first + sections[i].second));
+  return binbow::detail::write_sectioned_file(
+      "BINBOWLD", version, contents.data(), 8, [&](std::uint8_t* header) {
+        std::copy(bytes.begin() + 16, bytes.begin() + 48, header + 16);
+        std::copy(bytes.begin() + 52, bytes.begin() + 60, header + 52);
+      });
+}
+
 TEST(LoopDetectorState, DamagedFilesAreRefused) {
   const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
   LoopDetector fixed(orb);
@@ -231,10 +253,10 @@ TEST(LoopDetectorState, DamagedFilesAreRefused) {
     const std::vector<std::uint8_t>& bytes = c.bytes;
     ASSERT_NO_THROW(c.load(bytes));
     const auto sections = sections_of(bytes);
-    ASSERT_EQ(sections.size(), 8u);
+    ASSERT_EQ(sections.size(), 9u);
     // A flipped byte at a few places of every section (all non-empty ones,
     // in the header and the table too).
-    std::vector<std::size_t> places = {0, 9, 20, 30, 61, 64, 70, 64 + 24 * 8 + 1};
+    std::vector<std::size_t> places = {0, 9, 20, 30, 61, 64, 70, 64 + 24 * 9 + 1};
     for (const auto& [offset, length] : sections)
       for (std::size_t k = 0; k < 5 && length > 0; ++k) places.push_back(offset + k * length / 5);
     for (std::size_t at : places) {
@@ -328,7 +350,7 @@ TEST(LoopDetectorState, ForgottenFramesAreChecked) {
         [&] { LoopDetector::deserialize(data.data(), data.size(), "crafted.bbld", orb); });
   };
   ASSERT_EQ(problem(bytes), "loaded");
-  EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + 8), 2u);
+  EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + 8), 3u);
   EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + 44), 1u);
   const auto header = [](std::vector<std::uint8_t> b, std::size_t at, std::uint32_t value) {
     binbow::detail::store_le<std::uint32_t>(b.data() + at, value);
@@ -340,10 +362,16 @@ TEST(LoopDetectorState, ForgottenFramesAreChecked) {
   EXPECT_NE(problem(header(bytes, 44, 2)).find("of which 2 forgotten"), std::string::npos);
   EXPECT_NE(problem(header(bytes, 44, 5)).find("inconsistent frame counts"), std::string::npos);
   EXPECT_NE(problem(header(bytes, 8, 1)).find("reserved header bytes"), std::string::npos);
-  EXPECT_NE(problem(header(bytes, 8, 3)).find("unsupported .bbld format version 3"),
+  EXPECT_NE(problem(header(bytes, 8, 4)).find("unsupported .bbld format version 4"),
             std::string::npos);
-  // Version 1 (no forgotten frames) loads, and is saved again as version 2.
-  const std::vector<std::uint8_t> version1 = header(whole, 8, 1);
+  EXPECT_NE(problem(header(bytes, 8, 2)).find("expected 8 sections"), std::string::npos);
+  // Versions 1 (no forgotten frames) and 2 (no latest loop) load, and are
+  // saved again as version 3.
+  const std::vector<std::uint8_t> version2 = as_old_version(bytes, 2);
+  ASSERT_EQ(problem(version2), "loaded");
+  EXPECT_EQ(LoopDetector::deserialize(version2.data(), version2.size(), "v2", orb).serialize(),
+            bytes);
+  const std::vector<std::uint8_t> version1 = as_old_version(whole, 1);
   ASSERT_EQ(problem(version1), "loaded");
   EXPECT_EQ(LoopDetector::deserialize(version1.data(), version1.size(), "v1", orb).serialize(),
             whole);
@@ -361,6 +389,42 @@ TEST(LoopDetectorState, ForgottenFramesAreChecked) {
       binbow::detail::crc32c(moved.data() + 64, 24 * sections.size()));
   EXPECT_NE(problem(moved).find("forgotten frame 1 has features"), std::string::npos)
       << problem(moved);
+}
+
+// The latest loop (version 3) decides whether the next weak loops are
+// corroborated: it is saved, and a file naming frames that do not exist is
+// refused.
+TEST(LoopDetectorState, LatestLoopIsSavedAndChecked) {
+  const Vocabulary orb = Vocabulary::load(vocabulary_path("orb_default.bbw"));
+  LoopDetector fixed(orb);
+  LoopResult last_loop;
+  for (std::size_t i = 0; i < 50; ++i) {
+    LoopResult r = fixed.process(sample_features("orb")[i]);
+    if (r.detection()) last_loop = r;
+  }
+  ASSERT_TRUE(last_loop.detection());
+  const std::vector<std::uint8_t> bytes = fixed.serialize();
+  const auto sections = sections_of(bytes);
+  ASSERT_EQ(sections.size(), 9u);
+  ASSERT_EQ(sections[8].second, 8u);
+  EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + sections[8].first),
+            last_loop.query);
+  EXPECT_EQ(binbow::detail::load_le<std::uint32_t>(bytes.data() + sections[8].first + 4),
+            last_loop.match);
+  const auto with_loop = [&](std::uint32_t query, std::uint32_t match) {
+    std::vector<std::uint8_t> out = bytes;
+    std::uint8_t* at = out.data() + sections[8].first;
+    binbow::detail::store_le<std::uint32_t>(at, query);
+    binbow::detail::store_le<std::uint32_t>(at + 4, match);
+    binbow::detail::store_le<std::uint32_t>(out.data() + 64 + 24 * 8 + 4,
+                                            binbow::detail::crc32c(at, 8));
+    binbow::detail::store_le<std::uint32_t>(out.data() + 64 + 24 * 9,
+                                            binbow::detail::crc32c(out.data() + 64, 24 * 9));
+    return load_problem([&] { LoopDetector::deserialize(out.data(), out.size(), "crafted", orb); });
+  };
+  EXPECT_EQ(with_loop(last_loop.query, last_loop.match), "loaded");
+  EXPECT_NE(with_loop(50, 3).find("latest loop names frames"), std::string::npos);
+  EXPECT_NE(with_loop(40, 40).find("latest loop names frames"), std::string::npos);
 }
 
 TEST(LoopDetectorState, FeaturelessAndNoGeometricCheckStatesRoundTrip) {

@@ -37,11 +37,14 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_FALSE(p.mutual_matching);
   EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
   EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
+  EXPECT_EQ(p.min_uncorroborated_inliers, 16);
+  EXPECT_EQ(p.corroboration_distance, 4);
   const LoopDetectorParams f2 = LoopDetectorParams::for_frequency(2);
   EXPECT_EQ(f2.dislocal, 40);
   EXPECT_EQ(f2.max_db_results, 100);
   EXPECT_EQ(f2.max_intra_island_gap, 6);
   EXPECT_EQ(f2.max_distance_between_queries, 4);
+  EXPECT_EQ(f2.corroboration_distance, 8);
   EXPECT_DOUBLE_EQ(f2.alpha, 0.3);
 }
 
@@ -55,6 +58,8 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.mutual_matching = true;
   p.min_inlier_ratio = 0.5;
   p.min_inlier_spread = 0.25;
+  p.min_uncorroborated_inliers = 0;
+  p.corroboration_distance = 7;
   const LoopDetectorParams q = LoopDetectorParams::from_json(p.to_json());
   EXPECT_EQ(q.to_json(), p.to_json());
   EXPECT_EQ(q.dislocal, 60);
@@ -204,7 +209,9 @@ TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
         Bound{"min_inlier_ratio", 1, 1.5},
         Bound{"min_inlier_ratio", 0, -0.1},
         Bound{"min_inlier_spread", 1, 1.5},
-        Bound{"min_inlier_spread", 0, -0.1}}) {
+        Bound{"min_inlier_spread", 0, -0.1},
+        Bound{"min_uncorroborated_inliers", 0, -1},
+        Bound{"corroboration_distance", 1, 0}}) {
     SCOPED_TRACE(b.key);
     const auto json = [&](double value) {
       std::ostringstream text;

@@ -30,6 +30,18 @@ inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult
   EXPECT_EQ(a.correspondences, b.correspondences);
   EXPECT_EQ(a.exhaustive_fallback_used, b.exhaustive_fallback_used);
   EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_EQ(a.inlier_ratio, b.inlier_ratio);
+  EXPECT_EQ(a.inlier_spread, b.inlier_spread);
+  EXPECT_EQ(a.distinct_inliers, b.distinct_inliers);
+  EXPECT_EQ(a.inlier_thickness, b.inlier_thickness);
+  EXPECT_EQ(a.corroboration_needed, b.corroboration_needed);
+  EXPECT_EQ(a.has_previous_loop, b.has_previous_loop);
+  EXPECT_EQ(a.previous_loop_query, b.previous_loop_query);
+  EXPECT_EQ(a.previous_loop_match, b.previous_loop_match);
+  EXPECT_EQ(a.neighbour_checked, b.neighbour_checked);
+  EXPECT_EQ(a.corroborating_neighbour, b.corroborating_neighbour);
+  EXPECT_EQ(a.neighbour_inliers, b.neighbour_inliers);
+  EXPECT_EQ(a.corroborated, b.corroborated);
 }
 
 }  // namespace binbow::test

@@ -221,6 +221,35 @@ TEST(InlierSpread, CountsGridCellsAndTakesTheWorseImage) {
   EXPECT_DOUBLE_EQ(inlier_spread({&single, 1}, {&single, 1}, {{0, 0}}), 1.0 / 16);
 }
 
+TEST(DistinctInliers, CopiesOfOneCornerCountOnce) {
+  // Keypoints 0 and 1 are one corner at two pyramid levels (1 px apart) in
+  // the first image; 2 is 2.8 px from 0 in the second image only; 3 is apart.
+  const std::vector<Keypoint> first = {{10, 10}, {11, 10}, {50, 50}, {100, 10}};
+  const std::vector<Keypoint> second = {{20, 20}, {60, 60}, {22, 22}, {200, 20}};
+  const Span<Keypoint> a{first.data(), first.size()}, b{second.data(), second.size()};
+  EXPECT_EQ(distinct_inliers(a, b, {{0, 0}, {1, 1}, {2, 2}, {3, 3}}), 2U);
+  EXPECT_EQ(distinct_inliers(a, b, {{2, 1}, {3, 3}}), 2U);
+  EXPECT_EQ(distinct_inliers(a, b, {}), 0U);
+  EXPECT_THROW(distinct_inliers(a, b, {{0, 99}}), InvalidArgument);
+}
+
+TEST(InlierThickness, ZeroOnALineOneWithoutDirectionWorseImage) {
+  const std::vector<Keypoint> line = {{0, 0}, {10, 10}, {20, 20}, {30, 30}};
+  const std::vector<Keypoint> square = {{0, 0}, {10, 0}, {0, 10}, {10, 10}};
+  // A 4 × 1 rectangle's corners: covariance eigenvalues 16 and 1.
+  const std::vector<Keypoint> flat = {{0, 0}, {8, 0}, {0, 2}, {8, 2}};
+  const std::vector<Correspondence> all = {{0, 0}, {1, 1}, {2, 2}, {3, 3}};
+  const auto span = [](const std::vector<Keypoint>& k) {
+    return Span<Keypoint>{k.data(), k.size()};
+  };
+  EXPECT_NEAR(inlier_thickness(span(line), span(line), all), 0, 1e-6);
+  EXPECT_NEAR(inlier_thickness(span(square), span(square), all), 1, 1e-12);
+  EXPECT_NEAR(inlier_thickness(span(flat), span(flat), all), 0.25, 1e-12);
+  EXPECT_NEAR(inlier_thickness(span(square), span(flat), all), 0.25, 1e-12);
+  EXPECT_EQ(inlier_thickness(span(square), span(square), {{0, 0}}), 0);
+  EXPECT_THROW(inlier_thickness(span(square), span(square), {{0, 0}, {9, 1}}), InvalidArgument);
+}
+
 // First-image features 0 and 1 are identical: each is distinctive towards
 // the second image (its nearest, second feature 0, is far nearer than the
 // other), but second feature 0 has two equally near partners, so the pair

@@ -10,7 +10,9 @@
 //      consistency), and
 //   4. the best entry of that island and the query have a fundamental matrix
 //      with enough RANSAC inliers (geometric consistency; binbow's default
-//      estimator is MAGSAC++, see LoopDetectorParams).
+//      estimator is MAGSAC++, see LoopDetectorParams), and a weak one (fewer
+//      than min_uncorroborated_inliers) follows a loop near the same match or
+//      is confirmed by a neighbour of the match.
 #pragma once
 
 #include <cstddef>
@@ -64,10 +66,12 @@ inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  //
 // Every parameter of the detector, with its valid range in brackets. The
 // defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
 // except binbow's measured departures, each switchable back:
-// accept_single_candidate, exhaustive_fallback, skip_featureless_frames and
-// fundamental_estimator (docs/loop-detection.md has their effect). The
-// DLoopDetector rules: {"accept_single_candidate": true, "exhaustive_fallback":
-// false, "skip_featureless_frames": false, "fundamental_estimator": "ransac"}.
+// accept_single_candidate, exhaustive_fallback, skip_featureless_frames,
+// fundamental_estimator and min_uncorroborated_inliers
+// (docs/loop-detection.md has their effect). The DLoopDetector rules:
+// {"accept_single_candidate": true, "exhaustive_fallback": false,
+// "skip_featureless_frames": false, "fundamental_estimator": "ransac",
+// "min_uncorroborated_inliers": 0}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
@@ -145,10 +149,24 @@ struct LoopDetectorParams {
   // correspondences, and minimum inlier_spread() over both images. [0, 1]
   double min_inlier_ratio = 0;
   double min_inlier_spread = 0;
+  // binbow's addition, on by default: a loop whose fundamental matrix has
+  // fewer inliers than this must be corroborated, by the loop before it (a
+  // loop was detected at most corroboration_distance queries earlier, with
+  // its match at most corroboration_distance entries from this match) or
+  // else by a second place: the match's neighbour (match − 1 or match + 1)
+  // also passes the geometric check with the query. A camera that is really
+  // back at a place keeps recognising it and sees what the neighbouring
+  // frames saw, where a chance fit of a dozen matches of repeated or distant
+  // structure (what re-encoded, noisy or rescaled frames of another place
+  // give) comes alone, with one image. Loops with at least this many
+  // inliers stand alone. 0: off (the paper). [0, 1e4]
+  int min_uncorroborated_inliers = 16;
+  int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
 
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
-  // max_distance_between_queries 2 f; at least 1 each where it matters).
+  // max_distance_between_queries 2 f, corroboration_distance 4 f; at least 1
+  // each where it matters).
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
@@ -218,6 +236,25 @@ struct LoopResult {
   bool exhaustive_fallback_used = false;
   // RANSAC inliers: first = feature of the query, second = feature of the match.
   std::vector<vision::Correspondence> inliers;
+  // The measures of the last geometric check of the match
+  // (vision::FundamentalCheckResult; 0 before any check).
+  double inlier_ratio = 0;
+  double inlier_spread = 0;
+  std::size_t distinct_inliers = 0;
+  double inlier_thickness = 0;
+  // The corroboration of a loop with fewer than min_uncorroborated_inliers
+  // inliers (LoopDetectorParams): whether it was needed; the detector's
+  // latest loop before this query (if any: its query and match); whether a
+  // neighbour of the match was checked, the one with the most inliers and
+  // their number; and whether either corroborated the loop.
+  bool corroboration_needed = false;
+  bool has_previous_loop = false;
+  EntryId previous_loop_query = 0;
+  EntryId previous_loop_match = 0;
+  bool neighbour_checked = false;
+  EntryId corroborating_neighbour = 0;
+  std::size_t neighbour_inliers = 0;
+  bool corroborated = false;
   LoopStageTimes times;
 
   bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }

@@ -98,9 +98,32 @@ struct FundamentalCheckResult {
   bool consistent = false;                         // every test of the params passed
   cv::Matx33d fundamental = cv::Matx33d::zeros();  // maps first-image points to lines in second
   std::vector<Correspondence> inliers;  // the correspondences RANSAC kept, in input order
+  std::size_t correspondences = 0;      // correspondences given to the estimator
   double inlier_ratio = 0;              // inliers / correspondences
   double inlier_spread = 0;             // inlier_spread() of the inliers
+  // distinct_inliers() of the inliers: what min_distinct_inliers compares.
+  std::size_t distinct_inliers = 0;
+  // inlier_thickness() of the inliers: what min_inlier_thickness compares.
+  double inlier_thickness = 0;
 };
+
+// Inliers that are different points: an inlier whose keypoint lies within
+// kDistinctInlierRadius pixels of an earlier inlier's, in either image,
+// is not counted. ORB and multi-scale detectors describe one corner at
+// several pyramid levels, and the copies match together: 12 inliers can be
+// 6 points, which any fundamental matrix (7 degrees of freedom) fits.
+inline constexpr float kDistinctInlierRadius = 3.0F;
+std::size_t distinct_inliers(Span<Keypoint> first, Span<Keypoint> second,
+                             const std::vector<Correspondence>& inliers);
+
+// How far `inliers` are from lying on a line: sqrt(λ_min / λ_max) of the
+// covariance of their keypoints' coordinates, the smaller of the two images
+// (0: collinear or fewer than 2 inliers; 1: no preferred direction).
+// Points near a line (a skirting board, the edge of a shelf) leave the
+// epipolar geometry undetermined: a fundamental matrix through them exists
+// whatever the two views are.
+double inlier_thickness(Span<Keypoint> first, Span<Keypoint> second,
+                        const std::vector<Correspondence>& inliers);
 
 // How widely `inliers` cover both images: each image's keypoints' bounding
 // box is cut into kSpreadGridCells × kSpreadGridCells cells, and the spread is
