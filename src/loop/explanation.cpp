@@ -53,6 +53,11 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
     measures.push_back({"inlier spread", check.fit.inlier_spread, "min_inlier_spread",
                         params.min_inlier_spread,
                         check.fit.inlier_spread >= params.min_inlier_spread, false});
+  // Fewer inliers pass only when corroborated (by the latest loop or a neighbour).
+  const double alone = params.min_uncorroborated_inliers;
+  if (alone > 0 && check.fit.consistent && (check.corroboration_needed || inliers >= alone))
+    measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
+                        !check.corroboration_needed || check.corroborated, true});
   return measures;
 }
 
@@ -60,7 +65,8 @@ std::string to_string(const CheckMeasure& m) {
   const char* pattern = m.whole ? "%.0f" : "%.3g";
   const std::string value = number(m.value, pattern);
   const std::string what = m.whole ? value + " " + m.name : m.name + " " + value;
-  return what + (m.passed ? " ≥ " : " < ") + m.parameter + " " + number(m.threshold, pattern);
+  return what + (m.value >= m.threshold ? " ≥ " : " < ") + m.parameter + " " +
+         number(m.threshold, pattern);
 }
 
 std::string describe_check(const TrailCheck& check, const LoopDetectorParams& params) {
@@ -81,6 +87,24 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
     list += (list.empty() ? "" : ", ") + to_string(m);
   }
   if (measures.front().passed) text += ", " + std::to_string(check.fit.inliers.size()) + " inliers";
+  if (check.fit.consistent && check.corroboration_needed) {
+    const std::string weak = std::to_string(check.fit.inliers.size()) +
+                             " inliers < min_uncorroborated_inliers " +
+                             std::to_string(params.min_uncorroborated_inliers);
+    std::string by;
+    if (check.has_previous_loop)
+      by = "the latest loop was " + std::to_string(check.previous_loop_query) + " → " +
+           std::to_string(check.previous_loop_match) + " (corroboration_distance " +
+           std::to_string(params.corroboration_distance) + ")";
+    else
+      by = "no earlier loop";
+    if (check.neighbour_checked)
+      by += "; the best neighbour of the match, " + std::to_string(check.corroborating_neighbour) +
+            ", has " + std::to_string(check.neighbour_inliers) + " inliers";
+    if (check.corroborated)
+      return text + ": accepted (" + passed + "; " + weak + ", corroborated: " + by + ")";
+    return text + ": rejected: " + weak + " and not corroborated (" + by + ")";
+  }
   if (check.fit.consistent) return text + ": accepted (" + passed + ")";
   if (failed.empty()) return text + ": rejected by the estimator (no consistent model)";
   return text + ": rejected: " + failed;
@@ -364,7 +388,7 @@ class Explainer {
     if (matches_.empty()) return;
     if (truth_check != nullptr) {
       e_.true_match = truth_check->entry;
-      if (!truth_check->fit.consistent) {
+      if (!truth_check->accepted()) {
         lost(ExplainedStage::kGeometricCheck, "geometric check of ground-truth match " +
                                                   std::to_string(truth_check->entry) + ": " +
                                                   describe_check(*truth_check, p_));
@@ -374,7 +398,7 @@ class Explainer {
     }
     if (t_.checks.empty()) return;
     const TrailCheck& last = t_.checks.back();
-    if (last.fit.consistent)
+    if (last.accepted())
       lost(ExplainedStage::kWrongLoopAccepted,
            "entry " + std::to_string(last.entry) +
                " of the chosen island (not a ground-truth match) passed the geometric check");

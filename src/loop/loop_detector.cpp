@@ -108,6 +108,14 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
   if (trail != nullptr) {
     check.normalised_score = result.normalised_score;
+    check.corroboration_needed = result.corroboration_needed;
+    check.corroborated = result.corroborated;
+    check.has_previous_loop = result.has_previous_loop;
+    check.previous_loop_query = result.previous_loop_query;
+    check.previous_loop_match = result.previous_loop_match;
+    check.neighbour_checked = result.neighbour_checked;
+    check.corroborating_neighbour = result.corroborating_neighbour;
+    check.neighbour_inliers = result.neighbour_inliers;
     trail->checks.push_back(std::move(check));
   }
 }

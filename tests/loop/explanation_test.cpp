@@ -251,7 +251,7 @@ TEST(DecisionTrail, RecordsWithoutChangingResultsAndCheckPairRepeatsTheCheck) {
       EXPECT_EQ(c.entry, a.match);
       EXPECT_EQ(c.correspondences.size(), a.correspondences);
       EXPECT_EQ(c.fit.inliers, a.inliers);
-      EXPECT_EQ(c.fit.consistent, a.detection());
+      EXPECT_EQ(c.accepted(), a.detection());
       ASSERT_GE(trail.chosen_island, 0);
       EXPECT_EQ(trail.temporal.chain_after, a.consistent_queries);
       // The same check, run again for the pair.
@@ -268,12 +268,12 @@ TEST(DecisionTrail, ReportExplainsFalseLoopsAndMissesThroughTheCommandLine) {
   test::TempDir dir;
   const std::string csv = dir.file("loops.csv"), report = dir.file("report");
   std::string out;
-  // min_inliers 8 lets a false loop through; 3 database results lose true
-  // matches to islands and temporal consistency.
+  // min_inliers 8 without corroboration lets a false loop through; 3
+  // database results lose true matches to islands and temporal consistency.
   ASSERT_EQ(
       test::run_cli("detect-loops --vocab " + test::source_path("data/vocab/orb_default.bbw") +
-                        " --min-inliers 8 --max-db-results 3 -o " + csv + " " +
-                        test::shared_data("rtabmap-samples/samples"),
+                        " --min-inliers 8 --min-uncorroborated-inliers 0 --max-db-results 3 -o " +
+                        csv + " " + test::shared_data("rtabmap-samples/samples"),
                     &out),
       0)
       << out;
