@@ -55,9 +55,9 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
                         check.fit.inlier_spread >= params.min_inlier_spread, false});
   // Fewer inliers pass only when corroborated (by the latest loop or a neighbour).
   const double alone = params.min_uncorroborated_inliers;
-  if (alone > 0 && check.fit.consistent && (check.corroboration_needed || inliers >= alone))
+  if (alone > 0 && check.fit.consistent && (check.corroboration.needed || inliers >= alone))
     measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
-                        !check.corroboration_needed || check.corroborated, true});
+                        !check.corroboration.needed || check.corroboration.corroborated, true});
   return measures;
 }
 
@@ -87,21 +87,22 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
     list += (list.empty() ? "" : ", ") + to_string(m);
   }
   if (measures.front().passed) text += ", " + std::to_string(check.fit.inliers.size()) + " inliers";
-  if (check.fit.consistent && check.corroboration_needed) {
+  if (check.fit.consistent && check.corroboration.needed) {
     const std::string weak = std::to_string(check.fit.inliers.size()) +
                              " inliers < min_uncorroborated_inliers " +
                              std::to_string(params.min_uncorroborated_inliers);
     std::string by;
-    if (check.has_previous_loop)
-      by = "the latest loop was " + std::to_string(check.previous_loop_query) + " → " +
-           std::to_string(check.previous_loop_match) + " (corroboration_distance " +
-           std::to_string(params.corroboration_distance) + ")";
+    if (check.corroboration.has_previous_loop)
+      by = "the latest loop was " + std::to_string(check.corroboration.previous_loop_query) +
+           " → " + std::to_string(check.corroboration.previous_loop_match) +
+           " (corroboration_distance " + std::to_string(params.corroboration_distance) + ")";
     else
       by = "no earlier loop";
-    if (check.neighbour_checked)
-      by += "; the best neighbour of the match, " + std::to_string(check.corroborating_neighbour) +
-            ", has " + std::to_string(check.neighbour_inliers) + " inliers";
-    if (check.corroborated)
+    if (check.corroboration.neighbour_checked)
+      by += "; the best neighbour of the match, " +
+            std::to_string(check.corroboration.corroborating_neighbour) + ", has " +
+            std::to_string(check.corroboration.neighbour_inliers) + " inliers";
+    if (check.corroboration.corroborated)
       return text + ": accepted (" + passed + "; " + weak + ", corroborated: " + by + ")";
     return text + ": rejected: " + weak + " and not corroborated (" + by + ")";
   }

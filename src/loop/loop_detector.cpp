@@ -99,23 +99,17 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   result.distinct_inliers = fit.distinct_inliers;
   result.inlier_thickness = fit.inlier_thickness;
   result.inliers = fit.inliers;
-  result.corroboration_needed =
+  result.corroboration.needed =
       fit.consistent && params.min_uncorroborated_inliers > 0 &&
       result.inliers.size() < static_cast<std::size_t>(params.min_uncorroborated_inliers);
-  if (result.corroboration_needed)
+  if (result.corroboration.needed)
     corroborate(result, query_keypoints, query_descriptors, query_nodes);
-  const bool accepted = fit.consistent && (!result.corroboration_needed || result.corroborated);
+  const bool accepted =
+      fit.consistent && (!result.corroboration.needed || result.corroboration.corroborated);
   result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
   if (trail != nullptr) {
     check.normalised_score = result.normalised_score;
-    check.corroboration_needed = result.corroboration_needed;
-    check.corroborated = result.corroborated;
-    check.has_previous_loop = result.has_previous_loop;
-    check.previous_loop_query = result.previous_loop_query;
-    check.previous_loop_match = result.previous_loop_match;
-    check.neighbour_checked = result.neighbour_checked;
-    check.corroborating_neighbour = result.corroborating_neighbour;
-    check.neighbour_inliers = result.neighbour_inliers;
+    check.corroboration = result.corroboration;
     trail->checks.push_back(std::move(check));
   }
 }
@@ -125,27 +119,29 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
 void LoopDetector::Impl::corroborate(LoopResult& result, Span<Keypoint> query_keypoints,
                                      const DescriptorView& query_descriptors,
                                      const FeatureVector& query_nodes) const {
-  result.has_previous_loop = has_previous_loop;
-  result.previous_loop_query = previous_loop_query;
-  result.previous_loop_match = previous_loop_match;
+  result.corroboration.has_previous_loop = has_previous_loop;
+  result.corroboration.previous_loop_query = previous_loop_query;
+  result.corroboration.previous_loop_match = previous_loop_match;
   const auto distance = [](EntryId a, EntryId b) { return a > b ? a - b : b - a; };
   const auto limit = static_cast<EntryId>(params.corroboration_distance);
-  result.corroborated = has_previous_loop && distance(result.query, previous_loop_query) <= limit &&
-                        distance(result.match, previous_loop_match) <= limit;
+  result.corroboration.corroborated = has_previous_loop &&
+                                      distance(result.query, previous_loop_query) <= limit &&
+                                      distance(result.match, previous_loop_match) <= limit;
   for (const long long neighbour :
        {static_cast<long long>(result.match) - 1, static_cast<long long>(result.match) + 1}) {
-    if (result.corroborated) return;
+    if (result.corroboration.corroborated) return;
     if (neighbour < 0 || neighbour >= static_cast<long long>(result.query)) continue;
     const auto entry = static_cast<EntryId>(neighbour);
     if (!database.contains(entry) || frames[entry].keypoints.empty()) continue;
     const FundamentalCheckResult fit =
         geometric_check(query_keypoints, query_descriptors, query_nodes, entry).fit;
-    if (!result.neighbour_checked || fit.inliers.size() > result.neighbour_inliers) {
-      result.corroborating_neighbour = entry;
-      result.neighbour_inliers = fit.inliers.size();
+    if (!result.corroboration.neighbour_checked ||
+        fit.inliers.size() > result.corroboration.neighbour_inliers) {
+      result.corroboration.corroborating_neighbour = entry;
+      result.corroboration.neighbour_inliers = fit.inliers.size();
     }
-    result.neighbour_checked = true;
-    result.corroborated = fit.consistent;
+    result.corroboration.neighbour_checked = true;
+    result.corroboration.corroborated = fit.consistent;
   }
 }
 

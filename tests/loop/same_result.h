@@ -34,14 +34,15 @@ inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult
   EXPECT_EQ(a.inlier_spread, b.inlier_spread);
   EXPECT_EQ(a.distinct_inliers, b.distinct_inliers);
   EXPECT_EQ(a.inlier_thickness, b.inlier_thickness);
-  EXPECT_EQ(a.corroboration_needed, b.corroboration_needed);
-  EXPECT_EQ(a.has_previous_loop, b.has_previous_loop);
-  EXPECT_EQ(a.previous_loop_query, b.previous_loop_query);
-  EXPECT_EQ(a.previous_loop_match, b.previous_loop_match);
-  EXPECT_EQ(a.neighbour_checked, b.neighbour_checked);
-  EXPECT_EQ(a.corroborating_neighbour, b.corroborating_neighbour);
-  EXPECT_EQ(a.neighbour_inliers, b.neighbour_inliers);
-  EXPECT_EQ(a.corroborated, b.corroborated);
+  const loop::LoopCorroboration &x = a.corroboration, &y = b.corroboration;
+  EXPECT_EQ(x.needed, y.needed);
+  EXPECT_EQ(x.has_previous_loop, y.has_previous_loop);
+  EXPECT_EQ(x.previous_loop_query, y.previous_loop_query);
+  EXPECT_EQ(x.previous_loop_match, y.previous_loop_match);
+  EXPECT_EQ(x.neighbour_checked, y.neighbour_checked);
+  EXPECT_EQ(x.corroborating_neighbour, y.corroborating_neighbour);
+  EXPECT_EQ(x.neighbour_inliers, y.neighbour_inliers);
+  EXPECT_EQ(x.corroborated, y.corroborated);
 }
 
 }  // namespace binbow::test

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "binbow/loop/corroboration.h"
 #include "binbow/types.h"
 #include "binbow/vision/geometric_check.h"
 
@@ -68,22 +69,13 @@ struct TrailCheck {
   std::vector<vision::Correspondence> correspondences;
   vision::FundamentalCheckResult fit;
   // A consistent fit with fewer than min_uncorroborated_inliers inliers
-  // needs corroboration (LoopResult has the same fields): by the latest loop
-  // (its query and match), or by a neighbour of the entry (the one with the
-  // most inliers, and their number). Not evaluated for checks run outside
-  // detection (LoopDetector::check_pair).
-  bool corroboration_needed = false;
-  bool corroborated = false;
-  bool has_previous_loop = false;
-  EntryId previous_loop_query = 0;
-  EntryId previous_loop_match = 0;
-  bool neighbour_checked = false;
-  EntryId corroborating_neighbour = 0;
-  std::size_t neighbour_inliers = 0;
+  // needs corroboration, as in LoopResult. Not evaluated for checks run
+  // outside detection (LoopDetector::check_pair).
+  LoopCorroboration corroboration;
 
   // Whether the check let the entry through: a consistent fit, corroborated when needed.
   bool accepted() const noexcept {
-    return fit.consistent && (!corroboration_needed || corroborated);
+    return fit.consistent && (!corroboration.needed || corroboration.corroborated);
   }
 };
 

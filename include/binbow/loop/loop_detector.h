@@ -23,6 +23,7 @@
 
 #include "binbow/database.h"
 #include "binbow/descriptors.h"
+#include "binbow/loop/corroboration.h"
 #include "binbow/loop/decision_trail.h"
 #include "binbow/online_vocabulary.h"
 #include "binbow/span.h"
@@ -242,19 +243,7 @@ struct LoopResult {
   double inlier_spread = 0;
   std::size_t distinct_inliers = 0;
   double inlier_thickness = 0;
-  // The corroboration of a loop with fewer than min_uncorroborated_inliers
-  // inliers (LoopDetectorParams): whether it was needed; the detector's
-  // latest loop before this query (if any: its query and match); whether a
-  // neighbour of the match was checked, the one with the most inliers and
-  // their number; and whether either corroborated the loop.
-  bool corroboration_needed = false;
-  bool has_previous_loop = false;
-  EntryId previous_loop_query = 0;
-  EntryId previous_loop_match = 0;
-  bool neighbour_checked = false;
-  EntryId corroborating_neighbour = 0;
-  std::size_t neighbour_inliers = 0;
-  bool corroborated = false;
+  LoopCorroboration corroboration;
   LoopStageTimes times;
 
   bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }
