@@ -79,26 +79,44 @@ std::string base64(const std::vector<unsigned char>& bytes) {
   return out;
 }
 
+// Two frames scaled to kPairHeight, side by side on white: the canvas, each
+// frame's scale, and where the second begins.
+struct SideBySide {
+  cv::Mat canvas;
+  double query_scale = 1, match_scale = 1;
+  int match_left = 0;
+};
+
+SideBySide side_by_side(const cv::Mat& query, const cv::Mat& match) {
+  SideBySide pair;
+  pair.query_scale = double(kPairHeight) / query.rows;
+  pair.match_scale = double(kPairHeight) / match.rows;
+  cv::Mat a, b;
+  cv::resize(query, a, cv::Size(std::max(1, int(query.cols * pair.query_scale)), kPairHeight), 0, 0,
+             cv::INTER_AREA);
+  cv::resize(match, b, cv::Size(std::max(1, int(match.cols * pair.match_scale)), kPairHeight), 0, 0,
+             cv::INTER_AREA);
+  pair.match_left = a.cols + 8;
+  pair.canvas = cv::Mat(kPairHeight, a.cols + b.cols + 8, CV_8UC3, cv::Scalar(255, 255, 255));
+  a.copyTo(pair.canvas(cv::Rect(0, 0, a.cols, a.rows)));
+  b.copyTo(pair.canvas(cv::Rect(pair.match_left, 0, b.cols, b.rows)));
+  return pair;
+}
+
 // The two images scaled to one height, side by side, inliers as lines, as a
 // data URL. Throws FileError if an image cannot be read.
 std::string pair_image(const ReportLoop& loop) {
   // By name: a file, or "video#N" for a frame of a video.
   const cv::Mat query = vision::read_frame(loop.detection.query_file, vision::FramePixels::kBgr);
   const cv::Mat match = vision::read_frame(loop.detection.match_file, vision::FramePixels::kBgr);
-  const double sq = double(kPairHeight) / query.rows, sm = double(kPairHeight) / match.rows;
-  cv::Mat a, b;
-  cv::resize(query, a, cv::Size(std::max(1, int(query.cols * sq)), kPairHeight), 0, 0,
-             cv::INTER_AREA);
-  cv::resize(match, b, cv::Size(std::max(1, int(match.cols * sm)), kPairHeight), 0, 0,
-             cv::INTER_AREA);
-  cv::Mat canvas(kPairHeight, a.cols + b.cols + 8, CV_8UC3, cv::Scalar(255, 255, 255));
-  a.copyTo(canvas(cv::Rect(0, 0, a.cols, a.rows)));
-  b.copyTo(canvas(cv::Rect(a.cols + 8, 0, b.cols, b.rows)));
+  SideBySide pair = side_by_side(query, match);
+  cv::Mat& canvas = pair.canvas;
+  const double sq = pair.query_scale, sm = pair.match_scale;
   const std::size_t drawn = std::min(loop.inliers.size(), kDrawnInliers);
   for (std::size_t i = 0; i < drawn; ++i) {
     const auto& p = loop.inliers[i * loop.inliers.size() / drawn];
     const cv::Point2f pa(p[0] * float(sq), p[1] * float(sq));
-    const cv::Point2f pb(p[2] * float(sm) + float(a.cols + 8), p[3] * float(sm));
+    const cv::Point2f pb(p[2] * float(sm) + float(pair.match_left), p[3] * float(sm));
     cv::line(canvas, pa, pb, cv::Scalar(60, 200, 60), 1, cv::LINE_AA);
     cv::circle(canvas, pa, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
     cv::circle(canvas, pb, 3, cv::Scalar(0, 160, 255), 1, cv::LINE_AA);
@@ -556,19 +574,13 @@ std::string explained_image(const LoopExplanation& e) {
   const cv::Mat match = e.match_file.empty()
                             ? cv::Mat(query.rows, 1, CV_8UC3, cv::Scalar(255, 255, 255))
                             : vision::read_frame(e.match_file, vision::FramePixels::kBgr);
-  const double sq = double(kPairHeight) / query.rows, sm = double(kPairHeight) / match.rows;
-  cv::Mat a, b;
-  cv::resize(query, a, cv::Size(std::max(1, int(query.cols * sq)), kPairHeight), 0, 0,
-             cv::INTER_AREA);
-  cv::resize(match, b, cv::Size(std::max(1, int(match.cols * sm)), kPairHeight), 0, 0,
-             cv::INTER_AREA);
-  cv::Mat canvas(kPairHeight, a.cols + b.cols + 8, CV_8UC3, cv::Scalar(255, 255, 255));
-  a.copyTo(canvas(cv::Rect(0, 0, a.cols, a.rows)));
-  b.copyTo(canvas(cv::Rect(a.cols + 8, 0, b.cols, b.rows)));
+  SideBySide pair = side_by_side(query, match);
+  cv::Mat& canvas = pair.canvas;
+  const double sq = pair.query_scale, sm = pair.match_scale;
   const auto ends = [&](const ExplainedCorrespondence& c) {
     return std::make_pair(
         cv::Point2f(c.points[0] * float(sq), c.points[1] * float(sq)),
-        cv::Point2f(c.points[2] * float(sm) + float(a.cols + 8), c.points[3] * float(sm)));
+        cv::Point2f(c.points[2] * float(sm) + float(pair.match_left), c.points[3] * float(sm)));
   };
   for (const ExplainedCorrespondence& c : e.correspondences)
     if (!c.inlier) {
