@@ -50,6 +50,27 @@ TempDir::~TempDir() {
   fs::remove_all(path_, ignored);
 }
 
+std::string write_frame_list(const TempDir& dir, int count) {
+  const std::string path = dir.file("frames.txt");
+  std::ofstream list(path);
+  for (int i = 1; i <= count; ++i) list << samples_folder() << "/" << i << ".jpg\n";
+  return path;
+}
+
+Vocabulary hand_made_vocabulary(const std::string& descriptor, std::size_t code_size) {
+  VocabularyTree tree;
+  tree.code_size = code_size;
+  tree.branching = 3;
+  tree.levels = 2;
+  tree.parent = {0, 0, 0, 0, 1, 1, 1, 2, 2};
+  tree.descriptor = descriptor;
+  std::mt19937_64 rng(4);
+  tree.descriptors.resize(tree.parent.size() * code_size);
+  for (std::uint8_t& byte : tree.descriptors) byte = static_cast<std::uint8_t>(rng());
+  tree.weights = {0, 0, 0, 0.75f, 1.5f, 2.25f, 3.0f, 0.1f, 0.2f};
+  return Vocabulary::from_tree(tree);
+}
+
 std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size) {
   std::uint32_t d = 0;
   for (std::size_t i = 0; i < code_size; ++i)

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "binbow/descriptors.h"
+#include "binbow/vocabulary.h"
 
 namespace binbow::test {
 
@@ -34,6 +35,15 @@ class TempDir {
  private:
   std::string path_;
 };
+
+// A frame list (one path a line) of the first `count` corridor frames of
+// samples_folder(), written in `dir`; returns its path.
+std::string write_frame_list(const TempDir& dir, int count);
+
+// A hand-made two-level tree of 9 nodes (3 x 3 leaves, fixed random words of
+// `code_size` bytes, fixed weights) trained on `descriptor`: a vocabulary
+// that depends on no builder.
+Vocabulary hand_made_vocabulary(const std::string& descriptor = "", std::size_t code_size = 32);
 
 // Hamming distance counted bit by bit: the reference for the kernels.
 std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size);
