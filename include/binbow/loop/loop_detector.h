@@ -160,7 +160,7 @@ struct LoopDetectorParams {
   // most corroboration_horizon queries earlier, and its match is as many
   // entries from this match as its query is queries from this query, either
   // way, give or take corroboration_pace_tolerance of that many): a camera
-  // that lost the place for a few frames (dark or blank images) and finds
+  // that lost the place for a few frames (dim or blank images) and finds
   // it again where its pace puts it. A camera that is really back at a
   // place keeps recognising it and sees what the neighbouring frames saw,
   // where a chance fit of a dozen matches of repeated or distant structure
@@ -177,8 +177,7 @@ struct LoopDetectorParams {
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
   // max_distance_between_queries 2 f, corroboration_distance 4 f,
-  // corroboration_horizon 10 f; at least 1
-  // each where it matters).
+  // corroboration_horizon 10 f; at least 1 each where it matters).
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML
