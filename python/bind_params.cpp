@@ -170,6 +170,12 @@ const std::vector<Field>& fields() {
                 "match), [0, 10000] (0: off)."),
       int_field("corroboration_distance", &P::corroboration_distance,
                 "Frames from the loop before them that weak loops accept, [1, 1e6]."),
+      int_field("corroboration_horizon", &P::corroboration_horizon,
+                "Queries after the loop before them that weak loops at the revisit's pace "
+                "accept, [1, 1e6]."),
+      real_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance,
+                 "How far a weak loop may stray from the revisit's pace, as a fraction of the "
+                 "queries since the loop before it, [0, 1]."),
   };
   return table;
 }

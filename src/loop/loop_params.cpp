@@ -124,6 +124,8 @@ const std::vector<Field>& fields() {
       number_field("min_inlier_spread", &P::min_inlier_spread),
       number_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers),
       number_field("corroboration_distance", &P::corroboration_distance),
+      number_field("corroboration_horizon", &P::corroboration_horizon),
+      number_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance),
   };
   return table;
 }
@@ -142,6 +144,7 @@ void scale_to_frequency(LoopDetectorParams& p, double f) {
   p.max_distance_between_islands = scaled(3, 0);
   p.max_distance_between_queries = scaled(2, 1);
   p.corroboration_distance = scaled(4, 1);
+  p.corroboration_horizon = scaled(10, 1);
 }
 
 LoopDetectorParams from_object(const Json& object, const std::string& name,
@@ -266,6 +269,8 @@ void LoopDetectorParams::validate() const {
   in_range("min_inlier_spread", min_inlier_spread, 0, 1);
   in_range("min_uncorroborated_inliers", min_uncorroborated_inliers, 0, kMaxMinInliers);
   in_range("corroboration_distance", corroboration_distance, 1, kMaxFrameDistance);
+  in_range("corroboration_horizon", corroboration_horizon, 1, kMaxFrameDistance);
+  in_range("corroboration_pace_tolerance", corroboration_pace_tolerance, 0, 1);
 }
 
 namespace {
