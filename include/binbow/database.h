@@ -120,6 +120,9 @@ struct DatabaseJournalInfo {
   std::uint64_t bytes = 0;
   std::size_t saves = 0;  // incremental saves it holds (its intact records)
   std::size_t added = 0, removed = 0, labels_set = 0, cleared = 0;  // changes in them
+  // The database once the journal is replayed (the base's when none applies).
+  std::size_t entries = 0;
+  EntryId next_entry_id = 0;
   // After the last intact record: an append that never completed (the
   // process died during an incremental save), which load() drops.
   std::uint64_t torn_bytes = 0;

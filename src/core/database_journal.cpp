@@ -689,6 +689,9 @@ void Database::replay_journal(const std::string& path, const std::uint8_t* base,
 
 DatabaseJournalInfo Database::inspect_journal(const std::string& path) {
   DatabaseJournalInfo info;
+  const DatabaseFileInfo base = inspect(path, false);
+  info.entries = base.entries;
+  info.next_entry_id = base.next_entry_id;
   const std::string journal = detail::journal_path_of(path);
   struct stat st {};
   if (::stat(journal.c_str(), &st) != 0 && errno == ENOENT) return info;
@@ -701,15 +704,33 @@ DatabaseJournalInfo Database::inspect_journal(const std::string& path) {
   info.bytes = file.size();
   info.torn_bytes = scan.torn_bytes;
   bool superseded = false;
+  // Counted, not checked against the index: load() does that.
+  std::size_t entries = info.entries;
+  EntryId next_id = info.next_entry_id;
   for (const auto& record : scan.records) {
     bool sealing = false;
     detail::read_record(
         record, journal,
         [&](detail::JournalChange& change) {
-          info.added += change.type == detail::Change::kAdd;
-          info.removed += change.type == detail::Change::kRemove;
-          info.labels_set += change.type == detail::Change::kLabel;
-          info.cleared += change.type == detail::Change::kClear;
+          switch (change.type) {
+            case detail::Change::kAdd:
+              ++info.added;
+              ++entries;
+              ++next_id;
+              break;
+            case detail::Change::kRemove:
+              ++info.removed;
+              --entries;
+              break;
+            case detail::Change::kLabel:
+              ++info.labels_set;
+              break;
+            case detail::Change::kClear:
+              ++info.cleared;
+              entries = 0;
+              next_id = 0;
+              break;
+          }
         },
         [&](const detail::BaseId& sealed) {
           sealing = true;
@@ -717,7 +738,11 @@ DatabaseJournalInfo Database::inspect_journal(const std::string& path) {
         });
     info.saves += sealing ? 0 : 1;
   }
-  if (scan.base == id) return info;
+  if (scan.base == id) {
+    info.entries = entries;
+    info.next_entry_id = next_id;
+    return info;
+  }
   if (!superseded)
     throw FileError(journal, "the journal of another save of the database (" +
                                  detail::describe(scan.base) + "), not of " + path + " (" +
