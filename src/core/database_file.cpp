@@ -865,14 +865,20 @@ void Database::save(const std::string& path, bool include_vocabulary) const {
   std::lock_guard<std::mutex> saving(impl_->journal.mutex);
   impl_->journal.save_base(path, [&](std::FILE* file) {
     // Sections follow one another after the space kept for the header, which
-    // comes last: only the first section and the header need a seek.
-    std::size_t position = 0;
+    // comes last: only the first section and the header need a seek. The
+    // disk writes each 8 MiB while the next ones are produced.
+    constexpr std::size_t kWritebackBytes = std::size_t{8} << 20;
+    std::size_t position = 0, written_back = 0;
     detail::SectionedFileWriter out(
         kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
           if (offset != position && std::fseek(file, static_cast<long>(offset), SEEK_SET) != 0)
             throw FileError(path, "cannot seek to write the header");
           detail::write_all(file, data, size, path);
           position = offset + size;
+          if (position >= written_back + kWritebackBytes) {
+            detail::start_writeback(file, written_back, position - written_back);
+            written_back = position;
+          }
         });
     write_database(*impl_, include_vocabulary, out);
   });
