@@ -200,7 +200,8 @@ class Database {
   EntryId next_entry_id() const;  // the id the next add() returns
   void clear();                   // removes every entry; ids restart at 0
   // Bytes of heap memory held by the index (posting lists, direct index,
-  // per-entry state, labels), excluding the vocabulary.
+  // per-entry state, labels, changes kept for the next save_incremental),
+  // excluding the vocabulary.
   std::size_t memory_usage() const;
 
   const Vocabulary& vocabulary() const noexcept;  // empty over word ids

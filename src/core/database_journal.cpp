@@ -446,7 +446,10 @@ void DatabaseJournal::record_add(EntryId entry, const BowVector& bow, const Feat
       put_varint(pending_, e.word - previous);
       previous = e.word;
     }
-    for (const BowEntry& e : bow) put_le<float>(pending_, e.value);
+    const std::size_t weights = pending_.size();
+    pending_.resize(weights + 4 * bow.size());
+    for (std::size_t i = 0; i < bow.size(); ++i)
+      store_le<float>(pending_.data() + weights + 4 * i, bow[i].value);
     put_varint(pending_, features.size());
     NodeId previous_node = 0;
     for (const NodeId node : features.nodes()) {
