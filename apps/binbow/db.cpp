@@ -48,6 +48,7 @@ struct DbArguments {
   std::vector<std::string> inputs;
   vision::ImageSourceOptions source;
   unsigned threads = 0;
+  bool compact = false;  // db add: a full save
 };
 
 struct DbQueryArguments : DbArguments {
@@ -59,7 +60,22 @@ struct DbRemoveArguments {
   std::string database;
   std::vector<EntryId> entries;
   std::string vocabulary;
+  bool compact = false;
 };
+
+// db add and db remove append their changes to the database's journal, or
+// with --compact write the whole file (folding the journal into it).
+void save_changes(const Database& database, const std::string& path, bool vocabulary_included,
+                  bool compact) {
+  if (compact)
+    database.save(path, vocabulary_included);
+  else
+    database.save_incremental(path, vocabulary_included);
+}
+
+constexpr const char* kCompactHelp =
+    "Write the whole database file, folding its journal into it, instead of appending the "
+    "changes to the journal (<DB>.journal)";
 
 std::shared_ptr<const vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
                                                               const std::string& vocabulary_name,
@@ -180,12 +196,13 @@ void run_db_query(const DbQueryArguments& arguments) {
 }
 
 void run_db_add(const DbArguments& arguments) {
-  const bool vocabulary_included = Database::inspect(arguments.database).vocabulary_included;
+  // load() checks the whole file: the header is enough here.
+  const bool vocabulary_included = Database::inspect(arguments.database, false).vocabulary_included;
   Database database = load_database(arguments.database, arguments.vocabulary);
   const auto extractor = database_extractor(database, arguments);
   const AddedImages added = add_images(database, extractor, arguments.inputs, arguments.source,
                                        arguments.threads, nullptr);
-  database.save(arguments.database, vocabulary_included);
+  save_changes(database, arguments.database, vocabulary_included, arguments.compact);
   for (const auto& [entry, label] : added.entries)
     std::printf("added %u\t%s\n", entry, label.c_str());
   std::printf("%s: %zu entries added, %zu entries\n", arguments.database.c_str(),
@@ -193,7 +210,7 @@ void run_db_add(const DbArguments& arguments) {
 }
 
 void run_db_remove(const DbRemoveArguments& arguments) {
-  const bool vocabulary_included = Database::inspect(arguments.database).vocabulary_included;
+  const bool vocabulary_included = Database::inspect(arguments.database, false).vocabulary_included;
   Database database = load_database(arguments.database, arguments.vocabulary);
   std::vector<std::pair<EntryId, std::string>> removed;
   for (const EntryId entry : arguments.entries) {
@@ -204,7 +221,7 @@ void run_db_remove(const DbRemoveArguments& arguments) {
     removed.emplace_back(entry, database.label(entry));
     database.remove(entry);
   }
-  database.save(arguments.database, vocabulary_included);
+  save_changes(database, arguments.database, vocabulary_included, arguments.compact);
   for (const auto& [entry, label] : removed) std::printf("removed %u\t%s\n", entry, label.c_str());
   std::printf("%s: %zu entries removed, %zu entries\n", arguments.database.c_str(), removed.size(),
               database.size());
@@ -231,9 +248,10 @@ bool print_database_info(const std::string& path, bool verify) {
   std::ifstream file(path, std::ios::binary);
   if (!file.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWDB", 8) != 0) return false;
   const DatabaseFileInfo info = Database::inspect(path, verify);
+  const DatabaseJournalInfo journal = Database::inspect_journal(path);
   std::printf("kind: database\n");
-  std::printf("entries: %zu\n", info.entries);
-  std::printf("next_entry_id: %u\n", info.next_entry_id);
+  std::printf("entries: %zu\n", journal.entries);
+  std::printf("next_entry_id: %u\n", journal.next_entry_id);
   if (info.direct_index)
     std::printf("direct_index: %u levels up\n", info.direct_index_levels_up);
   else
@@ -241,6 +259,20 @@ bool print_database_info(const std::string& path, bool verify) {
   std::printf("vocabulary: %s\n", info.vocabulary_description.c_str());
   std::printf("vocabulary_checksum: %08x\n", info.vocabulary_checksum);
   std::printf("vocabulary_included: %s\n", info.vocabulary_included ? "yes" : "no");
+  if (!journal.present) {
+    std::printf("journal: none\n");
+  } else if (journal.superseded) {
+    std::printf("journal: %llu bytes, superseded by the database file (ignored)\n",
+                static_cast<unsigned long long>(journal.bytes));
+  } else {
+    std::printf(
+        "journal: %llu bytes, %zu saves: %zu entries added, %zu removed, %zu labels set%s\n",
+        static_cast<unsigned long long>(journal.bytes), journal.saves, journal.added,
+        journal.removed, journal.labels_set, journal.cleared > 0 ? ", cleared" : "");
+    if (journal.torn_bytes > 0)
+      std::printf("journal_torn_bytes: %llu (an interrupted save, dropped)\n",
+                  static_cast<unsigned long long>(journal.torn_bytes));
+  }
   return true;
 }
 
@@ -292,23 +324,27 @@ void add_db_command(CLI::App& app) {
 
   auto add = std::make_shared<DbArguments>();
   CLI::App* add_command = db->add_subcommand(
-      "add", "Add images to an existing database; it is saved in place, atomically");
+      "add",
+      "Add images to an existing database; the new entries are appended to its journal "
+      "(<DB>.journal), atomically");
   add_database_options(add_command, *add,
                        "Image files, directories, videos or text lists of images; entries are "
                        "labelled with the frame names");
+  add_command->add_flag("--compact", add->compact, kCompactHelp);
   add_command->callback([add] { run_db_add(*add); });
 
   auto remove = std::make_shared<DbRemoveArguments>();
   CLI::App* remove_command = db->add_subcommand(
       "remove",
-      "Remove entries from a database by id; it is saved in place, atomically (ids are not "
-      "reused)");
+      "Remove entries from a database by id; the removals are appended to its journal "
+      "(<DB>.journal), atomically (ids are not reused)");
   remove_command->add_option("DB", remove->database, "Database (.bbdb)")->required();
   remove_command
       ->add_option("ENTRY", remove->entries, "Entry ids, as db query and db add print them")
       ->required();
   remove_command->add_option("--vocab", remove->vocabulary,
                              "Vocabulary, for databases built with --external-vocab");
+  remove_command->add_flag("--compact", remove->compact, kCompactHelp);
   remove_command->callback([remove] { run_db_remove(*remove); });
 }
 

@@ -826,6 +826,8 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
+  impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
+                            label);
   if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
@@ -836,6 +838,8 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
     std::unique_lock lock(impl_->mutex);
     if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
     const EntryId entry = impl_->append(bow, features);
+    impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
+                              label);
     if (!label.empty()) impl_->store_label(entry, std::move(label));
     impl_->freeze_tail_if_full();
     return entry;
@@ -850,6 +854,8 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
+  impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
+                            label);
   if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
@@ -862,6 +868,7 @@ void Database::remove(EntryId entry) {
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
   impl_->alive[entry] = 0;
   --impl_->live_entries;
+  impl_->journal.record_remove(entry);
   // An entry without postings has nothing to drop, and may lie where no
   // segment is left (one whose postings were all removed is dropped).
   const std::size_t segment =
@@ -898,6 +905,7 @@ void Database::set_label(EntryId entry, std::string label) {
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::set_label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
+  impl_->journal.record_label(entry, label);
   impl_->store_label(entry, std::move(label));
 }
 
@@ -921,6 +929,7 @@ EntryId Database::next_entry_id() const {
 
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
+  impl_->journal.record_clear();
   std::vector<std::unique_ptr<detail::Segment>>().swap(impl_->segments);
   std::fill(impl_->tail_lists.begin(), impl_->tail_lists.end(), detail::TailList{});
   std::fill(impl_->first_block_logs.begin(), impl_->first_block_logs.end(), detail::kFirstBlockLog);
@@ -951,6 +960,7 @@ std::size_t Database::memory_usage() const {
              segment->postings() * (sizeof(std::uint16_t) + sizeof(float));
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
+  bytes += impl.journal.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();
   for (const auto& label : impl.labels)
     if (label.capacity() > 15) bytes += label.capacity() + 1;  // beyond the small-string buffer

@@ -19,6 +19,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/database_journal.h"
 #include "core/forward_index.h"
 #include "core/scoring.h"
 #include "writer_priority_mutex.h"
@@ -378,6 +379,9 @@ struct Database::Impl {
   // Of every value added or loaded (removals do not narrow it): whether a
   // query's L1 terms may be summed as minimums.
   detail::ValueRange values;
+
+  // The file last saved to or loaded from, and the changes since.
+  mutable detail::DatabaseJournal journal;
 };
 
 }  // namespace binbow
