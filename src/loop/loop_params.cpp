@@ -11,16 +11,16 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/loop_detector.h"
+#include "core/regular_file.h"
 #include "vision/flat_yaml.h"
-#include "vision/regular_file.h"
 #include "vision/storage_text.h"
 
 namespace binbow::loop {
 
+using binbow::detail::read_regular_file;
 using vision::check_storage_text;
 using vision::parse_flat_yaml;
 using vision::parse_fundamental_estimator;
-using vision::read_regular_file;
 namespace {
 
 using Json = nlohmann::json;

@@ -19,11 +19,11 @@
 #include "binbow/error.h"
 #include "binbow/vision/features.h"
 #include "core/file_io.h"
+#include "core/regular_file.h"
 #include "vision/image_header.h"
 #include "vision/jpeg_decoder.h"
 #include "vision/media_module.h"
 #include "vision/natural_order.h"
-#include "vision/regular_file.h"
 
 namespace binbow::vision {
 namespace fs = std::filesystem;
@@ -155,7 +155,7 @@ void check_extracted_pixels(const std::string& path, const char* what, std::uint
 cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max_pixels,
                            const ImageSourceOptions* options = nullptr,
                            cv::Size* file_size = nullptr) {
-  const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
+  const std::string bytes = binbow::detail::read_regular_file(path, kMaxImageFileBytes);
   if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
   const auto declared = declared_dimensions(data, bytes.size());
