@@ -1,7 +1,7 @@
 // Each subcommand lives in its own file and registers itself on the app.
-// The binbow executable holds info, convert and db (with db remove); the
-// others, and db build/query/add, are in the binbow_cli_vision module
-// (vision_commands.h).
+// The binbow executable holds info, convert, evaluate and db (with db
+// remove); the others, and db build/query/add, are in the binbow_cli_vision
+// module (vision_commands.h), which holds evaluate too for its demo.
 #pragma once
 
 #include <string>

@@ -31,7 +31,7 @@ void add_commands(CLI::App& app, int argc, const char* const* argv) {
   if (vision) vision->add_features_command(app);
   add_convert_command(app);
   if (vision) vision->add_detect_loops_command(app);
-  if (vision) vision->add_evaluate_command(app);
+  add_evaluate_command(app);
   add_db_command(app, vision ? vision->add_db_image_commands : nullptr);
   if (vision) vision->add_bench_command(app);
   if (vision) vision->add_demo_command(app);

@@ -76,7 +76,8 @@ const VisionCommands& find_and_load() {
 }
 
 bool is_lean_command(const std::string& first, const std::string& second) {
-  return first == "info" || first == "convert" || (first == "db" && second == "remove");
+  return first == "info" || first == "convert" || first == "evaluate" ||
+         (first == "db" && second == "remove");
 }
 
 }  // namespace

@@ -1,11 +1,11 @@
 // The commands that read images or videos (build-vocab, features,
-// detect-loops, evaluate, db build/query/add, bench, demo, make-route) and
-// the two parts of info and convert that need an extractor or the loop
-// detector live in binbow_cli_vision, a module the binbow executable loads
-// with dlopen only when the command line asks for one of them. The
+// detect-loops, db build/query/add, bench, demo, make-route) and the parts of
+// info, convert and evaluate that need an extractor, the loop detector or the
+// run's images live in binbow_cli_vision, a module the binbow executable
+// loads with dlopen only when the command line asks for one of them. The
 // executable itself links no OpenCV: OpenCV's core alone brings TBB, BLAS,
 // LAPACK and X11 libraries, several times the start-up of the whole of
-// `binbow --version`, `info`, `convert` or `db remove`.
+// `binbow --version`, `info`, `convert`, `evaluate` or `db remove`.
 //
 // Both sides are built by the same build with the same CLI11 and standard
 // library, so the interface passes C++ types (CLI::App, std::string); the
@@ -15,8 +15,11 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "evaluate.h"
 
 namespace binbow::cli {
 
@@ -30,7 +33,6 @@ struct VisionCommands {
   void (*add_build_vocab_command)(CLI::App& app);
   void (*add_features_command)(CLI::App& app);
   void (*add_detect_loops_command)(CLI::App& app);
-  void (*add_evaluate_command)(CLI::App& app);
   // `db build`, `db query` and `db add`, on the `db` command.
   void (*add_db_image_commands)(CLI::App& db);
   void (*add_bench_command)(CLI::App& app);
@@ -40,11 +42,14 @@ struct VisionCommands {
   void (*print_loop_state_info)(const std::string& path, const std::string& vocab_argument);
   // The descriptor size in bytes of extractor `name` (vision::make_extractor).
   std::size_t (*descriptor_code_size)(const std::string& name);
+  // `binbow evaluate --sweep` and `--report` (evaluate.h).
+  std::vector<double> (*evaluate_sweep_values)(const EvaluateArguments& arguments);
+  void (*sweep_and_report)(const EvaluateArguments& arguments, const Evaluation& evaluation);
 };
 
 // Whether the command line names a command (or asks for the help or the
 // usage error listing every command) that needs the module: all but
-// `--version`, `info`, `convert` and `db remove`.
+// `--version`, `info`, `convert`, `evaluate` and `db remove`.
 bool needs_vision_commands(int argc, const char* const* argv);
 
 // The module's functions, loading it on the first call. It is looked for at
@@ -52,7 +57,8 @@ bool needs_vision_commands(int argc, const char* const* argv);
 // relative to the executable: <bindir>/../<libdir>/binbow (installed, and the
 // build tree's layout), <package>/lib/binbow (the Python package's bin/binbow);
 // then in the install prefix's <libdir>/binbow. Throws binbow::Error naming
-// the file, why it did not load and what to do when none loads.
+// the file, why it did not load and what to do when none loads. Inside the
+// module (its `demo` runs `evaluate`), the module's own functions.
 const VisionCommands& vision_commands();
 
 }  // namespace binbow::cli

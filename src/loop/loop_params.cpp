@@ -200,26 +200,6 @@ GeometricCheck parse_geometric_check(const std::string& name) {
                         "\" (expected direct-index, exhaustive or none)");
 }
 
-const char* to_string(LoopStatus status) {
-  switch (status) {
-    case LoopStatus::kLoopDetected:
-      return "loop-detected";
-    case LoopStatus::kNoDatabaseResults:
-      return "no-database-results";
-    case LoopStatus::kLowNormalisationScore:
-      return "low-normalisation-score";
-    case LoopStatus::kLowScores:
-      return "low-scores";
-    case LoopStatus::kNoIslands:
-      return "no-islands";
-    case LoopStatus::kNoTemporalConsistency:
-      return "no-temporal-consistency";
-    case LoopStatus::kNoGeometricConsistency:
-      return "no-geometric-consistency";
-  }
-  return "?";
-}
-
 LoopDetectorParams LoopDetectorParams::for_frequency(double f) {
   LoopDetectorParams p;
   scale_to_frequency(p, f);

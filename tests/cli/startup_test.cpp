@@ -2,10 +2,11 @@
 // GStreamer, FFmpeg, HDF5 and GUI toolkits behind them) is the binbow_media
 // module, loaded when a command first reads an image other than a JPEG, a
 // video or a .mat file. Commands that read none start without it, and those
-// that need no OpenCV at all (--version, info, convert, db remove) load no
-// OpenCV library: the commands that do are the binbow_cli_vision module.
+// that need no OpenCV at all (--version, info, convert, evaluate, db remove)
+// load no OpenCV library: the commands that do are the binbow_cli_vision module.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
@@ -108,6 +109,10 @@ TEST(CliStartup, CommandsNeedingNoOpenCvLoadNone) {
   expect_without_opencv("convert '" + vocabulary + "' '" + dir.file("voc.yml.gz") + "'");
   expect_without_opencv("db remove '" + database + "' 1");
   expect_without_opencv("info --help");
+  std::ofstream(dir.file("truth.txt")) << "# 0-based\n2 0\n";
+  std::ofstream(dir.file("loops.csv")) << "query,match,score\n2,0,0.5\n";
+  expect_without_opencv("evaluate --gt '" + dir.file("truth.txt") + "' '" + dir.file("loops.csv") +
+                        "'");
 }
 
 // The commands that need OpenCV are a module; without it the others still
