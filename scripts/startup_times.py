@@ -59,6 +59,8 @@ def main():
         commands = (("hello-world (C++, libstdc++)", [str(hello)], None),
                     ("binbow --version", [cli, "--version"], None),
                     ("binbow info orb_default.bbw", [cli, "info", vocabulary], None),
+                    ("binbow info --header-only DB.bbdb",
+                     [cli, "info", "--header-only", database], None),
                     ("binbow info DB.bbdb", [cli, "info", database], None),
                     ("binbow db remove DB.bbdb 0", [cli, "db", "remove", edited, "0"],
                      lambda: shutil.copyfile(database, edited)),
