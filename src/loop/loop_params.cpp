@@ -11,16 +11,16 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/loop_detector.h"
+#include "core/regular_file.h"
 #include "vision/flat_yaml.h"
-#include "vision/regular_file.h"
 #include "vision/storage_text.h"
 
 namespace binbow::loop {
 
+using binbow::detail::read_regular_file;
 using vision::check_storage_text;
 using vision::parse_flat_yaml;
 using vision::parse_fundamental_estimator;
-using vision::read_regular_file;
 namespace {
 
 using Json = nlohmann::json;
@@ -201,26 +201,6 @@ GeometricCheck parse_geometric_check(const std::string& name) {
   if (n == "none") return GeometricCheck::kNone;
   throw InvalidArgument("unknown geometric check \"" + name +
                         "\" (expected direct-index, exhaustive or none)");
-}
-
-const char* to_string(LoopStatus status) {
-  switch (status) {
-    case LoopStatus::kLoopDetected:
-      return "loop-detected";
-    case LoopStatus::kNoDatabaseResults:
-      return "no-database-results";
-    case LoopStatus::kLowNormalisationScore:
-      return "low-normalisation-score";
-    case LoopStatus::kLowScores:
-      return "low-scores";
-    case LoopStatus::kNoIslands:
-      return "no-islands";
-    case LoopStatus::kNoTemporalConsistency:
-      return "no-temporal-consistency";
-    case LoopStatus::kNoGeometricConsistency:
-      return "no-geometric-consistency";
-  }
-  return "?";
 }
 
 LoopDetectorParams LoopDetectorParams::for_frequency(double f) {

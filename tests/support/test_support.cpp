@@ -39,6 +39,10 @@ std::string cli_path() {
   return BINBOW_CLI;
 }
 
+std::string cli_vision_module_path() {
+  return BINBOW_CLI_VISION_MODULE;
+}
+
 TempDir::TempDir() {
   std::string pattern = (fs::temp_directory_path() / "binbow-test-XXXXXX").string();
   if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");

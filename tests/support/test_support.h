@@ -21,6 +21,8 @@ std::string samples_folder();
 std::string source_path(const std::string& relative);
 // Path of the binbow CLI built beside the tests.
 std::string cli_path();
+// Path of the module with the CLI's commands that need OpenCV.
+std::string cli_vision_module_path();
 
 // A fresh empty directory, removed when the object dies.
 class TempDir {
