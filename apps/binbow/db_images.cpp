@@ -35,7 +35,6 @@ struct DbBuildArguments {
   bool external_vocabulary = false;
   vision::ImageSourceOptions source;
   unsigned threads = 0;
-  bool compact = false;  // db add: a full save
 };
 
 // What db query and db add need to read a database and describe images for it.
@@ -47,6 +46,7 @@ struct DbArguments {
   std::vector<std::string> inputs;
   vision::ImageSourceOptions source;
   unsigned threads = 0;
+  bool compact = false;  // db add: a full save
 };
 
 struct DbQueryArguments : DbArguments {
