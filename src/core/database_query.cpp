@@ -77,7 +77,7 @@ struct WorkerScratch {
   std::vector<EntryScore> scores;
   std::vector<QueryResult> best;
   std::vector<QueryResult> candidates;
-  std::vector<std::uint16_t> relative;  // a segment's candidates, entry - first entry
+  std::vector<std::uint32_t> hits;  // ForwardIndex::for_each_shared's buffer
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -87,7 +87,7 @@ struct QueryScratch {
   std::vector<BowEntry> rare_words;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> word_postings;  // (postings, position)
   QueryWordSet query_words;
-  std::vector<float> query_values;
+  std::vector<double> query_weights;  // ForwardIndex::word_weight of each query word
 };
 
 thread_local QueryScratch scratch;
@@ -432,25 +432,18 @@ Span<BowEntry> rare_words(const QueryContext& c) {
 
 // The exact score of an entry from its BoW vector: the same terms, summed in
 // the same order (increasing word id), as a pass over the index gives it.
-// `values` holds the query's values and a 0 after them, for absent words.
 template <class Term>
-void rescore(EntryId entry, Span<BowEntry> words, const QueryWordSet& query,
-             const std::vector<float>& values, BestResults& best) {
+void rescore(const QueryContext& c, EntryId entry, WorkerScratch& worker, BestResults& best) {
+  const QueryWordSet& query = c.buffers.query_words;
   double sum = 0;
   std::uint32_t shared = 0;
-  const auto absent = static_cast<std::uint32_t>(values.size() - 1);
-  for (const BowEntry& word : words) {
-    const std::uint32_t q = query.position(word.word);
-    if constexpr (std::is_same_v<Term, MinimumTerm>) {
-      // Branch-free: an absent word adds min(0, w) = +0.0, which leaves the
-      // sum as it is (a sum that starts at +0.0 is never -0.0).
-      sum += Term{values[q]}(word.value);
-      shared += q != absent ? 1 : 0;
-    } else if (q != absent) {
-      sum += Term{values[q]}(word.value);
-      ++shared;
-    }
-  }
+  c.index.forward->for_each_shared(
+      entry, [&](WordId word) { return query.position(word); },
+      static_cast<std::uint32_t>(c.words.size()), c.buffers.query_weights.data(), worker.hits,
+      [&](std::uint32_t q, float weight) {
+        sum += Term{c.words[q].value}(weight);
+        ++shared;
+      });
   best.offer_sum(entry, sum, shared);
 }
 
@@ -471,18 +464,16 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   // summed in the same order, as a pass over the whole index gives it.
   const std::vector<QueryResult> chosen = merged(candidates);
   c.buffers.query_words.assign(c.words);
-  std::vector<float>& values = c.buffers.query_values;
-  values.clear();
-  for (const BowEntry& e : c.words) values.push_back(e.value);
-  values.push_back(0.0f);
+  std::vector<double>& weights = c.buffers.query_weights;
+  weights.clear();
+  for (const BowEntry& e : c.words) weights.push_back(c.index.forward->word_weight(e.word));
   constexpr std::size_t kChunk = 64;
-  detail::parallel_for(c.workers, (chosen.size() + kChunk - 1) / kChunk,
-                       [&](std::size_t chunk, unsigned worker) {
-                         const std::size_t end = std::min(chosen.size(), (chunk + 1) * kChunk);
-                         for (std::size_t i = chunk * kChunk; i < end; ++i)
-                           rescore<Term>(chosen[i].entry, c.index.forward->words(chosen[i].entry),
-                                         c.buffers.query_words, values, best[worker]);
-                       });
+  detail::parallel_for(
+      c.workers, (chosen.size() + kChunk - 1) / kChunk, [&](std::size_t chunk, unsigned worker) {
+        const std::size_t end = std::min(chosen.size(), (chunk + 1) * kChunk);
+        for (std::size_t i = chunk * kChunk; i < end; ++i)
+          rescore<Term>(c, chosen[i].entry, c.buffers.workers[worker], best[worker]);
+      });
   return merged(best);
 }
 
