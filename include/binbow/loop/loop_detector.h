@@ -98,6 +98,12 @@ struct LoopDetectorParams {
   // --- Database query
   int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f) [0, 1e6]
   int max_db_results = 50;  // candidates taken from each query (50 f) [1, 1e6]
+  // Query the database in fast mode (QueryMode::kFast): the same exact
+  // scores, but read from the candidates that the query's rarest words
+  // find, for databases of many images that share most words. Off by
+  // default. Databases under ~260k postings per query (a few hundred images)
+  // are read whole in either mode, so their loops do not change at all.
+  bool fast_queries = false;
 
   // --- Islands (Section V-B)
   // Entries j < j' join the same island when j' − j < gap (3 f). [1, 1e6]
