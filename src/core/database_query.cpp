@@ -413,14 +413,22 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
 // of those queries (2000: 98.6%, 30% slower; a share of 1/16: 95%).
 constexpr double kFastPostingShare = 1.0 / 8;
 constexpr std::size_t kFastCandidates = 1000;
-// Small indexes are read whole (the candidates are then the exact best).
+// Small indexes are read whole (the candidates are then the exact best), and
+// so is any index where skipping the other words would save fewer postings
+// than kRescorePostings per word of the candidates (a query's size): a
+// candidate's word costs about 3 postings (7 µs per candidate of 1000 words,
+// 2.2 ns per posting at 200,000 images), so between ~1M and ~3M postings per
+// query fast mode can be slower than exact; 10,000 ORB-1000 images of the
+// benchmark (600k postings per query) are read whole.
 constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 18;
+constexpr std::uint64_t kRescorePostings = 1;
 
 // The query's words that find candidates, in word order: those that can add
 // most to a score for the postings they cost (the query's value over the
 // word's postings in the visible segments: rare words, and among them the
 // heavy ones), up to kFastPostingShare of the query's postings or
-// kFastMinPostings (at least one word).
+// kFastMinPostings (at least one word); all of them when fast mode would not
+// pay off.
 Span<BowEntry> rare_words(const QueryContext& c) {
   auto& postings = c.buffers.word_postings;
   postings.clear();
@@ -448,10 +456,12 @@ Span<BowEntry> rare_words(const QueryContext& c) {
   const auto budget = std::max<std::uint64_t>(
       static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare), kFastMinPostings);
   std::size_t taken = 0;
-  for (std::uint64_t read = 0; taken < postings.size(); ++taken) {
+  std::uint64_t read = 0;
+  for (; taken < postings.size(); ++taken) {
+    if (read + postings[taken].first > budget && taken > 0) break;
     read += postings[taken].first;
-    if (read > budget && taken > 0) break;
   }
+  if (total - read < kFastCandidates * kRescorePostings * c.words.size()) return c.words;
   std::sort(postings.begin(), postings.begin() + static_cast<std::ptrdiff_t>(taken),
             [](const auto& a, const auto& b) { return a.second < b.second; });
   auto& rare = c.buffers.rare_words;
