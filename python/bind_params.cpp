@@ -107,6 +107,9 @@ const std::vector<Field>& fields() {
                 "Candidates of image t are images j < t - dislocal (20 f), [0, 1e6]."),
       int_field("max_db_results", &P::max_db_results,
                 "Candidates taken from each database query (50 f), [1, 1e6]."),
+      bool_field("fast_queries", &P::fast_queries,
+                 "Query the database in fast mode (exact scores of the candidates that the\n"
+                 "query's rarest words find)."),
       int_field("max_intra_island_gap", &P::max_intra_island_gap,
                 "Entries closer than this join one island (3 f), [1, 1e6]."),
       int_field("min_matches_per_island", &P::min_matches_per_island,

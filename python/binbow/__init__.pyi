@@ -178,6 +178,7 @@ class LoopDetectorParams:
     skip_featureless_frames: bool
     dislocal: int
     max_db_results: int
+    fast_queries: bool
     max_intra_island_gap: int
     min_matches_per_island: int
     k: int

@@ -541,34 +541,66 @@ void Database::Impl::build_forward_index() const {
   if (forward_built.load(std::memory_order_acquire)) return;
   std::lock_guard<std::mutex> lock(forward_mutex);
   if (forward_built.load(std::memory_order_relaxed)) return;
-  detail::ForwardIndex built;
-  for (std::size_t entry = 0; entry < alive.size(); ++entry)
-    built.append_empty(alive[entry] != 0 ? word_counts[entry] : 0);
-  // Each entry's words come in increasing order: it lives in one segment or
-  // in the tail, visited word by word.
+  detail::ForwardIndex built(over_word_ids ? nullptr : &vocabulary, scoring);
+  built.resize(alive.size());
+  // The words of kChunk entries at a time, so that the BoW vectors in
+  // floats never exist all at once: each segment's rows are read chunk by
+  // chunk (entries are increasing within a row), the tail's lists likewise.
+  constexpr EntryId kChunk = 4096;
+  std::vector<std::vector<BowEntry>> words(kChunk);
+  const auto encode_chunk = [&](EntryId first, EntryId end) {
+    for (EntryId entry = first; entry < end; ++entry) {
+      std::vector<BowEntry>& entry_words = words[entry - first];
+      if (alive[entry] != 0)
+        built.assign(entry, Span<BowEntry>(entry_words.data(), entry_words.size()));
+      entry_words.clear();
+    }
+  };
+  std::vector<std::uint32_t> cursors;
   for (const auto& segment : segments) {
     const std::uint32_t* offsets = segment->offsets.data();
     const std::uint16_t* entries = segment->entries16.data();
     const float* weights = segment->weights.data();
-    for (std::size_t word = 0; word < word_capacity; ++word) {
-      const std::uint32_t row = row_order.row(static_cast<WordId>(word));
-      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
-        const EntryId entry = segment->first_entry + entries[i];
-        if (alive[entry] != 0) built.add_word(entry, static_cast<WordId>(word), weights[i]);
+    cursors.assign(offsets, offsets + word_capacity);  // by row
+    for (EntryId first = segment->first_entry; first < segment->end_entry; first += kChunk) {
+      const EntryId end = std::min<EntryId>(first + kChunk, segment->end_entry);
+      const auto relative_end = static_cast<std::uint32_t>(end - segment->first_entry);
+      for (std::size_t word = 0; word < word_capacity; ++word) {
+        const std::uint32_t row = row_order.row(static_cast<WordId>(word));
+        std::uint32_t& i = cursors[row];
+        for (; i < offsets[row + 1] && entries[i] < relative_end; ++i)
+          words[segment->first_entry + entries[i] - first].push_back(
+              {static_cast<WordId>(word), weights[i]});
       }
+      encode_chunk(first, end);
     }
   }
   const std::uint32_t high_mask = (1u << high_bits) - 1;
-  for (std::size_t word = 0; word < word_capacity && tail_postings > 0; ++word) {
-    const detail::TailList list = tail_lists[detail::group_of(static_cast<WordId>(word))];
-    if (list.size == 0) continue;
-    const detail::TailPosting* postings = arena.at(list.block);
-    const auto high = static_cast<std::uint32_t>(word >> detail::kGroupBits);
-    for (std::uint32_t i = 0; i < list.size; ++i) {
-      if ((postings[i].key & high_mask) != high) continue;
-      const EntryId entry = tail_first_entry + (postings[i].key >> high_bits);
-      if (alive[entry] != 0) built.add_word(entry, static_cast<WordId>(word), postings[i].weight);
+  const std::size_t groups = std::min(word_capacity, std::size_t{1} << detail::kGroupBits);
+  cursors.assign(groups, 0);
+  for (EntryId first = tail_first_entry; first < alive.size() && tail_postings > 0;
+       first += kChunk) {
+    const EntryId end = static_cast<EntryId>(std::min<std::size_t>(first + kChunk, alive.size()));
+    const std::uint64_t key_end = std::uint64_t{end - tail_first_entry} << high_bits;
+    for (std::size_t word = 0; word < word_capacity; ++word) {
+      const std::uint32_t group = detail::group_of(static_cast<WordId>(word));
+      const detail::TailList list = tail_lists[group];
+      if (list.size == 0) continue;
+      const detail::TailPosting* postings = arena.at(list.block);
+      const auto high = static_cast<std::uint32_t>(word >> detail::kGroupBits);
+      for (std::uint32_t i = cursors[group]; i < list.size && postings[i].key < key_end; ++i)
+        if ((postings[i].key & high_mask) == high)
+          words[tail_first_entry + (postings[i].key >> high_bits) - first].push_back(
+              {static_cast<WordId>(word), postings[i].weight});
     }
+    for (std::size_t group = 0; group < groups; ++group) {
+      const detail::TailList list = tail_lists[group];
+      if (list.size == 0) continue;
+      const detail::TailPosting* postings = arena.at(list.block);
+      std::uint32_t& i = cursors[group];
+      while (i < list.size && postings[i].key < key_end) ++i;
+    }
+    encode_chunk(first, end);
   }
   forward = std::move(built);
   forward_built.store(true, std::memory_order_release);

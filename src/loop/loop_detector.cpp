@@ -223,8 +223,10 @@ void LoopDetector::Impl::transform(const DescriptorView& descriptors, BowVector&
 std::vector<QueryResult> LoopDetector::Impl::query(const BowVector& bow, LoopResult& result) const {
   // DLoopDetector's bound (DBoW2's max_id is exclusive): j < t − dislocal.
   const EntryId newest_candidate = result.query - static_cast<EntryId>(params.dislocal) - 1;
-  std::vector<QueryResult> found =
-      database.query(bow, static_cast<std::size_t>(params.max_db_results), newest_candidate);
+  QueryOptions options;
+  options.mode = params.fast_queries ? QueryMode::kFast : QueryMode::kExact;
+  std::vector<QueryResult> found = database.query(
+      bow, static_cast<std::size_t>(params.max_db_results), newest_candidate, options);
   if (!found.empty()) {
     result.has_candidate = true;
     result.match = found.front().entry;

@@ -84,6 +84,7 @@ const std::vector<Field>& fields() {
       bool_field("skip_featureless_frames", &P::skip_featureless_frames),
       number_field("dislocal", &P::dislocal),
       number_field("max_db_results", &P::max_db_results),
+      bool_field("fast_queries", &P::fast_queries),
       number_field("max_intra_island_gap", &P::max_intra_island_gap),
       number_field("min_matches_per_island", &P::min_matches_per_island),
       number_field("k", &P::k),

@@ -35,6 +35,7 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_TRUE(p.skip_featureless_frames);
   EXPECT_EQ(p.fundamental_estimator, vision::FundamentalEstimator::kUsacMagsac);
   EXPECT_FALSE(p.mutual_matching);
+  EXPECT_FALSE(p.fast_queries);
   EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
   EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
   EXPECT_EQ(p.min_uncorroborated_inliers, 16);
@@ -59,6 +60,7 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.skip_featureless_frames = false;
   p.fundamental_estimator = vision::FundamentalEstimator::kRansac;
   p.mutual_matching = true;
+  p.fast_queries = true;
   p.min_inlier_ratio = 0.5;
   p.min_inlier_spread = 0.25;
   p.min_uncorroborated_inliers = 0;
@@ -69,6 +71,7 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   EXPECT_EQ(q.to_json(), p.to_json());
   EXPECT_EQ(q.dislocal, 60);
   EXPECT_EQ(q.geometric_check, GeometricCheck::kExhaustive);
+  EXPECT_TRUE(q.fast_queries);
   EXPECT_EQ(q.fundamental_estimator, vision::FundamentalEstimator::kRansac);
   EXPECT_NE(p.to_json().find("\"fundamental_estimator\": \"ransac\""), std::string::npos);
   EXPECT_EQ(LoopDetectorParams::from_json(R"({"fundamental_estimator": "USAC_ACCURATE"})")
