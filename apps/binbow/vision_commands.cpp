@@ -1,6 +1,5 @@
 #include "vision_commands.h"
 
-#include <dlfcn.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "binbow/error.h"
+#include "core/module_entry.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
@@ -26,17 +26,12 @@ std::string load_error(const std::string& path, const std::string& reason) {
 }
 
 const VisionCommands& load(const std::string& path) {
-  void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (handle == nullptr) {
-    const char* error = dlerror();
-    std::string reason = error != nullptr ? error : "dlopen failed";
-    if (reason.rfind(path + ": ", 0) == 0) reason.erase(0, path.size() + 2);
-    throw Error(load_error(path, reason));
-  }
-  // The module stays loaded: the commands it registers run from it.
+  std::string reason;
   using Entry = const VisionCommands* (*)();
-  const auto entry = reinterpret_cast<Entry>(dlsym(handle, kBinbowCliVisionSymbol));
-  const VisionCommands* commands = entry != nullptr ? entry() : nullptr;
+  const auto entry =
+      reinterpret_cast<Entry>(detail::module_entry(path, kBinbowCliVisionSymbol, reason));
+  if (entry == nullptr) throw Error(load_error(path, reason));
+  const VisionCommands* commands = entry();
   if (commands == nullptr)
     throw Error(load_error(path, std::string("no ") + kBinbowCliVisionSymbol + " entry point"));
   if (commands->version != kVisionCommandsVersion ||

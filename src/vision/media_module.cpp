@@ -1,6 +1,5 @@
 #include "vision/media_module.h"
 
-#include <dlfcn.h>
 #include <link.h>
 #include <unistd.h>
 
@@ -15,6 +14,7 @@
 #include <vector>
 
 #include "binbow/error.h"
+#include "core/module_entry.h"
 
 namespace binbow::vision {
 namespace fs = std::filesystem;
@@ -65,17 +65,12 @@ std::string load_error(const std::string& path, const std::string& reason) {
 }
 
 const media::Api& load(const std::string& path) {
-  void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (handle == nullptr) {
-    const char* error = dlerror();
-    std::string reason = error != nullptr ? error : "dlopen failed";
-    if (reason.rfind(path + ": ", 0) == 0) reason.erase(0, path.size() + 2);
-    throw Error(load_error(path, reason));
-  }
-  // The module stays loaded: OpenCV's and matio's state lives in it.
+  std::string reason;
   using Entry = const media::Api* (*)();
-  const auto entry = reinterpret_cast<Entry>(dlsym(handle, kBinbowMediaApiSymbol));
-  const media::Api* api = entry != nullptr ? entry() : nullptr;
+  const auto entry =
+      reinterpret_cast<Entry>(detail::module_entry(path, kBinbowMediaApiSymbol, reason));
+  if (entry == nullptr) throw Error(load_error(path, reason));
+  const media::Api* api = entry();
   if (api == nullptr) throw Error(load_error(path, "no binbow_media_api entry point"));
   if (api->version != media::kApiVersion || std::strcmp(api->binbow_version, BINBOW_VERSION) != 0)
     throw Error(load_error(path, std::string("built for binbow ") + api->binbow_version +
