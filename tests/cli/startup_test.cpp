@@ -44,8 +44,13 @@ TracedRun run_traced(const std::string& arguments, const std::string& environmen
   for (std::string line; std::getline(lines, line);) {
     const std::size_t at = line.find("file=");
     if (at == std::string::npos || line.find("generating link map") != std::string::npos) continue;
-    const std::size_t end = line.find_first_of(" [", at);
-    run.objects.insert(line.substr(at + 5, end - at - 5));
+    const std::size_t end = line.find_first_of(" [;", at);
+    const std::string object = line.substr(at + 5, end - at - 5);
+    // A sanitizer build's runtimes are the build's, not binbow's.
+    if (object.empty() || object.find("libasan") != std::string::npos ||
+        object.find("libubsan") != std::string::npos || object.find("libtsan") != std::string::npos)
+      continue;
+    run.objects.insert(object);
   }
   return run;
 }
