@@ -17,10 +17,10 @@
 // thread and on every core, and fast; see there), BM_QueryBounds/200000
 // measures what pruned or stop-listed
 // queries would read (see there), BM_Save/N measures full and incremental
-// saves, the disk's write rate and opening (see there), and BM_SaveLoad saves the largest database to a .bbdb file
-// (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it
-// back and checks that the loaded database answers every query identically,
-// with the peak resident memory of each step over the database's memory.
+// saves, the disk's write rate and opening (see there), and BM_SaveLoad saves the largest database
+// to a .bbdb file (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it back
+// and checks that the loaded database answers every query identically, with the peak resident
+// memory of each step over the database's memory.
 //
 // BINBOW_BENCH_SCALE_DIRECT_INDEX=0 measures a database without direct index
 // (a retrieval server); the loop detector needs one (the default).

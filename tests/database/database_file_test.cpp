@@ -18,22 +18,8 @@
 namespace binbow {
 namespace {
 
-Vocabulary test_vocabulary(std::uint64_t seed = 1) {
-  std::mt19937_64 rng(seed);
-  std::vector<DescriptorMatrix> images;
-  for (int i = 0; i < 10; ++i) images.push_back(test::clustered_descriptors(80, 32, 40, 0.08, rng));
-  std::vector<DescriptorView> views;
-  for (const auto& image : images) views.push_back(image.view());
-  BuildOptions options;
-  options.branching = 4;
-  options.levels = 3;
-  options.seed = seed;
-  options.threads = 1;
-  return Vocabulary::build(views, options);
-}
-
 struct Fixture {
-  Vocabulary vocabulary = test_vocabulary();
+  Vocabulary vocabulary = test::clustered_vocabulary();
   std::vector<DescriptorMatrix> images;
   Database database{vocabulary, {true, 1}};
 
@@ -105,7 +91,7 @@ TEST(DatabaseFile, SaveStreamsTheBytesSerializeReturns) {
 }
 
 TEST(DatabaseFile, WithoutDirectIndexOrLabels) {
-  const Vocabulary vocabulary = test_vocabulary();
+  const Vocabulary vocabulary = test::clustered_vocabulary();
   Database database(vocabulary, {false, 0});
   Fixture fixture(5);
   for (const auto& image : fixture.images) database.add(image.view());
@@ -133,7 +119,7 @@ TEST(DatabaseFile, VocabularyByChecksum) {
   expect_equivalent(fixture.database, Database::load(path, fixture.vocabulary), fixture);
 
   try {
-    Database::load(path, test_vocabulary(2));
+    Database::load(path, test::clustered_vocabulary(2));
     FAIL() << "a different vocabulary must be rejected";
   } catch (const FileError& e) {
     EXPECT_NE(e.problem().find("different vocabulary"), std::string::npos) << e.what();
@@ -384,7 +370,7 @@ TEST(DatabaseFile, OverWordIdsRoundTrip) {
   database.save(path);
   EXPECT_EQ(Database::load(path).serialize(), database.serialize());
   try {
-    Database::load(path, test_vocabulary());
+    Database::load(path, test::clustered_vocabulary());
     FAIL() << "a database over word ids has no vocabulary to check";
   } catch (const FileError& e) {
     EXPECT_NE(e.problem().find("over word ids"), std::string::npos) << e.what();

@@ -24,22 +24,8 @@
 namespace binbow {
 namespace {
 
-Vocabulary journal_vocabulary() {
-  std::mt19937_64 rng(5);
-  std::vector<DescriptorMatrix> images;
-  for (int i = 0; i < 10; ++i) images.push_back(test::clustered_descriptors(80, 32, 40, 0.08, rng));
-  std::vector<DescriptorView> views;
-  for (const auto& image : images) views.push_back(image.view());
-  BuildOptions options;
-  options.branching = 4;
-  options.levels = 3;
-  options.seed = 5;
-  options.threads = 1;
-  return Vocabulary::build(views, options);
-}
-
 const Vocabulary& vocabulary() {
-  static const Vocabulary built = journal_vocabulary();
+  static const Vocabulary built = test::clustered_vocabulary(5);
   return built;
 }
 

@@ -75,6 +75,20 @@ Vocabulary hand_made_vocabulary(const std::string& descriptor, std::size_t code_
   return Vocabulary::from_tree(tree);
 }
 
+Vocabulary clustered_vocabulary(std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<DescriptorMatrix> images;
+  for (int i = 0; i < 10; ++i) images.push_back(clustered_descriptors(80, 32, 40, 0.08, rng));
+  std::vector<DescriptorView> views;
+  for (const auto& image : images) views.push_back(image.view());
+  BuildOptions options;
+  options.branching = 4;
+  options.levels = 3;
+  options.seed = seed;
+  options.threads = 1;
+  return Vocabulary::build(views, options);
+}
+
 std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size) {
   std::uint32_t d = 0;
   for (std::size_t i = 0; i < code_size; ++i)

@@ -47,6 +47,10 @@ std::string write_frame_list(const TempDir& dir, int count);
 // that depends on no builder.
 Vocabulary hand_made_vocabulary(const std::string& descriptor = "", std::size_t code_size = 32);
 
+// A 4-way, 3-level vocabulary built on ten images of clustered descriptors
+// from `seed`: small, real structure, the same for the same seed.
+Vocabulary clustered_vocabulary(std::uint64_t seed = 1);
+
 // Hamming distance counted bit by bit: the reference for the kernels.
 std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size);
 
