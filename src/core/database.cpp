@@ -171,7 +171,9 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     partition = repeated == 0 && seen[beyond] == 0;
   }
   if (partition) {
-    layout_ = node_count_ <= 0x100 ? Layout::kPartition8 : Layout::kPartition16;
+    layout_ = node_count_ <= 0x80    ? Layout::kPartition7
+              : node_count_ <= 0x100 ? Layout::kPartition8
+                                     : Layout::kPartition16;
   } else {
     const bool wide =
         feature_count_ > 0xFFFF ||
@@ -196,6 +198,18 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     NodeId rest = step(node);
     for (; rest >= 0x80; rest >>= 7) *out++ = static_cast<std::uint8_t>((rest & 0x7F) | 0x80);
     *out++ = static_cast<std::uint8_t>(rest);
+  }
+  if (layout_ == Layout::kPartition7) {
+    // Feature f's 7 bits start at bit 7 f, from the low bit of each byte.
+    std::fill(out, bytes_.data() + bytes_.size(), 0);
+    for (std::size_t node = 0; node < node_count_; ++node)
+      for (std::uint32_t index : features.features(node)) {
+        const std::size_t bit = std::size_t{7} * index;
+        const std::uint32_t v = static_cast<std::uint32_t>(node) << (bit % 8);
+        out[bit / 8] |= static_cast<std::uint8_t>(v);
+        if (v > 0xFF) out[bit / 8 + 1] |= static_cast<std::uint8_t>(v >> 8);
+      }
+    return;
   }
   if (partition) {
     const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
@@ -223,6 +237,8 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
 std::size_t PackedFeatureVector::packed_size() const noexcept {
   const std::size_t nodes = node_bytes_;
   switch (layout_) {
+    case Layout::kPartition7:
+      return nodes + (std::size_t{feature_count_} * 7 + 7) / 8;
     case Layout::kPartition8:
       return nodes + feature_count_;
     case Layout::kPartition16:
@@ -265,14 +281,15 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
   PackedFeatureVector packed;
   packed.node_count_ = node_count;
   packed.feature_count_ = feature_count;
-  if (data[0] > static_cast<std::uint8_t>(Layout::kRows32))
+  if (data[0] > static_cast<std::uint8_t>(Layout::kPartition7))
     throw InvalidArgument("unknown layout " + std::to_string(data[0]));
   packed.layout_ = static_cast<Layout>(data[0]);
   packed.node_bytes_ = load_le<std::uint32_t>(data + 1);
-  const bool partition =
-      packed.layout_ == Layout::kPartition8 || packed.layout_ == Layout::kPartition16;
-  if (partition && node_count > (packed.layout_ == Layout::kPartition8 ? 0x100u : 0x10000u))
-    throw InvalidArgument("too many nodes for its layout");
+  const bool partition = packed.partition();
+  const std::uint32_t most_nodes = packed.layout_ == Layout::kPartition7   ? 0x80u
+                                   : packed.layout_ == Layout::kPartition8 ? 0x100u
+                                                                           : 0x10000u;
+  if (partition && node_count > most_nodes) throw InvalidArgument("too many nodes for its layout");
   if (packed.node_bytes_ > size - 5 || size - 5 != packed.packed_size())
     throw InvalidArgument(std::to_string(size - 5) + " bytes, not what its " +
                           std::to_string(node_count) + " nodes and " +
@@ -291,15 +308,19 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
   if (at != nodes_end) throw InvalidArgument("node ids are followed by stray bytes");
   if (partition) {
     // Every feature names a node, and every node has a feature.
-    const std::size_t width = packed.layout_ == Layout::kPartition8 ? 1 : 2;
     std::vector<std::uint8_t> used(node_count, 0);
     for (std::size_t f = 0; f < feature_count; ++f) {
-      const std::uint32_t slot = packed.value(nodes_bytes + f * width, width);
+      const std::uint32_t slot = packed.slot(f);
       if (slot >= node_count) throw InvalidArgument("a feature names no node");
       used[slot] = 1;
     }
     if (std::find(used.begin(), used.end(), 0) != used.end())
       throw InvalidArgument("a node has no features");
+    // The bits after the last feature's are zero: one encoding per vector.
+    const std::size_t used_bits = std::size_t{7} * feature_count;
+    if (packed.layout_ == Layout::kPartition7 && used_bits % 8 != 0 &&
+        (packed.bytes_.back() >> (used_bits % 8)) != 0)
+      throw InvalidArgument("stray bits after the last feature");
   } else {
     const std::size_t width = packed.layout_ == Layout::kRows32 ? 4 : 2;
     std::uint32_t previous = 0;
@@ -324,15 +345,12 @@ FeatureVector PackedFeatureVector::unpack() const {
   }
   std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
   std::vector<std::uint32_t> indices(feature_count_);
-  if (layout_ == Layout::kPartition8 || layout_ == Layout::kPartition16) {
+  if (partition()) {
     // Counting sort of the features by node; increasing index within a node.
-    const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
-    for (std::size_t f = 0; f < feature_count_; ++f)
-      ++offsets[value(nodes_bytes + f * width, width) + 1];
+    for (std::size_t f = 0; f < feature_count_; ++f) ++offsets[slot(f) + 1];
     for (std::size_t i = 0; i < node_count_; ++i) offsets[i + 1] += offsets[i];
     std::vector<std::uint32_t> next(offsets.begin(), offsets.end() - 1);
-    for (std::uint32_t f = 0; f < feature_count_; ++f)
-      indices[next[value(nodes_bytes + f * width, width)]++] = f;
+    for (std::uint32_t f = 0; f < feature_count_; ++f) indices[next[slot(f)]++] = f;
   } else {
     const std::size_t width = layout_ == Layout::kRows32 ? 4 : 2;
     std::size_t at = nodes_bytes;
@@ -402,11 +420,9 @@ void Database::Impl::set_word_capacity(std::size_t capacity) noexcept {
 namespace {
 
 // A segment's rows (RowOrder of `old_words`) re-laid for `new_words` ≥
-// old_words into new arrays: the words keep their postings, the new words get
-// empty rows. Returns the new offsets.
-template <typename Relative>
-std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Relative* old_entries,
-                                      Relative* new_entries, float* new_weights,
+// old_words into `new_bytes`: the words keep their postings, the new words
+// get empty rows. Returns the new offsets.
+std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, std::uint8_t* new_bytes,
                                       std::size_t old_words, std::size_t new_words) {
   const detail::RowOrder old_order(old_words);
   std::vector<std::uint32_t> offsets(new_words + 1);
@@ -419,10 +435,9 @@ std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Rela
       if (word < old_words) {
         const std::uint32_t old_row = old_order.row(static_cast<WordId>(word));
         const std::uint32_t from = segment.offsets[old_row];
-        const std::uint32_t count = segment.offsets[old_row + 1] - from;
-        std::memcpy(new_entries + at, old_entries + from, count * sizeof(Relative));
-        std::memcpy(new_weights + at, segment.weights.data() + from, count * sizeof(float));
-        at += count;
+        const std::uint32_t bytes = segment.offsets[old_row + 1] - from;
+        if (bytes > 0) std::memcpy(new_bytes + at, segment.bytes.data() + from, bytes);
+        at += bytes;
       }
       offsets[++row] = at;
     }
@@ -433,8 +448,7 @@ std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Rela
 // One segment's arrays for the new capacity, built before any is replaced.
 struct RelaidSegment {
   std::vector<std::uint32_t> offsets;
-  detail::GrowableArray<std::uint16_t> entries16;
-  detail::GrowableArray<float> weights;
+  detail::GrowableArray<std::uint8_t> bytes;
 };
 
 }  // namespace
@@ -453,18 +467,15 @@ void Database::Impl::grow_words(std::size_t needed) {
   for (std::size_t i = 0; i < segments.size(); ++i) {
     const detail::Segment& segment = *segments[i];
     RelaidSegment& out = relaid[i];
-    out.weights.resize(segment.postings());
-    out.entries16.resize(segment.postings());
-    out.offsets = relay_rows(segment, segment.entries16.data(), out.entries16.data(),
-                             out.weights.data(), word_capacity, new_words);
+    out.bytes.resize(segment.bytes.size());
+    out.offsets = relay_rows(segment, out.bytes.data(), word_capacity, new_words);
   }
   std::vector<detail::TailList> lists(std::min(new_words, std::size_t{1} << detail::kGroupBits));
   std::vector<std::uint8_t> block_logs(lists.size(), detail::kFirstBlockLog);
   for (std::size_t i = 0; i < segments.size(); ++i) {
     detail::Segment& segment = *segments[i];
     segment.offsets.swap(relaid[i].offsets);
-    segment.entries16.swap(relaid[i].entries16);
-    segment.weights.swap(relaid[i].weights);
+    segment.bytes.swap(relaid[i].bytes);
   }
   tail_lists.swap(lists);
   first_block_logs.swap(block_logs);
@@ -547,15 +558,14 @@ void Database::Impl::build_forward_index() const {
   // Each entry's words come in increasing order: it lives in one segment or
   // in the tail, visited word by word.
   for (const auto& segment : segments) {
-    const std::uint32_t* offsets = segment->offsets.data();
-    const std::uint16_t* entries = segment->entries16.data();
-    const float* weights = segment->weights.data();
     for (std::size_t word = 0; word < word_capacity; ++word) {
       const std::uint32_t row = row_order.row(static_cast<WordId>(word));
-      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
-        const EntryId entry = segment->first_entry + entries[i];
-        if (alive[entry] != 0) built.add_word(entry, static_cast<WordId>(word), weights[i]);
-      }
+      detail::for_each_posting(segment->row_begin(row), segment->row_end(row),
+                               [&](std::uint32_t relative, float weight) {
+                                 const EntryId entry = segment->first_entry + relative;
+                                 if (alive[entry] != 0)
+                                   built.add_word(entry, static_cast<WordId>(word), weight);
+                               });
     }
   }
   const std::uint32_t high_mask = (1u << high_bits) - 1;
@@ -610,63 +620,84 @@ void Database::Impl::merge_segments_if_many() {
 namespace {
 
 // Row by row, the rows of the segments [begin, end), oldest first: entries
-// stay in increasing order. Every source is read sequentially. Merged
-// segments and their sources span at most kSegmentSpan ids (16-bit entries).
-void merge_rows(const std::unique_ptr<detail::Segment>* begin,
-                const std::unique_ptr<detail::Segment>* end, detail::Segment& merged) noexcept {
+// stay in increasing order. Every source is read sequentially; within a
+// source's run only the first gap changes (it is now from the previous
+// source's last entry), the rest is copied as is. Merged segments and their
+// sources span at most kSegmentSpan ids. Returns the bytes written.
+std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
+                       const std::unique_ptr<detail::Segment>* end,
+                       detail::Segment& merged) noexcept {
   // The sources' arrays, read once: the stores below could alias their fields.
   // merge_segments_if_many merges at most kSegmentFanIn segments.
   struct Source {
     const std::uint32_t* offsets;
-    const std::uint16_t* entries;
-    const float* weights;
-    std::uint16_t delta;
+    const std::uint8_t* bytes;
+    std::uint32_t shift;  // first_entry - merged.first_entry
   };
   Source sources[detail::kSegmentFanIn];
   std::size_t source_count = 0;
   for (auto source = begin; source != end; ++source, ++source_count) {
     const detail::Segment& s = **source;
-    sources[source_count] = {s.offsets.data(), s.entries16.data(), s.weights.data(),
-                             static_cast<std::uint16_t>(s.first_entry - merged.first_entry)};
+    sources[source_count] = {s.offsets.data(), s.bytes.data(), s.first_entry - merged.first_entry};
   }
-  std::uint16_t* entries = merged.entries16.data();
+  std::uint8_t* const out_begin = merged.bytes.data();
+  std::uint8_t* out = out_begin;
   const std::size_t rows = merged.offsets.size() - 1;
-  float* weights = merged.weights.data();
   std::uint32_t* offsets = merged.offsets.data();
-  std::uint32_t at = 0;
   offsets[0] = 0;
   for (std::size_t r = 0; r < rows; ++r) {
+    std::uint32_t last = detail::kRowStart;  // relative to merged.first_entry
     for (std::size_t k = 0; k < source_count; ++k) {
       const Source& s = sources[k];
-      const std::uint32_t from = s.offsets[r];
-      const std::uint32_t count = s.offsets[r + 1] - from;
-      // Most rows hold a few postings: a call to memcpy would cost more.
-      for (std::uint32_t i = 0; i < count; ++i) {
-        entries[at + i] = static_cast<std::uint16_t>(s.entries[from + i] + s.delta);
-        weights[at + i] = s.weights[from + i];
+      const std::uint8_t* at = s.bytes + s.offsets[r];
+      const std::uint8_t* const row_end = s.bytes + s.offsets[r + 1];
+      if (at == row_end) continue;
+      std::uint32_t gap;
+      at = detail::read_gap(at, gap);
+      std::uint32_t entry = s.shift + gap;  // the source's first is gap + 1 after kRowStart
+      out = detail::put_posting(out, entry - last - 1, detail::read_weight(at));
+      at += detail::kWeightBytes;
+      const std::uint8_t* const rest = at;
+      // The run's last entry, for the next source's first gap.
+      while (at != row_end) {
+        at = detail::read_gap(at, gap);
+        entry += gap + 1;
+        at += detail::kWeightBytes;
       }
-      at += count;
+      const auto rest_bytes = static_cast<std::size_t>(row_end - rest);
+      std::memcpy(out, rest, rest_bytes);
+      out += rest_bytes;
+      last = entry;
     }
-    offsets[r + 1] = at;
+    offsets[r + 1] = static_cast<std::uint32_t>(out - out_begin);
   }
+  return static_cast<std::size_t>(out - out_begin);
 }
 
 }  // namespace
 
 void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
-  std::size_t total = 0;
-  for (std::size_t i = begin; i < end; ++i) total += segments[i]->postings();
-  if (total > std::numeric_limits<std::uint32_t>::max())
-    throw InvalidArgument("Database: more than 2^32 postings in one segment");
+  // A source's first gap in a row may grow by up to 2 bytes in the merged
+  // row: room for that, then the block shrinks to what was written.
+  std::size_t postings = 0, bytes = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    const detail::Segment& source = *segments[i];
+    postings += source.postings();
+    bytes += source.bytes.size();
+    if (i > begin)
+      bytes += (detail::kMaxGapBytes - 1) * std::min(source.postings(), source.offsets.size());
+  }
+  if (bytes > std::numeric_limits<std::uint32_t>::max())
+    throw InvalidArgument("Database: more than 4 GiB of postings in one segment");
   auto merged = std::make_unique<detail::Segment>();
   merged->first_entry = segments[begin]->first_entry;
   merged->end_entry = segments[end - 1]->end_entry;
   merged->level = segments[begin]->level + 1;
   merged->offsets.resize(segments[begin]->offsets.size());
-  merged->entries16.resize(total);
-  merged->weights.resize(total);
-  // Nothing below can throw.
-  merge_rows(segments.data() + begin, segments.data() + end, *merged);
+  merged->bytes.resize(bytes);
+  merged->posting_count = postings;
+  // Nothing below can throw (shrinking never does).
+  merged->bytes.resize(merge_rows(segments.data() + begin, segments.data() + end, *merged));
   for (std::size_t i = begin; i < end; ++i) merged->dead_postings += segments[i]->dead_postings;
   segments[begin] = std::move(merged);
   segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(begin) + 1,
@@ -676,60 +707,78 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
 std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   const std::size_t live = tail_postings - tail_dead_postings;
   if (live == 0) return nullptr;
-  std::vector<std::uint32_t> next(std::size_t{1}
-                                  << high_bits);  // per word of a group: its row's next slot
+  // Per word of a group: its row's last entry, then its next byte.
+  const std::size_t words_per_group = std::size_t{1} << high_bits;
+  std::vector<std::uint32_t> last(words_per_group);
+  std::vector<std::uint32_t> next(words_per_group);
   auto segment = std::make_unique<detail::Segment>();
   segment->offsets.resize(word_capacity + 1);
-  segment->entries16.resize(live);
-  segment->weights.resize(live);
   segment->first_entry = tail_first_entry;
   segment->end_entry = static_cast<EntryId>(alive.size());
-  std::uint32_t* offsets = segment->offsets.data();
-  std::uint16_t* entries = segment->entries16.data();
-  float* weights = segment->weights.data();
+  segment->posting_count = live;
   const std::uint8_t* live_at = alive.data() + tail_first_entry;
   const bool drop_dead = tail_dead_postings > 0;
-  // One pass over the groups: a group's rows are consecutive (RowOrder),
-  // so each group's postings are counted by word, which gives its rows'
-  // offsets, then put in their rows, all written sequentially. Within a
-  // group's list entries increase, so the rows come out in entry order.
+  // Two passes over the groups: the first sizes every row (a gap's length
+  // depends on the row's previous entry), the second writes the postings. A
+  // group's rows are consecutive (RowOrder), so each pass writes
+  // sequentially. Within a group's list entries increase, so the rows come
+  // out in entry order.
   const std::uint32_t high_mask = (1u << high_bits) - 1;
   constexpr std::size_t kAhead = 4;
   constexpr std::uint32_t kLinesAhead = 8;
+  const auto for_each_group = [&](const auto& visit) {
+    for (std::size_t group = 0; group < tail_lists.size(); ++group) {
+      if (group + kAhead < tail_lists.size()) {
+        const detail::TailList ahead = tail_lists[group + kAhead];
+        const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
+        for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
+          __builtin_prefetch(block + i);
+      }
+      const auto g = static_cast<std::uint32_t>(group);
+      const std::uint32_t first_row = row_order.group_start(g);
+      const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
+      const detail::TailList list = tail_lists[group];
+      const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
+      std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
+      visit(first_row, rows, postings, list.size);
+    }
+  };
+  std::uint32_t* offsets = segment->offsets.data();
   std::uint32_t row_end = 0;  // of the previous group
-  for (std::size_t group = 0; group < tail_lists.size(); ++group) {
-    if (group + kAhead < tail_lists.size()) {
-      const detail::TailList ahead = tail_lists[group + kAhead];
-      const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
-      for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
-        __builtin_prefetch(block + i);
-    }
-    const auto g = static_cast<std::uint32_t>(group);
-    const std::uint32_t first_row = row_order.group_start(g);
-    const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
-    const detail::TailList list = tail_lists[group];
-    const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
+  for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
+                     const detail::TailPosting* postings, std::uint32_t size) {
     std::fill(next.begin(), next.begin() + rows, 0);
-    for (std::uint32_t i = 0; i < list.size; ++i) {
-      const std::uint32_t key = postings[i].key;
-      if (!drop_dead || live_at[key >> high_bits] != 0) ++next[key & high_mask];
-    }
-    for (std::uint32_t r = 0; r < rows; ++r) {
-      const std::uint32_t count = next[r];
-      next[r] = row_end;
-      row_end += count;
-      offsets[first_row + r + 1] = row_end;
-    }
-    for (std::uint32_t i = 0; i < list.size; ++i) {
+    for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
-      const std::uint32_t at = next[key & high_mask]++;
-      entries[at] = static_cast<std::uint16_t>(relative);
-      weights[at] = postings[i].weight;
+      const std::uint32_t word = key & high_mask;
+      next[word] += static_cast<std::uint32_t>(detail::gap_bytes(relative - last[word] - 1) +
+                                               detail::kWeightBytes);
+      last[word] = relative;
     }
-  }
+    for (std::uint32_t r = 0; r < rows; ++r) {
+      row_end += next[r];
+      offsets[first_row + r + 1] = row_end;
+    }
+  });
   offsets[0] = 0;
+  segment->bytes.resize(row_end);
+  std::uint8_t* bytes = segment->bytes.data();
+  for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
+                     const detail::TailPosting* postings, std::uint32_t size) {
+    for (std::uint32_t r = 0; r < rows; ++r) next[r] = offsets[first_row + r];
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      const std::uint32_t relative = key >> high_bits;
+      if (drop_dead && live_at[relative] == 0) continue;
+      const std::uint32_t word = key & high_mask;
+      next[word] = static_cast<std::uint32_t>(
+          detail::put_posting(bytes + next[word], relative - last[word] - 1, postings[i].weight) -
+          bytes);
+      last[word] = relative;
+    }
+  });
   return segment;
 }
 
@@ -755,24 +804,33 @@ void Database::Impl::freeze_tail() {
 
 namespace {
 
-template <typename Relative>
-std::uint32_t drop_dead_postings(detail::Segment& segment, Relative* entries,
-                                 const std::uint8_t* live_at) noexcept {
+// Rewrites the rows in place without the postings of removed entries;
+// returns the bytes kept. A gap that absorbs dropped postings never takes
+// more bytes than they and its own did, so writing never overtakes reading.
+std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at) noexcept {
   std::uint32_t* offsets = segment.offsets.data();
-  float* weights = segment.weights.data();
-  std::uint32_t kept = 0;
-  std::uint32_t begin = 0;
+  std::uint8_t* const bytes = segment.bytes.data();
+  std::uint8_t* out = bytes;
+  std::size_t kept = 0;
+  const std::uint8_t* at = bytes;
   for (std::size_t w = 0; w + 1 < segment.offsets.size(); ++w) {
-    const std::uint32_t end = offsets[w + 1];
-    for (std::uint32_t i = begin; i < end; ++i) {
-      entries[kept] = entries[i];
-      weights[kept] = weights[i];
-      kept += live_at[entries[i]];
+    const std::uint8_t* const end = bytes + offsets[w + 1];
+    std::uint32_t entry = detail::kRowStart, last = detail::kRowStart;
+    while (at != end) {
+      std::uint32_t gap;
+      at = detail::read_gap(at, gap);
+      entry += gap + 1;
+      const float weight = detail::read_weight(at);
+      at += detail::kWeightBytes;
+      if (live_at[entry] == 0) continue;
+      out = detail::put_posting(out, entry - last - 1, weight);
+      last = entry;
+      ++kept;
     }
-    begin = end;
-    offsets[w + 1] = kept;
+    offsets[w + 1] = static_cast<std::uint32_t>(out - bytes);
   }
-  return kept;
+  segment.posting_count = kept;
+  return static_cast<std::size_t>(out - bytes);
 }
 
 }  // namespace
@@ -783,10 +841,8 @@ void Database::Impl::compact(std::size_t index) {
     segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(index));
     return;
   }
-  const std::uint8_t* live_at = alive.data() + segment.first_entry;
   // Shrinking never throws.
-  segment.entries16.resize(drop_dead_postings(segment, segment.entries16.data(), live_at));
-  segment.weights.resize(segment.entries16.size());
+  segment.bytes.resize(drop_dead_postings(segment, alive.data() + segment.first_entry));
   segment.dead_postings = 0;
 }
 
@@ -948,7 +1004,7 @@ std::size_t Database::memory_usage() const {
                       impl.labels.capacity() * sizeof(std::string);
   for (const auto& segment : impl.segments)
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
-             segment->postings() * (sizeof(std::uint16_t) + sizeof(float));
+             segment->bytes.size();
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();

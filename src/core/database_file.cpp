@@ -5,18 +5,25 @@
 //   every byte is covered by a CRC. Sections, always present (maybe empty):
 //   1 embedded .bbw vocabulary   2 vocabulary description (text)
 //   3 entry states (u8 per id)
-//   Version 2 (written): the index in parts of 65,536 ids (part k holds the
-//   postings of ids [65,536 k, 65,536 (k + 1))), as a database keeps them:
+//   Version 3 (written): the index in parts of 65,536 ids (part k holds the
+//   postings of ids [65,536 k, 65,536 (k + 1))), each part's rows exactly
+//   the bytes a database keeps in memory:
 //   4 parts (per part: u32 rows, u32 postings)
-//   5 rows (per part, per word with postings: u32 word, u32 length), by
+//   5 rows (per part, per word with postings: u32 word, u32 bytes), by
 //     word mod 65,536, then word / 65,536
-//   6 posting entries (u16: id - the part's first id), by part, row, id
-//   7 posting weights (f32), in the same order
+//   6 postings, by part, row, id: per posting the gap from the row's
+//     previous id minus 1 (the first: id - the part's first id) in LEB128
+//     (at most 3 bytes, shortest form), then its weight (f32)
+//   7 empty
 //   8 direct index sizes (per id: u32 nodes, u32 features, u32 bytes)
 //   9 direct index data (per live entry: u8 layout, u32 bytes of node ids,
 //     the node ids as steps from the previous one (LEB128), then per
-//     feature its node's position (u8 or u16: layouts 0, 1) or per node the
-//     end of its features and the feature indices (u16 or u32: layouts 2, 3))
+//     feature its node's position (u8, u16 or 7 bits packed from the low
+//     bit of the first byte: layouts 0, 1, 4) or per node the end of its
+//     features and the feature indices (u16 or u32: layouts 2, 3))
+//   Version 2 (read): as version 3, but 5 rows count postings (u32 length),
+//   6 holds their ids (u16: id - the part's first id), 7 their weights
+//   (f32), and the direct index has no layout 4.
 //   Version 1 (read): the index by word over every id:
 //   4 words with postings (u32, increasing)  5 posting list lengths (u32)
 //   6 posting entry ids (u32)  7 weights (f32)
@@ -51,7 +58,7 @@ namespace binbow {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'D', 'B'};
-constexpr std::uint32_t kVersion = 2;  // written; version 1 is read too
+constexpr std::uint32_t kVersion = 3;  // written; versions 1 and 2 are read too
 constexpr std::size_t kHeaderSize = detail::kSectionedHeaderSize;
 
 enum Section : std::uint32_t {
@@ -60,8 +67,8 @@ enum Section : std::uint32_t {
   kEntryStates,
   kParts,           // version 1: kWords
   kRows,            // version 1: kListLengths
-  kPostingEntries,  // version 1: kPostingIds
-  kPostingWeights,
+  kPostingEntries,  // version 1: kPostingIds; version 3: kPostingBytes
+  kPostingWeights,  // empty in version 3
   kDirectSizes,
   kDirectData,
   kLabelLengths,
@@ -70,12 +77,16 @@ enum Section : std::uint32_t {
   kWords = kParts,
   kListLengths = kRows,
   kPostingIds = kPostingEntries,
+  kPostingBytes = kPostingEntries,
 };
 
 constexpr const char* kSectionNames[kSectionCount] = {
     "vocabulary",   "vocabulary description", "entry states",    "parts",
     "rows",         "posting entries",        "posting weights", "direct index sizes",
     "direct index", "label lengths",          "labels"};
+constexpr const char* kVersion3SectionNames[kSectionCount] = {
+    "vocabulary", "vocabulary description", "entry states", "parts",         "rows",  "postings",
+    "unused",     "direct index sizes",     "direct index", "label lengths", "labels"};
 constexpr const char* kVersion1SectionNames[kSectionCount] = {
     "vocabulary",  "vocabulary description", "entry states",       "words",        "list lengths",
     "posting ids", "posting weights",        "direct index sizes", "direct index", "label lengths",
@@ -120,11 +131,13 @@ class Layout {
            std::to_string(kHeaderSize) + "-byte header of a .bbdb database");
     if (std::memcmp(data, kMagic, 8) != 0) fail("not a binbow database (.bbdb): wrong magic bytes");
     header_.version = detail::load_le<std::uint32_t>(data + 8);
-    if (header_.version != 1 && header_.version != kVersion)
+    if (header_.version < 1 || header_.version > kVersion)
       fail("unsupported .bbdb format version " + std::to_string(header_.version) +
            " (this binbow reads versions 1 to " + std::to_string(kVersion) +
            "): saved by a newer binbow?");
-    names_ = header_.version == 1 ? kVersion1SectionNames : kSectionNames;
+    names_ = header_.version == 1   ? kVersion1SectionNames
+             : header_.version == 2 ? kSectionNames
+                                    : kVersion3SectionNames;
     if (detail::load_le<std::uint32_t>(data + 60) != detail::crc32c(data, 60))
       fail("header checksum mismatch: the file is corrupted");
     if (detail::load_le<std::uint32_t>(data + 12) != kHeaderSize) fail("unexpected header size");
@@ -236,36 +249,29 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     while (s < sources.size() && sources[s]->end_entry <= k * span) ++s;
     source_begin[k] = s;
   }
-  // Calls visit(source, begin, end) for the postings [begin, end) of the
-  // row's runs in part k (removed entries included).
-  const auto for_each_run = [&](std::size_t k, std::uint32_t row, const auto& visit) {
+  // Calls visit(relative_entry, weight) for the live postings of the row in
+  // part k, in entry order (relative to the part's first id).
+  const auto for_each_posting = [&](std::size_t k, std::uint32_t row, const auto& visit) {
     const auto part_begin = static_cast<EntryId>(k * span);
     const auto part_end = static_cast<EntryId>(std::min<std::size_t>(next_id, (k + 1) * span));
     for (std::size_t s = source_begin[k]; s < sources.size(); ++s) {
       const detail::Segment& source = *sources[s];
       if (source.first_entry >= part_end) break;
-      const std::uint16_t* entries = source.entries16.data();
-      std::uint32_t begin = source.offsets[row], end = source.offsets[row + 1];
-      if (begin == end) continue;
-      if (source.first_entry < part_begin)
-        begin = static_cast<std::uint32_t>(
-            std::lower_bound(entries + begin, entries + end, part_begin - source.first_entry) -
-            entries);
-      if (source.end_entry > part_end)
-        end = static_cast<std::uint32_t>(
-            std::lower_bound(entries + begin, entries + end, part_end - source.first_entry) -
-            entries);
-      if (begin < end) visit(source, begin, end);
+      const bool check_alive = source.dead_postings > 0;
+      detail::for_each_posting(source.row_begin(row), source.row_end(row),
+                               [&](std::uint32_t relative, float weight) {
+                                 const EntryId entry = source.first_entry + relative;
+                                 if (entry < part_begin || entry >= part_end) return;
+                                 if (check_alive && impl.alive[entry] == 0) return;
+                                 visit(entry - part_begin, weight);
+                               });
     }
-  };
-  const auto is_live = [&](const detail::Segment& source, std::uint32_t i) {
-    return source.dead_postings == 0 || impl.alive[source.entry(i)] != 0;
   };
 
   struct PartRow {
     std::uint32_t row;
     WordId word;
-    std::uint32_t length;
+    std::uint32_t bytes;
   };
   std::vector<std::vector<PartRow>> part_rows(part_count);
   std::vector<std::uint32_t> part_postings(part_count, 0);
@@ -274,18 +280,16 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   for (std::size_t k = 0; k < part_count; ++k) {
     if (source_begin[k] == sources.size()) break;
     detail::RowOrder::for_each_row(impl.word_capacity, [&](std::uint32_t row, WordId word) {
-      std::uint32_t length = 0;
-      for_each_run(k, row,
-                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
-                     if (source.dead_postings == 0) {
-                       length += end - begin;
-                       return;
-                     }
-                     for (std::uint32_t i = begin; i < end; ++i) length += is_live(source, i);
-                   });
-      if (length == 0) return;
-      part_rows[k].push_back({row, word, length});
-      part_postings[k] += length;
+      std::uint32_t bytes = 0, postings = 0, last = detail::kRowStart;
+      for_each_posting(k, row, [&](std::uint32_t relative, float) {
+        bytes += static_cast<std::uint32_t>(detail::gap_bytes(relative - last - 1) +
+                                            detail::kWeightBytes);
+        last = relative;
+        ++postings;
+      });
+      if (postings == 0) return;
+      part_rows[k].push_back({row, word, bytes});
+      part_postings[k] += postings;
       largest_word_end = std::max<std::uint64_t>(largest_word_end, std::uint64_t{word} + 1);
     });
     posting_count += part_postings[k];
@@ -298,36 +302,23 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   for (const auto& rows : part_rows)
     for (const PartRow& row : rows) {
       out.append_le<std::uint32_t>(row.word);
-      out.append_le<std::uint32_t>(row.length);
+      out.append_le<std::uint32_t>(row.bytes);
     }
   out.next_section();
+  std::vector<std::uint8_t> row_bytes;
   for (std::size_t k = 0; k < part_count; ++k)
-    for (const PartRow& row : part_rows[k])
-      for_each_run(k, row.row,
-                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
-                     const auto shift = static_cast<std::uint16_t>(source.first_entry - k * span);
-                     if (shift == 0 && source.dead_postings == 0) {
-                       out.append(source.entries16.data() + begin, std::size_t{end - begin} * 2);
-                       return;
-                     }
-                     for (std::uint32_t i = begin; i < end; ++i)
-                       if (is_live(source, i))
-                         out.append_le<std::uint16_t>(
-                             static_cast<std::uint16_t>(source.entries16.data()[i] + shift));
-                   });
+    for (const PartRow& row : part_rows[k]) {
+      row_bytes.resize(row.bytes);
+      std::uint8_t* at = row_bytes.data();
+      std::uint32_t last = detail::kRowStart;
+      for_each_posting(k, row.row, [&](std::uint32_t relative, float weight) {
+        at = detail::put_posting(at, relative - last - 1, weight);
+        last = relative;
+      });
+      out.append(row_bytes.data(), row_bytes.size());
+    }
   out.next_section();
-  for (std::size_t k = 0; k < part_count; ++k)
-    for (const PartRow& row : part_rows[k])
-      for_each_run(k, row.row,
-                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
-                     if (source.dead_postings == 0) {
-                       out.append(source.weights.data() + begin, std::size_t{end - begin} * 4);
-                       return;
-                     }
-                     for (std::uint32_t i = begin; i < end; ++i)
-                       if (is_live(source, i)) out.append_le<float>(source.weights.data()[i]);
-                   });
-  out.next_section();
+  out.next_section();  // weights: within the postings since version 3
 
   if (impl.options.direct_index) {
     for (EntryId entry = 0; entry < next_id; ++entry) {
@@ -486,7 +477,12 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
         segment->level = detail::kLoadedLevel;
         segment->offsets.assign(word_count + 1, 0);
       }
-      ++segment->offsets[rows[l] + 1];
+      // The row's previous posting in this segment, if any, precedes it in the list.
+      const bool first_in_row = i == from || previous < segment->first_entry;
+      const std::uint32_t gap = first_in_row ? id - segment->first_entry : id - previous - 1;
+      segment->offsets[rows[l] + 1] +=
+          static_cast<std::uint32_t>(detail::gap_bytes(gap) + detail::kWeightBytes);
+      ++segment->posting_count;
       previous = id;
     }
   });
@@ -494,20 +490,21 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     if (!segment) continue;
     std::uint32_t* offsets = segment->offsets.data();
     for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
-    segment->entries16.resize(offsets[word_count]);
-    segment->weights.resize(offsets[word_count]);
+    segment->bytes.resize(offsets[word_count]);
   }
   for_each_list([&](std::size_t l, std::size_t from) {
     std::size_t i = from;
     const std::size_t end = from + lengths[l];
     while (i < end) {
       detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
-      std::uint32_t to = segment.offsets[rows[l]];
-      for (; i < end; ++i, ++to) {
+      std::uint8_t* to = segment.bytes.data() + segment.offsets[rows[l]];
+      std::uint32_t last = detail::kRowStart;
+      for (; i < end; ++i) {
         const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
         if (id >= segment.end_entry) break;
-        segment.entries16.data()[to] = static_cast<std::uint16_t>(id - segment.first_entry);
-        segment.weights.data()[to] = detail::load_le<float>(weights + 4 * i);
+        const std::uint32_t relative = id - segment.first_entry;
+        to = detail::put_posting(to, relative - last - 1, detail::load_le<float>(weights + 4 * i));
+        last = relative;
       }
     }
   });
@@ -515,20 +512,44 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     if (segment) impl->segments.push_back(std::move(segment));
 }
 
-// Version 2: the parts are the segments, row by row as in memory.
+// A posting's gap at `at` (before `end`), as put_posting writes it: the
+// shortest LEB128 of a value below kSegmentSpan; false if it is not one.
+bool read_checked_gap(const std::uint8_t*& at, const std::uint8_t* end, std::uint32_t& gap) {
+  std::uint32_t value = 0;
+  for (unsigned i = 0; i < detail::kMaxGapBytes && at != end; ++i) {
+    const std::uint8_t byte = *at++;
+    value |= std::uint32_t{byte & 0x7Fu} << (7 * i);
+    if (byte < 0x80) {
+      gap = value;
+      return (i == 0 || byte != 0) && value < detail::kSegmentSpan;
+    }
+  }
+  return false;
+}
+
+// Versions 2 and 3: the parts are the segments, row by row. Version 3 rows
+// are the bytes a segment keeps (copied once checked); version 2 rows hold
+// 16-bit ids and the weights apart, encoded here.
 template <class Impl>
 void read_postings(const Layout& layout, const Release& release, Impl* impl) {
   const Header& header = layout.header();
+  const bool encoded = header.version >= 3;
   const std::size_t word_count = impl->word_capacity;
   const EntryId next_id = header.next_entry_id;
   const std::size_t span = detail::kSegmentSpan;
   const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
   const auto parts = layout.values<std::uint32_t>(kParts, 2 * part_count);
   const std::size_t row_count = layout.count_of(kRows, 8);
-  const std::size_t posting_count = layout.count_of(kPostingEntries, 2);
-  if (posting_count != header.postings)
+  // Version 3: bytes of the rows; version 2: postings.
+  const std::size_t posting_units =
+      encoded ? layout.count_of(kPostingBytes, 1) : layout.count_of(kPostingEntries, 2);
+  if (!encoded && posting_units != header.postings)
     layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
-                std::to_string(posting_count));
+                std::to_string(posting_units));
+  if (encoded && layout.section(kPostingWeights).size != 0)
+    layout.fail("the unused section holds " + std::to_string(layout.section(kPostingWeights).size) +
+                " bytes");
+  layout.verify(kPostingWeights);
   std::uint64_t rows_in_parts = 0, postings_in_parts = 0;
   for (std::size_t k = 0; k < part_count; ++k) {
     rows_in_parts += parts[2 * k];
@@ -537,29 +558,34 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       layout.fail("part " + std::to_string(k) + " has " + std::to_string(parts[2 * k]) +
                   " rows for " + std::to_string(parts[2 * k + 1]) + " postings");
   }
-  if (rows_in_parts != row_count || postings_in_parts != posting_count)
+  if (rows_in_parts != row_count || postings_in_parts != header.postings)
     layout.fail("the parts count " + std::to_string(rows_in_parts) + " rows and " +
                 std::to_string(postings_in_parts) + " postings, the sections " +
-                std::to_string(row_count) + " and " + std::to_string(posting_count));
+                std::to_string(row_count) + " and " + std::to_string(header.postings));
   const std::uint8_t* rows = layout.array(kRows, row_count, 8);
-  const std::uint8_t* entries = layout.array(kPostingEntries, posting_count, 2);
-  const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
+  const std::uint8_t* postings = layout.array(kPostingEntries, posting_units, encoded ? 1 : 2);
+  const std::uint8_t* weights = encoded ? nullptr : layout.array(kPostingWeights, posting_units, 4);
   impl->word_counts.assign(next_id, 0);
-  std::size_t row_at = 0, posting_at = 0;
+  std::size_t row_at = 0, unit_at = 0;
   for (std::size_t k = 0; k < part_count; ++k) {
     const std::uint32_t part_rows = parts[2 * k];
     const std::uint32_t part_postings = parts[2 * k + 1];
     if (part_postings == 0) continue;
     const auto first = static_cast<EntryId>(k * span);
     const auto end = static_cast<EntryId>(std::min<std::size_t>(next_id, first + span));
+    const std::uint32_t part_span = end - first;
     const std::string where = "part " + std::to_string(k);
     auto segment = std::make_unique<detail::Segment>();
     segment->first_entry = first;
     segment->end_entry = end;
     segment->level = detail::kLoadedLevel;
+    segment->posting_count = part_postings;
     segment->offsets.assign(word_count + 1, 0);
     std::uint32_t* offsets = segment->offsets.data();
-    std::uint64_t previous_row = 0, total = 0;
+    // Each row is checked where the file has it (unit_at + its start):
+    // every posting names a live entry of the part, in increasing order,
+    // with a finite weight; its size in memory goes to offsets.
+    std::uint64_t previous_row = 0, part_units = 0, part_read = 0, part_bytes = 0;
     for (std::uint32_t r = 0; r < part_rows; ++r) {
       const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
       const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
@@ -569,46 +595,88 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       const std::uint32_t row = impl->row_order.row(word);
       if (r > 0 && row <= previous_row)
         layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
-      if (length == 0 || length > end - first || length > part_postings - total)
+      const std::uint64_t most =
+          encoded ? std::uint64_t{part_span} * (detail::kMaxGapBytes + detail::kWeightBytes)
+                  : std::min<std::uint64_t>(part_span, part_postings - part_read);
+      if (length == 0 || length > most || length > posting_units - unit_at - part_units)
         layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
-      offsets[row + 1] = length;
-      previous_row = row;
-      total += length;
-    }
-    if (total != part_postings)
-      layout.fail(where + ": its rows hold " + std::to_string(total) + " postings, not " +
-                  std::to_string(part_postings));
-    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
-    segment->entries16.resize(part_postings);
-    segment->weights.resize(part_postings);
-    std::uint16_t* part_entries = segment->entries16.data();
-    float* part_weights = segment->weights.data();
-    std::memcpy(part_entries, entries + 2 * posting_at, std::size_t{part_postings} * 2);
-    std::memcpy(part_weights, weights + 4 * posting_at, std::size_t{part_postings} * 4);
-    release(entries + 2 * posting_at, std::size_t{part_postings} * 2);
-    release(weights + 4 * posting_at, std::size_t{part_postings} * 4);
-    // Within a row the entries increase; each names a live entry of the part.
-    const std::uint32_t part_span = end - first;
-    for (std::uint32_t r = 0; r < part_rows; ++r) {
-      const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
-      const std::uint32_t row = impl->row_order.row(word);
-      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
-        const std::uint32_t relative = part_entries[i];
-        if (relative >= part_span || impl->alive[first + relative] == 0 ||
-            (i > offsets[row] && relative <= part_entries[i - 1]))
-          layout.fail(where + ": the row of word " + std::to_string(word) +
-                      " names a missing entry or is not in increasing order");
-        if (!std::isfinite(part_weights[i]))
+      const auto invalid_posting = [&] {
+        layout.fail(where + ": the row of word " + std::to_string(word) +
+                    " names a missing entry or is not in increasing order");
+      };
+      const auto check = [&](std::uint32_t relative, float weight) {
+        if (relative >= part_span || impl->alive[first + relative] == 0) invalid_posting();
+        if (!std::isfinite(weight))
           layout.fail(where + ": the row of word " + std::to_string(word) +
                       " has a non-finite weight");
-        impl->values.include(part_weights[i]);
+        impl->values.include(weight);
         ++impl->word_counts[first + relative];
+      };
+      std::uint32_t last = detail::kRowStart;
+      std::uint64_t bytes = 0;
+      if (encoded) {
+        const std::uint8_t* at = postings + unit_at + part_units;
+        const std::uint8_t* const row_end = at + length;
+        while (at != row_end) {
+          std::uint32_t gap;
+          if (!read_checked_gap(at, row_end, gap) ||
+              static_cast<std::size_t>(row_end - at) < detail::kWeightBytes)
+            layout.fail(where + ": the row of word " + std::to_string(word) +
+                        " has a malformed posting");
+          last += gap + 1;
+          check(last, detail::read_weight(at));
+          at += detail::kWeightBytes;
+          ++part_read;
+        }
+        bytes = length;
+      } else {
+        for (std::uint32_t i = 0; i < length; ++i) {
+          const std::size_t at = unit_at + part_units + i;
+          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
+          if (i > 0 && relative <= last) invalid_posting();
+          check(relative, detail::load_le<float>(weights + 4 * at));
+          bytes += detail::gap_bytes(relative - last - 1) + detail::kWeightBytes;
+          last = relative;
+        }
+        part_read += length;
       }
+      offsets[row + 1] = static_cast<std::uint32_t>(bytes);
+      previous_row = row;
+      part_units += length;
+      part_bytes += bytes;
+    }
+    if (part_read != part_postings)
+      layout.fail(where + ": its rows hold " + std::to_string(part_read) + " postings, not " +
+                  std::to_string(part_postings));
+    if (part_bytes > std::numeric_limits<std::uint32_t>::max())
+      layout.fail(where + " holds more than 4 GiB of postings");
+    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
+    segment->bytes.resize(offsets[word_count]);
+    if (encoded) {
+      std::memcpy(segment->bytes.data(), postings + unit_at, part_units);
+      release(postings + unit_at, part_units);
+    } else {
+      // The rows in row order, as in the file.
+      std::uint8_t* to = segment->bytes.data();
+      std::size_t at = unit_at;
+      for (std::uint32_t r = 0; r < part_rows; ++r) {
+        const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
+        std::uint32_t last = detail::kRowStart;
+        for (std::uint32_t i = 0; i < length; ++i, ++at) {
+          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
+          to = detail::put_posting(to, relative - last - 1,
+                                   detail::load_le<float>(weights + 4 * at));
+          last = relative;
+        }
+      }
+      release(postings + 2 * unit_at, part_units * 2);
+      release(weights + 4 * unit_at, part_units * 4);
     }
     impl->segments.push_back(std::move(segment));
     row_at += part_rows;
-    posting_at += part_postings;
+    unit_at += part_units;
   }
+  if (unit_at != posting_units) layout.fail("the postings section has trailing data");
 }
 
 // Version 1: per entry, its node ids, node end offsets and feature indices.

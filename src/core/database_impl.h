@@ -200,8 +200,9 @@ class GrowableArray {
 // One entry's FeatureVector, packed. Node ids are the steps from the
 // previous one (LEB128: siblings take a byte each). When every feature
 // 0..n-1 sits under exactly one node (what transform produces), each feature
-// just stores the position of its node, in 8 bits when there are at most 256
-// nodes (about 1 byte per feature) or 16 bits; otherwise the end offset of
+// just stores the position of its node: in 7 bits when there are at most 128
+// nodes (a direct index 4 levels up a k=10 L=6 tree has at most 100: 7/8 of
+// a byte per feature), 8 bits up to 256 nodes, else 16; otherwise the end offset of
 // every node's features and the feature indices follow, 16 bit when they fit
 // (images have fewer than 65,536 features), else 32 bit.
 class PackedFeatureVector {
@@ -213,7 +214,7 @@ class PackedFeatureVector {
   std::uint32_t feature_count() const noexcept { return feature_count_; }
   std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
 
-  // The form a .bbdb (version 2) stores: the layout (u8), the bytes of the
+  // The form a .bbdb (versions 2 and 3) stores: the layout (u8), the bytes of the
   // node ids (u32), then the packed bytes, little-endian.
   std::size_t encoded_size() const noexcept { return 5 + bytes_.size(); }
   void encode(std::uint8_t* out) const noexcept;
@@ -225,7 +226,23 @@ class PackedFeatureVector {
                                     std::uint64_t node_limit);
 
  private:
-  enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32 };
+  // Numbered as stored; kPartition7 came last.
+  enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32, kPartition7 };
+  bool partition() const noexcept {
+    return layout_ != Layout::kRows16 && layout_ != Layout::kRows32;
+  }
+  // The position of the node of feature `f` (partition layouts).
+  std::uint32_t slot(std::size_t f) const noexcept {
+    const std::size_t base = node_bytes_;
+    if (layout_ == Layout::kPartition7) {
+      const std::size_t bit = 7 * f;
+      const std::size_t byte = base + bit / 8;
+      std::uint32_t v = bytes_[byte];
+      if (byte + 1 < bytes_.size()) v |= std::uint32_t{bytes_[byte + 1]} << 8;
+      return (v >> (bit % 8)) & 0x7F;
+    }
+    return layout_ == Layout::kPartition8 ? value(base + f, 1) : value(base + 2 * f, 2);
+  }
   // The little-endian value of `width` (1, 2 or 4) bytes at `byte_offset`.
   std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept {
     const std::uint8_t* at = bytes_.data() + byte_offset;
@@ -260,11 +277,70 @@ namespace detail {
 
 // A part of the inverted index: the postings of the entries
 // [first_entry, end_entry) as compressed rows by word (in RowOrder): one
-// offset per word, then the entries as offsets from first_entry and the
-// weights. A segment spans at most kSegmentSpan ids, so its entries are 16
-// bits (6 bytes per posting; 32-bit entries would cost 8). A query pays one
-// offset lookup per word and segment, small next to the postings it reads.
+// byte offset per word, then the row's postings in increasing entry order,
+// each as its gap from the previous one (entry - previous - 1, the first
+// from first_entry - 1) in LEB128 (7 bits per byte: 1 byte for gaps below
+// 128, which rows of common words have, at most 3) followed by its weight
+// (f32, little-endian, unaligned): 5 bytes per posting in common rows. A
+// segment spans at most kSegmentSpan ids, so that gaps stay small. A query
+// pays one offset lookup per word and segment, small next to the postings
+// it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
+constexpr std::size_t kWeightBytes = 4;
+constexpr std::size_t kMaxGapBytes = 3;  // LEB128 of a gap below kSegmentSpan
+
+constexpr std::size_t gap_bytes(std::uint32_t gap) noexcept {
+  return gap < 0x80 ? 1 : gap < 0x4000 ? 2 : 3;
+}
+// Writes a posting at `out`; returns the byte after it.
+inline std::uint8_t* put_posting(std::uint8_t* out, std::uint32_t gap, float weight) noexcept {
+  while (gap >= 0x80) {
+    *out++ = static_cast<std::uint8_t>(gap | 0x80);
+    gap >>= 7;
+  }
+  *out++ = static_cast<std::uint8_t>(gap);
+  std::memcpy(out, &weight, kWeightBytes);  // little-endian hosts only (as the whole index)
+  return out + kWeightBytes;
+}
+// Reads the gap of a posting written by put_posting; returns its weight's
+// first byte.
+inline const std::uint8_t* read_gap(const std::uint8_t* at, std::uint32_t& gap) noexcept {
+  const std::uint32_t b0 = at[0];
+  if (b0 < 0x80) {
+    gap = b0;
+    return at + 1;
+  }
+  const std::uint32_t b1 = at[1];
+  if (b1 < 0x80) {
+    gap = (b0 & 0x7F) | b1 << 7;
+    return at + 2;
+  }
+  gap = (b0 & 0x7F) | (b1 & 0x7F) << 7 | std::uint32_t{at[2]} << 14;
+  return at + 3;
+}
+inline float read_weight(const std::uint8_t* at) noexcept {
+  float weight;
+  std::memcpy(&weight, at, kWeightBytes);
+  return weight;
+}
+// The entry before a row's first, relative to first_entry: gaps are
+// differences minus 1, in wrapping 32-bit arithmetic.
+constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
+
+// Calls visit(relative_entry, weight) for the postings of the row in
+// [begin, end), in order.
+template <class Visit>
+inline void for_each_posting(const std::uint8_t* begin, const std::uint8_t* end,
+                             const Visit& visit) {
+  std::uint32_t entry = kRowStart;
+  for (const std::uint8_t* at = begin; at != end;) {
+    std::uint32_t gap;
+    at = read_gap(at, gap);
+    entry += gap + 1;
+    visit(entry, read_weight(at));
+    at += kWeightBytes;
+  }
+}
 
 // So that a query's offset lookups stay few as the database grows, every
 // kSegmentFanIn segments of one level are merged into one of the next, as
@@ -282,14 +358,17 @@ struct Segment {
   // Frozen from the tail: 0; merged from segments of level l: l + 1;
   // loaded (one per kSegmentSpan ids): kLoadedLevel, never merged.
   unsigned level = 0;
-  std::vector<std::uint32_t> offsets;      // word_count + 1, by RowOrder
-  GrowableArray<std::uint16_t> entries16;  // entry - first_entry
-  GrowableArray<float> weights;
+  std::vector<std::uint32_t> offsets;  // word_count + 1 byte offsets into `bytes`, by RowOrder
+  GrowableArray<std::uint8_t> bytes;   // the rows' postings (see above)
+  std::size_t posting_count = 0;
   std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 
-  std::size_t postings() const noexcept { return weights.size(); }
-  EntryId entry(std::size_t posting) const noexcept {
-    return first_entry + entries16.data()[posting];
+  std::size_t postings() const noexcept { return posting_count; }
+  const std::uint8_t* row_begin(std::uint32_t row) const noexcept {
+    return bytes.data() + offsets[row];
+  }
+  const std::uint8_t* row_end(std::uint32_t row) const noexcept {
+    return bytes.data() + offsets[row + 1];
   }
 };
 

@@ -124,28 +124,29 @@ template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
                         EntryId last_entry, PartScores scores) {
   const std::uint32_t* offsets = segment.offsets.data();
-  const std::uint16_t* entries = segment.entries16.data();
-  const float* weights = segment.weights.data();
+  const std::uint8_t* bytes = segment.bytes.data();
   const bool cut = last_entry < segment.end_entry - 1;
-  const auto last = static_cast<std::uint16_t>(cut ? last_entry - segment.first_entry : 0);
+  const std::uint32_t last = cut ? last_entry - segment.first_entry : detail::kRowStart;
   const std::size_t n = bow.size();
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + 2 * kPrefetchAhead < n)
       __builtin_prefetch(offsets + order.row(query[q + 2 * kPrefetchAhead].word));
-    if (q + kPrefetchAhead < n) {
-      const std::uint32_t begin = offsets[order.row(query[q + kPrefetchAhead].word)];
-      __builtin_prefetch(entries + begin);
-      __builtin_prefetch(weights + begin);
-    }
+    if (q + kPrefetchAhead < n)
+      __builtin_prefetch(bytes + offsets[order.row(query[q + kPrefetchAhead].word)]);
     const std::uint32_t row = order.row(query[q].word);
-    const std::uint32_t begin = offsets[row];
-    std::uint32_t end = offsets[row + 1];
-    if (cut)
-      end = static_cast<std::uint32_t>(std::upper_bound(entries + begin, entries + end, last) -
-                                       entries);
+    const std::uint8_t* at = bytes + offsets[row];
+    const std::uint8_t* const end = bytes + offsets[row + 1];
     const Term term{query[q].value};
-    for (std::uint32_t i = begin; i < end; ++i) scores.add(entries[i], term(weights[i]));
+    std::uint32_t entry = detail::kRowStart;
+    while (at != end) {
+      std::uint32_t gap;
+      at = detail::read_gap(at, gap);
+      entry += gap + 1;
+      if (cut && entry > last) break;
+      scores.add(entry, term(detail::read_weight(at)));
+      at += detail::kWeightBytes;
+    }
   }
 }
 
