@@ -40,13 +40,27 @@ void populate(void* data, std::size_t bytes) noexcept {
 #endif
 }
 
+void* allocate_huge(std::size_t bytes) {
+  constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  void* data = std::aligned_alloc(kHugePage, bytes);
+  if (data == nullptr) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  madvise(data, bytes, MADV_HUGEPAGE);  // only advice: 4 KiB pages otherwise
+#endif
+  return data;
+}
+
 std::uint32_t PostingArena::new_chunk(std::size_t postings) {
   // Addresses are 32 bits: chunk index, then kChunkBits of position.
   if (chunks_.size() >= (std::size_t{1} << (32 - kChunkBits)))
     throw InvalidArgument("Database: the tail outgrew its 32 GiB of addresses");
   chunk_starts_.reserve(chunks_.size() + 1);
   chunk_postings_.reserve(chunks_.size() + 1);
-  chunks_.emplace_back(new TailPosting[postings]);  // left uninitialised
+  // Left uninitialised; a block larger than a chunk gets a chunk of its own,
+  // whose size is rounded up to huge pages.
+  const std::size_t huge_postings = (std::size_t{2} << 20) / sizeof(TailPosting);
+  postings = (postings + huge_postings - 1) / huge_postings * huge_postings;
+  chunks_.emplace_back(static_cast<TailPosting*>(allocate_huge(postings * sizeof(TailPosting))));
   chunk_starts_.push_back(chunks_.back().get());
   chunk_postings_.push_back(postings);
   chunk_bytes_ += postings * sizeof(TailPosting);

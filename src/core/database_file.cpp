@@ -755,6 +755,9 @@ void read_direct_index(const Layout& layout, const Release& release, Impl* impl,
       layout.fail("direct index of entry " + std::to_string(entry) +
                   " is inconsistent: " + e.what());
     }
+    // Node positions saved in 8 bits take 7 since version 3.
+    if (layout.header().version < 3 && size[0] <= 0x80)
+      impl->direct[entry] = detail::PackedFeatureVector(impl->direct[entry].unpack());
     cursor += size[2];
     if (cursor - released >= kReleaseBytes) {
       release(data.data + released, cursor - released);

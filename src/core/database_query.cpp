@@ -139,11 +139,21 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
     const std::uint8_t* const end = bytes + offsets[row + 1];
     const Term term{query[q].value};
     std::uint32_t entry = detail::kRowStart;
+    if (!cut) {
+      while (at != end) {
+        std::uint32_t gap;
+        at = detail::read_gap(at, gap);
+        entry += gap + 1;
+        scores.add(entry, term(detail::read_weight(at)));
+        at += detail::kWeightBytes;
+      }
+      continue;
+    }
     while (at != end) {
       std::uint32_t gap;
       at = detail::read_gap(at, gap);
       entry += gap + 1;
-      if (cut && entry > last) break;
+      if (entry > last) break;
       scores.add(entry, term(detail::read_weight(at)));
       at += detail::kWeightBytes;
     }
