@@ -195,27 +195,52 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     layout_ = wide ? Layout::kRows32 : Layout::kRows16;
   }
   // Node ids are increasing: each is stored as its step from the previous
-  // one (the first from 0), 7 bits per byte (LEB128). Siblings are
-  // consecutive ids, so most steps take a byte: a direct index 4 levels up a
-  // k=10 L=6 tree takes ~1.2 bytes per node, against 4 for the ids.
-  const auto step = [&](std::size_t node) {
-    return features.node(node) - (node > 0 ? features.node(node - 1) : 0);
+  // one (the first from 0), 7 bits per byte (LEB128), or, when shorter, each
+  // run of consecutive ids as the step to its first from the end of the
+  // previous run (from 0) and its length - 1. Siblings are consecutive ids:
+  // a direct index 4 levels up a k=10 L=6 tree takes ~1.2 bytes per node as
+  // steps, ~0.4 as runs, against 4 for the ids.
+  const auto leb128_bytes = [](std::uint32_t value) {
+    std::uint32_t bytes = 1;
+    for (; value >= 0x80; value >>= 7) ++bytes;
+    return bytes;
   };
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    NodeId rest = step(node);
-    for (; rest >= 0x80; rest >>= 7) ++node_bytes_;
-    ++node_bytes_;
-  }
-  bytes_.resize(packed_size());
-  std::uint8_t* out = bytes_.data();
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    NodeId rest = step(node);
-    for (; rest >= 0x80; rest >>= 7) *out++ = static_cast<std::uint8_t>((rest & 0x7F) | 0x80);
-    *out++ = static_cast<std::uint8_t>(rest);
+  const auto for_each_run = [&](const auto& visit) {
+    NodeId end = 0;  // of the previous run
+    for (std::size_t node = 0; node < node_count_;) {
+      std::size_t last = node;
+      while (last + 1 < node_count_ && features.node(last + 1) == features.node(last) + 1) ++last;
+      visit(features.node(node) - end, static_cast<std::uint32_t>(last - node));
+      end = features.node(last) + 1;
+      node = last + 1;
+    }
+  };
+  std::uint32_t step_bytes = 0, run_bytes = 0;
+  for (std::size_t node = 0; node < node_count_; ++node)
+    step_bytes += leb128_bytes(features.node(node) - (node > 0 ? features.node(node - 1) : 0));
+  for_each_run([&](std::uint32_t step, std::uint32_t more) {
+    run_bytes += leb128_bytes(step) + leb128_bytes(more);
+  });
+  node_runs_ = run_bytes < step_bytes;
+  node_bytes_ = node_runs_ ? run_bytes : step_bytes;
+  bytes_.reset(new std::uint8_t[packed_size()]);
+  std::uint8_t* out = bytes_.get();
+  const auto put_leb128 = [&](std::uint32_t value) {
+    for (; value >= 0x80; value >>= 7) *out++ = static_cast<std::uint8_t>((value & 0x7F) | 0x80);
+    *out++ = static_cast<std::uint8_t>(value);
+  };
+  if (node_runs_) {
+    for_each_run([&](std::uint32_t step, std::uint32_t more) {
+      put_leb128(step);
+      put_leb128(more);
+    });
+  } else {
+    for (std::size_t node = 0; node < node_count_; ++node)
+      put_leb128(features.node(node) - (node > 0 ? features.node(node - 1) : 0));
   }
   if (layout_ == Layout::kPartition7) {
     // Feature f's 7 bits start at bit 7 f, from the low bit of each byte.
-    std::fill(out, bytes_.data() + bytes_.size(), 0);
+    std::fill(out, bytes_.get() + packed_size(), 0);
     for (std::size_t node = 0; node < node_count_; ++node)
       for (std::uint32_t index : features.features(node)) {
         const std::size_t bit = std::size_t{7} * index;
@@ -266,25 +291,39 @@ std::size_t PackedFeatureVector::packed_size() const noexcept {
 }
 
 void PackedFeatureVector::encode(std::uint8_t* out) const noexcept {
-  out[0] = static_cast<std::uint8_t>(layout_);
+  out[0] = static_cast<std::uint8_t>(static_cast<unsigned>(layout_) | (node_runs_ ? kNodeRuns : 0));
   store_le<std::uint32_t>(out + 1, node_bytes_);
-  if (!bytes_.empty()) std::memcpy(out + 5, bytes_.data(), bytes_.size());
+  if (packed_size() > 0) std::memcpy(out + 5, bytes_.get(), packed_size());
 }
 
-bool PackedFeatureVector::next_node(const std::uint8_t*& at, const std::uint8_t* end,
-                                    NodeId& id) noexcept {
-  std::uint64_t step = 0;
+bool PackedFeatureVector::read_leb128(const std::uint8_t*& at, const std::uint8_t* end,
+                                      std::uint64_t& value) noexcept {
+  value = 0;
   for (unsigned shift = 0; shift < 35; shift += 7) {
     if (at == end) return false;
     const std::uint8_t byte = *at++;
-    step |= std::uint64_t{byte & 0x7Fu} << shift;
-    if ((byte & 0x80) == 0) {
-      if (step > 0xFFFFFFFFu - id) return false;
-      id += static_cast<NodeId>(step);
-      return true;
-    }
+    value |= std::uint64_t{byte & 0x7Fu} << shift;
+    if ((byte & 0x80) == 0) return true;
   }
   return false;
+}
+
+template <class Visit>
+bool PackedFeatureVector::for_each_node(const Visit& visit) const {
+  const std::uint8_t* at = bytes_.get();
+  const std::uint8_t* const end = at + node_bytes_;
+  std::uint64_t id = 0;
+  for (std::uint32_t node = 0; node < node_count_;) {
+    std::uint64_t step, more = 0;
+    if (!read_leb128(at, end, step) || (node_runs_ && !read_leb128(at, end, more))) return false;
+    // Steps after the first are at least 1 (runs: from the previous run's end).
+    if (node > 0 && step == 0 && !node_runs_) return false;
+    id += step;
+    if (more >= node_count_ - node || id + more > 0xFFFFFFFFu) return false;
+    for (std::uint64_t i = 0; i <= more; ++i, ++node) visit(static_cast<NodeId>(id + i));
+    if (node_runs_) id += more + 1;
+  }
+  return at == end;
 }
 
 PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::size_t size,
@@ -295,9 +334,11 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
   PackedFeatureVector packed;
   packed.node_count_ = node_count;
   packed.feature_count_ = feature_count;
-  if (data[0] > static_cast<std::uint8_t>(Layout::kPartition7))
+  const unsigned layout = data[0] & ~kNodeRuns;
+  if (layout > static_cast<unsigned>(Layout::kPartition7))
     throw InvalidArgument("unknown layout " + std::to_string(data[0]));
-  packed.layout_ = static_cast<Layout>(data[0]);
+  packed.layout_ = static_cast<Layout>(layout);
+  packed.node_runs_ = (data[0] & kNodeRuns) != 0;
   packed.node_bytes_ = load_le<std::uint32_t>(data + 1);
   const bool partition = packed.partition();
   const std::uint32_t most_nodes = packed.layout_ == Layout::kPartition7   ? 0x80u
@@ -308,18 +349,14 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
     throw InvalidArgument(std::to_string(size - 5) + " bytes, not what its " +
                           std::to_string(node_count) + " nodes and " +
                           std::to_string(feature_count) + " features take");
-  packed.bytes_.assign(data + 5, data + size);
-  const std::size_t nodes_bytes = packed.node_bytes_;
-  const std::uint8_t* at = packed.bytes_.data();
-  const std::uint8_t* const nodes_end = at + nodes_bytes;
-  NodeId id = 0;
-  for (std::size_t node = 0; node < node_count; ++node) {
-    const NodeId previous = id;
-    if (!next_node(at, nodes_end, id)) throw InvalidArgument("node ids are cut short or too large");
-    if (node > 0 && id == previous) throw InvalidArgument("nodes are not strictly increasing");
-    if (id >= node_limit) throw InvalidArgument("node " + std::to_string(id) + " is out of range");
-  }
-  if (at != nodes_end) throw InvalidArgument("node ids are followed by stray bytes");
+  packed.bytes_.reset(new std::uint8_t[size - 5]);
+  if (size > 5) std::memcpy(packed.bytes_.get(), data + 5, size - 5);
+  NodeId largest = 0;
+  if (!packed.for_each_node([&](NodeId id) { largest = id; }))
+    throw InvalidArgument(
+        "node ids are cut short, too large, not strictly increasing or followed by stray bytes");
+  if (node_count > 0 && largest >= node_limit)
+    throw InvalidArgument("node " + std::to_string(largest) + " is out of range");
   if (partition) {
     // Every feature names a node, and every node has a feature.
     std::vector<std::uint8_t> used(node_count, 0);
@@ -333,13 +370,13 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
     // The bits after the last feature's are zero: one encoding per vector.
     const std::size_t used_bits = std::size_t{7} * feature_count;
     if (packed.layout_ == Layout::kPartition7 && used_bits % 8 != 0 &&
-        (packed.bytes_.back() >> (used_bits % 8)) != 0)
+        (packed.bytes_[size - 6] >> (used_bits % 8)) != 0)
       throw InvalidArgument("stray bits after the last feature");
   } else {
     const std::size_t width = packed.layout_ == Layout::kRows32 ? 4 : 2;
     std::uint32_t previous = 0;
     for (std::size_t node = 0; node < node_count; ++node) {
-      const std::uint32_t end = packed.value(nodes_bytes + node * width, width);
+      const std::uint32_t end = packed.value(packed.node_bytes_ + node * width, width);
       if (end <= previous) throw InvalidArgument("a node has no features");
       previous = end;
     }
@@ -349,14 +386,10 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
 }
 
 FeatureVector PackedFeatureVector::unpack() const {
-  std::vector<NodeId> nodes(node_count_);
+  std::vector<NodeId> nodes;
+  nodes.reserve(node_count_);
+  for_each_node([&](NodeId id) { nodes.push_back(id); });
   const std::size_t nodes_bytes = node_bytes_;
-  const std::uint8_t* step = bytes_.data();
-  NodeId id = 0;
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    next_node(step, bytes_.data() + nodes_bytes, id);
-    nodes[node] = id;
-  }
   std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
   std::vector<std::uint32_t> indices(feature_count_);
   if (partition()) {

@@ -221,11 +221,12 @@ class PackedFeatureVector {
   FeatureVector unpack() const;
   std::uint32_t node_count() const noexcept { return node_count_; }
   std::uint32_t feature_count() const noexcept { return feature_count_; }
-  std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
+  std::size_t memory_usage() const noexcept { return packed_size(); }
 
-  // The form a .bbdb (versions 2 and 3) stores: the layout (u8), the bytes of the
-  // node ids (u32), then the packed bytes, little-endian.
-  std::size_t encoded_size() const noexcept { return 5 + bytes_.size(); }
+  // The form a .bbdb (versions 2 and 3) stores: the layout (u8, with
+  // kNodeRuns when the node ids are runs), the bytes of the node ids (u32),
+  // then the packed bytes, little-endian.
+  std::size_t encoded_size() const noexcept { return 5 + packed_size(); }
   void encode(std::uint8_t* out) const noexcept;
   // The inverse, for `node_count` nodes below `node_limit` and
   // `feature_count` features; throws InvalidArgument unless the bytes are
@@ -247,14 +248,14 @@ class PackedFeatureVector {
       const std::size_t bit = 7 * f;
       const std::size_t byte = base + bit / 8;
       std::uint32_t v = bytes_[byte];
-      if (byte + 1 < bytes_.size()) v |= std::uint32_t{bytes_[byte + 1]} << 8;
+      if (byte + 1 < packed_size()) v |= std::uint32_t{bytes_[byte + 1]} << 8;
       return (v >> (bit % 8)) & 0x7F;
     }
     return layout_ == Layout::kPartition8 ? value(base + f, 1) : value(base + 2 * f, 2);
   }
   // The little-endian value of `width` (1, 2 or 4) bytes at `byte_offset`.
   std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept {
-    const std::uint8_t* at = bytes_.data() + byte_offset;
+    const std::uint8_t* at = bytes_.get() + byte_offset;
     if (width == 1) return *at;
     if (width == 2) {
       std::uint16_t v;
@@ -265,17 +266,25 @@ class PackedFeatureVector {
     std::memcpy(&v, at, 4);
     return v;
   }
-  // Adds the step at `at` (LEB128, before `end`) to `id`, and moves past it;
-  // false if it is cut short or makes `id` exceed 32 bits.
-  static bool next_node(const std::uint8_t*& at, const std::uint8_t* end, NodeId& id) noexcept;
+  static constexpr unsigned kNodeRuns = 0x80;  // in the stored layout byte
+  // The LEB128 value at `at` (before `end`, at most 5 bytes), moving past it;
+  // false if it is cut short or longer.
+  static bool read_leb128(const std::uint8_t*& at, const std::uint8_t* end,
+                          std::uint64_t& value) noexcept;
+  // Calls visit(id) for the node ids in order; false unless the node bytes
+  // are exactly node_count_ strictly increasing 32-bit ids.
+  template <class Visit>
+  bool for_each_node(const Visit& visit) const;
   // The packed size for the layout and widths, in bytes.
   std::size_t packed_size() const noexcept;
 
-  std::vector<std::uint8_t> bytes_;
+  // packed_size() bytes: 24 bytes per entry in all, the vector's own.
+  std::unique_ptr<std::uint8_t[]> bytes_;
   std::uint32_t node_count_ = 0;
   std::uint32_t feature_count_ = 0;
-  Layout layout_ = Layout::kPartition8;
   std::uint32_t node_bytes_ = 0;  // of the node ids, at the start of bytes_
+  Layout layout_ = Layout::kPartition8;
+  bool node_runs_ = false;
 };
 
 }  // namespace binbow::detail
