@@ -321,17 +321,22 @@ inline std::uint8_t* put_posting(std::uint8_t* out, std::uint32_t gap, float wei
   return out + kWeightBytes;
 }
 // Reads the gap of a posting written by put_posting; returns its weight's
-// first byte. Branch-free (rows mix 1- and 2-byte gaps unpredictably): the
-// gap's at most 3 bytes are read at once, which the weight after them keeps
-// within the posting.
+// first byte. Common rows have 1-byte gaps: a predicted branch lets the next
+// postings be read ahead, where a branch-free decode would wait for each
+// gap's load before the next.
 inline const std::uint8_t* read_gap(const std::uint8_t* at, std::uint32_t& gap) noexcept {
-  std::uint32_t v;
-  std::memcpy(&v, at, 4);  // little-endian
-  const std::uint32_t second = (v >> 7) & 1;
-  const std::uint32_t third = second & (v >> 15);
-  gap =
-      (v & 0x7F) | ((v >> 1) & (0x3F80u & (0u - second))) | ((v >> 2) & (0x1FC000u & (0u - third)));
-  return at + 1 + second + third;
+  const std::uint32_t b0 = at[0];
+  if (__builtin_expect(b0 < 0x80, 1)) {
+    gap = b0;
+    return at + 1;
+  }
+  const std::uint32_t b1 = at[1];
+  if (b1 < 0x80) {
+    gap = (b0 & 0x7F) | b1 << 7;
+    return at + 2;
+  }
+  gap = (b0 & 0x7F) | (b1 & 0x7F) << 7 | std::uint32_t{at[2]} << 14;
+  return at + 3;
 }
 inline float read_weight(const std::uint8_t* at) noexcept {
   float weight;
