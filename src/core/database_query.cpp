@@ -119,6 +119,8 @@ struct MinimumTerm {
 // ahead are prefetched so that their cache misses overlap.
 constexpr std::size_t kPrefetchAhead = 8;
 
+constexpr std::size_t kDecodeBatch = 64;
+
 // Entries are increasing within a row, so `last_entry` cuts it short.
 template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
@@ -138,24 +140,27 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
     const std::uint8_t* at = bytes + offsets[row];
     const std::uint8_t* const end = bytes + offsets[row + 1];
     const Term term{query[q].value};
+    // A batch of postings is decoded, then scored: each gap's decoding waits
+    // for the previous one, and kept apart from the scoring it does not hold
+    // back the overlapping cache misses of the sums.
     std::uint32_t entry = detail::kRowStart;
-    if (!cut) {
-      while (at != end) {
+    while (at != end) {
+      std::uint32_t batch_entries[kDecodeBatch];
+      float batch_weights[kDecodeBatch];
+      std::size_t count = 0;
+      for (; at != end && count < kDecodeBatch; ++count) {
         std::uint32_t gap;
         at = detail::read_gap(at, gap);
         entry += gap + 1;
-        scores.add(entry, term(detail::read_weight(at)));
+        if (cut && entry > last) {
+          at = end;
+          break;
+        }
+        batch_entries[count] = entry;
+        batch_weights[count] = detail::read_weight(at);
         at += detail::kWeightBytes;
       }
-      continue;
-    }
-    while (at != end) {
-      std::uint32_t gap;
-      at = detail::read_gap(at, gap);
-      entry += gap + 1;
-      if (entry > last) break;
-      scores.add(entry, term(detail::read_weight(at)));
-      at += detail::kWeightBytes;
+      for (std::size_t i = 0; i < count; ++i) scores.add(batch_entries[i], term(batch_weights[i]));
     }
   }
 }
