@@ -884,3 +884,37 @@ TEST(Database, MemoryUsageGrowsWithEntries) {
 
 }  // namespace
 }  // namespace binbow
+
+namespace binbow {
+namespace {
+
+// 1000 features under 100 nodes in 10 runs of 10 siblings (a direct index 4
+// levels up a k=10 L=6 tree): node positions take 7 bits, node ids a few
+// bytes per run; the packed vector gives back the same FeatureVector.
+TEST(PackedFeatureVector, SevenBitPositionsAndRunsOfSiblings) {
+  std::vector<NodeId> assignment;
+  std::mt19937_64 rng(4);
+  for (int f = 0; f < 1000; ++f) {
+    const auto node = static_cast<NodeId>(f % 100);
+    assignment.push_back(11 + (node / 10) * 11111 + node % 10);
+  }
+  std::shuffle(assignment.begin(), assignment.end(), rng);
+  const FeatureVector features =
+      FeatureVector::from_assignment(assignment.data(), assignment.size());
+  ASSERT_EQ(features.size(), 100u);
+  const detail::PackedFeatureVector packed(features);
+  EXPECT_EQ(packed.unpack(), features);
+  EXPECT_LE(packed.memory_usage(), 875u + 10 * 4);
+  // Decoding its stored form gives the same vector; a cut form is refused.
+  std::vector<std::uint8_t> stored(packed.encoded_size());
+  packed.encode(stored.data());
+  EXPECT_EQ(detail::PackedFeatureVector::decode(stored.data(), stored.size(), 100, 1000, 1u << 20)
+                .unpack(),
+            features);
+  EXPECT_THROW(
+      detail::PackedFeatureVector::decode(stored.data(), stored.size() - 1, 100, 1000, 1u << 20),
+      InvalidArgument);
+}
+
+}  // namespace
+}  // namespace binbow
