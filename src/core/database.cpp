@@ -651,9 +651,9 @@ void Database::Impl::merge_segments_if_many() {
     if (level == detail::kLoadedLevel) return;
     for (std::size_t i = n - detail::kSegmentFanIn; i < n; ++i)
       if (segments[i]->level != level) return;
-    // A merged segment spans at most kSegmentSpan ids, so that its entries
-    // stay 16-bit (6 bytes per posting, not 8): the oldest of these segments
-    // that fit together merge, if at least two do.
+    // A merged segment spans at most kSegmentSpan ids, so that a query's
+    // sums for it stay in cache: the oldest of these segments that fit
+    // together merge, if at least two do.
     const std::size_t begin = n - detail::kSegmentFanIn;
     std::size_t end = begin + 1;
     while (end < n &&

@@ -434,9 +434,9 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
 
-  // The postings go to one segment per kSegmentSpan ids (16-bit entries, as
-  // in a database that was filled by add()): a first pass checks them and
-  // counts each segment's rows, a second puts them in place. Within a list
+  // The postings go to one segment per kSegmentSpan ids (as in a database
+  // that was filled by add()): a first pass checks them and sizes each
+  // segment's rows, a second encodes them in place. Within a list
   // the entries increase, so each segment's part of a row is one run of it.
   // The sections are released as they are read, a part at a time.
   const auto for_each_list = [&](const auto& visit) {
