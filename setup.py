@@ -80,6 +80,12 @@ class BuildWithCMake(build_ext):
         packaged_media = target.parent / "lib" / "binbow" / "binbow_media.so"
         packaged_media.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(media, packaged_media)
+        # The CLI's commands that need OpenCV, a module beside it, loaded by
+        # bin/binbow from <package>/lib/binbow as from an installed prefix.
+        commands = build_dir / "lib" / "binbow" / "binbow_cli_vision.so"
+        if not commands.is_file():
+            sys.exit(f"setup.py: CMake built no CLI commands module at {commands}")
+        shutil.copyfile(commands, packaged_media.parent / "binbow_cli_vision.so")
 
 
 class BuildWithData(build_py):

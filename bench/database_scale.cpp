@@ -16,7 +16,8 @@
 // counter add_us), BM_Query/N answers the queries (top 10: exact on one
 // thread and on every core, and fast; see there), BM_QueryBounds/200000
 // measures what pruned or stop-listed
-// queries would read (see there), and BM_SaveLoad saves the largest database to a .bbdb file
+// queries would read (see there), BM_Save/N measures full and incremental
+// saves, the disk's write rate and opening (see there), and BM_SaveLoad saves the largest database to a .bbdb file
 // (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it
 // back and checks that the loaded database answers every query identically,
 // with the peak resident memory of each step over the database's memory.
@@ -247,6 +248,33 @@ void memory_counters(benchmark::State& state, const Scale& s) {
       static_cast<double>(s.words_total) / static_cast<double>(s.database->next_entry_id());
 }
 
+// Adds entries until the database's next id is `target`; the time spent in
+// add() alone is added to the totals.
+void add_entries(Scale& s, std::size_t target, double& add_seconds, double& add_cpu_seconds) {
+  DescriptorMatrix image;
+  BowVector bow;
+  FeatureVector features;
+  for (std::size_t entry = s.database->next_entry_id(); entry < target; ++entry) {
+    image = s.photographs[entry % s.photographs.size()];
+    flip_bits(image, entry);
+    if (s.direct_index) {
+      s.vocabulary.transform(image, bow, features, kLevelsUp);
+    } else {
+      s.vocabulary.transform(image, bow);
+    }
+    s.words_total += bow.size();
+    for (const BowEntry& word : bow) {
+      ++s.entries_with_word[word.word];
+      s.largest_weight[word.word] = std::max(s.largest_weight[word.word], word.value);
+    }
+    const Clock::time_point start = Clock::now();
+    const double cpu_start = thread_seconds();
+    s.database->add(bow, features);
+    add_cpu_seconds += thread_seconds() - cpu_start;
+    add_seconds += seconds_since(start);
+  }
+}
+
 void BM_Fill(benchmark::State& state) {
   Scale* s = scale_or_skip(state);
   if (s == nullptr) return;
@@ -257,29 +285,8 @@ void BM_Fill(benchmark::State& state) {
   }
   for (auto _ : state) {
     const std::size_t first = s->database->next_entry_id();
-    DescriptorMatrix image;
-    BowVector bow;
-    FeatureVector features;
     double add_seconds = 0, add_cpu_seconds = 0;
-    for (std::size_t entry = first; entry < target; ++entry) {
-      image = s->photographs[entry % s->photographs.size()];
-      flip_bits(image, entry);
-      if (s->direct_index) {
-        s->vocabulary.transform(image, bow, features, kLevelsUp);
-      } else {
-        s->vocabulary.transform(image, bow);
-      }
-      s->words_total += bow.size();
-      for (const BowEntry& word : bow) {
-        ++s->entries_with_word[word.word];
-        s->largest_weight[word.word] = std::max(s->largest_weight[word.word], word.value);
-      }
-      const Clock::time_point start = Clock::now();
-      const double cpu_start = thread_seconds();
-      s->database->add(bow, features);
-      add_cpu_seconds += thread_seconds() - cpu_start;
-      add_seconds += seconds_since(start);
-    }
+    add_entries(*s, target, add_seconds, add_cpu_seconds);
     state.SetIterationTime(add_seconds);
     state.counters["add_us"] = add_seconds * 1e6 / static_cast<double>(target - first);
     state.counters["add_us_cpu"] = add_cpu_seconds * 1e6 / static_cast<double>(target - first);
@@ -454,14 +461,119 @@ void BM_QueryBounds(benchmark::State& state) {
   label(state, *s);
 }
 
+std::size_t file_size(const std::string& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) return 0;
+  std::fseek(file, 0, SEEK_END);
+  const long size = std::ftell(file);
+  std::fclose(file);
+  return size < 0 ? 0 : static_cast<std::size_t>(size);
+}
+
+// Seconds to write `bytes` to a new file at `path` in 1 MiB writes, then
+// fdatasync it: the disk's sequential write rate as a save meets it.
+double write_scratch_file(const std::string& path, std::size_t bytes) {
+  std::vector<char> block(std::size_t{1} << 20);
+  std::mt19937_64 rng(1);
+  for (char& c : block) c = static_cast<char>(rng());
+  const Clock::time_point start = Clock::now();
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) return 0;
+  for (std::size_t done = 0; done < bytes; done += block.size())
+    std::fwrite(block.data(), 1, std::min(block.size(), bytes - done), file);
+  std::fflush(file);
+  fdatasync(fileno(file));
+  std::fclose(file);
+  const double seconds = seconds_since(start);
+  std::remove(path.c_str());
+  return seconds;
+}
+
+// Saving and opening at each size, in BINBOW_BENCH_DIR:
+// - save_full_s: a full save (Database::save, fsync'ed), and its rate
+//   save_full_mb_s; disk_write_mb_s: the rate of writing a scratch file of
+//   about the same size in the same folder, then fdatasync, measured right
+//   before and right after the save (their mean; save_full/disk is the
+//   save's rate over it);
+// - save_incremental_s: Database::save_incremental after adding 1% more
+//   entries (the journal's size in journal_MB);
+// - open_to_first_query_s: from Database::load (base and journal, warm page
+//   cache) to the first query's answer; the loaded database replaces the one
+//   in memory and must answer every query as it did.
+void BM_Save(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s == nullptr) return;
+  if (s->database->size() != static_cast<std::size_t>(state.range(0))) {
+    state.SkipWithError("run after BM_Fill of the same size");
+    return;
+  }
+  const std::string path = s->folder + "/binbow-bench-save-" + std::to_string(getpid()) + ".bbdb";
+  for (auto _ : state) {
+    // The disk's rate before and after the save (other jobs share it): their mean.
+    const std::size_t expected_bytes = static_cast<std::size_t>(s->database->memory_usage() * 0.98);
+    const double disk_before = write_scratch_file(path + ".scratch", expected_bytes);
+    Clock::time_point start = Clock::now();
+    const double cpu_start = thread_seconds();
+    s->database->save(path, false);
+    const double full_seconds = seconds_since(start);
+    const double full_cpu_seconds = thread_seconds() - cpu_start;
+    const std::size_t base_bytes = file_size(path);
+    const double disk_after = write_scratch_file(path + ".scratch", base_bytes);
+    const double disk_mb_s = (static_cast<double>(expected_bytes) / disk_before +
+                              static_cast<double>(base_bytes) / disk_after) /
+                             2e6;
+
+    const std::size_t target = s->database->next_entry_id() + s->database->size() / 100;
+    double add_seconds = 0, add_cpu_seconds = 0;
+    add_entries(*s, target, add_seconds, add_cpu_seconds);
+    start = Clock::now();
+    s->database->save_incremental(path, false);
+    const double incremental_seconds = seconds_since(start);
+    const std::size_t journal_bytes = file_size(Database::journal_path(path));
+
+    std::vector<std::vector<QueryResult>> expected;
+    for (const BowVector& query : s->queries)
+      expected.push_back(s->database->query(query, kMaxResults, {QueryMode::kExact, 1}));
+    s->database.reset();
+    malloc_trim(0);
+    start = Clock::now();
+    s->database = std::make_unique<Database>(Database::load(path, s->vocabulary));
+    const auto first = s->database->query(s->queries.front(), kMaxResults, {QueryMode::kExact, 1});
+    const double open_seconds = seconds_since(start);
+    std::remove(path.c_str());
+    std::remove(Database::journal_path(path).c_str());
+    for (std::size_t q = 0; q < s->queries.size(); ++q)
+      if (s->database->query(s->queries[q], kMaxResults, {QueryMode::kExact, 1}) != expected[q]) {
+        state.SkipWithError("the database loaded from base and journal answers differently");
+        return;
+      }
+
+    const double mb = static_cast<double>(base_bytes) / 1e6;
+    state.SetIterationTime(full_seconds);
+    state.counters["save_full_s"] = full_seconds;
+    state.counters["save_full_s_cpu"] = full_cpu_seconds;
+    state.counters["save_full_mb_s"] = mb / full_seconds;
+    state.counters["disk_write_mb_s"] = disk_mb_s;
+    state.counters["save_full/disk"] = mb / full_seconds / disk_mb_s;
+    state.counters["save_incremental_s"] = incremental_seconds;
+    state.counters["journal_MB"] = static_cast<double>(journal_bytes) / 1e6;
+    state.counters["file_MB"] = mb;
+    state.counters["open_to_first_query_s"] = open_seconds;
+  }
+  label(state, *s);
+}
+
 // Registered size by size: each size's queries run before the database grows on.
 BENCHMARK(BM_Fill)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Save)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(200000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(200000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_QueryBounds)->Arg(200000)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_Save)->Arg(200000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Save)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
 void BM_SaveLoad(benchmark::State& state) {
   Scale* s = scale_or_skip(state);

@@ -16,8 +16,9 @@ install(TARGETS binbow_dbow2 EXPORT binbowDbow2Targets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS binbow RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-# The image/video module, loaded by binbow::vision on first use (src/media/).
-install(TARGETS binbow_media LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/binbow)
+# The image/video module, loaded by binbow::vision on first use (src/media/),
+# and the CLI's commands that need OpenCV (apps/binbow/vision_commands.h).
+install(TARGETS binbow_media binbow_cli_vision LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/binbow)
 install(DIRECTORY include/binbow DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT binbowCoreTargets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)

@@ -19,6 +19,7 @@
 #include "binbow/online_vocabulary.h"
 #include "binbow/vocabulary.h"
 #include "core/crc32c.h"
+#include "core/database_journal.h"
 #include "core/little_endian.h"
 #include "formats/codecs.h"
 #include "formats/container.h"
@@ -169,6 +170,73 @@ inline void load_bbdb(const std::uint8_t* data, std::size_t size) {
   check_accepted_database(Database::deserialize(data, size, "fuzz"));
 }
 
+// Rewrites the header CRC of a database journal and every record's CRCs,
+// as far as the records' lengths lead; with `base`, the header names it.
+inline void fix_journal_checksums(std::vector<std::uint8_t>& bytes,
+                                  const detail::BaseId* base = nullptr) {
+  if (bytes.size() < detail::kJournalHeaderSize) return;
+  if (base != nullptr) {
+    detail::store_le<std::uint64_t>(bytes.data() + 16, base->size);
+    detail::store_le<std::uint32_t>(bytes.data() + 24, base->checksum);
+  }
+  detail::store_le<std::uint32_t>(bytes.data() + 28, detail::crc32c(bytes.data(), 28));
+  std::size_t at = detail::kJournalHeaderSize;
+  while (bytes.size() - at >= detail::kJournalRecordHeaderSize) {
+    std::uint8_t* head = bytes.data() + at;
+    const auto length = detail::load_le<std::uint64_t>(head);
+    const std::size_t body = at + detail::kJournalRecordHeaderSize;
+    if (length > bytes.size() - body) return;
+    detail::store_le<std::uint32_t>(
+        head + 8, detail::crc32c(bytes.data() + body, static_cast<std::size_t>(length)));
+    detail::store_le<std::uint32_t>(head + 12, detail::crc32c(head, 12));
+    at = body + static_cast<std::size_t>(length);
+  }
+}
+
+// The base every fuzzed journal extends: a small database over word ids,
+// with a direct index, labels and a removed entry.
+inline const std::vector<std::uint8_t>& journal_fuzz_base() {
+  static const std::vector<std::uint8_t> bytes = [] {
+    Database database = Database::over_word_ids(Scoring::kL1, {true, 0});
+    for (WordId i = 0; i < 6; ++i) {
+      const std::vector<BowEntry> entries{{i, 0.25f}, {i + 3, 0.5f}, {7 * i + 10, 0.25f}};
+      std::vector<NodeId> nodes;
+      for (const BowEntry& e : entries) nodes.push_back(e.word);
+      database.add(BowVector(entries), FeatureVector::from_assignment(nodes.data(), nodes.size()),
+                   i % 2 == 0 ? "image_" + std::to_string(i) : "");
+    }
+    database.remove(2);
+    return database.serialize();
+  }();
+  return bytes;
+}
+
+// A database journal replayed over journal_fuzz_base(): the input as is
+// (which must name that base), then with the base named and every CRC
+// recomputed, so that mutations reach the decoding of the changes. The
+// result is an accepted database.
+inline void load_bbdb_journal(const std::uint8_t* data, std::size_t size) {
+  const std::vector<std::uint8_t>& base = journal_fuzz_base();
+  detail::BaseId id;
+  if (!detail::base_id_of(base.data(), base.size(), id))
+    throw std::logic_error("the fuzz base is no sectioned file");
+  const auto replay = [&](const std::uint8_t* journal, std::size_t journal_size) {
+    Database database = Database::deserialize(base.data(), base.size(), "base");
+    const detail::JournalScan scan = detail::scan_journal(journal, journal_size, "fuzz");
+    if (scan.valid_end + scan.torn_bytes != journal_size)
+      throw std::logic_error("the scan lost bytes of the journal");
+    detail::replay_journal(database, scan, id, "fuzz", base.size() + journal_size);
+    check_accepted_database(database);
+  };
+  std::vector<std::uint8_t> fixed(data, data + size);
+  fix_journal_checksums(fixed, &id);
+  try {
+    replay(fixed.data(), fixed.size());
+  } catch (const FileError&) {
+  }
+  replay(data, size);
+}
+
 // An accepted online vocabulary survives a save/load round trip unchanged,
 // and keeps working: it transforms and adds an image.
 inline void check_accepted_online(OnlineVocabulary vocabulary) {
@@ -269,6 +337,7 @@ inline const Target kTargets[] = {
                        std::size_t n) { load_tree_format(VocabularyFormat::kVinsBinary, d, n); }},
     {"bbw", load_bbw},
     {"bbdb", load_bbdb},
+    {"bbdb_journal", load_bbdb_journal},
     {"bbov", load_bbov},
     {"gzip", load_gzip},
     {"tar", load_tar},

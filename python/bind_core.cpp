@@ -481,6 +481,17 @@ void bind_core(py::module_& m) {
           py::arg("path"), py::arg("include_vocabulary") = true,
           py::call_guard<py::gil_scoped_release>(),
           "Save as .bbdb; without the vocabulary, load it with Database.load(path, vocabulary).")
+      .def(
+          "save_incremental",
+          [](const Database& db, const Path& path, bool include_vocabulary) {
+            db.save_incremental(path.string(), include_vocabulary);
+          },
+          py::arg("path"), py::arg("include_vocabulary") = true,
+          py::call_guard<py::gil_scoped_release>(),
+          "Append the changes since the last save or load of path to its journal\n"
+          "(path + \".journal\"), flushed to disk; a full save when the database was\n"
+          "not last saved to or loaded from path, or the journal would pass a quarter\n"
+          "of the file. Copy or remove the journal together with the .bbdb file.")
       .def_static(
           "load",
           [](const Path& path, const std::optional<Vocabulary>& vocabulary) {

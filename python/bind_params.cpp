@@ -107,6 +107,9 @@ const std::vector<Field>& fields() {
                 "Candidates of image t are images j < t - dislocal (20 f), [0, 1e6]."),
       int_field("max_db_results", &P::max_db_results,
                 "Candidates taken from each database query (50 f), [1, 1e6]."),
+      bool_field("fast_queries", &P::fast_queries,
+                 "Query the database in fast mode (exact scores of the candidates that the\n"
+                 "query's rarest words find)."),
       int_field("max_intra_island_gap", &P::max_intra_island_gap,
                 "Entries closer than this join one island (3 f), [1, 1e6]."),
       int_field("min_matches_per_island", &P::min_matches_per_island,
@@ -170,6 +173,12 @@ const std::vector<Field>& fields() {
                 "match), [0, 10000] (0: off)."),
       int_field("corroboration_distance", &P::corroboration_distance,
                 "Frames from the loop before them that weak loops accept, [1, 1e6]."),
+      int_field("corroboration_horizon", &P::corroboration_horizon,
+                "Queries after the loop before them that weak loops at the revisit's pace "
+                "accept, [1, 1e6]."),
+      real_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance,
+                 "How far a weak loop may stray from the revisit's pace, as a fraction of the "
+                 "queries since the loop before it, [0, 1]."),
   };
   return table;
 }

@@ -9,11 +9,11 @@
 
 #include "binbow/error.h"
 #include "binbow/formats.h"
-#include "binbow/vision/features.h"
 #include "commands.h"
 #include "formats/loader.h"
 #include "output_options.h"
 #include "validators.h"
+#include "vision_commands.h"
 
 namespace binbow::cli {
 
@@ -71,7 +71,7 @@ void run_convert(const ConvertArguments& args) {
         trained_on.c_str());
 
   if (!args.descriptor.empty()) {
-    const std::size_t code_size = vision::make_extractor(args.descriptor)->code_size();
+    const std::size_t code_size = vision_commands().descriptor_code_size(args.descriptor);
     if (code_size != loaded.vocabulary.code_size())
       throw InvalidArgument("--descriptor " + args.descriptor + ": " + args.descriptor + " gives " +
                             std::to_string(code_size * 8) +

@@ -11,11 +11,10 @@
 
 #include "binbow/descriptors.h"
 #include "binbow/formats.h"
-#include "binbow/loop/loop_detector.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
-#include "default_vocabulary.h"
 #include "formats/loader.h"
+#include "vision_commands.h"
 
 namespace binbow::cli {
 
@@ -34,45 +33,9 @@ void print_vocabulary(const Vocabulary& v) {
   std::printf("checksum: %08x\n", v.checksum());
 }
 
-// Checks the whole state as `detect-loops --resume-state` does, by loading
-// it. A fixed vocabulary's state needs that vocabulary: --vocab, else the
-// bundled default of its descriptor when its checksum is the state's; without
-// one, says on stderr what was left unchecked.
-void verify_loop_state(const std::string& path, const loop::LoopDetectorFileInfo& info,
-                       const std::string& vocab_argument) {
-  if (info.online) {
-    loop::LoopDetector::load(path);
-    return;
-  }
-  Vocabulary vocabulary;
-  if (vocab_argument.empty()) {
-    if (has_default_vocabulary(info.descriptor)) {
-      const std::vector<std::string> candidates = default_vocabulary_candidates(info.descriptor);
-      for (const std::string& candidate : candidates) {
-        std::error_code error;
-        if (!std::filesystem::is_regular_file(candidate, error)) continue;
-        Vocabulary bundled = load_vocabulary(candidate);
-        if (bundled.checksum() == info.vocabulary_checksum) vocabulary = std::move(bundled);
-        break;
-      }
-    }
-    if (vocabulary.empty()) {
-      std::fprintf(stderr,
-                   "note: %s: the header, the parameters and the previous BoW vector are checked; "
-                   "the database, features and the rest need the state's vocabulary (checksum "
-                   "%08x): give --vocab to check them\n",
-                   path.c_str(), info.vocabulary_checksum);
-      return;
-    }
-  } else {
-    std::string descriptor = info.descriptor;
-    load_loop_vocabulary(vocab_argument, descriptor, vocabulary);
-  }
-  loop::LoopDetector::load(path, std::move(vocabulary));
-}
-
-// A loop detector state (.bbld): what to resume it with. False for any other file.
-bool print_loop_state_info(const std::string& path, const std::string& vocab_argument) {
+// A loop detector state (.bbld): what to resume it with. False for any other
+// file; only a state loads the module with the loop detector.
+bool print_if_loop_state(const std::string& path, const std::string& vocab_argument) {
   // Only a regular file is opened here: a FIFO would block (the readers
   // below refuse it with a clear error).
   std::error_code error;
@@ -80,20 +43,7 @@ bool print_loop_state_info(const std::string& path, const std::string& vocab_arg
   char magic[8] = {};
   std::ifstream in(path, std::ios::binary);
   if (!in.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWLD", 8) != 0) return false;
-  const loop::LoopDetectorFileInfo info = loop::LoopDetector::inspect(path);
-  verify_loop_state(path, info, vocab_argument);
-  std::printf("kind: loop detector state\n");
-  std::printf("version: %u\n", info.version);
-  std::printf("vocabulary: %s\n", info.online ? "online" : "fixed");
-  std::printf("descriptor: %s\n", info.descriptor.empty() ? "unknown" : info.descriptor.c_str());
-  std::printf("descriptor_bits: %zu\n", info.code_size * 8);
-  std::printf("frames: %zu\n", info.frames);
-  std::printf("forgotten_frames: %zu\n", info.forgotten_frames);
-  if (!info.online) {
-    std::printf("vocabulary_checksum: %08x\n", info.vocabulary_checksum);
-    std::printf("vocabulary_words: %zu\n", info.vocabulary_words);
-    std::printf("vocabulary_levels: %u\n", info.vocabulary_levels);
-  }
+  vision_commands().print_loop_state_info(path, vocab_argument);
   return true;
 }
 
@@ -131,7 +81,7 @@ void add_info_command(CLI::App& app) {
   cmd->callback([path, header_only, vocab, system] {
     if (*system) return print_system_info();
     if (path->empty()) throw CLI::RequiredError("FILE");
-    if (print_loop_state_info(*path, *vocab)) return;
+    if (print_if_loop_state(*path, *vocab)) return;
     if (print_database_info(*path, !*header_only)) return;
     // The format the loader settled on: inside a .gz it is known only after
     // decompressing (ORB-SLAM and VINS binary files are told apart by size).

@@ -6,6 +6,7 @@
 
 #include "binbow/error.h"
 #include "commands.h"
+#include "vision_commands.h"
 
 namespace {
 
@@ -17,6 +18,24 @@ std::string command_path(const CLI::App& app) {
     path += " " + command->get_name();
   }
   return path;
+}
+
+// Every command, in the order --help lists them; those of the vision module
+// only when the command line needs them (vision_commands.h), so that the
+// others start without OpenCV.
+void add_commands(CLI::App& app, int argc, const char* const* argv) {
+  using namespace binbow::cli;
+  const VisionCommands* vision = needs_vision_commands(argc, argv) ? &vision_commands() : nullptr;
+  add_info_command(app);
+  if (vision) vision->add_build_vocab_command(app);
+  if (vision) vision->add_features_command(app);
+  add_convert_command(app);
+  if (vision) vision->add_detect_loops_command(app);
+  add_evaluate_command(app);
+  add_db_command(app, vision ? vision->add_db_image_commands : nullptr);
+  if (vision) vision->add_bench_command(app);
+  if (vision) vision->add_demo_command(app);
+  if (vision) vision->add_make_route_command(app);
 }
 
 int fail(const std::string& message) {
@@ -33,16 +52,11 @@ int main(int argc, char** argv) {
   CLI::App app{"binbow: fast place recognition and loop closure with bags of binary words"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "binbow " BINBOW_VERSION);
-  binbow::cli::add_info_command(app);
-  binbow::cli::add_build_vocab_command(app);
-  binbow::cli::add_features_command(app);
-  binbow::cli::add_convert_command(app);
-  binbow::cli::add_detect_loops_command(app);
-  binbow::cli::add_evaluate_command(app);
-  binbow::cli::add_db_command(app);
-  binbow::cli::add_bench_command(app);
-  binbow::cli::add_demo_command(app);
-  binbow::cli::add_make_route_command(app);
+  try {
+    add_commands(app, argc, argv);
+  } catch (const binbow::Error& e) {
+    return fail(e.what());
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -81,15 +81,19 @@ enum class QueryMode {
   // Reads every posting of the query's words: the best entries, always.
   kExact,
   // Reads the postings of the query's rarest words only (an eighth of the
-  // exact query's postings, the words that tell images apart; small
-  // databases are read whole), keeps the 500 entries that score best on
-  // them as candidates, then computes the exact score of every candidate
-  // from a copy of its BoW vector. An entry can only be missing, never
-  // ranked by a wrong score. The first fast query makes that copy of every
-  // entry (8 bytes per word: ~7.5 KiB per ORB-1000 image, about doubling
-  // memory_usage()); add, remove and clear keep it up to date. Worth it
-  // when a query reads millions of postings (large databases of images
-  // that share most words; docs/benchmarks.md has the speed and agreement).
+  // exact query's postings, the words that tell images apart, heavy ones
+  // first), keeps the 1000 entries that score best on them as candidates,
+  // then computes the exact score of every candidate from a copy of its BoW
+  // vector. An entry can only be missing, never ranked by a wrong score. The
+  // first fast query makes that copy of every entry, compact: about 2 bytes
+  // per word (~2 KiB per ORB-1000 image, 30% more memory_usage()) for vectors
+  // that Vocabulary::transform made, whose weights it computes again from
+  // word counts bit for bit, 6 bytes per word for others (over word ids);
+  // add, remove and clear keep it up to date. Indexes where skipping words
+  // would save fewer postings than the candidates hold words (under ~1M
+  // postings per query) are read whole, as kExact does. Worth it when a query
+  // reads millions of postings (large databases of images that share most
+  // words; docs/benchmarks.md has the speed and agreement).
   kFast,
 };
 
@@ -113,6 +117,21 @@ struct DatabaseFileInfo {
   bool vocabulary_included = false;
   std::uint32_t vocabulary_checksum = 0;
   std::string vocabulary_description;  // Vocabulary::description() at save time
+};
+
+// What the journal beside a .bbdb file holds (Database::inspect_journal).
+struct DatabaseJournalInfo {
+  bool present = false;     // a journal file exists beside the database
+  bool superseded = false;  // a full save made it obsolete: load() ignores it
+  std::uint64_t bytes = 0;
+  std::size_t saves = 0;  // incremental saves it holds (its intact records)
+  std::size_t added = 0, removed = 0, labels_set = 0, cleared = 0;  // changes in them
+  // The database once the journal is replayed (the base's when none applies).
+  std::size_t entries = 0;
+  EntryId next_entry_id = 0;
+  // After the last intact record: an append that never completed (the
+  // process died during an incremental save), which load() drops.
+  std::uint64_t torn_bytes = 0;
 };
 
 class Database {
@@ -187,7 +206,8 @@ class Database {
   EntryId next_entry_id() const;  // the id the next add() returns
   void clear();                   // removes every entry; ids restart at 0
   // Bytes of heap memory held by the index (posting lists, direct index,
-  // per-entry state, labels), excluding the vocabulary.
+  // per-entry state, labels, changes kept for the next save_incremental),
+  // excluding the vocabulary.
   std::size_t memory_usage() const;
 
   const Vocabulary& vocabulary() const noexcept;  // empty over word ids
@@ -202,8 +222,33 @@ class Database {
   // save() writes format version 3 (the index as memory holds it: about 6 KB
   // per ORB-1000 image with its direct index); load() reads versions 1 to 3.
   void save(const std::string& path, bool include_vocabulary = true) const;
+  //
+  // save() is a full save: it also folds the journal of an earlier
+  // save_incremental() into the new file and removes it, so that a crash at
+  // any moment leaves the old or the new database (docs/database-files.md).
+  //
+  // An incremental save: appends what changed since the last save or load
+  // of `path` (entries added, removed, labels set, clear) to the journal
+  // beside it, journal_path(path), as one record flushed to disk
+  // (fdatasync): it costs what changed, not the database. It is a full save
+  // instead when the database was last saved to or loaded from another path
+  // (or never), when the file at `path` is not the one it was saved to or
+  // loaded from (another process replaced it), or when the journal would
+  // grow past a quarter of the file (at least 1 MiB), which keeps loading
+  // fast. A process killed during the append leaves the database as it was
+  // before it. Between saves, a database tied to a file keeps a copy of its
+  // changes (about their journal's size, counted in memory_usage(); past the
+  // journal's limit it drops them and the next save is full).
+  void save_incremental(const std::string& path, bool include_vocabulary = true) const;
+  // "<path>.journal": copy, move or remove it together with the .bbdb file.
+  static std::string journal_path(const std::string& path);
   // Throws FileError naming the file and the problem (damaged file, a file
   // without vocabulary, or a vocabulary whose checksum does not match).
+  // Loading replays the journal beside the file, if any: the database is
+  // then exactly what a full save would have written (entry ids, scores,
+  // labels). A journal that extends another save of the file is refused
+  // (FileError naming it), a damaged record in it too, except at its end,
+  // where it is an incremental save that never completed and is dropped.
   static Database load(const std::string& path);
   static Database load(const std::string& path, Vocabulary vocabulary);
   // The exact bytes save() writes, and their parsing; `name` is used in error
@@ -218,10 +263,16 @@ class Database {
   // otherwise; without it only the header and the description are read.
   // Throws FileError.
   static DatabaseFileInfo inspect(const std::string& path, bool verify = true);
+  // The journal beside the .bbdb file at `path`, its records checked.
+  // Throws FileError for a damaged journal or one of another save.
+  static DatabaseJournalInfo inspect_journal(const std::string& path);
 
  private:
   struct Impl;
   explicit Database(std::unique_ptr<Impl> impl);
+  // Applies the journal beside `path` to the database just read from the
+  // base `base`, and ties the database to that file.
+  void replay_journal(const std::string& path, const std::uint8_t* base, std::size_t base_size);
   std::unique_ptr<Impl> impl_;
 };
 

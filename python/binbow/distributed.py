@@ -84,9 +84,32 @@ class _Shard:
             if method == "save":
                 # Database.save writes a temporary file and renames it: atomic.
                 return self.database.save(arguments[0], include_vocabulary=False), None
+            if method == "save_incremental":
+                return self.database.save_incremental(arguments[0], include_vocabulary=False), None
             return getattr(self.database, method)(*arguments), None
         except Exception as error:
             return None, error
+
+
+_JOURNAL = ".journal"  # Database.journal_path: beside each shard's file
+
+
+def _shard_files(shards):
+    return [f"shard-{shard}.bbdb" for shard in range(shards)]
+
+
+def _cut_journal(journal, size, manifest):
+    """Cuts a shard's journal to the size the manifest committed: what follows
+    is a save that never finished writing the manifest."""
+    found = os.path.getsize(journal) if os.path.exists(journal) else 0
+    if found < size:
+        raise Error(f"ShardedDatabase.load: {journal} has {found} bytes, {manifest} "
+                    f"says {size}")
+    if found > size:
+        if size == 0:
+            os.unlink(journal)
+        else:
+            os.truncate(journal, size)
 
 
 def _shard_size(entries, shard, shards):
@@ -137,6 +160,7 @@ class ShardedDatabase:
         if not timeout > 0:
             raise ValueError(f"ShardedDatabase: timeout must be positive seconds, got {timeout!r}")
         self._client = client
+        self._saved_folder = None  # of the last save or load, which incremental saves extend
         self._vocabulary = vocabulary
         self._timeout = float(timeout)
         self._shard_count = shards
@@ -379,16 +403,48 @@ class ShardedDatabase:
         # Every shard must answer before any writes (binbow.Error otherwise).
         options = self._call_all("save", "options", [()] * self._shard_count)[0]
         os.makedirs(folder, exist_ok=True)
-        files = [f"shard-{shard}.bbdb" for shard in range(self._shard_count)]
+        files = _shard_files(self._shard_count)
         staged = [os.path.join(folder, f".{name}.saving") for name in files]
         try:
             self._call_all("save", "save", [(path,) for path in staged])
             for path, name in zip(staged, files):
                 os.replace(path, os.path.join(folder, name))
+                # The journal of the shard's previous file extends it no more.
+                journal = os.path.join(folder, name) + _JOURNAL
+                if os.path.lexists(journal):
+                    os.unlink(journal)
         finally:
             for path in staged:
                 if os.path.isfile(path):
                     os.unlink(path)
+        self._write_manifest(folder, files, options, [0] * self._shard_count)
+
+    def save_incremental(self, folder):
+        """Appends each shard's changes since the last save to its journal, then
+        rewrites manifest.json, which records each journal's size.
+
+        A save to another folder than this database's last save or load is a
+        full save(folder). Each shard appends with Database.save_incremental
+        (atomic per shard; a shard whose journal would pass a quarter of its
+        file, or that was last saved under the name save() stages, writes its
+        file whole instead). The manifest, written last, is what a load
+        follows: records appended after the manifest's sizes (a save that did
+        not finish) are cut off by load().
+        """
+        self._check_usable("save_incremental")
+        folder = os.path.abspath(os.fspath(folder))
+        if self._saved_folder != folder:
+            self.save(folder)
+            return
+        options = self._call_all("save_incremental", "options", [()] * self._shard_count)[0]
+        files = _shard_files(self._shard_count)
+        paths = [os.path.join(folder, name) for name in files]
+        self._call_all("save_incremental", "save_incremental", [(path,) for path in paths])
+        sizes = [os.path.getsize(path + _JOURNAL) if os.path.exists(path + _JOURNAL) else 0
+                 for path in paths]
+        self._write_manifest(folder, files, options, sizes)
+
+    def _write_manifest(self, folder, files, options, journal_bytes):
         manifest = {
             "format": _FORMAT,
             "version": _FORMAT_VERSION,
@@ -398,6 +454,7 @@ class ShardedDatabase:
             "vocabulary_checksum": self._vocabulary.checksum,
             "database_options": options,
             "files": files,
+            "journal_bytes": journal_bytes,
         }
         descriptor, temporary = tempfile.mkstemp(prefix=".manifest-", dir=folder)
         try:
@@ -407,6 +464,7 @@ class ShardedDatabase:
         except BaseException:
             os.unlink(temporary)
             raise
+        self._saved_folder = folder
 
     @classmethod
     def load(cls, client, folder, vocabulary, timeout=DEFAULT_TIMEOUT):
@@ -436,11 +494,18 @@ class ShardedDatabase:
                            for name in files)):
             raise Error(f"ShardedDatabase.load: {path} has an invalid shards, next_entry_id "
                         "or files field")
+        journal_bytes = manifest.get("journal_bytes", [0] * shards)
+        if (not isinstance(journal_bytes, list) or len(journal_bytes) != shards
+                or not all(isinstance(size, int) and size >= 0 for size in journal_bytes)):
+            raise Error(f"ShardedDatabase.load: {path} has an invalid journal_bytes field")
+        for name, size in zip(files, journal_bytes):
+            _cut_journal(os.path.join(folder, name) + _JOURNAL, size, path)
         if isinstance(vocabulary, Vocabulary) and checksum != vocabulary.checksum:
             raise Error(f"ShardedDatabase.load: {path} was saved with vocabulary checksum "
                         f"{checksum}, this vocabulary's is {vocabulary.checksum}")
         self = cls.__new__(cls)
         self._setup(client, vocabulary, shards, timeout)
+        self._saved_folder = folder
         self._entries = entries
         self._start([(vocabulary, None, os.path.join(folder, name)) for name in files])
         found = self._call_all("load", "next_entry_id", [()] * shards)

@@ -100,6 +100,25 @@ def test_save_and_load_with_and_without_vocabulary(tmp_path, database, vocabular
         database.save(tmp_path / "full.bbdb" / "db.bbdb")
 
 
+def test_incremental_saves_append_to_a_journal(tmp_path, database, vocabulary, images):
+    path = tmp_path / "db.bbdb"
+    database.save(path)
+    base = path.read_bytes()
+    added = database.add(images[0], "again")
+    database.remove(1)
+    database.save_incremental(path)
+    assert path.read_bytes() == base  # only the journal was written
+    journal = tmp_path / "db.bbdb.journal"
+    assert 0 < journal.stat().st_size < len(base)
+    query = vocabulary.transform(images[0])
+    loaded = binbow.Database.load(path)
+    assert loaded.query(query, 10) == database.query(query, 10)
+    assert loaded.label(added) == "again" and 1 not in loaded
+    database.save(path)  # a full save folds the journal into the file
+    assert not journal.exists()
+    assert binbow.Database.load(path).query(query, 10) == database.query(query, 10)
+
+
 def test_memory_usage_grows_with_entries(vocabulary, images):
     db = binbow.Database(vocabulary)
     before = db.memory_usage

@@ -121,6 +121,44 @@ def test_save_and_load_round_trip(client, vocabulary, tmp_path):
     assert loaded.add(images[1]) == 11
 
 
+def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp_path):
+    images = random_images(21, 12)
+    single, sharded = both(client, vocabulary, images[:6], 2, [f"l{i}" for i in range(6)])
+    module = sharded_module()
+    sharded.save_incremental(tmp_path)  # never saved: a full save
+    assert not list(tmp_path.glob("*.journal"))
+    for image in images[6:8]:
+        single.add(image)
+    sharded.add_many(images[6:8])
+    sharded.save_incremental(tmp_path)  # shards saved under staging names: whole files
+    for image in images[8:10]:
+        single.add(image)
+    sharded.add_many(images[8:10])
+    single.remove(3)
+    sharded.remove(3)
+    sharded.save_incremental(tmp_path)
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    journals = [tmp_path / f"shard-{shard}.bbdb.journal" for shard in range(2)]
+    assert manifest["journal_bytes"] == [path.stat().st_size for path in journals]
+    assert all(size > 0 for size in manifest["journal_bytes"])
+    queries = [vocabulary.transform(images[i]) for i in (0, 7, 9)]
+    loaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert_same_answers(single, loaded, queries)
+    # A save that stopped before its manifest: load cuts the journals back.
+    committed = (tmp_path / "manifest.json").read_bytes()
+    loaded.add_many(images[10:12])
+    loaded.save_incremental(tmp_path)
+    assert journals[0].stat().st_size > manifest["journal_bytes"][0]
+    (tmp_path / "manifest.json").write_bytes(committed)
+    again = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert [path.stat().st_size for path in journals] == manifest["journal_bytes"]
+    assert again.next_entry_id == 10 and len(again) == 9
+    assert_same_answers(single, again, queries)
+    # A full save removes the journals.
+    again.save(tmp_path)
+    assert not list(tmp_path.glob("*.journal"))
+
+
 def test_load_refuses_another_vocabulary_and_broken_manifests(client, vocabulary, tmp_path):
     sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=2)
     sharded.add_many(random_images(9, 3))

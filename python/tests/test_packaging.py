@@ -126,7 +126,8 @@ def test_pip_install_from_the_source_tree(tmp_path):
     assert result.returncode == 0, result.stdout[-4000:] + result.stderr[-4000:]
     package = target / "binbow"
     for name in ("__init__.py", "__init__.pyi", "py.typed", "__main__.py", "bin/binbow",
-                 "lib/binbow/binbow_media.so", "share/binbow/vocab/orb_default.bbw", "share/binbow/vocab/brief_default.bbw",
+                 "lib/binbow/binbow_media.so", "lib/binbow/binbow_cli_vision.so",
+                 "share/binbow/vocab/orb_default.bbw", "share/binbow/vocab/brief_default.bbw",
                  "share/binbow/vocab/PROVENANCE.md", "share/binbow/samples/rtabmap/LICENSE",
                  "share/binbow/samples/rtabmap/samples_GT.bmp"):
         assert (package / name).is_file(), f"pip installed no binbow/{name}"

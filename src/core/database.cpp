@@ -599,33 +599,74 @@ void Database::Impl::build_forward_index() const {
   if (forward_built.load(std::memory_order_acquire)) return;
   std::lock_guard<std::mutex> lock(forward_mutex);
   if (forward_built.load(std::memory_order_relaxed)) return;
-  detail::ForwardIndex built;
-  for (std::size_t entry = 0; entry < alive.size(); ++entry)
-    built.append_empty(alive[entry] != 0 ? word_counts[entry] : 0);
-  // Each entry's words come in increasing order: it lives in one segment or
-  // in the tail, visited word by word.
+  detail::ForwardIndex built(over_word_ids ? nullptr : &vocabulary, scoring);
+  built.resize(alive.size());
+  // The words of kChunk entries at a time, so that the BoW vectors in
+  // floats never exist all at once: each segment's rows are read chunk by
+  // chunk (entries are increasing within a row), the tail's lists likewise.
+  constexpr EntryId kChunk = 4096;
+  std::vector<std::vector<BowEntry>> words(kChunk);
+  const auto encode_chunk = [&](EntryId first, EntryId end) {
+    for (EntryId entry = first; entry < end; ++entry) {
+      std::vector<BowEntry>& entry_words = words[entry - first];
+      if (alive[entry] != 0)
+        built.assign(entry, Span<BowEntry>(entry_words.data(), entry_words.size()));
+      entry_words.clear();
+    }
+  };
+  std::vector<std::uint32_t> cursors, last_entries;
   for (const auto& segment : segments) {
-    for (std::size_t word = 0; word < word_capacity; ++word) {
-      const std::uint32_t row = row_order.row(static_cast<WordId>(word));
-      detail::for_each_posting(segment->row_begin(row), segment->row_end(row),
-                               [&](std::uint32_t relative, float weight) {
-                                 const EntryId entry = segment->first_entry + relative;
-                                 if (alive[entry] != 0)
-                                   built.add_word(entry, static_cast<WordId>(word), weight);
-                               });
+    const std::uint32_t* offsets = segment->offsets.data();
+    const std::uint8_t* bytes = segment->bytes.data();
+    cursors.assign(offsets, offsets + word_capacity);  // by row: the next posting's byte
+    last_entries.assign(word_capacity, detail::kRowStart);
+    for (EntryId first = segment->first_entry; first < segment->end_entry; first += kChunk) {
+      const EntryId end = std::min<EntryId>(first + kChunk, segment->end_entry);
+      const auto relative_end = static_cast<std::uint32_t>(end - segment->first_entry);
+      for (std::size_t word = 0; word < word_capacity; ++word) {
+        const std::uint32_t row = row_order.row(static_cast<WordId>(word));
+        std::uint32_t& i = cursors[row];
+        std::uint32_t& last = last_entries[row];
+        while (i < offsets[row + 1]) {
+          std::uint32_t gap;
+          const std::uint8_t* weight = detail::read_gap(bytes + i, gap);
+          const std::uint32_t relative = last + gap + 1;
+          if (relative >= relative_end) break;
+          words[segment->first_entry + relative - first].push_back(
+              {static_cast<WordId>(word), detail::read_weight(weight)});
+          last = relative;
+          i = static_cast<std::uint32_t>(weight + detail::kWeightBytes - bytes);
+        }
+      }
+      encode_chunk(first, end);
     }
   }
   const std::uint32_t high_mask = (1u << high_bits) - 1;
-  for (std::size_t word = 0; word < word_capacity && tail_postings > 0; ++word) {
-    const detail::TailList list = tail_lists[detail::group_of(static_cast<WordId>(word))];
-    if (list.size == 0) continue;
-    const detail::TailPosting* postings = arena.at(list.block);
-    const auto high = static_cast<std::uint32_t>(word >> detail::kGroupBits);
-    for (std::uint32_t i = 0; i < list.size; ++i) {
-      if ((postings[i].key & high_mask) != high) continue;
-      const EntryId entry = tail_first_entry + (postings[i].key >> high_bits);
-      if (alive[entry] != 0) built.add_word(entry, static_cast<WordId>(word), postings[i].weight);
+  const std::size_t groups = std::min(word_capacity, std::size_t{1} << detail::kGroupBits);
+  cursors.assign(groups, 0);
+  for (EntryId first = tail_first_entry; first < alive.size() && tail_postings > 0;
+       first += kChunk) {
+    const EntryId end = static_cast<EntryId>(std::min<std::size_t>(first + kChunk, alive.size()));
+    const std::uint64_t key_end = std::uint64_t{end - tail_first_entry} << high_bits;
+    for (std::size_t word = 0; word < word_capacity; ++word) {
+      const std::uint32_t group = detail::group_of(static_cast<WordId>(word));
+      const detail::TailList list = tail_lists[group];
+      if (list.size == 0) continue;
+      const detail::TailPosting* postings = arena.at(list.block);
+      const auto high = static_cast<std::uint32_t>(word >> detail::kGroupBits);
+      for (std::uint32_t i = cursors[group]; i < list.size && postings[i].key < key_end; ++i)
+        if ((postings[i].key & high_mask) == high)
+          words[tail_first_entry + (postings[i].key >> high_bits) - first].push_back(
+              {static_cast<WordId>(word), postings[i].weight});
     }
+    for (std::size_t group = 0; group < groups; ++group) {
+      const detail::TailList list = tail_lists[group];
+      if (list.size == 0) continue;
+      const detail::TailPosting* postings = arena.at(list.block);
+      std::uint32_t& i = cursors[group];
+      while (i < list.size && postings[i].key < key_end) ++i;
+    }
+    encode_chunk(first, end);
   }
   forward = std::move(built);
   forward_built.store(true, std::memory_order_release);
@@ -929,6 +970,8 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
+  impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
+                            label);
   if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
@@ -939,6 +982,8 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
     std::unique_lock lock(impl_->mutex);
     if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
     const EntryId entry = impl_->append(bow, features);
+    impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
+                              label);
     if (!label.empty()) impl_->store_label(entry, std::move(label));
     impl_->freeze_tail_if_full();
     return entry;
@@ -953,6 +998,8 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
   const EntryId entry = impl_->append(bow, features);
+  impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
+                            label);
   if (!label.empty()) impl_->store_label(entry, std::move(label));
   impl_->freeze_tail_if_full();
   return entry;
@@ -965,6 +1012,7 @@ void Database::remove(EntryId entry) {
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
   impl_->alive[entry] = 0;
   --impl_->live_entries;
+  impl_->journal.record_remove(entry);
   // An entry without postings has nothing to drop, and may lie where no
   // segment is left (one whose postings were all removed is dropped).
   const std::size_t segment =
@@ -1001,6 +1049,7 @@ void Database::set_label(EntryId entry, std::string label) {
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::set_label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
+  impl_->journal.record_label(entry, label);
   impl_->store_label(entry, std::move(label));
 }
 
@@ -1024,6 +1073,7 @@ EntryId Database::next_entry_id() const {
 
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
+  impl_->journal.record_clear();
   std::vector<std::unique_ptr<detail::Segment>>().swap(impl_->segments);
   std::fill(impl_->tail_lists.begin(), impl_->tail_lists.end(), detail::TailList{});
   std::fill(impl_->first_block_logs.begin(), impl_->first_block_logs.end(), detail::kFirstBlockLog);
@@ -1054,6 +1104,7 @@ std::size_t Database::memory_usage() const {
              segment->bytes.size();
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
+  bytes += impl.journal.memory_usage();
   for (const auto& features : impl.direct) bytes += features.memory_usage();
   for (const auto& label : impl.labels)
     if (label.capacity() > 15) bytes += label.capacity() + 1;  // beyond the small-string buffer

@@ -933,35 +933,47 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size,
 // Streams the file: the memory a save needs does not grow with the database.
 void Database::save(const std::string& path, bool include_vocabulary) const {
   std::shared_lock lock(impl_->mutex);
-  detail::write_file_atomically(path, [&](std::FILE* file) {
+  std::lock_guard<std::mutex> saving(impl_->journal.mutex);
+  impl_->journal.save_base(path, [&](std::FILE* file) {
     // Sections follow one another after the space kept for the header, which
-    // comes last: only the first section and the header need a seek.
-    std::size_t position = 0;
+    // comes last: only the first section and the header need a seek. The
+    // disk writes each 8 MiB while the next ones are produced.
+    constexpr std::size_t kWritebackBytes = std::size_t{8} << 20;
+    std::size_t position = 0, written_back = 0;
     detail::SectionedFileWriter out(
         kSectionCount, [&](std::size_t offset, const std::uint8_t* data, std::size_t size) {
           if (offset != position && std::fseek(file, static_cast<long>(offset), SEEK_SET) != 0)
             throw FileError(path, "cannot seek to write the header");
           detail::write_all(file, data, size, path);
           position = offset + size;
+          if (position >= written_back + kWritebackBytes) {
+            detail::start_writeback(file, written_back, position - written_back);
+            written_back = position;
+          }
         });
     write_database(*impl_, include_vocabulary, out);
   });
 }
 
 // load() reads a mapped file, dropping each large section's pages once read.
+// Then the journal beside it is replayed.
 Database Database::load(const std::string& path) {
   const detail::MappedFile file(path);
   const Layout layout(file.data(), file.size(), path, false);
-  return Database(read_self_contained_database<Impl>(
+  Database database(read_self_contained_database<Impl>(
       layout, path, [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }));
+  database.replay_journal(path, file.data(), file.size());
+  return database;
 }
 
 Database Database::load(const std::string& path, Vocabulary vocabulary) {
   const detail::MappedFile file(path);
   const Layout layout(file.data(), file.size(), path, false);
-  return Database(read_vocabulary_database<Impl>(
+  Database database(read_vocabulary_database<Impl>(
       layout, std::move(vocabulary),
       [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }));
+  database.replay_journal(path, file.data(), file.size());
+  return database;
 }
 
 DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {

@@ -19,6 +19,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/database_journal.h"
 #include "core/forward_index.h"
 #include "core/scoring.h"
 #include "writer_priority_mutex.h"
@@ -390,6 +391,11 @@ struct Segment {
   const std::uint8_t* row_end(std::uint32_t row) const noexcept {
     return bytes.data() + offsets[row + 1];
   }
+  std::size_t row_postings(std::uint32_t row) const noexcept {
+    std::size_t count = 0;
+    for_each_posting(row_begin(row), row_end(row), [&](std::uint32_t, float) { ++count; });
+    return count;
+  }
 };
 
 }  // namespace detail
@@ -477,6 +483,9 @@ struct Database::Impl {
   // Of every value added or loaded (removals do not narrow it): whether a
   // query's L1 terms may be summed as minimums.
   detail::ValueRange values;
+
+  // The file last saved to or loaded from, and the changes since.
+  mutable detail::DatabaseJournal journal;
 };
 
 }  // namespace binbow

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <mutex>
 #include <shared_mutex>
@@ -43,26 +44,40 @@ static_assert(sizeof(EntryScore) == 12);
 // instructions, from 1 bit per word id (68 KiB for 540k words, in cache).
 class QueryWordSet {
  public:
+  // Inline: without -mpopcnt, __builtin_popcountll is a library call.
+  static std::uint32_t popcount(std::uint64_t x) noexcept {
+#if defined(__POPCNT__)
+    return static_cast<std::uint32_t>(__builtin_popcountll(x));
+#else
+    x -= (x >> 1) & 0x5555555555555555ull;
+    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+    x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
+#endif
+  }
+
   void assign(Span<BowEntry> words) {
-    const std::size_t blocks = words.empty() ? 0 : words[words.size() - 1].word / 64 + 1;
+    const std::size_t blocks = words.empty() ? 1 : words[words.size() - 1].word / 64 + 1;
     bits_.assign(blocks, 0);
     ranks_.resize(blocks);
     for (const BowEntry& e : words) bits_[e.word / 64] |= std::uint64_t{1} << (e.word % 64);
     std::uint32_t rank = 0;
     for (std::size_t b = 0; b < blocks; ++b) {
       ranks_[b] = rank;
-      rank += static_cast<std::uint32_t>(__builtin_popcountll(bits_[b]));
+      rank += popcount(bits_[b]);
     }
     absent_ = rank;
   }
   // The word's position in the query, or the query's size if it lacks it.
-  std::uint32_t position(WordId word) const noexcept {
-    const std::size_t block = word / 64;
-    if (block >= bits_.size()) return absent_;
-    const std::uint64_t bits = bits_[block];
-    const std::uint64_t bit = std::uint64_t{1} << (word % 64);
-    if ((bits & bit) == 0) return absent_;
-    return ranks_[block] + static_cast<std::uint32_t>(__builtin_popcountll(bits & (bit - 1)));
+  // Without branches (a mask, not a conditional, which compilers turn into
+  // a branch): about half the words looked up are the query's.
+  [[gnu::always_inline]] std::uint32_t position(WordId word) const noexcept {
+    const std::size_t block = std::min<std::size_t>(word / 64, bits_.size() - 1);
+    const std::uint64_t bits = word / 64 < bits_.size() ? bits_[block] : 0;
+    const std::uint64_t below = (std::uint64_t{1} << (word % 64)) - 1;
+    const std::uint32_t rank = ranks_[block] + popcount(bits & below);
+    const auto present = static_cast<std::uint32_t>((bits >> (word % 64)) & 1);
+    return absent_ + ((rank - absent_) & (0u - present));
   }
 
  private:
@@ -77,7 +92,7 @@ struct WorkerScratch {
   std::vector<EntryScore> scores;
   std::vector<QueryResult> best;
   std::vector<QueryResult> candidates;
-  std::vector<std::uint16_t> relative;  // a segment's candidates, entry - first entry
+  std::vector<std::uint32_t> hits;  // ForwardIndex::for_each_shared's buffer
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -87,7 +102,7 @@ struct QueryScratch {
   std::vector<BowEntry> rare_words;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> word_postings;  // (postings, position)
   QueryWordSet query_words;
-  std::vector<float> query_values;
+  std::vector<double> query_weights;  // ForwardIndex::word_weight of each query word
 };
 
 thread_local QueryScratch scratch;
@@ -424,15 +439,29 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
   return merged(best);
 }
 
-// Fast mode: the share of the query's postings read to find candidates (in
-// its rarest words), and how many candidates are scored exactly.
+// Fast mode: the share of the query's postings read to find candidates, and
+// how many candidates are scored exactly. Chosen at 200,000 real images
+// (docs/benchmarks.md) on other noisy copies of the held-out photographs
+// than the benchmark reports: 1000 candidates keep the exact top 10 for 98%
+// of those queries (2000: 98.6%, 30% slower; a share of 1/16: 95%).
 constexpr double kFastPostingShare = 1.0 / 8;
-constexpr std::size_t kFastCandidates = 500;
-// Small indexes are read whole (the candidates are then the exact best).
+constexpr std::size_t kFastCandidates = 1000;
+// Small indexes are read whole (the candidates are then the exact best), and
+// so is any index where skipping the other words would save fewer postings
+// than kRescorePostings per word of the candidates (a query's size): a
+// candidate's word costs about 3 postings (7 µs per candidate of 1000 words,
+// 2.2 ns per posting at 200,000 images), so between ~1M and ~3M postings per
+// query fast mode can be slower than exact; 10,000 ORB-1000 images of the
+// benchmark (600k postings per query) are read whole.
 constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 18;
+constexpr std::uint64_t kRescorePostings = 1;
 
-// The query's rarest words, by postings in the visible segments, up to
-// kFastPostingShare of them or kFastMinPostings (at least one word), in word order.
+// The query's words that find candidates, in word order: those that can add
+// most to a score for the postings they cost (the query's value over the
+// word's postings in the visible segments: rare words, and among them the
+// heavy ones), up to kFastPostingShare of the query's postings or
+// kFastMinPostings (at least one word); all of them when fast mode would not
+// pay off.
 Span<BowEntry> rare_words(const QueryContext& c) {
   auto& postings = c.buffers.word_postings;
   postings.clear();
@@ -440,21 +469,30 @@ Span<BowEntry> rare_words(const QueryContext& c) {
   for (std::size_t q = 0; q < c.words.size(); ++q) {
     const std::uint32_t row = c.index.row_order.row(c.words[q].word);
     std::uint64_t count = 0;
-    for (std::size_t s = 0; s < c.visible_segments; ++s) {
-      const std::uint32_t* offsets = c.index.segments[s]->offsets.data();
-      count += offsets[row + 1] - offsets[row];
-    }
+    for (std::size_t s = 0; s < c.visible_segments; ++s)
+      count += c.index.segments[s]->row_postings(row);
     postings.emplace_back(count, static_cast<std::uint32_t>(q));
     total += count;
   }
-  std::sort(postings.begin(), postings.end());
+  // value_a / (postings_a + 1) > value_b / (postings_b + 1), without division;
+  // ties by position, so the choice is deterministic.
+  std::sort(postings.begin(), postings.end(), [&](const auto& a, const auto& b) {
+    const double ka =
+        static_cast<double>(c.words[a.second].value) * static_cast<double>(b.first + 1);
+    const double kb =
+        static_cast<double>(c.words[b.second].value) * static_cast<double>(a.first + 1);
+    if (ka != kb) return ka > kb;
+    return a.second < b.second;
+  });
   const auto budget = std::max<std::uint64_t>(
       static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare), kFastMinPostings);
   std::size_t taken = 0;
-  for (std::uint64_t read = 0; taken < postings.size(); ++taken) {
+  std::uint64_t read = 0;
+  for (; taken < postings.size(); ++taken) {
+    if (read + postings[taken].first > budget && taken > 0) break;
     read += postings[taken].first;
-    if (read > budget && taken > 0) break;
   }
+  if (total - read < kFastCandidates * kRescorePostings * c.words.size()) return c.words;
   std::sort(postings.begin(), postings.begin() + static_cast<std::ptrdiff_t>(taken),
             [](const auto& a, const auto& b) { return a.second < b.second; });
   auto& rare = c.buffers.rare_words;
@@ -465,25 +503,18 @@ Span<BowEntry> rare_words(const QueryContext& c) {
 
 // The exact score of an entry from its BoW vector: the same terms, summed in
 // the same order (increasing word id), as a pass over the index gives it.
-// `values` holds the query's values and a 0 after them, for absent words.
 template <class Term>
-void rescore(EntryId entry, Span<BowEntry> words, const QueryWordSet& query,
-             const std::vector<float>& values, BestResults& best) {
+void rescore(const QueryContext& c, EntryId entry, WorkerScratch& worker, BestResults& best) {
+  const QueryWordSet& query = c.buffers.query_words;
   double sum = 0;
   std::uint32_t shared = 0;
-  const auto absent = static_cast<std::uint32_t>(values.size() - 1);
-  for (const BowEntry& word : words) {
-    const std::uint32_t q = query.position(word.word);
-    if constexpr (std::is_same_v<Term, MinimumTerm>) {
-      // Branch-free: an absent word adds min(0, w) = +0.0, which leaves the
-      // sum as it is (a sum that starts at +0.0 is never -0.0).
-      sum += Term{values[q]}(word.value);
-      shared += q != absent ? 1 : 0;
-    } else if (q != absent) {
-      sum += Term{values[q]}(word.value);
-      ++shared;
-    }
-  }
+  c.index.forward->for_each_shared(
+      entry, [&](WordId word) { return query.position(word); },
+      static_cast<std::uint32_t>(c.words.size()), c.buffers.query_weights.data(), worker.hits,
+      [&](std::uint32_t q, float weight) {
+        sum += Term{c.words[q].value}(weight);
+        ++shared;
+      });
   best.offer_sum(entry, sum, shared);
 }
 
@@ -504,18 +535,16 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   // summed in the same order, as a pass over the whole index gives it.
   const std::vector<QueryResult> chosen = merged(candidates);
   c.buffers.query_words.assign(c.words);
-  std::vector<float>& values = c.buffers.query_values;
-  values.clear();
-  for (const BowEntry& e : c.words) values.push_back(e.value);
-  values.push_back(0.0f);
+  std::vector<double>& weights = c.buffers.query_weights;
+  weights.clear();
+  for (const BowEntry& e : c.words) weights.push_back(c.index.forward->word_weight(e.word));
   constexpr std::size_t kChunk = 64;
-  detail::parallel_for(c.workers, (chosen.size() + kChunk - 1) / kChunk,
-                       [&](std::size_t chunk, unsigned worker) {
-                         const std::size_t end = std::min(chosen.size(), (chunk + 1) * kChunk);
-                         for (std::size_t i = chunk * kChunk; i < end; ++i)
-                           rescore<Term>(chosen[i].entry, c.index.forward->words(chosen[i].entry),
-                                         c.buffers.query_words, values, best[worker]);
-                       });
+  detail::parallel_for(
+      c.workers, (chosen.size() + kChunk - 1) / kChunk, [&](std::size_t chunk, unsigned worker) {
+        const std::size_t end = std::min(chosen.size(), (chunk + 1) * kChunk);
+        for (std::size_t i = chunk * kChunk; i < end; ++i)
+          rescore<Term>(c, chosen[i].entry, c.buffers.workers[worker], best[worker]);
+      });
   return merged(best);
 }
 

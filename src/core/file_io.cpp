@@ -102,6 +102,12 @@ void write_all(std::FILE* file, const void* data, std::size_t size, const std::s
     throw FileError(path, "cannot write: " + errno_text());
 }
 
+void start_writeback(std::FILE* file, std::size_t offset, std::size_t size) noexcept {
+  if (std::fflush(file) != 0) return;  // write_all reports errors; this is advice
+  (void)::sync_file_range(::fileno(file), static_cast<off64_t>(offset), static_cast<off64_t>(size),
+                          SYNC_FILE_RANGE_WRITE);
+}
+
 ReplaceCalls& replace_calls() {
   static ReplaceCalls calls{::link, std::rename, ::unlink};
   return calls;

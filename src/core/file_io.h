@@ -130,4 +130,13 @@ ReplaceCalls& replace_calls();
 // Writes all bytes or throws FileError naming `path`.
 void write_all(std::FILE* file, const void* data, std::size_t size, const std::string& path);
 
+// Asks the kernel to start writing the file's bytes [offset, offset + size)
+// to disk now, without waiting for it (sync_file_range). Until a file's dirty
+// pages pass a share of memory the kernel keeps them, so a save that writes
+// a large file and then calls fsync would produce all its bytes first and
+// only then wait for the disk: calling this every few MiB overlaps the two,
+// and the fsync finds little left. Advice only: nothing happens where the
+// kernel cannot.
+void start_writeback(std::FILE* file, std::size_t offset, std::size_t size) noexcept;
+
 }  // namespace binbow::detail

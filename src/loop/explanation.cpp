@@ -91,11 +91,21 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
     const std::string weak = std::to_string(check.fit.inliers.size()) +
                              " inliers < min_uncorroborated_inliers " +
                              std::to_string(params.min_uncorroborated_inliers);
+    const LoopCorroboration& c = check.corroboration;
+    const std::string near =
+        "within corroboration_distance " + std::to_string(params.corroboration_distance);
+    const std::string pace = "at the revisit's pace: corroboration_horizon " +
+                             std::to_string(params.corroboration_horizon) +
+                             ", corroboration_pace_tolerance " +
+                             number(params.corroboration_pace_tolerance);
     std::string by;
-    if (check.corroboration.has_previous_loop)
-      by = "the latest loop was " + std::to_string(check.corroboration.previous_loop_query) +
-           " → " + std::to_string(check.corroboration.previous_loop_match) +
-           " (corroboration_distance " + std::to_string(params.corroboration_distance) + ")";
+    if (c.has_previous_loop)
+      by = "the latest loop was " + std::to_string(c.previous_loop_query) + " → " +
+           std::to_string(c.previous_loop_match) + " (" +
+           (c.previous_loop_at_pace                  ? pace
+            : c.corroborated && !c.neighbour_checked ? near
+                                                     : "neither " + near + " nor " + pace) +
+           ")";
     else
       by = "no earlier loop";
     if (check.corroboration.neighbour_checked)

@@ -5,8 +5,8 @@
 #include <string>
 
 #include "binbow/error.h"
+#include "core/regular_file.h"
 #include "loop/ground_truth_readers.h"
-#include "vision/regular_file.h"
 
 namespace binbow::loop {
 namespace {
@@ -56,7 +56,7 @@ GroundTruth GroundTruth::from_runs(std::size_t frames,
 GroundTruth GroundTruth::load(const std::string& path, const GroundTruthOptions& options) {
   const std::string name = lower(path);
   try {
-    vision::require_regular_file(path);
+    binbow::detail::require_regular_file(path);
     detail::LoadedGroundTruth loaded;
     bool image = false;
     for (const char* ext : {".bmp", ".png", ".pgm", ".pbm", ".tif", ".tiff", ".jpg", ".jpeg"})

@@ -14,6 +14,7 @@
 
 #include "binbow/error.h"
 #include "loop/ground_truth_readers.h"
+#include "loop/mat_zlib_stream.h"
 #include "vision/media_module.h"
 
 namespace binbow::loop::detail {
@@ -245,34 +246,18 @@ struct Level5Reader {
   // matio would read a damaged stream as zeros, or size arrays from it.
   void check_compressed(std::ifstream& in, std::uint64_t offset, std::uint64_t bytes,
                         VariableLayout& layout) const {
-    z_stream stream{};
-    if (inflateInit(&stream) != Z_OK) fail(offset, "cannot start zlib");
-    std::unique_ptr<z_stream, int (*)(z_streamp)> guard(&stream, inflateEnd);
-    std::vector<unsigned char> input(64 << 10), output(64 << 10);
+    in.seekg(static_cast<std::streamoff>(offset + 8));
+    MatZlibStream stream(in, path, offset, bytes, 64 << 10, 64 << 10);
     unsigned char head[512];
     std::size_t head_size = 0;
     ElementChain chain(path, offset);
     unsigned char tag[8];
     std::size_t tag_size = 0;
-    std::uint64_t inflated = 0, left = bytes;
-    int status = Z_OK;
-    in.seekg(static_cast<std::streamoff>(offset + 8));
-    while (status != Z_STREAM_END) {
-      if (stream.avail_in == 0) {
-        if (left == 0) fail(offset, "a compressed variable that ends before its zlib stream");
-        const auto chunk = static_cast<std::size_t>(std::min<std::uint64_t>(left, input.size()));
-        if (!in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(chunk)))
-          fail(offset, "a compressed variable cut short");
-        left -= chunk;
-        stream.next_in = input.data();
-        stream.avail_in = static_cast<uInt>(chunk);
-      }
-      stream.next_out = output.data();
-      stream.avail_out = static_cast<uInt>(output.size());
-      status = inflate(&stream, Z_NO_FLUSH);
-      if (status != Z_OK && status != Z_STREAM_END)
-        fail(offset, "a compressed variable whose zlib stream is damaged");
-      const std::size_t produced = output.size() - stream.avail_out;
+    while (!stream.ended()) {
+      stream.next();
+      const unsigned char* output = stream.piece();
+      const std::size_t produced = stream.piece_size();
+      const std::uint64_t inflated = stream.piece_start();
       for (std::size_t i = 0; i < produced && !chain.done();) {
         const std::uint64_t wanted = chain.next_tag() + tag_size;  // the next tag byte
         if (wanted >= inflated + produced) break;
@@ -287,15 +272,15 @@ struct Level5Reader {
         }
       }
       const std::size_t kept = std::min(produced, sizeof head - head_size);
-      std::memcpy(head + head_size, output.data(), kept);
+      std::memcpy(head + head_size, output, kept);
       head_size += kept;
-      inflated += produced;
-      if (inflated > kMaxMatInflatedBytes)
+      if (stream.inflated() > kMaxMatInflatedBytes)
         fail(offset, "a compressed variable expanding beyond " +
                          std::to_string(kMaxMatInflatedBytes) + " bytes");
     }
-    if (left != 0 || stream.avail_in != 0)
+    if (stream.trailing_bytes())
       fail(offset, "a compressed variable with bytes after its zlib stream");
+    const std::uint64_t inflated = stream.inflated();
     if (head_size < 8 || word(head) != kMiMatrix)
       fail(offset, "a compressed variable that holds no matrix");
     const std::uint64_t size = word(head + 4);
@@ -423,41 +408,23 @@ void read_compressed_dense(const std::string& path, const VariableLayout& layout
   };
   std::ifstream in(path, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(layout.offset + 8));
-  z_stream stream{};
-  if (inflateInit(&stream) != Z_OK) fail("cannot start zlib");
-  std::unique_ptr<z_stream, int (*)(z_streamp)> guard(&stream, inflateEnd);
-  std::vector<unsigned char> input(256 << 10), output(1 << 20);
+  MatZlibStream stream(in, path, layout.offset, layout.bytes, 256 << 10, 1 << 20);
   const std::uint64_t data_begin = layout.real_at;
   // Only the columns read: the stream is left once they are.
   const std::uint64_t data_end = data_begin + std::uint64_t{columns_read} * rows * number_bytes;
-  std::uint64_t inflated = 0, left = layout.bytes;
   unsigned char partial[8];
   std::size_t partial_size = 0;
   std::size_t row = 0, column = 0;
   constexpr std::size_t kNoStretch = SIZE_MAX;
   std::size_t stretch = kNoStretch;  // the first row of non-zero cells going on
-  int status = Z_OK;
-  while (status != Z_STREAM_END && inflated < data_end) {
-    if (stream.avail_in == 0) {
-      if (left == 0) fail("a compressed variable cut short");
-      const auto chunk = static_cast<std::size_t>(std::min<std::uint64_t>(left, input.size()));
-      if (!in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(chunk)))
-        fail("a compressed variable cut short");
-      left -= chunk;
-      stream.next_in = input.data();
-      stream.avail_in = static_cast<uInt>(chunk);
-    }
-    stream.next_out = output.data();
-    stream.avail_out = static_cast<uInt>(output.size());
-    status = inflate(&stream, Z_NO_FLUSH);
-    if (status != Z_OK && status != Z_STREAM_END)
-      fail("a compressed variable whose zlib stream is damaged");
-    const std::uint64_t produced = output.size() - stream.avail_out;
-    // The part of this output inside the cells.
+  while (!stream.ended() && stream.inflated() < data_end) {
+    stream.next();
+    const std::uint64_t inflated = stream.piece_start();
+    // The part of this piece inside the cells.
     const std::uint64_t from = std::max(inflated, data_begin);
-    const std::uint64_t to = std::min(inflated + produced, data_end);
+    const std::uint64_t to = std::min(stream.inflated(), data_end);
     for (std::uint64_t at = from; at < to;) {
-      const unsigned char* bytes = output.data() + (at - inflated);
+      const unsigned char* bytes = stream.piece() + (at - inflated);
       const unsigned char* cell_bytes = bytes;
       if (partial_size > 0 || to - at < number_bytes - partial_size) {
         const auto take =
@@ -485,9 +452,8 @@ void read_compressed_dense(const std::string& path, const VariableLayout& layout
         ++column;
       }
     }
-    inflated += produced;
   }
-  if (inflated < data_end) fail("a compressed matrix whose cells end early");
+  if (stream.inflated() < data_end) fail("a compressed matrix whose cells end early");
 }
 
 }  // namespace

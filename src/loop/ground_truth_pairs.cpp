@@ -5,8 +5,8 @@
 #include <string>
 
 #include "binbow/error.h"
+#include "core/regular_file.h"
 #include "loop/ground_truth_readers.h"
-#include "vision/regular_file.h"
 
 namespace binbow::loop::detail {
 namespace {
@@ -46,7 +46,7 @@ int detect_index_base(const std::string& text) {
 
 LoadedGroundTruth read_ground_truth_pairs(const std::string& path,
                                           const GroundTruthOptions& options) {
-  const std::string text = vision::read_regular_file(path, kMaxTextBytes);
+  const std::string text = binbow::detail::read_regular_file(path, kMaxTextBytes);
   int base = options.pairs_index_base;
   if (base != 0 && base != 1) {
     base = detect_index_base(text);

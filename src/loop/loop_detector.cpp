@@ -114,19 +114,34 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   }
 }
 
-// The latest loop first; without one near enough, the match's neighbours
-// (match − 1, then match + 1) against the query.
+// Near the latest loop, or else at the revisit's pace since it: the match
+// as many entries from its match as the query is queries from its query.
+void LoopDetector::Impl::corroborate_by_previous_loop(LoopCorroboration& c, EntryId query,
+                                                      EntryId match) const {
+  c.has_previous_loop = has_previous_loop;
+  c.previous_loop_query = previous_loop_query;
+  c.previous_loop_match = previous_loop_match;
+  if (!has_previous_loop) return;
+  const auto distance = [](EntryId a, EntryId b) { return a > b ? a - b : b - a; };
+  const EntryId queries = distance(query, previous_loop_query);
+  const EntryId entries = distance(match, previous_loop_match);
+  const auto near = static_cast<EntryId>(params.corroboration_distance);
+  if (queries <= near && entries <= near) {
+    c.corroborated = true;
+    return;
+  }
+  c.previous_loop_at_pace = queries <= static_cast<EntryId>(params.corroboration_horizon) &&
+                            static_cast<double>(distance(entries, queries)) <=
+                                params.corroboration_pace_tolerance * static_cast<double>(queries);
+  c.corroborated = c.previous_loop_at_pace;
+}
+
+// The latest loop first; without one near enough or at the revisit's pace,
+// the match's neighbours (match − 1, then match + 1) against the query.
 void LoopDetector::Impl::corroborate(LoopResult& result, Span<Keypoint> query_keypoints,
                                      const DescriptorView& query_descriptors,
                                      const FeatureVector& query_nodes) const {
-  result.corroboration.has_previous_loop = has_previous_loop;
-  result.corroboration.previous_loop_query = previous_loop_query;
-  result.corroboration.previous_loop_match = previous_loop_match;
-  const auto distance = [](EntryId a, EntryId b) { return a > b ? a - b : b - a; };
-  const auto limit = static_cast<EntryId>(params.corroboration_distance);
-  result.corroboration.corroborated = has_previous_loop &&
-                                      distance(result.query, previous_loop_query) <= limit &&
-                                      distance(result.match, previous_loop_match) <= limit;
+  corroborate_by_previous_loop(result.corroboration, result.query, result.match);
   for (const long long neighbour :
        {static_cast<long long>(result.match) - 1, static_cast<long long>(result.match) + 1}) {
     if (result.corroboration.corroborated) return;
@@ -208,8 +223,10 @@ void LoopDetector::Impl::transform(const DescriptorView& descriptors, BowVector&
 std::vector<QueryResult> LoopDetector::Impl::query(const BowVector& bow, LoopResult& result) const {
   // DLoopDetector's bound (DBoW2's max_id is exclusive): j < t − dislocal.
   const EntryId newest_candidate = result.query - static_cast<EntryId>(params.dislocal) - 1;
-  std::vector<QueryResult> found =
-      database.query(bow, static_cast<std::size_t>(params.max_db_results), newest_candidate);
+  QueryOptions options;
+  options.mode = params.fast_queries ? QueryMode::kFast : QueryMode::kExact;
+  std::vector<QueryResult> found = database.query(
+      bow, static_cast<std::size_t>(params.max_db_results), newest_candidate, options);
   if (!found.empty()) {
     result.has_candidate = true;
     result.match = found.front().entry;

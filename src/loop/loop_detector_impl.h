@@ -87,6 +87,9 @@ struct LoopDetector::Impl {
   void record_islands();
   void record_temporal(const detail::Island& chosen, const detail::TemporalWindow::State& before,
                        EntryId position, int chain_after);
+  // Sets c's latest-loop fields, and corroborated when that loop corroborates
+  // the weak loop query → match (LoopDetectorParams::min_uncorroborated_inliers).
+  void corroborate_by_previous_loop(LoopCorroboration& c, EntryId query, EntryId match) const;
   // Sets result's corroboration fields (LoopDetectorParams::min_uncorroborated_inliers).
   void corroborate(LoopResult& result, Span<vision::Keypoint> query_keypoints,
                    const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;

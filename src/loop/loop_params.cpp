@@ -11,16 +11,16 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/loop_detector.h"
+#include "core/regular_file.h"
 #include "vision/flat_yaml.h"
-#include "vision/regular_file.h"
 #include "vision/storage_text.h"
 
 namespace binbow::loop {
 
+using binbow::detail::read_regular_file;
 using vision::check_storage_text;
 using vision::parse_flat_yaml;
 using vision::parse_fundamental_estimator;
-using vision::read_regular_file;
 namespace {
 
 using Json = nlohmann::json;
@@ -84,6 +84,7 @@ const std::vector<Field>& fields() {
       bool_field("skip_featureless_frames", &P::skip_featureless_frames),
       number_field("dislocal", &P::dislocal),
       number_field("max_db_results", &P::max_db_results),
+      bool_field("fast_queries", &P::fast_queries),
       number_field("max_intra_island_gap", &P::max_intra_island_gap),
       number_field("min_matches_per_island", &P::min_matches_per_island),
       number_field("k", &P::k),
@@ -124,6 +125,8 @@ const std::vector<Field>& fields() {
       number_field("min_inlier_spread", &P::min_inlier_spread),
       number_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers),
       number_field("corroboration_distance", &P::corroboration_distance),
+      number_field("corroboration_horizon", &P::corroboration_horizon),
+      number_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance),
   };
   return table;
 }
@@ -142,6 +145,7 @@ void scale_to_frequency(LoopDetectorParams& p, double f) {
   p.max_distance_between_islands = scaled(3, 0);
   p.max_distance_between_queries = scaled(2, 1);
   p.corroboration_distance = scaled(4, 1);
+  p.corroboration_horizon = scaled(10, 1);
 }
 
 LoopDetectorParams from_object(const Json& object, const std::string& name,
@@ -200,26 +204,6 @@ GeometricCheck parse_geometric_check(const std::string& name) {
                         "\" (expected direct-index, exhaustive or none)");
 }
 
-const char* to_string(LoopStatus status) {
-  switch (status) {
-    case LoopStatus::kLoopDetected:
-      return "loop-detected";
-    case LoopStatus::kNoDatabaseResults:
-      return "no-database-results";
-    case LoopStatus::kLowNormalisationScore:
-      return "low-normalisation-score";
-    case LoopStatus::kLowScores:
-      return "low-scores";
-    case LoopStatus::kNoIslands:
-      return "no-islands";
-    case LoopStatus::kNoTemporalConsistency:
-      return "no-temporal-consistency";
-    case LoopStatus::kNoGeometricConsistency:
-      return "no-geometric-consistency";
-  }
-  return "?";
-}
-
 LoopDetectorParams LoopDetectorParams::for_frequency(double f) {
   LoopDetectorParams p;
   scale_to_frequency(p, f);
@@ -266,6 +250,8 @@ void LoopDetectorParams::validate() const {
   in_range("min_inlier_spread", min_inlier_spread, 0, 1);
   in_range("min_uncorroborated_inliers", min_uncorroborated_inliers, 0, kMaxMinInliers);
   in_range("corroboration_distance", corroboration_distance, 1, kMaxFrameDistance);
+  in_range("corroboration_horizon", corroboration_horizon, 1, kMaxFrameDistance);
+  in_range("corroboration_pace_tolerance", corroboration_pace_tolerance, 0, 1);
 }
 
 namespace {

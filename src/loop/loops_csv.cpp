@@ -11,7 +11,7 @@
 
 #include "binbow/error.h"
 #include "core/file_io.h"
-#include "vision/regular_file.h"
+#include "core/regular_file.h"
 
 namespace binbow::loop {
 namespace {
@@ -140,7 +140,7 @@ Columns columns_of_header(const std::string& path, const std::vector<std::string
 }  // namespace
 
 std::vector<Detection> read_detections_csv(const std::string& path) {
-  const std::string text = vision::read_regular_file(path, kMaxTextBytes);
+  const std::string text = binbow::detail::read_regular_file(path, kMaxTextBytes);
   std::size_t pos = 0, line = 0;
   std::vector<std::string> fields;
   bool malformed = false;

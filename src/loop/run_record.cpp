@@ -18,7 +18,7 @@
 #include "core/crc32c.h"
 #include "core/file_io.h"
 #include "core/output_path.h"
-#include "vision/regular_file.h"
+#include "core/regular_file.h"
 
 namespace binbow::loop {
 
@@ -264,7 +264,7 @@ std::vector<StageTiming> stage_timings(const std::vector<SequenceFrame>& frames)
 
 LoopRun LoopRun::load(const std::string& path) {
   // Only a regular file, read whole: a FIFO would block, a device never end.
-  const std::string text = vision::read_regular_file(path, kMaxRunRecordBytes);
+  const std::string text = binbow::detail::read_regular_file(path, kMaxRunRecordBytes);
   LoopRun run;
   run.path = path;
   try {
@@ -363,7 +363,7 @@ LoopRun LoopRun::load(const std::string& path) {
 bool check_loops_csv_of_run(const LoopRun& run, const std::string& run_path,
                             const std::string& loops_csv) {
   if (!run.knows_loops_csv) return false;
-  vision::require_regular_file(loops_csv);
+  binbow::detail::require_regular_file(loops_csv);
   std::ifstream in(loops_csv, std::ios::binary);
   if (!in) throw FileError(loops_csv, std::string("cannot open: ") + std::strerror(errno));
   std::vector<char> buffer(std::size_t{1} << 20);

@@ -8,14 +8,6 @@
 
 namespace binbow::loop {
 
-const char* const kStageNames[kStageCount] = {"features", "transform",    "query",
-                                              "islands",  "verification", "insertion"};
-
-std::array<double, kStageCount> SequenceFrame::stage_ms() const {
-  const LoopStageTimes& t = result.times;
-  return {features_ms, t.transform_ms, t.query_ms, t.islands_ms, t.verification_ms, t.insertion_ms};
-}
-
 namespace {
 
 std::shared_ptr<const vision::FeatureExtractor> extractor_of(const SequenceOptions& options) {

@@ -22,7 +22,7 @@
 namespace binbow::media {
 
 // Raised whenever Api changes.
-inline constexpr int kApiVersion = 1;
+inline constexpr int kApiVersion = 2;
 
 // An open video file (cv::VideoCapture with a file backend).
 class Video {
@@ -40,12 +40,23 @@ class Video {
   virtual bool seek(long long frame) = 0;
 };
 
+// 8-bit grey pixels, row by row, without OpenCV's types: for callers that
+// link no OpenCV (the ground-truth images of `binbow evaluate`).
+struct GreyPixels {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> pixels;  // width * height
+};
+
 struct Api {
   int version;
   const char* binbow_version;
   // cv::imdecode of `size` bytes as 8-bit grey (IMREAD_GRAYSCALE) or BGR
   // (IMREAD_COLOR); empty when OpenCV cannot decode them.
   cv::Mat (*decode_image)(const std::uint8_t* data, std::size_t size, bool grey);
+  // decode_image to grey, into `image`; catches cv::Exception and returns
+  // its message instead (empty on success, and when the bytes are no image,
+  // which leaves `image` empty).
+  std::string (*decode_grey_pixels)(const std::uint8_t* data, std::size_t size, GreyPixels& image);
   // cv::imencode to the format of `extension` (".png", ".jpg"); JPEG at
   // `jpeg_quality` (0-100).
   bool (*encode_image)(const std::string& extension, const cv::Mat& image, int jpeg_quality,

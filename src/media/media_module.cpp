@@ -1,4 +1,6 @@
 // binbow_media: OpenCV's imgcodecs and videoio, and matio, behind media::Api.
+#include <algorithm>
+#include <string>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -65,6 +67,21 @@ cv::Mat decode_image(const std::uint8_t* data, std::size_t size, bool grey) {
                       grey ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
 }
 
+std::string decode_grey_pixels(const std::uint8_t* data, std::size_t size, GreyPixels& image) {
+  try {
+    const cv::Mat grey = decode_image(data, size, true);
+    image.width = grey.cols;
+    image.height = grey.rows;
+    image.pixels.resize(grey.total());
+    for (int row = 0; row < grey.rows; ++row)
+      std::copy_n(grey.ptr<std::uint8_t>(row), grey.cols,
+                  image.pixels.data() + static_cast<std::size_t>(row) * grey.cols);
+    return {};
+  } catch (const cv::Exception& e) {
+    return e.msg;
+  }
+}
+
 bool encode_image(const std::string& extension, const cv::Mat& image, int jpeg_quality,
                   std::vector<std::uint8_t>& bytes) {
   return cv::imencode(extension, image, bytes, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
@@ -88,10 +105,10 @@ std::unique_ptr<Video> open_video(const std::string& path) {
   return video;
 }
 
-const Api kApi{kApiVersion,           BINBOW_VERSION,    decode_image,           encode_image,
-               write_image,           have_image_writer, have_image_reader,      open_video,
-               &::Mat_Open,           &::Mat_Close,      &::Mat_VarReadNextInfo, &::Mat_VarReadData,
-               &::Mat_VarReadDataAll, &::Mat_VarFree};
+const Api kApi{kApiVersion,        BINBOW_VERSION,        decode_image,      decode_grey_pixels,
+               encode_image,       write_image,           have_image_writer, have_image_reader,
+               open_video,         &::Mat_Open,           &::Mat_Close,      &::Mat_VarReadNextInfo,
+               &::Mat_VarReadData, &::Mat_VarReadDataAll, &::Mat_VarFree};
 
 }  // namespace
 }  // namespace binbow::media

@@ -7,6 +7,8 @@
 #include <string>
 #include <string_view>
 
+#include "binbow/error.h"
+
 namespace binbow::vision {
 namespace {
 
@@ -324,6 +326,51 @@ std::optional<ImageDimensions> declared_dimensions(const std::uint8_t* data, std
   if (b.matches(0, std::string_view("\0\0\0\x0CjP  \r\n\x87\n", 12))) return jpeg2000_file(b);
   if (b.has(0, 4) && b.be(0, 4) == 0xFF4FFF51) return jpeg2000_codestream(b, 0);
   return std::nullopt;
+}
+
+std::string describe_size(std::uint64_t width, std::uint64_t height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
+void check_pixel_count(const std::string& path, const char* what, std::uint64_t width,
+                       std::uint64_t height, std::uint64_t max_pixels) {
+  if (width == 0 || height == 0) {
+    throw FileError(
+        path, std::string(what) + " declares 0 pixels (" + describe_size(width, height) + ")");
+  }
+  if (width > max_pixels / height) {
+    throw FileError(path, std::string(what) + " declares " + describe_size(width, height) +
+                              " pixels, more than the limit of " + std::to_string(max_pixels));
+  }
+}
+
+ImageDimensions check_image_header(const std::string& path, const std::string& bytes,
+                                   std::uint64_t max_pixels) {
+  if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
+  const auto declared =
+      declared_dimensions(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+  if (!declared) {
+    throw FileError(path,
+                    "not an image whose size can be read before decoding "
+                    "(unknown format, or a damaged header)");
+  }
+  check_pixel_count(path, "image header", declared->width, declared->height, max_pixels);
+  return *declared;
+}
+
+void check_image_allocation(const std::string& path, const ImageDimensions& declared,
+                            std::size_t file_size, std::uint64_t max_pixels) {
+  // Found by fuzzing: a 172-byte TIFF of 12090x6 pixels in strips of 65530
+  // rows made OpenCV allocate 3 GB for one strip.
+  if (declared.block_width != 0)
+    check_pixel_count(path, "TIFF header's strip or tile", declared.block_width,
+                      declared.block_height, max_pixels);
+  if (declared.ratio_bounded &&
+      declared.width * declared.height > max_pixels_for_file_size(file_size)) {
+    throw FileError(path,
+                    "image header declares " + describe_size(declared.width, declared.height) +
+                        " pixels, more than " + std::to_string(file_size) + " bytes can hold");
+  }
 }
 
 }  // namespace binbow::vision

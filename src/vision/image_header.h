@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace binbow::vision {
@@ -37,5 +38,24 @@ inline std::optional<ImageDimensions> declared_dimensions(const std::vector<std:
 inline std::uint64_t max_pixels_for_file_size(std::size_t file_size) {
   return (std::uint64_t{1} << 22) + 1100 * static_cast<std::uint64_t>(file_size);
 }
+
+// "WIDTHxHEIGHT".
+std::string describe_size(std::uint64_t width, std::uint64_t height);
+
+// Throws FileError naming `path` when `width` x `height` is 0 or above
+// `max_pixels`; `what` says whose size it is ("image header", "decoded image").
+void check_pixel_count(const std::string& path, const char* what, std::uint64_t width,
+                       std::uint64_t height, std::uint64_t max_pixels);
+
+// The first checks of the content `bytes` of image file `path` before it is
+// decoded: not empty, of a size its header declares, at most `max_pixels`.
+// Throws FileError naming `path`; returns the size.
+ImageDimensions check_image_header(const std::string& path, const std::string& bytes,
+                                   std::uint64_t max_pixels);
+// The checks of what a decoder would allocate beyond the image: a TIFF strip
+// or tile of at most `max_pixels`, and no more pixels than a PNG or JPEG of
+// `file_size` bytes can hold.
+void check_image_allocation(const std::string& path, const ImageDimensions& declared,
+                            std::size_t file_size, std::uint64_t max_pixels);
 
 }  // namespace binbow::vision

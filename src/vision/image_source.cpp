@@ -19,11 +19,11 @@
 #include "binbow/error.h"
 #include "binbow/vision/features.h"
 #include "core/file_io.h"
+#include "core/regular_file.h"
 #include "vision/image_header.h"
 #include "vision/jpeg_decoder.h"
 #include "vision/media_module.h"
 #include "vision/natural_order.h"
-#include "vision/regular_file.h"
 
 namespace binbow::vision {
 namespace fs = std::filesystem;
@@ -102,24 +102,6 @@ cv::Mat limit_width(const cv::Mat& image, cv::Size file_size, int max_width) {
   return resized;
 }
 
-std::string describe_size(std::uint64_t width, std::uint64_t height) {
-  return std::to_string(width) + "x" + std::to_string(height);
-}
-
-// Throws FileError naming `path` when `width` x `height` is 0 or above
-// `max_pixels`.
-void check_pixel_count(const std::string& path, const char* what, std::uint64_t width,
-                       std::uint64_t height, std::uint64_t max_pixels) {
-  if (width == 0 || height == 0) {
-    throw FileError(
-        path, std::string(what) + " declares 0 pixels (" + describe_size(width, height) + ")");
-  }
-  if (width > max_pixels / height) {
-    throw FileError(path, std::string(what) + " declares " + describe_size(width, height) +
-                              " pixels, more than the limit of " + std::to_string(max_pixels));
-  }
-}
-
 // The size limit_width() gives a frame of `width` x `height`.
 std::uint64_t pixels_after_max_width(std::uint64_t width, std::uint64_t height, int max_width) {
   if (max_width <= 0 || width <= static_cast<std::uint64_t>(max_width)) return width * height;
@@ -155,32 +137,15 @@ void check_extracted_pixels(const std::string& path, const char* what, std::uint
 cv::Mat read_checked_image(const std::string& path, bool grey, std::uint64_t max_pixels,
                            const ImageSourceOptions* options = nullptr,
                            cv::Size* file_size = nullptr) {
-  const std::string bytes = read_regular_file(path, kMaxImageFileBytes);
-  if (bytes.empty()) throw FileError(path, "empty file (0 bytes), not an image");
+  const std::string bytes = binbow::detail::read_regular_file(path, kMaxImageFileBytes);
   const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data());
-  const auto declared = declared_dimensions(data, bytes.size());
-  if (!declared) {
-    throw FileError(path,
-                    "not an image whose size can be read before decoding "
-                    "(unknown format, or a damaged header)");
-  }
-  check_pixel_count(path, "image header", declared->width, declared->height, max_pixels);
+  const ImageDimensions declared = check_image_header(path, bytes, max_pixels);
   if (options != nullptr)
-    check_extracted_pixels(path, "image", declared->width, declared->height, *options);
-  // Found by fuzzing: a 172-byte TIFF of 12090x6 pixels in strips of 65530
-  // rows made OpenCV allocate 3 GB for one strip.
-  if (declared->block_width != 0)
-    check_pixel_count(path, "TIFF header's strip or tile", declared->block_width,
-                      declared->block_height, max_pixels);
-  if (declared->ratio_bounded &&
-      declared->width * declared->height > max_pixels_for_file_size(bytes.size())) {
-    throw FileError(path,
-                    "image header declares " + describe_size(declared->width, declared->height) +
-                        " pixels, more than " + std::to_string(bytes.size()) + " bytes can hold");
-  }
+    check_extracted_pixels(path, "image", declared.width, declared.height, *options);
+  check_image_allocation(path, declared, bytes.size(), max_pixels);
   cv::Mat image;
   cv::Size full_size;
-  if (std::strcmp(declared->format, "jpeg") == 0) {
+  if (std::strcmp(declared.format, "jpeg") == 0) {
     DecodedJpeg decoded =
         decode_jpeg(data, bytes.size(), grey, options != nullptr ? options->max_width : 0);
     if (!decoded.problem.empty()) throw FileError(path, "damaged JPEG: " + decoded.problem);

@@ -103,8 +103,8 @@ std::vector<std::string> media_module_candidates() {
   const std::string holder = object_holding(reinterpret_cast<const void*>(&media_module));
   if (!holder.empty()) {
     const fs::path dir = fs::path(holder).parent_path();
-    for (const char* relative :
-         {BINBOW_MEDIA_FROM_LIBDIR, BINBOW_MEDIA_FROM_BINDIR, BINBOW_MEDIA_FROM_PACKAGE}) {
+    for (const char* relative : {BINBOW_MEDIA_FROM_LIBDIR, BINBOW_MEDIA_FROM_BINDIR,
+                                 BINBOW_MEDIA_FROM_PACKAGE, BINBOW_MEDIA_FROM_MODULE}) {
       candidates.push_back((dir / relative / kModuleFile).lexically_normal().string());
     }
   }

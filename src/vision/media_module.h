@@ -15,7 +15,8 @@ namespace binbow::vision {
 // relative to the program or shared library holding this code: beside a
 // shared binbow library (<libdir>/binbow/binbow_media.so), from an
 // executable in <prefix>/<bindir>, inside the Python package
-// (<package>/lib/binbow/), and at the install prefix's <libdir>/binbow.
+// (<package>/lib/binbow/), beside a module in <libdir>/binbow (the CLI's
+// binbow_cli_vision), and at the install prefix's <libdir>/binbow.
 // Throws binbow::Error "cannot load the image/video module <path>: <reason>"
 // when none loads, or the one found belongs to another binbow build.
 const media::Api& media_module();

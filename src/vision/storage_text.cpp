@@ -7,8 +7,8 @@
 #include <opencv2/core/persistence.hpp>
 
 #include "binbow/error.h"
+#include "core/regular_file.h"
 #include "formats/gzip.h"
-#include "vision/regular_file.h"
 
 namespace binbow::vision {
 namespace {
@@ -162,7 +162,7 @@ int storage_format(std::string_view text, const std::string& path) {
 }
 
 std::string read_storage_text(const std::string& path, std::uint64_t max_bytes) {
-  std::string text = read_regular_file(path, max_bytes);
+  std::string text = binbow::detail::read_regular_file(path, max_bytes);
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(text.data());
   if (detail::is_gzip(bytes, text.size())) {
     const std::vector<std::uint8_t> inflated =

@@ -19,23 +19,9 @@ using test::run_cli;
 using test::TempDir;
 using test::write_file;
 
-Vocabulary small_vocabulary() {
-  // A hand-made two-level tree: no dependence on the builder.
-  VocabularyTree tree;
-  tree.code_size = 32;
-  tree.branching = 3;
-  tree.levels = 2;
-  tree.parent = {0, 0, 0, 0, 1, 1, 1, 2, 2};
-  std::mt19937_64 rng(4);
-  tree.descriptors.resize(tree.parent.size() * 32);
-  for (std::uint8_t& byte : tree.descriptors) byte = static_cast<std::uint8_t>(rng());
-  tree.weights = {0, 0, 0, 0.75f, 1.5f, 2.25f, 3.0f, 0.1f, 0.2f};
-  return Vocabulary::from_tree(tree);
-}
-
 TEST(CliConvert, ConvertsBetweenEveryFormatAndBack) {
   TempDir dir;
-  const Vocabulary vocabulary = small_vocabulary();
+  const Vocabulary vocabulary = test::hand_made_vocabulary();
   vocabulary.save(dir.file("v.bbw"));
   std::string output;
   for (const char* name :
@@ -62,7 +48,7 @@ TEST(CliConvert, ConvertsBetweenEveryFormatAndBack) {
 
 TEST(CliConvert, FromAndToOverrideDetection) {
   TempDir dir;
-  small_vocabulary().save(dir.file("v.bbw"));
+  test::hand_made_vocabulary().save(dir.file("v.bbw"));
   std::string output;
   ASSERT_EQ(run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("orbvoc.data") +
                         "' --to orbslam-text",
@@ -118,7 +104,7 @@ TEST(CliConvert, DamagedInputsExitWithOneAndNameTheFile) {
 // it, and commands warn when a vocabulary does not say.
 TEST(CliConvert, DescriptorRecordsTheExtractorAndCommandsWarnWithoutOne) {
   TempDir dir;
-  save_vocabulary(small_vocabulary(), dir.file("v.yml"));
+  save_vocabulary(test::hand_made_vocabulary(), dir.file("v.yml"));
   std::string output;
   ASSERT_EQ(run_cli("convert --descriptor brief '" + dir.file("v.yml") + "' '" +
                         dir.file("brief.bbw") + "'",
@@ -177,7 +163,7 @@ TEST(CliConvert, DescriptorRecordsTheExtractorAndCommandsWarnWithoutOne) {
 // .vins.bin name, recognised by content, and usable wherever a vocabulary is.
 TEST(CliConvert, WritesAndReadsVinsBinary) {
   TempDir dir;
-  small_vocabulary().save(dir.file("v.bbw"));
+  test::hand_made_vocabulary().save(dir.file("v.bbw"));
   std::string output;
   ASSERT_EQ(
       run_cli("convert '" + dir.file("v.bbw") + "' '" + dir.file("brief_k10L6.bin") + "' --to vins",
@@ -219,7 +205,7 @@ TEST(CliConvert, WritesAndReadsVinsBinary) {
       << output;
 
   // VINS computes BRIEF: an ORB vocabulary is written, with a note.
-  small_vocabulary().with_descriptor("orb").save(dir.file("orb.bbw"));
+  test::hand_made_vocabulary().with_descriptor("orb").save(dir.file("orb.bbw"));
   ASSERT_EQ(
       run_cli("convert '" + dir.file("orb.bbw") + "' '" + dir.file("orb.vins.bin") + "'", &output),
       0)
@@ -228,7 +214,7 @@ TEST(CliConvert, WritesAndReadsVinsBinary) {
       << output;
 
   // Only 256-bit descriptors fit.
-  VocabularyTree wide = small_vocabulary().to_tree();
+  VocabularyTree wide = test::hand_made_vocabulary().to_tree();
   wide.code_size = 64;
   wide.descriptors.resize(wide.node_count() * 64, 1);
   Vocabulary::from_tree(wide).save(dir.file("wide.bbw"));
@@ -248,7 +234,7 @@ TEST(CliConvert, WritesAndReadsVinsBinary) {
 // TemplatedVocabulary::load does, and compare with the vocabulary.
 TEST(CliConvert, Dbow2YamlOutputReadsBackThroughOpenCvFileStorage) {
   TempDir dir;
-  const Vocabulary vocabulary = small_vocabulary();
+  const Vocabulary vocabulary = test::hand_made_vocabulary();
   vocabulary.save(dir.file("v.bbw"));
   const VocabularyTree tree = vocabulary.to_tree();
   std::string output;

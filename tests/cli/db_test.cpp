@@ -202,6 +202,12 @@ TEST(CliDb, AddsAndRemovesEntriesInPlace) {
   ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
   EXPECT_NE(output.find("entries: 4\n"), std::string::npos) << output;
   EXPECT_NE(output.find("vocabulary_included: no\n"), std::string::npos) << output;
+  // The new entries went to the journal; the file itself was not rewritten.
+  EXPECT_NE(output.find("journal: "), std::string::npos) << output;
+  EXPECT_NE(output.find(" bytes, 1 saves: 2 entries added, 0 removed, 0 labels set\n"),
+            std::string::npos)
+      << output;
+  EXPECT_EQ(Database::inspect(database, false).entries, 2u);
   ASSERT_EQ(run_cli("db query '" + database + "' --vocab '" + vocabulary + "' '" + folder +
                         "/54.jpg' --top 2",
                     &output),
@@ -220,10 +226,21 @@ TEST(CliDb, AddsAndRemovesEntriesInPlace) {
       << output;
   ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
   EXPECT_NE(output.find("entries: 2\nnext_entry_id: 4\n"), std::string::npos) << output;
+  EXPECT_NE(output.find(" bytes, 2 saves: 2 entries added, 2 removed, 0 labels set\n"),
+            std::string::npos)
+      << output;
+  // --compact writes the whole file and folds the journal into it.
+  ASSERT_EQ(
+      run_cli("db remove --compact '" + database + "' --vocab '" + vocabulary + "' 1", &output), 0)
+      << output;
+  ASSERT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
+  EXPECT_NE(output.find("entries: 1\nnext_entry_id: 4\n"), std::string::npos) << output;
+  EXPECT_NE(output.find("journal: none\n"), std::string::npos) << output;
+  EXPECT_EQ(Database::inspect(database, false).entries, 1u);
 
   // A missing entry changes nothing, even after a valid one.
   const std::vector<std::uint8_t> before = test::read_file(database);
-  EXPECT_EQ(run_cli("db remove '" + database + "' --vocab '" + vocabulary + "' 1 3", &output), 1);
+  EXPECT_EQ(run_cli("db remove '" + database + "' --vocab '" + vocabulary + "' 2 3", &output), 1);
   EXPECT_NE(output.find("binbow: error: " + database + ": no entry 3"), std::string::npos)
       << output;
   EXPECT_EQ(test::read_file(database), before);

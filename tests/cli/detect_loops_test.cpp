@@ -42,14 +42,6 @@ std::string write_corridor_video(const TempDir& dir) {
   return path;
 }
 
-// A list of the first `count` corridor frames.
-std::string write_frame_list(const TempDir& dir, int count) {
-  const std::string path = dir.file("frames.txt");
-  std::ofstream list(path);
-  for (int i = 1; i <= count; ++i) list << samples_folder() << "/" << i << ".jpg\n";
-  return path;
-}
-
 nlohmann::json run_record(const std::string& loops_csv) {
   std::ifstream in(loops_csv + ".run.json");
   EXPECT_TRUE(in.good()) << "no run record beside " << loops_csv;
@@ -115,8 +107,9 @@ TEST(CliDetectLoops, VideoFramesPerSecondSetTheFrequencyUnlessParamsDo) {
   EXPECT_EQ(record["params"]["max_db_results"], 25);
 
   // Images have no frame rate: the paper's 1 Hz defaults.
-  ASSERT_EQ(run_cli("detect-loops -o '" + loops + "' '" + write_frame_list(dir, 30) + "'", &output),
-            0)
+  ASSERT_EQ(
+      run_cli("detect-loops -o '" + loops + "' '" + test::write_frame_list(dir, 30) + "'", &output),
+      0)
       << output;
   EXPECT_NE(output.find("frequency: 1 Hz (the paper's default; images have no frame rate)\n"),
             std::string::npos)
@@ -299,7 +292,7 @@ TEST(CliDetectLoops, SaveStateThenResumeStateEqualsOneRun) {
 
 TEST(CliDetectLoops, ResumeStateUsageErrors) {
   TempDir dir;
-  const std::string frames = write_frame_list(dir, 3);
+  const std::string frames = test::write_frame_list(dir, 3);
   const std::string fixed = dir.file("fixed.bbld");
   const std::string online = dir.file("online.bbld");
   std::string output;
@@ -356,7 +349,7 @@ TEST(CliDetectLoops, ResumeStateUsageErrors) {
 // makes more words, which --save-vocabulary's summary counts.
 TEST(CliDetectLoops, OnlineVocabularyOptionsReachTheVocabulary) {
   TempDir dir;
-  const std::string frames = write_frame_list(dir, 6);
+  const std::string frames = test::write_frame_list(dir, 6);
   std::string loose, strict;
   ASSERT_EQ(run_cli("detect-loops --online-vocabulary --new-word-distance 0.4 --save-vocabulary '" +
                         dir.file("a.bbw") + "' -o '" + dir.file("a.csv") + "' '" + frames + "'",
@@ -382,7 +375,7 @@ TEST(CliDetectLoops, OnlineVocabularyOptionsReachTheVocabulary) {
 
 TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) {
   TempDir dir;
-  const std::string list = write_frame_list(dir, 10);
+  const std::string list = test::write_frame_list(dir, 10);
   std::string output;
   ASSERT_EQ(run_cli("detect-loops -o '" + dir.file("loops.csv") + "' '" + list + "'", &output), 0)
       << output;
@@ -408,10 +401,10 @@ TEST(CliDetectLoops, CountsFramesPerStatusAndWarnsWhenNoFrameCanHaveACandidate) 
   EXPECT_NE(output.find("dislocal = 200 frames"), std::string::npos) << output;
 
   // Frames 21 and 22 of 23 can have candidates: no warning.
-  ASSERT_EQ(
-      run_cli("detect-loops -o '" + dir.file("loops.csv") + "' '" + write_frame_list(dir, 23) + "'",
-              &output),
-      0)
+  ASSERT_EQ(run_cli("detect-loops -o '" + dir.file("loops.csv") + "' '" +
+                        test::write_frame_list(dir, 23) + "'",
+                    &output),
+            0)
       << output;
   EXPECT_EQ(output.find("warning"), std::string::npos) << output;
   EXPECT_NE(output.find("frames by status:\n  loop-detected: 0\n"), std::string::npos) << output;

@@ -24,28 +24,6 @@ using test::samples_folder;
 using test::shared_data;
 using test::TempDir;
 
-std::string write_frame_list(const TempDir& dir, int count) {
-  const std::string path = dir.file("frames.txt");
-  std::ofstream list(path);
-  for (int i = 1; i <= count; ++i) list << samples_folder() << "/" << i << ".jpg\n";
-  return path;
-}
-
-// A hand-made two-level tree of `code_size`-byte words made by `descriptor`.
-Vocabulary small_vocabulary(const std::string& descriptor, std::size_t code_size) {
-  VocabularyTree tree;
-  tree.code_size = code_size;
-  tree.branching = 3;
-  tree.levels = 2;
-  tree.parent = {0, 0, 0, 0, 1, 1, 1, 2, 2};
-  tree.descriptor = descriptor;
-  std::mt19937_64 rng(4);
-  tree.descriptors.resize(tree.parent.size() * code_size);
-  for (std::uint8_t& byte : tree.descriptors) byte = static_cast<std::uint8_t>(rng());
-  tree.weights = {0, 0, 0, 0.75f, 1.5f, 2.25f, 3.0f, 0.1f, 0.2f};
-  return Vocabulary::from_tree(tree);
-}
-
 // `binbow evaluate --sweep` on a run record changed by `change`: fails, and
 // the message names the record.
 void expect_sweep_error_naming_the_record(const std::string& what,
@@ -55,8 +33,9 @@ void expect_sweep_error_naming_the_record(const std::string& what,
   const std::string loops = dir.file("loops.csv");
   const std::string record_path = loops + ".run.json";
   std::string output;
-  ASSERT_EQ(run_cli("detect-loops -o '" + loops + "' '" + write_frame_list(dir, 4) + "'", &output),
-            0)
+  ASSERT_EQ(
+      run_cli("detect-loops -o '" + loops + "' '" + test::write_frame_list(dir, 4) + "'", &output),
+      0)
       << output;
   nlohmann::json record = nlohmann::json::parse(std::ifstream(record_path));
   change(record);
@@ -89,12 +68,12 @@ TEST(CliFileNaming, SweepErrorsFromTheRunRecordNameIt) {
 
 TEST(CliFileNaming, AStateNamingAnUnknownOrMismatchedDescriptorIsNamed) {
   TempDir dir;
-  const std::string frames = write_frame_list(dir, 3);
+  const std::string frames = test::write_frame_list(dir, 3);
   std::string output;
   const auto expect_state_error = [&](const std::string& descriptor, std::size_t code_size,
                                       const std::string& problem) {
     SCOPED_TRACE(descriptor);
-    const Vocabulary vocabulary = small_vocabulary(descriptor, code_size);
+    const Vocabulary vocabulary = test::hand_made_vocabulary(descriptor, code_size);
     vocabulary.save(dir.file("v.bbw"));
     loop::LoopDetector(vocabulary).save(dir.file("state.bbld"));
     EXPECT_EQ(run_cli("detect-loops --resume-state '" + dir.file("state.bbld") + "' --vocab '" +

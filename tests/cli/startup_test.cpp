@@ -1,13 +1,18 @@
 // Start-up: the image/video stack (OpenCV's imgcodecs and videoio, with GDAL,
 // GStreamer, FFmpeg, HDF5 and GUI toolkits behind them) is the binbow_media
 // module, loaded when a command first reads an image other than a JPEG, a
-// video or a .mat file. Commands that read none start without it.
+// video or a .mat file. Commands that read none start without it, and those
+// that need no OpenCV at all (--version, info, convert, evaluate, db remove)
+// load no OpenCV library: the commands that do are the binbow_cli_vision module.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
 
+#include "binbow/database.h"
+#include "binbow/formats.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -62,12 +67,75 @@ void expect_light(const std::string& arguments) {
       EXPECT_EQ(object.find(heavy), std::string::npos) << object << " loaded";
 }
 
+// No OpenCV library at all, nor the module of the commands that need one.
+void expect_without_opencv(const std::string& arguments) {
+  SCOPED_TRACE("binbow " + arguments);
+  const TracedRun run = run_traced(arguments);
+  ASSERT_EQ(run.status, 0) << run.output;
+  ASSERT_FALSE(run.objects.empty()) << "LD_DEBUG=files printed no object:\n" << run.output;
+  for (const std::string& object : run.objects) {
+    EXPECT_EQ(object.find("libopencv_"), std::string::npos) << object << " loaded";
+    EXPECT_EQ(object.find("binbow_cli_vision"), std::string::npos) << object << " loaded";
+  }
+}
+
+// A database of the bundled ORB vocabulary with three entries.
+std::string small_database(const TempDir& dir) {
+  Database database(load_vocabulary(test::source_path("data/vocab/orb_default.bbw")));
+  std::mt19937_64 rng(7);
+  for (int i = 0; i < 3; ++i)
+    database.add(test::random_descriptors(50, 32, rng).view(), "frame" + std::to_string(i));
+  const std::string path = dir.file("small.bbdb");
+  database.save(path);
+  return path;
+}
+
 TEST(CliStartup, CommandsReadingNoImageLoadNoImageOrVideoLibrary) {
   TempDir dir;
   const std::string vocabulary = test::source_path("data/vocab/orb_default.bbw");
   expect_light("--version");
   expect_light("info '" + vocabulary + "'");
   expect_light("convert '" + vocabulary + "' '" + dir.file("voc.yml.gz") + "'");
+}
+
+TEST(CliStartup, CommandsNeedingNoOpenCvLoadNone) {
+  TempDir dir;
+  const std::string vocabulary = test::source_path("data/vocab/orb_default.bbw");
+  const std::string database = small_database(dir);
+  expect_without_opencv("--version");
+  expect_without_opencv("info '" + vocabulary + "'");
+  expect_without_opencv("info --system");
+  expect_without_opencv("info '" + database + "'");
+  expect_without_opencv("convert '" + vocabulary + "' '" + dir.file("voc.yml.gz") + "'");
+  expect_without_opencv("db remove '" + database + "' 1");
+  expect_without_opencv("info --help");
+  std::ofstream(dir.file("truth.txt")) << "# 0-based\n2 0\n";
+  std::ofstream(dir.file("loops.csv")) << "query,match,score\n2,0,0.5\n";
+  expect_without_opencv("evaluate --gt '" + dir.file("truth.txt") + "' '" + dir.file("loops.csv") +
+                        "'");
+}
+
+// The commands that need OpenCV are a module; without it the others still
+// run, and the rest fail saying which file is missing and what to do.
+TEST(CliStartup, AMissingCommandsModuleIsAClearError) {
+  const std::string missing = "BINBOW_CLI_VISION_MODULE=/nonexistent/binbow_cli_vision.so ";
+  std::string output;
+  EXPECT_EQ(run_command(missing + "'" + test::cli_path() + "' --version", &output), 0) << output;
+  EXPECT_EQ(run_command(missing + "'" + test::cli_path() + "' info '" +
+                            test::source_path("data/vocab/orb_default.bbw") + "'",
+                        &output),
+            0)
+      << output;
+  for (const std::string arguments : {"features x.jpg", "--help", "db query a.bbdb x.jpg", ""}) {
+    SCOPED_TRACE(arguments);
+    EXPECT_EQ(run_command(missing + "'" + test::cli_path() + "' " + arguments, &output), 1);
+    EXPECT_EQ(output.rfind("binbow: error: cannot load binbow's image and video commands, "
+                           "/nonexistent/binbow_cli_vision.so: cannot open shared object file",
+                           0),
+              0)
+        << output;
+    EXPECT_NE(output.find("set BINBOW_CLI_VISION_MODULE"), std::string::npos) << output;
+  }
 }
 
 TEST(CliStartup, JpegFramesAreReadWithoutTheModule) {

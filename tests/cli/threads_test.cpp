@@ -134,7 +134,7 @@ TEST(CliThreads, DatabasesAndQueriesAreOneThreads) {
   TempDir dir;
   const std::string vocabulary = shared_data("kimera-small-voc/small_voc.yml.gz");
   const std::string folder = samples_folder();
-  std::vector<std::uint8_t> database;  // built, then added to
+  std::vector<std::uint8_t> database, journal;  // built, then added to
   std::string query;
   for (const unsigned threads : {1u, 3u}) {
     SCOPED_TRACE(std::to_string(threads) + " threads");
@@ -151,10 +151,13 @@ TEST(CliThreads, DatabasesAndQueriesAreOneThreads) {
     ASSERT_EQ(queried.status, 0) << queried.output;
     if (threads == 1) {
       database = test::read_file(build.directory + "/d.bbdb");
+      journal = test::read_file(build.directory + "/d.bbdb.journal");
       query = queried.output;
       ASSERT_FALSE(database.empty());
+      ASSERT_FALSE(journal.empty());
     } else {
       EXPECT_EQ(test::read_file(build.directory + "/d.bbdb"), database);
+      EXPECT_EQ(test::read_file(build.directory + "/d.bbdb.journal"), journal);
       EXPECT_EQ(queried.output, query);
     }
   }

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <regex>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "support/test_support.h"
 
@@ -100,6 +102,46 @@ INSTANTIATE_TEST_SUITE_P(
         AccuracyCase{"online_orb", "orb", "online:", 0.85},
         AccuracyCase{"online_brief", "brief", "online:", 0.70}),
     [](const testing::TestParamInfo<AccuracyCase>& test) { return std::string(test.param.name); });
+
+// Fast queries (--fast-queries true) find the same loops, hence the same
+// precision and recall: the same loops.csv as exact queries. 84 frames are
+// far below the size where fast mode reads less than every posting (~1M
+// postings per query), so this checks that the option is threaded through,
+// not what fast mode loses on large databases (docs/benchmarks.md).
+TEST(AccuracyFastQueries, SameLoopsAsExactQueries) {
+  test::TempDir dir;
+  const std::string cli = test::cli_path();
+  const std::string frames = shared_data("rtabmap-samples/samples");
+  ASSERT_TRUE(std::filesystem::is_directory(frames)) << frames << " is missing";
+  for (const auto& [descriptor, vocabulary] :
+       {std::pair<std::string, std::string>{
+            "orb", " --vocab " + test::source_path("data/vocab/orb_default.bbw")},
+        std::pair<std::string, std::string>{"orb", " --online-vocabulary"}}) {
+    SCOPED_TRACE(descriptor + vocabulary);
+    std::string loops[2], out;
+    for (int fast = 0; fast < 2; ++fast) {
+      const std::string csv = dir.file("loops" + std::to_string(fast) + ".csv");
+      ASSERT_EQ(test::run_command(cli + " detect-loops --descriptor " + descriptor + vocabulary +
+                                      " --fast-queries " + (fast ? "true" : "false") + " -o " +
+                                      csv + " " + frames,
+                                  &out),
+                0)
+          << out;
+      const std::vector<std::uint8_t> bytes = test::read_file(csv);
+      loops[fast].assign(bytes.begin(), bytes.end());
+      ASSERT_NE(loops[fast].find('\n'), std::string::npos) << csv << " is empty";
+    }
+    EXPECT_EQ(loops[1], loops[0]);
+    ASSERT_EQ(
+        test::run_command(cli + " evaluate --gt " + shared_data("rtabmap-samples/samples_GT.bmp") +
+                              " " + dir.file("loops1.csv"),
+                          &out),
+        0)
+        << out;
+    EXPECT_EQ(line_value(out, "false positives"), "0") << out;
+    EXPECT_GE(std::stod(line_value(out, "recall")), 0.85) << out;
+  }
+}
 
 }  // namespace
 }  // namespace binbow::vision

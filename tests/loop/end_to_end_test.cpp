@@ -198,18 +198,20 @@ TEST_F(RealSequence, DefaultVocabularyFoundFromTheBuildTree) {
   EXPECT_EQ(status, 0) << out;
 }
 
-// A binbow executable with no data beside it asks for --vocab and names the
-// file it looked for.
+// A binbow executable with no data beside it (its commands module given by
+// the environment) asks for --vocab and names the file it looked for.
 TEST_F(RealSequence, MissingDefaultVocabularyAsksForVocab) {
   test::TempDir dir;
   std::filesystem::create_directories(dir.file("bin"));
   std::filesystem::copy_file(test::cli_path(), dir.file("bin/binbow"));
   std::filesystem::permissions(dir.file("bin/binbow"), std::filesystem::perms::owner_all);
   std::string out;
-  const int status = test::run_command(
-      "BINBOW_DATA_DIR=" + dir.file("empty") + " " + dir.file("bin/binbow") + " detect-loops -o " +
-          dir.file("l.csv") + " " + shared_data("rtabmap-samples/samples/1.jpg"),
-      &out);
+  const int status =
+      test::run_command("BINBOW_DATA_DIR=" + dir.file("empty") +
+                            " BINBOW_CLI_VISION_MODULE=" + test::cli_vision_module_path() + " " +
+                            dir.file("bin/binbow") + " detect-loops -o " + dir.file("l.csv") + " " +
+                            shared_data("rtabmap-samples/samples/1.jpg"),
+                        &out);
   EXPECT_EQ(status, 1) << out;
   EXPECT_NE(out.find("--vocab"), std::string::npos) << out;
   EXPECT_NE(out.find("orb_default.bbw"), std::string::npos) << out;

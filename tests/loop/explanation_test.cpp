@@ -166,6 +166,40 @@ TEST(Explanation, FalseLoopSaysWhatAcceptedIt) {
       << e.reason;
 }
 
+// A fit of 13 inliers needs corroboration: the text names the rule that
+// gave it (near the latest loop, at the revisit's pace since it) or that
+// both failed.
+TEST(Explanation, WeakLoopSaysWhatCorroboratedIt) {
+  TrailCheck check = full_trail(13, true).checks.front();
+  check.corroboration.needed = true;
+  check.corroboration.has_previous_loop = true;
+  check.corroboration.previous_loop_query = 35;
+  check.corroboration.previous_loop_match = 7;
+  check.corroboration.previous_loop_at_pace = true;
+  check.corroboration.corroborated = true;
+  const LoopDetectorParams params;
+  std::string text = describe_check(check, params);
+  EXPECT_TRUE(contains(text,
+                       "13 inliers < min_uncorroborated_inliers 16, corroborated: the "
+                       "latest loop was 35 → 7 (at the revisit's pace: "
+                       "corroboration_horizon 10, corroboration_pace_tolerance 0.25)"))
+      << text;
+  check.corroboration.previous_loop_at_pace = false;
+  text = describe_check(check, params);
+  EXPECT_TRUE(contains(text, "latest loop was 35 → 7 (within corroboration_distance 4)")) << text;
+  check.corroboration.corroborated = false;
+  check.corroboration.neighbour_checked = true;
+  check.corroboration.corroborating_neighbour = 11;
+  text = describe_check(check, params);
+  EXPECT_TRUE(contains(text,
+                       "rejected: 13 inliers < min_uncorroborated_inliers 16 and not corroborated "
+                       "(the latest loop was 35 → 7 (neither within corroboration_distance 4 nor "
+                       "at the revisit's pace: corroboration_horizon 10, "
+                       "corroboration_pace_tolerance 0.25); the best neighbour of the match, 11, "
+                       "has 0 inliers)"))
+      << text;
+}
+
 TEST(Explanation, WrongLoopIsBothFalseAndMissed) {
   // The true place is 3, whose island lost; 12 was accepted.
   LoopDecisionTrail t = full_trail(14, true);

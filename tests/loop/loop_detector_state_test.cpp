@@ -427,6 +427,51 @@ TEST(LoopDetectorState, LatestLoopIsSavedAndChecked) {
   EXPECT_NE(with_loop(40, 40).find("latest loop names frames"), std::string::npos);
 }
 
+// A state saved before corroboration_horizon and corroboration_pace_tolerance
+// existed has neither key among its parameters: it resumes with their
+// defaults, the horizon scaled to the state's frequency as the others are.
+TEST(LoopDetectorState, ParametersSavedBeforeThePaceRuleResumeWithItsDefaults) {
+  LoopDetectorParams params = LoopDetectorParams::for_frequency(2);
+  params.dislocal = 2;
+  params.corroboration_horizon = 3;
+  params.corroboration_pace_tolerance = 0.5;
+  LoopDetector detector = LoopDetector::online(32, {}, params);
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 6; ++i) {
+    Features f;
+    f.descriptors = test::random_descriptors(20, 32, rng);
+    for (std::size_t k = 0; k < f.descriptors.rows(); ++k)
+      f.keypoints.push_back({float(k), float(3 * k), 7, 1, 1, 0});
+    detector.process(f);
+  }
+  const std::vector<std::uint8_t> bytes = detector.serialize();
+  const auto sections = sections_of(bytes);
+  std::vector<std::vector<std::uint8_t>> contents;
+  for (const auto& [offset, length] : sections)
+    contents.emplace_back(bytes.begin() + static_cast<std::ptrdiff_t>(offset),
+                          bytes.begin() + static_cast<std::ptrdiff_t>(offset + length));
+  std::string text(contents[0].begin(), contents[0].end());
+  for (const std::string key : {"corroboration_horizon", "corroboration_pace_tolerance"}) {
+    const std::size_t at = text.find("\"" + key + "\"");
+    ASSERT_NE(at, std::string::npos) << text;
+    const std::size_t line = text.rfind('\n', at);
+    text.erase(line, text.find('\n', at) - line);
+  }
+  const std::size_t dangling = text.rfind(",\n}");
+  if (dangling != std::string::npos) text.erase(dangling, 1);
+  contents[0].assign(text.begin(), text.end());
+  const std::vector<std::uint8_t> old = binbow::detail::write_sectioned_file(
+      "BINBOWLD", 3, contents.data(), contents.size(), [&](std::uint8_t* header) {
+        std::copy(bytes.begin() + 16, bytes.begin() + 48, header + 16);
+        std::copy(bytes.begin() + 52, bytes.begin() + 60, header + 52);
+      });
+  const LoopDetector resumed = LoopDetector::deserialize(old.data(), old.size(), "old");
+  EXPECT_EQ(resumed.params().corroboration_horizon, 20);
+  EXPECT_DOUBLE_EQ(resumed.params().corroboration_pace_tolerance, 0.25);
+  EXPECT_EQ(resumed.params().dislocal, 2);
+  EXPECT_EQ(resumed.size(), 6u);
+}
+
 TEST(LoopDetectorState, FeaturelessAndNoGeometricCheckStatesRoundTrip) {
   // kNone keeps no features: the file has none and the detector still resumes.
   LoopDetectorParams params;

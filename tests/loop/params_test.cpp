@@ -35,16 +35,20 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_TRUE(p.skip_featureless_frames);
   EXPECT_EQ(p.fundamental_estimator, vision::FundamentalEstimator::kUsacMagsac);
   EXPECT_FALSE(p.mutual_matching);
+  EXPECT_FALSE(p.fast_queries);
   EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
   EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
   EXPECT_EQ(p.min_uncorroborated_inliers, 16);
   EXPECT_EQ(p.corroboration_distance, 4);
+  EXPECT_EQ(p.corroboration_horizon, 10);
+  EXPECT_DOUBLE_EQ(p.corroboration_pace_tolerance, 0.25);
   const LoopDetectorParams f2 = LoopDetectorParams::for_frequency(2);
   EXPECT_EQ(f2.dislocal, 40);
   EXPECT_EQ(f2.max_db_results, 100);
   EXPECT_EQ(f2.max_intra_island_gap, 6);
   EXPECT_EQ(f2.max_distance_between_queries, 4);
   EXPECT_EQ(f2.corroboration_distance, 8);
+  EXPECT_EQ(f2.corroboration_horizon, 20);
   EXPECT_DOUBLE_EQ(f2.alpha, 0.3);
 }
 
@@ -56,14 +60,18 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.skip_featureless_frames = false;
   p.fundamental_estimator = vision::FundamentalEstimator::kRansac;
   p.mutual_matching = true;
+  p.fast_queries = true;
   p.min_inlier_ratio = 0.5;
   p.min_inlier_spread = 0.25;
   p.min_uncorroborated_inliers = 0;
   p.corroboration_distance = 7;
+  p.corroboration_horizon = 9;
+  p.corroboration_pace_tolerance = 0.5;
   const LoopDetectorParams q = LoopDetectorParams::from_json(p.to_json());
   EXPECT_EQ(q.to_json(), p.to_json());
   EXPECT_EQ(q.dislocal, 60);
   EXPECT_EQ(q.geometric_check, GeometricCheck::kExhaustive);
+  EXPECT_TRUE(q.fast_queries);
   EXPECT_EQ(q.fundamental_estimator, vision::FundamentalEstimator::kRansac);
   EXPECT_NE(p.to_json().find("\"fundamental_estimator\": \"ransac\""), std::string::npos);
   EXPECT_EQ(LoopDetectorParams::from_json(R"({"fundamental_estimator": "USAC_ACCURATE"})")
@@ -211,7 +219,10 @@ TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
         Bound{"min_inlier_spread", 1, 1.5},
         Bound{"min_inlier_spread", 0, -0.1},
         Bound{"min_uncorroborated_inliers", 0, -1},
-        Bound{"corroboration_distance", 1, 0}}) {
+        Bound{"corroboration_distance", 1, 0},
+        Bound{"corroboration_horizon", 1, 0},
+        Bound{"corroboration_pace_tolerance", 1, 1.5},
+        Bound{"corroboration_pace_tolerance", 0, -0.1}}) {
     SCOPED_TRACE(b.key);
     const auto json = [&](double value) {
       std::ostringstream text;

@@ -39,6 +39,7 @@ inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult
   EXPECT_EQ(x.has_previous_loop, y.has_previous_loop);
   EXPECT_EQ(x.previous_loop_query, y.previous_loop_query);
   EXPECT_EQ(x.previous_loop_match, y.previous_loop_match);
+  EXPECT_EQ(x.previous_loop_at_pace, y.previous_loop_at_pace);
   EXPECT_EQ(x.neighbour_checked, y.neighbour_checked);
   EXPECT_EQ(x.corroborating_neighbour, y.corroborating_neighbour);
   EXPECT_EQ(x.neighbour_inliers, y.neighbour_inliers);

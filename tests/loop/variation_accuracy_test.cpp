@@ -4,12 +4,10 @@
 // scripts/make_variations.sh (ffmpeg, fixed seeds and thread counts). With
 // the DEFAULT parameters and the bundled vocabularies, no case may give a
 // false loop, and each finds at least the true loops the detector found
-// there before weak loops needed corroboration (the counts below), but for
-// one loop fewer in two cases (jpeg_q24 with BRIEF, downscale_0.75+jpeg_q16
-// with ORB: a true loop of 12-14 inliers with no loop just before it and
-// no neighbour of its match to confirm it; docs/loop-detection.md). The
+// there before weak loops needed corroboration (the counts below). The
 // "tuning" cases chose the defaults; the "validation" cases were only
-// measured afterwards. Through the CLI, as
+// measured afterwards (docs/loop-detection.md says which of their results
+// shaped a rule). Through the CLI, as
 // `scripts/measure_accuracy.sh -s` measures them.
 #include <gtest/gtest.h>
 
@@ -55,7 +53,7 @@ const VariationCase kCases[] = {
     VariationCase{"h265_crf35", "validation", 37, 33},
     VariationCase{"jpeg_q8", "validation", 39, 35},
     VariationCase{"jpeg_q16", "tuning", 39, 36},
-    VariationCase{"jpeg_q24", "validation", 35, 31},
+    VariationCase{"jpeg_q24", "validation", 35, 32},
     VariationCase{"noise_8", "validation", 38, 29},
     VariationCase{"noise_16", "tuning", 40, 17},
     VariationCase{"gamma_0.6", "tuning", 36, 35},
@@ -69,7 +67,7 @@ const VariationCase kCases[] = {
     VariationCase{"upscale_1.5", "tuning", 38, 34},
     VariationCase{"upscale_2", "validation", 37, 29},
     VariationCase{"noise_8+h264_crf28", "tuning", 38, 34},
-    VariationCase{"downscale_0.75+jpeg_q16", "validation", 35, 29},
+    VariationCase{"downscale_0.75+jpeg_q16", "validation", 36, 29},
     VariationCase{"exposure_x1.5+blur_1.0+h265_crf28", "validation", 36, 38},
     VariationCase{"gamma_1.6+upscale_1.5+h264_crf35", "tuning", 35, 30},
 };

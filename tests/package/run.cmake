@@ -46,7 +46,15 @@ run("running the installed binbow info" ${cli} info ${vocabulary})
 if(NOT output MATCHES "words")
   message(FATAL_ERROR "the installed binbow info printed: ${output}")
 endif()
-expect_linkage(${cli} vision)
+expect_linkage(${cli} core)
+# The commands that read images are a module beside binbow_media, loaded
+# from the prefix (shared: linking the installed libbinbow_vision.so).
+set(vision_commands ${prefix}/${LIBDIR}/binbow/binbow_cli_vision.so)
+run("running the installed binbow features" ${cli} features ${sample}/1.jpg)
+if(NOT output MATCHES "keypoints")
+  message(FATAL_ERROR "the installed binbow features printed: ${output}")
+endif()
+expect_linkage(${vision_commands} vision)
 
 set(core_expect "words: [0-9]+")
 set(vision_expect "frames: 84, database entries: 84, loops: [1-9][0-9]*")

@@ -39,6 +39,10 @@ std::string cli_path() {
   return BINBOW_CLI;
 }
 
+std::string cli_vision_module_path() {
+  return BINBOW_CLI_VISION_MODULE;
+}
+
 TempDir::TempDir() {
   std::string pattern = (fs::temp_directory_path() / "binbow-test-XXXXXX").string();
   if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
@@ -48,6 +52,27 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ignored;
   fs::remove_all(path_, ignored);
+}
+
+std::string write_frame_list(const TempDir& dir, int count) {
+  const std::string path = dir.file("frames.txt");
+  std::ofstream list(path);
+  for (int i = 1; i <= count; ++i) list << samples_folder() << "/" << i << ".jpg\n";
+  return path;
+}
+
+Vocabulary hand_made_vocabulary(const std::string& descriptor, std::size_t code_size) {
+  VocabularyTree tree;
+  tree.code_size = code_size;
+  tree.branching = 3;
+  tree.levels = 2;
+  tree.parent = {0, 0, 0, 0, 1, 1, 1, 2, 2};
+  tree.descriptor = descriptor;
+  std::mt19937_64 rng(4);
+  tree.descriptors.resize(tree.parent.size() * code_size);
+  for (std::uint8_t& byte : tree.descriptors) byte = static_cast<std::uint8_t>(rng());
+  tree.weights = {0, 0, 0, 0.75f, 1.5f, 2.25f, 3.0f, 0.1f, 0.2f};
+  return Vocabulary::from_tree(tree);
 }
 
 std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size) {

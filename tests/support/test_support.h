@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "binbow/descriptors.h"
+#include "binbow/vocabulary.h"
 
 namespace binbow::test {
 
@@ -20,6 +21,8 @@ std::string samples_folder();
 std::string source_path(const std::string& relative);
 // Path of the binbow CLI built beside the tests.
 std::string cli_path();
+// Path of the module with the CLI's commands that need OpenCV.
+std::string cli_vision_module_path();
 
 // A fresh empty directory, removed when the object dies.
 class TempDir {
@@ -34,6 +37,15 @@ class TempDir {
  private:
   std::string path_;
 };
+
+// A frame list (one path a line) of the first `count` corridor frames of
+// samples_folder(), written in `dir`; returns its path.
+std::string write_frame_list(const TempDir& dir, int count);
+
+// A hand-made two-level tree of 9 nodes (3 x 3 leaves, fixed random words of
+// `code_size` bytes, fixed weights) trained on `descriptor`: a vocabulary
+// that depends on no builder.
+Vocabulary hand_made_vocabulary(const std::string& descriptor = "", std::size_t code_size = 32);
 
 // Hamming distance counted bit by bit: the reference for the kernels.
 std::uint32_t bit_distance(const std::uint8_t* a, const std::uint8_t* b, std::size_t code_size);

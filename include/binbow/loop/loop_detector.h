@@ -98,6 +98,14 @@ struct LoopDetectorParams {
   // --- Database query
   int dislocal = 20;        // candidates of image t are entries j < t − dislocal (20 f) [0, 1e6]
   int max_db_results = 50;  // candidates taken from each query (50 f) [1, 1e6]
+  // Query the database in fast mode (QueryMode::kFast): the same exact
+  // scores, but read from the candidates that the query's rarest words
+  // find, for databases of many images that share most words. Off by
+  // default. Fast mode reads the whole index until skipping words saves
+  // more postings than its candidates hold words (~1M postings per query,
+  // ~20,000 images of 1000 features that share most words): smaller maps
+  // get the same loops either way.
+  bool fast_queries = false;
 
   // --- Islands (Section V-B)
   // Entries j < j' join the same island when j' − j < gap (3 f). [1, 1e6]
@@ -151,23 +159,33 @@ struct LoopDetectorParams {
   double min_inlier_ratio = 0;
   double min_inlier_spread = 0;
   // binbow's addition, on by default: a loop whose fundamental matrix has
-  // fewer inliers than this must be corroborated, by the loop before it (a
-  // loop was detected at most corroboration_distance queries earlier, with
-  // its match at most corroboration_distance entries from this match) or
+  // fewer inliers than this must be corroborated, by the loop before it or
   // else by a second place: the match's neighbour (match − 1 or match + 1)
-  // also passes the geometric check with the query. A camera that is really
-  // back at a place keeps recognising it and sees what the neighbouring
-  // frames saw, where a chance fit of a dozen matches of repeated or distant
-  // structure (what re-encoded, noisy or rescaled frames of another place
-  // give) comes alone, with one image. Loops with at least this many
-  // inliers stand alone. 0: off (the paper). [0, 1e4]
+  // also passes the geometric check with the query. The loop before it
+  // corroborates when it is near (detected at most corroboration_distance
+  // queries earlier, with its match at most corroboration_distance entries
+  // from this match), or when the revisit kept its pace since (detected at
+  // most corroboration_horizon queries earlier, and its match is as many
+  // entries from this match as its query is queries from this query, either
+  // way, give or take corroboration_pace_tolerance of that many): a camera
+  // that lost the place for a few frames (dim or blank images) and finds
+  // it again where its pace puts it. A camera that is really back at a
+  // place keeps recognising it and sees what the neighbouring frames saw,
+  // where a chance fit of a dozen matches of repeated or distant structure
+  // (what re-encoded, noisy or rescaled frames of another place give) comes
+  // alone, with one image, or jumps entries away from the loop before it.
+  // Loops with at least this many inliers stand alone. 0: off (the paper).
+  // [0, 1e4]
   int min_uncorroborated_inliers = 16;
   int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
+  int corroboration_horizon = 10;  // frames (10 f) [1, 1e6]
+  // Fraction of the queries since the loop before it. [0, 1]
+  double corroboration_pace_tolerance = 0.25;
 
   // The defaults with frame-count parameters scaled to `frequency` Hz
   // (dislocal 20 f, max_db_results 50 f, gaps 3 f, min_matches_per_island f,
-  // max_distance_between_queries 2 f, corroboration_distance 4 f; at least 1
-  // each where it matters).
+  // max_distance_between_queries 2 f, corroboration_distance 4 f,
+  // corroboration_horizon 10 f; at least 1 each where it matters).
   static LoopDetectorParams for_frequency(double frequency);
 
   // Reads a JSON file (content starting with '{', or a .json name) or a YAML

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-namespace binbow::vision {
+namespace binbow::detail {
 
 // Throws FileError naming `path` unless it is a regular file (symbolic links
 // followed): missing, a directory, a FIFO, a socket or a device.
@@ -17,4 +17,4 @@ void require_regular_file(const std::string& path);
 // than `max_bytes` bytes (the message gives the limit).
 std::string read_regular_file(const std::string& path, std::uint64_t max_bytes);
 
-}  // namespace binbow::vision
+}  // namespace binbow::detail

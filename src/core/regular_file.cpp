@@ -1,4 +1,4 @@
-#include "vision/regular_file.h"
+#include "core/regular_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -11,11 +11,11 @@
 #include "binbow/error.h"
 #include "core/file_io.h"
 
-namespace binbow::vision {
+namespace binbow::detail {
 namespace {
 
 [[noreturn]] void throw_not_regular(const std::string& path, mode_t mode) {
-  throw FileError(path, std::string("is ") + detail::file_kind(mode) + ", not a regular file");
+  throw FileError(path, std::string("is ") + file_kind(mode) + ", not a regular file");
 }
 
 // Closes the descriptor on every path out of read_regular_file.
@@ -79,4 +79,4 @@ std::string read_regular_file(const std::string& path, std::uint64_t max_bytes) 
   return bytes;
 }
 
-}  // namespace binbow::vision
+}  // namespace binbow::detail
