@@ -618,7 +618,10 @@ void Database::Impl::build_forward_index() const {
   for (const auto& segment : segments) {
     const std::uint32_t* offsets = segment->offsets.data();
     const std::uint8_t* bytes = segment->bytes.data();
-    cursors.assign(offsets, offsets + word_capacity);  // by row: the next posting's byte
+    // By row: the next posting's byte, past the row's header.
+    cursors.resize(word_capacity);
+    for (std::size_t row = 0; row < word_capacity; ++row)
+      cursors[row] = offsets[row] + (offsets[row] != offsets[row + 1] ? 1 : 0);
     last_entries.assign(word_capacity, detail::kRowStart);
     for (EntryId first = segment->first_entry; first < segment->end_entry; first += kChunk) {
       const EntryId end = std::min<EntryId>(first + kChunk, segment->end_entry);
@@ -627,15 +630,15 @@ void Database::Impl::build_forward_index() const {
         const std::uint32_t row = row_order.row(static_cast<WordId>(word));
         std::uint32_t& i = cursors[row];
         std::uint32_t& last = last_entries[row];
-        while (i < offsets[row + 1]) {
-          std::uint32_t gap;
-          const std::uint8_t* weight = detail::read_gap(bytes + i, gap);
-          const std::uint32_t relative = last + gap + 1;
+        const std::uint32_t width = i < offsets[row + 1] ? bytes[offsets[row]] : 0;
+        for (; i < offsets[row + 1]; i += width + detail::kWeightBytes) {
+          const std::uint8_t* at = bytes + i;
+          const std::uint32_t relative =
+              last + (width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at)) + 1;
           if (relative >= relative_end) break;
           words[segment->first_entry + relative - first].push_back(
-              {static_cast<WordId>(word), detail::read_weight(weight)});
+              {static_cast<WordId>(word), detail::read_weight(at + width)});
           last = relative;
-          i = static_cast<std::uint32_t>(weight + detail::kWeightBytes - bytes);
         }
       }
       encode_chunk(first, end);
@@ -708,10 +711,9 @@ void Database::Impl::merge_segments_if_many() {
 namespace {
 
 // Row by row, the rows of the segments [begin, end), oldest first: entries
-// stay in increasing order. Every source is read sequentially; within a
-// source's run only the first gap changes (it is now from the previous
-// source's last entry), the rest is copied as is. Merged segments and their
-// sources span at most kSegmentSpan ids. Returns the bytes written.
+// stay in increasing order, every source is read sequentially. Merged
+// segments and their sources span at most kSegmentSpan ids. Returns the
+// bytes written.
 std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
                        const std::unique_ptr<detail::Segment>* end,
                        detail::Segment& merged) noexcept {
@@ -735,28 +737,17 @@ std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
   offsets[0] = 0;
   for (std::size_t r = 0; r < rows; ++r) {
     std::uint32_t last = detail::kRowStart;  // relative to merged.first_entry
+    detail::RowWriter row(out);
     for (std::size_t k = 0; k < source_count; ++k) {
       const Source& s = sources[k];
-      const std::uint8_t* at = s.bytes + s.offsets[r];
-      const std::uint8_t* const row_end = s.bytes + s.offsets[r + 1];
-      if (at == row_end) continue;
-      std::uint32_t gap;
-      at = detail::read_gap(at, gap);
-      std::uint32_t entry = s.shift + gap;  // the source's first is gap + 1 after kRowStart
-      out = detail::put_posting(out, entry - last - 1, detail::read_weight(at));
-      at += detail::kWeightBytes;
-      const std::uint8_t* const rest = at;
-      // The run's last entry, for the next source's first gap.
-      while (at != row_end) {
-        at = detail::read_gap(at, gap);
-        entry += gap + 1;
-        at += detail::kWeightBytes;
-      }
-      const auto rest_bytes = static_cast<std::size_t>(row_end - rest);
-      std::memcpy(out, rest, rest_bytes);
-      out += rest_bytes;
-      last = entry;
+      detail::for_each_posting(s.bytes + s.offsets[r], s.bytes + s.offsets[r + 1],
+                               [&](std::uint32_t relative, float weight) {
+                                 const std::uint32_t entry = s.shift + relative;
+                                 row.put(entry - last - 1, weight);
+                                 last = entry;
+                               });
     }
+    out = row.finish();
     offsets[r + 1] = static_cast<std::uint32_t>(out - out_begin);
   }
   return static_cast<std::size_t>(out - out_begin);
@@ -765,16 +756,13 @@ std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
 }  // namespace
 
 void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
-  // A source's first gap in a row may grow by up to 2 bytes in the merged
-  // row: room for that, then the block shrinks to what was written.
-  std::size_t postings = 0, bytes = 0;
-  for (std::size_t i = begin; i < end; ++i) {
-    const detail::Segment& source = *segments[i];
-    postings += source.postings();
-    bytes += source.bytes.size();
-    if (i > begin)
-      bytes += (detail::kMaxGapBytes - 1) * std::min(source.postings(), source.offsets.size());
-  }
+  // Rows are written with 2-byte gaps, then narrowed: room for that, then
+  // the block shrinks to what was written.
+  std::size_t postings = 0;
+  for (std::size_t i = begin; i < end; ++i) postings += segments[i]->postings();
+  const std::size_t rows = segments[begin]->offsets.size() - 1;
+  const std::size_t bytes =
+      postings * (detail::kMaxGapWidth + detail::kWeightBytes) + std::min(postings, rows);
   if (bytes > std::numeric_limits<std::uint32_t>::max())
     throw InvalidArgument("Database: more than 4 GiB of postings in one segment");
   auto merged = std::make_unique<detail::Segment>();
@@ -799,6 +787,7 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   const std::size_t words_per_group = std::size_t{1} << high_bits;
   std::vector<std::uint32_t> last(words_per_group);
   std::vector<std::uint32_t> next(words_per_group);
+  std::vector<std::uint32_t> gaps(words_per_group);  // per word: its row's gaps ORed
   auto segment = std::make_unique<detail::Segment>();
   segment->offsets.resize(word_capacity + 1);
   segment->first_entry = tail_first_entry;
@@ -836,17 +825,18 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
                      const detail::TailPosting* postings, std::uint32_t size) {
     std::fill(next.begin(), next.begin() + rows, 0);
+    std::fill(gaps.begin(), gaps.begin() + rows, 0);
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
       const std::uint32_t word = key & high_mask;
-      next[word] += static_cast<std::uint32_t>(detail::gap_bytes(relative - last[word] - 1) +
-                                               detail::kWeightBytes);
+      ++next[word];
+      gaps[word] |= relative - last[word] - 1;
       last[word] = relative;
     }
     for (std::uint32_t r = 0; r < rows; ++r) {
-      row_end += next[r];
+      row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r]));
       offsets[first_row + r + 1] = row_end;
     }
   });
@@ -855,15 +845,33 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   std::uint8_t* bytes = segment->bytes.data();
   for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
                      const detail::TailPosting* postings, std::uint32_t size) {
-    for (std::uint32_t r = 0; r < rows; ++r) next[r] = offsets[first_row + r];
+    // Each row's width, as the first pass found it (the group is in cache).
+    std::fill(gaps.begin(), gaps.begin() + rows, 0);
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
       const std::uint32_t word = key & high_mask;
-      next[word] = static_cast<std::uint32_t>(
-          detail::put_posting(bytes + next[word], relative - last[word] - 1, postings[i].weight) -
-          bytes);
+      gaps[word] |= relative - last[word] - 1;
+      last[word] = relative;
+    }
+    std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
+    for (std::uint32_t r = 0; r < rows; ++r) {
+      const std::uint32_t begin = offsets[first_row + r], end = offsets[first_row + r + 1];
+      next[r] = begin + (begin != end ? 1 : 0);
+      if (begin == end) continue;
+      gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
+      bytes[begin] = static_cast<std::uint8_t>(gaps[r]);
+    }
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      const std::uint32_t relative = key >> high_bits;
+      if (drop_dead && live_at[relative] == 0) continue;
+      const std::uint32_t word = key & high_mask;
+      next[word] = static_cast<std::uint32_t>(detail::put_posting(bytes + next[word], gaps[word],
+                                                                  relative - last[word] - 1,
+                                                                  postings[i].weight) -
+                                              bytes);
       last[word] = relative;
     }
   });
@@ -892,33 +900,32 @@ void Database::Impl::freeze_tail() {
 
 namespace {
 
-// Rewrites the rows in place without the postings of removed entries;
-// returns the bytes kept. A gap that absorbs dropped postings never takes
-// more bytes than they and its own did, so writing never overtakes reading.
-std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at) noexcept {
+// Writes the rows without the postings of removed entries into `out`
+// (room for each kept posting with a 2-byte gap, and a header per row);
+// returns the bytes written.
+std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at,
+                               std::uint8_t* const out_begin) noexcept {
   std::uint32_t* offsets = segment.offsets.data();
-  std::uint8_t* const bytes = segment.bytes.data();
-  std::uint8_t* out = bytes;
+  const std::uint8_t* const bytes = segment.bytes.data();
+  std::uint8_t* out = out_begin;
   std::size_t kept = 0;
-  const std::uint8_t* at = bytes;
+  std::uint32_t begin = offsets[0];
   for (std::size_t w = 0; w + 1 < segment.offsets.size(); ++w) {
-    const std::uint8_t* const end = bytes + offsets[w + 1];
-    std::uint32_t entry = detail::kRowStart, last = detail::kRowStart;
-    while (at != end) {
-      std::uint32_t gap;
-      at = detail::read_gap(at, gap);
-      entry += gap + 1;
-      const float weight = detail::read_weight(at);
-      at += detail::kWeightBytes;
-      if (live_at[entry] == 0) continue;
-      out = detail::put_posting(out, entry - last - 1, weight);
+    const std::uint32_t end = offsets[w + 1];
+    std::uint32_t last = detail::kRowStart;
+    detail::RowWriter row(out);
+    detail::for_each_posting(bytes + begin, bytes + end, [&](std::uint32_t entry, float weight) {
+      if (live_at[entry] == 0) return;
+      row.put(entry - last - 1, weight);
       last = entry;
       ++kept;
-    }
-    offsets[w + 1] = static_cast<std::uint32_t>(out - bytes);
+    });
+    out = row.finish();
+    offsets[w + 1] = static_cast<std::uint32_t>(out - out_begin);
+    begin = end;
   }
   segment.posting_count = kept;
-  return static_cast<std::size_t>(out - bytes);
+  return static_cast<std::size_t>(out - out_begin);
 }
 
 }  // namespace
@@ -929,8 +936,20 @@ void Database::Impl::compact(std::size_t index) {
     segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(index));
     return;
   }
+  // A gap that absorbs dropped postings may widen its row: the rows go to
+  // a new block. Without memory for it the segment stays as it is (queries
+  // skip removed entries), so that remove never fails half done.
+  const std::size_t live = segment.postings() - segment.dead_postings;
+  detail::GrowableArray<std::uint8_t> kept;
+  try {
+    kept.resize(live * (detail::kMaxGapWidth + detail::kWeightBytes) +
+                std::min(live, segment.offsets.size() - 1));
+  } catch (const std::bad_alloc&) {
+    return;
+  }
   // Shrinking never throws.
-  segment.bytes.resize(drop_dead_postings(segment, alive.data() + segment.first_entry));
+  kept.resize(drop_dead_postings(segment, alive.data() + segment.first_entry, kept.data()));
+  segment.bytes.swap(kept);
   segment.dead_postings = 0;
 }
 

@@ -280,15 +280,15 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   for (std::size_t k = 0; k < part_count; ++k) {
     if (source_begin[k] == sources.size()) break;
     detail::RowOrder::for_each_row(impl.word_capacity, [&](std::uint32_t row, WordId word) {
-      std::uint32_t bytes = 0, postings = 0, last = detail::kRowStart;
+      std::uint32_t gaps = 0, postings = 0, last = detail::kRowStart;
       for_each_posting(k, row, [&](std::uint32_t relative, float) {
-        bytes += static_cast<std::uint32_t>(detail::gap_bytes(relative - last - 1) +
-                                            detail::kWeightBytes);
+        gaps |= relative - last - 1;
         last = relative;
         ++postings;
       });
       if (postings == 0) return;
-      part_rows[k].push_back({row, word, bytes});
+      part_rows[k].push_back(
+          {row, word, static_cast<std::uint32_t>(detail::row_bytes(postings, gaps))});
       part_postings[k] += postings;
       largest_word_end = std::max<std::uint64_t>(largest_word_end, std::uint64_t{word} + 1);
     });
@@ -308,14 +308,15 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   std::vector<std::uint8_t> row_bytes;
   for (std::size_t k = 0; k < part_count; ++k)
     for (const PartRow& row : part_rows[k]) {
-      row_bytes.resize(row.bytes);
-      std::uint8_t* at = row_bytes.data();
+      row_bytes.resize(row.bytes + detail::kMaxGapWidth * (row.bytes / detail::kWeightBytes));
+      detail::RowWriter writer(row_bytes.data());
       std::uint32_t last = detail::kRowStart;
       for_each_posting(k, row.row, [&](std::uint32_t relative, float weight) {
-        at = detail::put_posting(at, relative - last - 1, weight);
+        writer.put(relative - last - 1, weight);
         last = relative;
       });
-      out.append(row_bytes.data(), row_bytes.size());
+      writer.finish();  // row.bytes long: the same postings were sized above
+      out.append(row_bytes.data(), row.bytes);
     }
   out.next_section();
   out.next_section();  // weights: within the postings since version 3
@@ -388,6 +389,26 @@ std::string hex(std::uint32_t value) {
   char text[16];
   std::snprintf(text, sizeof text, "%08x", value);
   return text;
+}
+// Moves rows written into slots of row_bytes(n, 0xFFFF) bytes (RowWriter
+// leaves 1-byte rows shorter) next to each other, and shrinks the block.
+void squeeze_rows(detail::Segment& segment) noexcept {
+  std::uint32_t* offsets = segment.offsets.data();
+  std::uint8_t* const bytes = segment.bytes.data();
+  std::uint32_t out = 0;
+  for (std::size_t r = 0; r + 1 < segment.offsets.size(); ++r) {
+    const std::uint32_t begin = offsets[r], slot = offsets[r + 1] - begin;
+    offsets[r] = out;
+    if (slot == 0) continue;
+    const std::uint32_t postings = static_cast<std::uint32_t>(
+        (slot - detail::kRowHeaderBytes) / (detail::kMaxGapWidth + detail::kWeightBytes));
+    const auto size = static_cast<std::uint32_t>(detail::kRowHeaderBytes +
+                                                 postings * (bytes[begin] + detail::kWeightBytes));
+    std::memmove(bytes + out, bytes + begin, size);
+    out += size;
+  }
+  offsets[segment.offsets.size() - 1] = out;
+  segment.bytes.resize(out);
 }
 
 // The readers below check every count against the length of the section it
@@ -479,9 +500,10 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
       }
       // The row's previous posting in this segment, if any, precedes it in the list.
       const bool first_in_row = i == from || previous < segment->first_entry;
-      const std::uint32_t gap = first_in_row ? id - segment->first_entry : id - previous - 1;
+      // Room for a 2-byte gap: pass two writes the row, pass three squeezes it.
       segment->offsets[rows[l] + 1] +=
-          static_cast<std::uint32_t>(detail::gap_bytes(gap) + detail::kWeightBytes);
+          static_cast<std::uint32_t>((first_in_row ? detail::kRowHeaderBytes : 0) +
+                                     detail::kMaxGapWidth + detail::kWeightBytes);
       ++segment->posting_count;
       previous = id;
     }
@@ -497,34 +519,23 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     const std::size_t end = from + lengths[l];
     while (i < end) {
       detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
-      std::uint8_t* to = segment.bytes.data() + segment.offsets[rows[l]];
+      detail::RowWriter row(segment.bytes.data() + segment.offsets[rows[l]]);
       std::uint32_t last = detail::kRowStart;
       for (; i < end; ++i) {
         const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
         if (id >= segment.end_entry) break;
         const std::uint32_t relative = id - segment.first_entry;
-        to = detail::put_posting(to, relative - last - 1, detail::load_le<float>(weights + 4 * i));
+        row.put(relative - last - 1, detail::load_le<float>(weights + 4 * i));
         last = relative;
       }
+      row.finish();
     }
   });
   for (auto& segment : segments)
-    if (segment) impl->segments.push_back(std::move(segment));
-}
-
-// A posting's gap at `at` (before `end`), as put_posting writes it: the
-// shortest LEB128 of a value below kSegmentSpan; false if it is not one.
-bool read_checked_gap(const std::uint8_t*& at, const std::uint8_t* end, std::uint32_t& gap) {
-  std::uint32_t value = 0;
-  for (unsigned i = 0; i < detail::kMaxGapBytes && at != end; ++i) {
-    const std::uint8_t byte = *at++;
-    value |= std::uint32_t{byte & 0x7Fu} << (7 * i);
-    if (byte < 0x80) {
-      gap = value;
-      return (i == 0 || byte != 0) && value < detail::kSegmentSpan;
+    if (segment) {
+      squeeze_rows(*segment);
+      impl->segments.push_back(std::move(segment));
     }
-  }
-  return false;
 }
 
 // Versions 2 and 3: the parts are the segments, row by row. Version 3 rows
@@ -596,7 +607,7 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       if (r > 0 && row <= previous_row)
         layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
       const std::uint64_t most =
-          encoded ? std::uint64_t{part_span} * (detail::kMaxGapBytes + detail::kWeightBytes)
+          encoded ? detail::row_bytes(part_span, 0xFFFF)
                   : std::min<std::uint64_t>(part_span, part_postings - part_read);
       if (length == 0 || length > most || length > posting_units - unit_at - part_units)
         layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
@@ -615,29 +626,38 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       std::uint32_t last = detail::kRowStart;
       std::uint64_t bytes = 0;
       if (encoded) {
+        // The header's width (1 or 2), postings at its stride, and the
+        // width the narrowest the gaps allow, so that a row has one form.
         const std::uint8_t* at = postings + unit_at + part_units;
-        const std::uint8_t* const row_end = at + length;
-        while (at != row_end) {
-          std::uint32_t gap;
-          if (!read_checked_gap(at, row_end, gap) ||
-              static_cast<std::size_t>(row_end - at) < detail::kWeightBytes)
-            layout.fail(where + ": the row of word " + std::to_string(word) +
-                        " has a malformed posting");
+        const std::size_t width = at[0];
+        const std::size_t stride = width + detail::kWeightBytes;
+        if ((width != 1 && width != 2) || (length - detail::kRowHeaderBytes) % stride != 0)
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " has a malformed posting");
+        std::uint32_t gaps = 0;
+        for (at += detail::kRowHeaderBytes; at != postings + unit_at + part_units + length;
+             at += stride) {
+          const std::uint32_t gap = width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at);
+          gaps |= gap;
           last += gap + 1;
-          check(last, detail::read_weight(at));
-          at += detail::kWeightBytes;
+          check(last, detail::read_weight(at + width));
           ++part_read;
         }
+        if (detail::gap_width(gaps) != width)
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " has gaps wider than needed");
         bytes = length;
       } else {
+        std::uint32_t gaps = 0;
         for (std::uint32_t i = 0; i < length; ++i) {
           const std::size_t at = unit_at + part_units + i;
           const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
           if (i > 0 && relative <= last) invalid_posting();
           check(relative, detail::load_le<float>(weights + 4 * at));
-          bytes += detail::gap_bytes(relative - last - 1) + detail::kWeightBytes;
+          gaps |= relative - last - 1;
           last = relative;
         }
+        bytes = detail::row_bytes(length, gaps);
         part_read += length;
       }
       offsets[row + 1] = static_cast<std::uint32_t>(bytes);
@@ -661,10 +681,18 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       std::size_t at = unit_at;
       for (std::uint32_t r = 0; r < part_rows; ++r) {
         const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
-        std::uint32_t last = detail::kRowStart;
+        std::uint32_t gaps = 0, last = detail::kRowStart;
+        for (std::uint32_t i = 0; i < length; ++i) {
+          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * (at + i));
+          gaps |= relative - last - 1;
+          last = relative;
+        }
+        const std::size_t width = detail::gap_width(gaps);
+        *to++ = static_cast<std::uint8_t>(width);
+        last = detail::kRowStart;
         for (std::uint32_t i = 0; i < length; ++i, ++at) {
           const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
-          to = detail::put_posting(to, relative - last - 1,
+          to = detail::put_posting(to, width, relative - last - 1,
                                    detail::load_le<float>(weights + 4 * at));
           last = relative;
         }

@@ -295,49 +295,41 @@ namespace binbow {
 namespace detail {
 
 // A part of the inverted index: the postings of the entries
-// [first_entry, end_entry) as compressed rows by word (in RowOrder): one
-// byte offset per word, then the row's postings in increasing entry order,
-// each as its gap from the previous one (entry - previous - 1, the first
-// from first_entry - 1) in LEB128 (7 bits per byte: 1 byte for gaps below
-// 128, which rows of common words have, at most 3) followed by its weight
+// [first_entry, end_entry) as rows by word (in RowOrder): one byte offset
+// per word, then the row's bytes. An empty row has none; otherwise a header
+// byte holds the row's gap width (1 if every gap of the row is below 256,
+// else 2), then come its postings in increasing entry order at a fixed
+// stride: the gap from the previous entry (entry - previous - 1, the first
+// from first_entry - 1; little-endian, of the row's width) and the weight
 // (f32, little-endian, unaligned): 5 bytes per posting in common rows. A
-// segment spans at most kSegmentSpan ids, so that gaps stay small. A query
-// pays one offset lookup per word and segment, small next to the postings
-// it reads.
+// fixed stride lets a query read a row with no branch per posting, so the
+// cache misses of its score sums overlap. A segment spans at most
+// kSegmentSpan ids, so that 2 bytes hold any gap. A query pays one offset
+// lookup per word and segment, small next to the postings it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
 constexpr std::size_t kWeightBytes = 4;
-constexpr std::size_t kMaxGapBytes = 3;  // LEB128 of a gap below kSegmentSpan
+constexpr std::size_t kRowHeaderBytes = 1;
+constexpr std::size_t kMaxGapWidth = 2;
 
-constexpr std::size_t gap_bytes(std::uint32_t gap) noexcept {
-  return gap < 0x80 ? 1 : gap < 0x4000 ? 2 : 3;
+// The gap width of a row whose gaps OR to `gaps`.
+constexpr std::size_t gap_width(std::uint32_t gaps) noexcept {
+  return gaps < 0x100 ? 1 : 2;
 }
-// Writes a posting at `out`; returns the byte after it.
-inline std::uint8_t* put_posting(std::uint8_t* out, std::uint32_t gap, float weight) noexcept {
-  while (gap >= 0x80) {
-    *out++ = static_cast<std::uint8_t>(gap | 0x80);
-    gap >>= 7;
-  }
-  *out++ = static_cast<std::uint8_t>(gap);
-  std::memcpy(out, &weight, kWeightBytes);  // little-endian hosts only (as the whole index)
-  return out + kWeightBytes;
+// The bytes of a row of `postings` postings whose gaps OR to `gaps`.
+constexpr std::size_t row_bytes(std::size_t postings, std::uint32_t gaps) noexcept {
+  return postings == 0 ? 0 : kRowHeaderBytes + postings * (gap_width(gaps) + kWeightBytes);
 }
-// Reads the gap of a posting written by put_posting; returns its weight's
-// first byte. Common rows have 1-byte gaps: a predicted branch lets the next
-// postings be read ahead, where a branch-free decode would wait for each
-// gap's load before the next.
-inline const std::uint8_t* read_gap(const std::uint8_t* at, std::uint32_t& gap) noexcept {
-  const std::uint32_t b0 = at[0];
-  if (__builtin_expect(b0 < 0x80, 1)) {
-    gap = b0;
-    return at + 1;
-  }
-  const std::uint32_t b1 = at[1];
-  if (b1 < 0x80) {
-    gap = (b0 & 0x7F) | b1 << 7;
-    return at + 2;
-  }
-  gap = (b0 & 0x7F) | (b1 & 0x7F) << 7 | std::uint32_t{at[2]} << 14;
-  return at + 3;
+// Writes a posting of a row of gap width `width` at `out`; returns the byte after it.
+inline std::uint8_t* put_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
+                                 float weight) noexcept {
+  out[0] = static_cast<std::uint8_t>(gap);
+  if (width == 2) out[1] = static_cast<std::uint8_t>(gap >> 8);
+  std::memcpy(out + width, &weight, kWeightBytes);  // little-endian hosts only (as the whole index)
+  return out + width + kWeightBytes;
+}
+template <std::size_t kWidth>
+inline std::uint32_t read_gap(const std::uint8_t* at) noexcept {
+  return kWidth == 1 ? at[0] : std::uint32_t{at[0]} | std::uint32_t{at[1]} << 8;
 }
 inline float read_weight(const std::uint8_t* at) noexcept {
   float weight;
@@ -348,18 +340,49 @@ inline float read_weight(const std::uint8_t* at) noexcept {
 // differences minus 1, in wrapping 32-bit arithmetic.
 constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
 
+// Writes a row from its postings alone: each with a 2-byte gap, narrowed to
+// 1 byte by finish() when every gap allows. Needs row_bytes(n, 0xFFFF) bytes
+// for n postings.
+class RowWriter {
+ public:
+  explicit RowWriter(std::uint8_t* out) noexcept : begin_(out), at_(out + kRowHeaderBytes) {}
+  void put(std::uint32_t gap, float weight) noexcept {
+    at_ = put_posting(at_, 2, gap, weight);
+    gaps_ |= gap;
+  }
+  // Returns the byte after the row.
+  std::uint8_t* finish() noexcept {
+    const std::uint8_t* const postings = begin_ + kRowHeaderBytes;
+    if (at_ == postings) return begin_;
+    const std::size_t width = gap_width(gaps_);
+    *begin_ = static_cast<std::uint8_t>(width);
+    if (width == 2) return at_;
+    std::uint8_t* out = begin_ + kRowHeaderBytes;
+    for (const std::uint8_t* in = postings; in != at_; in += 2 + kWeightBytes) {
+      out[0] = in[0];
+      std::memmove(out + 1, in + 2, kWeightBytes);
+      out += 1 + kWeightBytes;
+    }
+    return out;
+  }
+
+ private:
+  std::uint8_t* begin_;
+  std::uint8_t* at_;
+  std::uint32_t gaps_ = 0;
+};
+
 // Calls visit(relative_entry, weight) for the postings of the row in
 // [begin, end), in order.
 template <class Visit>
 inline void for_each_posting(const std::uint8_t* begin, const std::uint8_t* end,
                              const Visit& visit) {
+  if (begin == end) return;
+  const std::size_t width = *begin;
   std::uint32_t entry = kRowStart;
-  for (const std::uint8_t* at = begin; at != end;) {
-    std::uint32_t gap;
-    at = read_gap(at, gap);
-    entry += gap + 1;
-    visit(entry, read_weight(at));
-    at += kWeightBytes;
+  for (const std::uint8_t* at = begin + kRowHeaderBytes; at != end; at += width + kWeightBytes) {
+    entry += (width == 1 ? read_gap<1>(at) : read_gap<2>(at)) + 1;
+    visit(entry, read_weight(at + width));
   }
 }
 
@@ -392,9 +415,9 @@ struct Segment {
     return bytes.data() + offsets[row + 1];
   }
   std::size_t row_postings(std::uint32_t row) const noexcept {
-    std::size_t count = 0;
-    for_each_posting(row_begin(row), row_end(row), [&](std::uint32_t, float) { ++count; });
-    return count;
+    const std::uint32_t size = offsets[row + 1] - offsets[row];
+    if (size == 0) return 0;
+    return (size - kRowHeaderBytes) / (bytes.data()[offsets[row]] + kWeightBytes);
   }
 };
 

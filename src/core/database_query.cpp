@@ -134,7 +134,18 @@ struct MinimumTerm {
 // ahead are prefetched so that their cache misses overlap.
 constexpr std::size_t kPrefetchAhead = 8;
 
-constexpr std::size_t kDecodeBatch = 64;
+// A row's postings at their fixed stride: the entries are a running sum of
+// the gaps, with no branch per posting but the (predicted) cut.
+template <std::size_t kWidth, class Term>
+inline void accumulate_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
+                           std::uint32_t last, const Term& term, PartScores scores) {
+  std::uint32_t entry = detail::kRowStart;
+  for (; at != end; at += kWidth + detail::kWeightBytes) {
+    entry += detail::read_gap<kWidth>(at) + 1;
+    if (cut && entry > last) return;
+    scores.add(entry, term(detail::read_weight(at + kWidth)));
+  }
+}
 
 // Entries are increasing within a row, so `last_entry` cuts it short.
 template <class Term>
@@ -152,48 +163,14 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
     if (q + kPrefetchAhead < n)
       __builtin_prefetch(bytes + offsets[order.row(query[q + kPrefetchAhead].word)]);
     const std::uint32_t row = order.row(query[q].word);
-    const std::uint8_t* at = bytes + offsets[row];
+    const std::uint8_t* const begin = bytes + offsets[row];
     const std::uint8_t* const end = bytes + offsets[row + 1];
+    if (begin == end) continue;
     const Term term{query[q].value};
-    // A batch of postings is decoded, then scored: each gap's decoding waits
-    // for the previous one, and kept apart from the scoring it does not hold
-    // back the overlapping cache misses of the sums.
-    std::uint32_t entry = detail::kRowStart;
-    while (at != end) {
-      std::uint32_t batch_entries[kDecodeBatch];
-      float batch_weights[kDecodeBatch];
-      std::size_t count = 0;
-      for (; at != end && count < kDecodeBatch; ++count) {
-        // Four postings of 1-byte gaps at once: their gaps are 5 bytes apart.
-        if (end - at >= 20 && count + 4 <= kDecodeBatch) {
-          const std::uint32_t g0 = at[0], g1 = at[5], g2 = at[10], g3 = at[15];
-          const std::uint32_t e3 = entry + g0 + g1 + g2 + g3 + 4;
-          if ((g0 | g1 | g2 | g3) < 0x80 && (!cut || e3 <= last)) {
-            batch_entries[count] = entry + g0 + 1;
-            batch_entries[count + 1] = entry + g0 + g1 + 2;
-            batch_entries[count + 2] = entry + g0 + g1 + g2 + 3;
-            batch_entries[count + 3] = e3;
-            for (std::size_t k = 0; k < 4; ++k)
-              batch_weights[count + k] = detail::read_weight(at + 5 * k + 1);
-            entry = e3;
-            at += 20;
-            count += 3;
-            continue;
-          }
-        }
-        std::uint32_t gap;
-        at = detail::read_gap(at, gap);
-        entry += gap + 1;
-        if (cut && entry > last) {
-          at = end;
-          break;
-        }
-        batch_entries[count] = entry;
-        batch_weights[count] = detail::read_weight(at);
-        at += detail::kWeightBytes;
-      }
-      for (std::size_t i = 0; i < count; ++i) scores.add(batch_entries[i], term(batch_weights[i]));
-    }
+    if (*begin == 1)
+      accumulate_row<1>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
+    else
+      accumulate_row<2>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
   }
 }
 

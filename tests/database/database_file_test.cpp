@@ -256,16 +256,17 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
        "beyond"},
       {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { put_u32(d + 4, 0); }),
        "invalid length"},
-      // The first posting of the first row: a 1-byte gap (the entry itself), then its weight.
-      {posting([](std::uint8_t* d) { d[0] = 4; }), "missing entry"},
-      {posting([](std::uint8_t* d) { d[0] = 12; }), "missing entry"},
-      // A gap longer than its shortest form, then one of more than 3 bytes.
-      {posting([](std::uint8_t* d) { d[0] |= 0x80, d[1] = 0; }), "malformed posting"},
-      {posting([](std::uint8_t* d) { d[0] = d[1] = d[2] = 0xFF; }), "malformed posting"},
+      // The first row: its header (gap width 1), then its first posting's
+      // 1-byte gap (the entry itself) and weight.
+      {posting([](std::uint8_t* d) { d[1] = 4; }), "missing entry"},
+      {posting([](std::uint8_t* d) { d[1] = 12; }), "missing entry"},
+      // Gap widths other than 1 and 2.
+      {posting([](std::uint8_t* d) { d[0] = 0; }), "malformed posting"},
+      {posting([](std::uint8_t* d) { d[0] = 3; }), "malformed posting"},
       // A row whose last posting is cut short.
       {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { d[4] -= 1; }),
        "malformed posting"},
-      {posting([&](std::uint8_t* d) { std::memcpy(d + 1, &nan, 4); }), "non-finite"},
+      {posting([&](std::uint8_t* d) { std::memcpy(d + 2, &nan, 4); }), "non-finite"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
        "unknown layout"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[1] ^= 1; }),
