@@ -11,8 +11,9 @@
 // Index layout: new entries go to a tail of growable lists, one per group
 // of words (at most 65,536 groups, so that adding stays in cache); when the
 // tail holds about two postings per vocabulary word it becomes a segment of
-// compact rows by word (each posting the LEB128 gap from the row's previous
-// entry, 1 byte in common rows, then its weight: about 5.25 bytes per
+// compact rows by word (each posting the gap from the row's previous entry,
+// 1 byte in common rows and 2 in rows with a gap of 256 or more, then its
+// weight: a fixed stride per row, which queries read without a branch per
 // posting), and every 8 segments of one size merge into one while it spans at
 // most 65,536 entry ids (so that a query's sums for a segment stay in
 // cache). add() is

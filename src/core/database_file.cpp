@@ -11,9 +11,10 @@
 //   4 parts (per part: u32 rows, u32 postings)
 //   5 rows (per part, per word with postings: u32 word, u32 bytes), by
 //     word mod 65,536, then word / 65,536
-//   6 postings, by part, row, id: per posting the gap from the row's
-//     previous id minus 1 (the first: id - the part's first id) in LEB128
-//     (at most 3 bytes, shortest form), then its weight (f32)
+//   6 postings, by part, row: the row's gap width (u8: 1 if every gap of
+//     the row is below 256, else 2; no other), then by id per posting the
+//     gap from the row's previous id minus 1 (the first: id - the part's
+//     first id; u8 or u16 by the width), then its weight (f32)
 //   7 empty
 //   8 direct index sizes (per id: u32 nodes, u32 features, u32 bytes)
 //   9 direct index data (per live entry: u8 layout, u32 bytes of node ids,
