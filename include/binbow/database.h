@@ -11,9 +11,12 @@
 // Index layout: new entries go to a tail of growable lists, one per group
 // of words (at most 65,536 groups, so that adding stays in cache); when the
 // tail holds about two postings per vocabulary word it becomes a segment of
-// compact rows by word (16-bit entry offsets and weights: 6 bytes per
+// compact rows by word (each posting the gap from the row's previous entry,
+// 1 byte in common rows and 2 in rows with a gap of 256 or more, then its
+// weight: a fixed stride per row, which queries read without a branch per
 // posting), and every 8 segments of one size merge into one while it spans at
-// most 65,536 entry ids (so entries stay 16-bit at any size). add() is
+// most 65,536 entry ids (so that a query's sums for a segment stay in
+// cache). add() is
 // O(words of the image) amortised; a query costs O(postings of the query's
 // words), plus one row lookup per query word and segment. A query thread
 // scores one segment (or the tail) at a time, so it keeps 768 KiB of sums
@@ -217,8 +220,8 @@ class Database {
   // folders are made). With
   // `include_vocabulary`, the file is self-contained; otherwise it records the
   // vocabulary's checksum and load() must be given the same vocabulary.
-  // save() writes format version 2 (the index as memory holds it: about 7 KB
-  // per ORB-1000 image with its direct index); load() reads versions 1 and 2.
+  // save() writes format version 3 (the index as memory holds it: about 6 KB
+  // per ORB-1000 image with its direct index); load() reads versions 1 to 3.
   void save(const std::string& path, bool include_vocabulary = true) const;
   //
   // save() is a full save: it also folds the journal of an earlier

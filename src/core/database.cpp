@@ -40,13 +40,27 @@ void populate(void* data, std::size_t bytes) noexcept {
 #endif
 }
 
+void* allocate_huge(std::size_t bytes) {
+  constexpr std::size_t kHugePage = std::size_t{2} << 20;
+  void* data = std::aligned_alloc(kHugePage, bytes);
+  if (data == nullptr) throw std::bad_alloc();
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  madvise(data, bytes, MADV_HUGEPAGE);  // only advice: 4 KiB pages otherwise
+#endif
+  return data;
+}
+
 std::uint32_t PostingArena::new_chunk(std::size_t postings) {
   // Addresses are 32 bits: chunk index, then kChunkBits of position.
   if (chunks_.size() >= (std::size_t{1} << (32 - kChunkBits)))
     throw InvalidArgument("Database: the tail outgrew its 32 GiB of addresses");
   chunk_starts_.reserve(chunks_.size() + 1);
   chunk_postings_.reserve(chunks_.size() + 1);
-  chunks_.emplace_back(new TailPosting[postings]);  // left uninitialised
+  // Left uninitialised; a block larger than a chunk gets a chunk of its own,
+  // whose size is rounded up to huge pages.
+  const std::size_t huge_postings = (std::size_t{2} << 20) / sizeof(TailPosting);
+  postings = (postings + huge_postings - 1) / huge_postings * huge_postings;
+  chunks_.emplace_back(static_cast<TailPosting*>(allocate_huge(postings * sizeof(TailPosting))));
   chunk_starts_.push_back(chunks_.back().get());
   chunk_postings_.push_back(postings);
   chunk_bytes_ += postings * sizeof(TailPosting);
@@ -171,7 +185,9 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     partition = repeated == 0 && seen[beyond] == 0;
   }
   if (partition) {
-    layout_ = node_count_ <= 0x100 ? Layout::kPartition8 : Layout::kPartition16;
+    layout_ = node_count_ <= 0x80    ? Layout::kPartition7
+              : node_count_ <= 0x100 ? Layout::kPartition8
+                                     : Layout::kPartition16;
   } else {
     const bool wide =
         feature_count_ > 0xFFFF ||
@@ -179,23 +195,60 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
     layout_ = wide ? Layout::kRows32 : Layout::kRows16;
   }
   // Node ids are increasing: each is stored as its step from the previous
-  // one (the first from 0), 7 bits per byte (LEB128). Siblings are
-  // consecutive ids, so most steps take a byte: a direct index 4 levels up a
-  // k=10 L=6 tree takes ~1.2 bytes per node, against 4 for the ids.
-  const auto step = [&](std::size_t node) {
-    return features.node(node) - (node > 0 ? features.node(node - 1) : 0);
+  // one (the first from 0), 7 bits per byte (LEB128), or, when shorter, each
+  // run of consecutive ids as the step to its first from the end of the
+  // previous run (from 0) and its length - 1. Siblings are consecutive ids:
+  // a direct index 4 levels up a k=10 L=6 tree takes ~1.2 bytes per node as
+  // steps, ~0.4 as runs, against 4 for the ids.
+  const auto leb128_bytes = [](std::uint32_t value) {
+    std::uint32_t bytes = 1;
+    for (; value >= 0x80; value >>= 7) ++bytes;
+    return bytes;
   };
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    NodeId rest = step(node);
-    for (; rest >= 0x80; rest >>= 7) ++node_bytes_;
-    ++node_bytes_;
+  const auto for_each_run = [&](const auto& visit) {
+    NodeId end = 0;  // of the previous run
+    for (std::size_t node = 0; node < node_count_;) {
+      std::size_t last = node;
+      while (last + 1 < node_count_ && features.node(last + 1) == features.node(last) + 1) ++last;
+      visit(features.node(node) - end, static_cast<std::uint32_t>(last - node));
+      end = features.node(last) + 1;
+      node = last + 1;
+    }
+  };
+  std::uint32_t step_bytes = 0, run_bytes = 0;
+  for (std::size_t node = 0; node < node_count_; ++node)
+    step_bytes += leb128_bytes(features.node(node) - (node > 0 ? features.node(node - 1) : 0));
+  for_each_run([&](std::uint32_t step, std::uint32_t more) {
+    run_bytes += leb128_bytes(step) + leb128_bytes(more);
+  });
+  node_runs_ = run_bytes < step_bytes;
+  node_bytes_ = node_runs_ ? run_bytes : step_bytes;
+  bytes_.reset(new std::uint8_t[packed_size()]);
+  std::uint8_t* out = bytes_.get();
+  const auto put_leb128 = [&](std::uint32_t value) {
+    for (; value >= 0x80; value >>= 7) *out++ = static_cast<std::uint8_t>((value & 0x7F) | 0x80);
+    *out++ = static_cast<std::uint8_t>(value);
+  };
+  if (node_runs_) {
+    for_each_run([&](std::uint32_t step, std::uint32_t more) {
+      put_leb128(step);
+      put_leb128(more);
+    });
+  } else {
+    for (std::size_t node = 0; node < node_count_; ++node)
+      put_leb128(features.node(node) - (node > 0 ? features.node(node - 1) : 0));
   }
-  bytes_.resize(packed_size());
-  std::uint8_t* out = bytes_.data();
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    NodeId rest = step(node);
-    for (; rest >= 0x80; rest >>= 7) *out++ = static_cast<std::uint8_t>((rest & 0x7F) | 0x80);
-    *out++ = static_cast<std::uint8_t>(rest);
+  if (layout_ == Layout::kPartition7) {
+    // Feature f's 7 bits start at bit 7 f, from the low bit of each byte.
+    std::fill(out, bytes_.get() + packed_size(), 0);
+    for (std::size_t node = 0; node < node_count_; ++node)
+      for (std::uint32_t index : features.features(node)) {
+        const std::size_t bit = std::size_t{7} * index;
+        const std::uint32_t v = static_cast<std::uint32_t>(node) << (bit % 8);
+        out[bit / 8] |= static_cast<std::uint8_t>(v);
+        if (v > 0xFF) out[bit / 8 + 1] |= static_cast<std::uint8_t>(v >> 8);
+      }
+    return;
   }
   if (partition) {
     const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
@@ -223,6 +276,8 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
 std::size_t PackedFeatureVector::packed_size() const noexcept {
   const std::size_t nodes = node_bytes_;
   switch (layout_) {
+    case Layout::kPartition7:
+      return nodes + (std::size_t{feature_count_} * 7 + 7) / 8;
     case Layout::kPartition8:
       return nodes + feature_count_;
     case Layout::kPartition16:
@@ -236,25 +291,39 @@ std::size_t PackedFeatureVector::packed_size() const noexcept {
 }
 
 void PackedFeatureVector::encode(std::uint8_t* out) const noexcept {
-  out[0] = static_cast<std::uint8_t>(layout_);
+  out[0] = static_cast<std::uint8_t>(static_cast<unsigned>(layout_) | (node_runs_ ? kNodeRuns : 0));
   store_le<std::uint32_t>(out + 1, node_bytes_);
-  if (!bytes_.empty()) std::memcpy(out + 5, bytes_.data(), bytes_.size());
+  if (packed_size() > 0) std::memcpy(out + 5, bytes_.get(), packed_size());
 }
 
-bool PackedFeatureVector::next_node(const std::uint8_t*& at, const std::uint8_t* end,
-                                    NodeId& id) noexcept {
-  std::uint64_t step = 0;
+bool PackedFeatureVector::read_leb128(const std::uint8_t*& at, const std::uint8_t* end,
+                                      std::uint64_t& value) noexcept {
+  value = 0;
   for (unsigned shift = 0; shift < 35; shift += 7) {
     if (at == end) return false;
     const std::uint8_t byte = *at++;
-    step |= std::uint64_t{byte & 0x7Fu} << shift;
-    if ((byte & 0x80) == 0) {
-      if (step > 0xFFFFFFFFu - id) return false;
-      id += static_cast<NodeId>(step);
-      return true;
-    }
+    value |= std::uint64_t{byte & 0x7Fu} << shift;
+    if ((byte & 0x80) == 0) return true;
   }
   return false;
+}
+
+template <class Visit>
+bool PackedFeatureVector::for_each_node(const Visit& visit) const {
+  const std::uint8_t* at = bytes_.get();
+  const std::uint8_t* const end = at + node_bytes_;
+  std::uint64_t id = 0;
+  for (std::uint32_t node = 0; node < node_count_;) {
+    std::uint64_t step, more = 0;
+    if (!read_leb128(at, end, step) || (node_runs_ && !read_leb128(at, end, more))) return false;
+    // Steps after the first are at least 1 (runs: from the previous run's end).
+    if (node > 0 && step == 0 && !node_runs_) return false;
+    id += step;
+    if (more >= node_count_ - node || id + more > 0xFFFFFFFFu) return false;
+    for (std::uint64_t i = 0; i <= more; ++i, ++node) visit(static_cast<NodeId>(id + i));
+    if (node_runs_) id += more + 1;
+  }
+  return at == end;
 }
 
 PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::size_t size,
@@ -265,46 +334,49 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
   PackedFeatureVector packed;
   packed.node_count_ = node_count;
   packed.feature_count_ = feature_count;
-  if (data[0] > static_cast<std::uint8_t>(Layout::kRows32))
+  const unsigned layout = data[0] & ~kNodeRuns;
+  if (layout > static_cast<unsigned>(Layout::kPartition7))
     throw InvalidArgument("unknown layout " + std::to_string(data[0]));
-  packed.layout_ = static_cast<Layout>(data[0]);
+  packed.layout_ = static_cast<Layout>(layout);
+  packed.node_runs_ = (data[0] & kNodeRuns) != 0;
   packed.node_bytes_ = load_le<std::uint32_t>(data + 1);
-  const bool partition =
-      packed.layout_ == Layout::kPartition8 || packed.layout_ == Layout::kPartition16;
-  if (partition && node_count > (packed.layout_ == Layout::kPartition8 ? 0x100u : 0x10000u))
-    throw InvalidArgument("too many nodes for its layout");
+  const bool partition = packed.partition();
+  const std::uint32_t most_nodes = packed.layout_ == Layout::kPartition7   ? 0x80u
+                                   : packed.layout_ == Layout::kPartition8 ? 0x100u
+                                                                           : 0x10000u;
+  if (partition && node_count > most_nodes) throw InvalidArgument("too many nodes for its layout");
   if (packed.node_bytes_ > size - 5 || size - 5 != packed.packed_size())
     throw InvalidArgument(std::to_string(size - 5) + " bytes, not what its " +
                           std::to_string(node_count) + " nodes and " +
                           std::to_string(feature_count) + " features take");
-  packed.bytes_.assign(data + 5, data + size);
-  const std::size_t nodes_bytes = packed.node_bytes_;
-  const std::uint8_t* at = packed.bytes_.data();
-  const std::uint8_t* const nodes_end = at + nodes_bytes;
-  NodeId id = 0;
-  for (std::size_t node = 0; node < node_count; ++node) {
-    const NodeId previous = id;
-    if (!next_node(at, nodes_end, id)) throw InvalidArgument("node ids are cut short or too large");
-    if (node > 0 && id == previous) throw InvalidArgument("nodes are not strictly increasing");
-    if (id >= node_limit) throw InvalidArgument("node " + std::to_string(id) + " is out of range");
-  }
-  if (at != nodes_end) throw InvalidArgument("node ids are followed by stray bytes");
+  packed.bytes_.reset(new std::uint8_t[size - 5]);
+  if (size > 5) std::memcpy(packed.bytes_.get(), data + 5, size - 5);
+  NodeId largest = 0;
+  if (!packed.for_each_node([&](NodeId id) { largest = id; }))
+    throw InvalidArgument(
+        "node ids are cut short, too large, not strictly increasing or followed by stray bytes");
+  if (node_count > 0 && largest >= node_limit)
+    throw InvalidArgument("node " + std::to_string(largest) + " is out of range");
   if (partition) {
     // Every feature names a node, and every node has a feature.
-    const std::size_t width = packed.layout_ == Layout::kPartition8 ? 1 : 2;
     std::vector<std::uint8_t> used(node_count, 0);
     for (std::size_t f = 0; f < feature_count; ++f) {
-      const std::uint32_t slot = packed.value(nodes_bytes + f * width, width);
+      const std::uint32_t slot = packed.slot(f);
       if (slot >= node_count) throw InvalidArgument("a feature names no node");
       used[slot] = 1;
     }
     if (std::find(used.begin(), used.end(), 0) != used.end())
       throw InvalidArgument("a node has no features");
+    // The bits after the last feature's are zero: one encoding per vector.
+    const std::size_t used_bits = std::size_t{7} * feature_count;
+    if (packed.layout_ == Layout::kPartition7 && used_bits % 8 != 0 &&
+        (packed.bytes_[size - 6] >> (used_bits % 8)) != 0)
+      throw InvalidArgument("stray bits after the last feature");
   } else {
     const std::size_t width = packed.layout_ == Layout::kRows32 ? 4 : 2;
     std::uint32_t previous = 0;
     for (std::size_t node = 0; node < node_count; ++node) {
-      const std::uint32_t end = packed.value(nodes_bytes + node * width, width);
+      const std::uint32_t end = packed.value(packed.node_bytes_ + node * width, width);
       if (end <= previous) throw InvalidArgument("a node has no features");
       previous = end;
     }
@@ -314,25 +386,18 @@ PackedFeatureVector PackedFeatureVector::decode(const std::uint8_t* data, std::s
 }
 
 FeatureVector PackedFeatureVector::unpack() const {
-  std::vector<NodeId> nodes(node_count_);
+  std::vector<NodeId> nodes;
+  nodes.reserve(node_count_);
+  for_each_node([&](NodeId id) { nodes.push_back(id); });
   const std::size_t nodes_bytes = node_bytes_;
-  const std::uint8_t* step = bytes_.data();
-  NodeId id = 0;
-  for (std::size_t node = 0; node < node_count_; ++node) {
-    next_node(step, bytes_.data() + nodes_bytes, id);
-    nodes[node] = id;
-  }
   std::vector<std::uint32_t> offsets(std::size_t{node_count_} + 1, 0);
   std::vector<std::uint32_t> indices(feature_count_);
-  if (layout_ == Layout::kPartition8 || layout_ == Layout::kPartition16) {
+  if (partition()) {
     // Counting sort of the features by node; increasing index within a node.
-    const std::size_t width = layout_ == Layout::kPartition8 ? 1 : 2;
-    for (std::size_t f = 0; f < feature_count_; ++f)
-      ++offsets[value(nodes_bytes + f * width, width) + 1];
+    for (std::size_t f = 0; f < feature_count_; ++f) ++offsets[slot(f) + 1];
     for (std::size_t i = 0; i < node_count_; ++i) offsets[i + 1] += offsets[i];
     std::vector<std::uint32_t> next(offsets.begin(), offsets.end() - 1);
-    for (std::uint32_t f = 0; f < feature_count_; ++f)
-      indices[next[value(nodes_bytes + f * width, width)]++] = f;
+    for (std::uint32_t f = 0; f < feature_count_; ++f) indices[next[slot(f)]++] = f;
   } else {
     const std::size_t width = layout_ == Layout::kRows32 ? 4 : 2;
     std::size_t at = nodes_bytes;
@@ -402,11 +467,9 @@ void Database::Impl::set_word_capacity(std::size_t capacity) noexcept {
 namespace {
 
 // A segment's rows (RowOrder of `old_words`) re-laid for `new_words` ≥
-// old_words into new arrays: the words keep their postings, the new words get
-// empty rows. Returns the new offsets.
-template <typename Relative>
-std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Relative* old_entries,
-                                      Relative* new_entries, float* new_weights,
+// old_words into `new_bytes`: the words keep their postings, the new words
+// get empty rows. Returns the new offsets.
+std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, std::uint8_t* new_bytes,
                                       std::size_t old_words, std::size_t new_words) {
   const detail::RowOrder old_order(old_words);
   std::vector<std::uint32_t> offsets(new_words + 1);
@@ -419,10 +482,9 @@ std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Rela
       if (word < old_words) {
         const std::uint32_t old_row = old_order.row(static_cast<WordId>(word));
         const std::uint32_t from = segment.offsets[old_row];
-        const std::uint32_t count = segment.offsets[old_row + 1] - from;
-        std::memcpy(new_entries + at, old_entries + from, count * sizeof(Relative));
-        std::memcpy(new_weights + at, segment.weights.data() + from, count * sizeof(float));
-        at += count;
+        const std::uint32_t bytes = segment.offsets[old_row + 1] - from;
+        if (bytes > 0) std::memcpy(new_bytes + at, segment.bytes.data() + from, bytes);
+        at += bytes;
       }
       offsets[++row] = at;
     }
@@ -433,8 +495,7 @@ std::vector<std::uint32_t> relay_rows(const detail::Segment& segment, const Rela
 // One segment's arrays for the new capacity, built before any is replaced.
 struct RelaidSegment {
   std::vector<std::uint32_t> offsets;
-  detail::GrowableArray<std::uint16_t> entries16;
-  detail::GrowableArray<float> weights;
+  detail::GrowableArray<std::uint8_t> bytes;
 };
 
 }  // namespace
@@ -453,18 +514,15 @@ void Database::Impl::grow_words(std::size_t needed) {
   for (std::size_t i = 0; i < segments.size(); ++i) {
     const detail::Segment& segment = *segments[i];
     RelaidSegment& out = relaid[i];
-    out.weights.resize(segment.postings());
-    out.entries16.resize(segment.postings());
-    out.offsets = relay_rows(segment, segment.entries16.data(), out.entries16.data(),
-                             out.weights.data(), word_capacity, new_words);
+    out.bytes.resize(segment.bytes.size());
+    out.offsets = relay_rows(segment, out.bytes.data(), word_capacity, new_words);
   }
   std::vector<detail::TailList> lists(std::min(new_words, std::size_t{1} << detail::kGroupBits));
   std::vector<std::uint8_t> block_logs(lists.size(), detail::kFirstBlockLog);
   for (std::size_t i = 0; i < segments.size(); ++i) {
     detail::Segment& segment = *segments[i];
     segment.offsets.swap(relaid[i].offsets);
-    segment.entries16.swap(relaid[i].entries16);
-    segment.weights.swap(relaid[i].weights);
+    segment.bytes.swap(relaid[i].bytes);
   }
   tail_lists.swap(lists);
   first_block_logs.swap(block_logs);
@@ -556,21 +614,32 @@ void Database::Impl::build_forward_index() const {
       entry_words.clear();
     }
   };
-  std::vector<std::uint32_t> cursors;
+  std::vector<std::uint32_t> cursors, last_entries;
   for (const auto& segment : segments) {
     const std::uint32_t* offsets = segment->offsets.data();
-    const std::uint16_t* entries = segment->entries16.data();
-    const float* weights = segment->weights.data();
-    cursors.assign(offsets, offsets + word_capacity);  // by row
+    const std::uint8_t* bytes = segment->bytes.data();
+    // By row: the next posting's byte, past the row's header.
+    cursors.resize(word_capacity);
+    for (std::size_t row = 0; row < word_capacity; ++row)
+      cursors[row] = offsets[row] + (offsets[row] != offsets[row + 1] ? 1 : 0);
+    last_entries.assign(word_capacity, detail::kRowStart);
     for (EntryId first = segment->first_entry; first < segment->end_entry; first += kChunk) {
       const EntryId end = std::min<EntryId>(first + kChunk, segment->end_entry);
       const auto relative_end = static_cast<std::uint32_t>(end - segment->first_entry);
       for (std::size_t word = 0; word < word_capacity; ++word) {
         const std::uint32_t row = row_order.row(static_cast<WordId>(word));
         std::uint32_t& i = cursors[row];
-        for (; i < offsets[row + 1] && entries[i] < relative_end; ++i)
-          words[segment->first_entry + entries[i] - first].push_back(
-              {static_cast<WordId>(word), weights[i]});
+        std::uint32_t& last = last_entries[row];
+        const std::uint32_t width = i < offsets[row + 1] ? bytes[offsets[row]] : 0;
+        for (; i < offsets[row + 1]; i += width + detail::kWeightBytes) {
+          const std::uint8_t* at = bytes + i;
+          const std::uint32_t relative =
+              last + (width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at)) + 1;
+          if (relative >= relative_end) break;
+          words[segment->first_entry + relative - first].push_back(
+              {static_cast<WordId>(word), detail::read_weight(at + width)});
+          last = relative;
+        }
       }
       encode_chunk(first, end);
     }
@@ -626,9 +695,9 @@ void Database::Impl::merge_segments_if_many() {
     if (level == detail::kLoadedLevel) return;
     for (std::size_t i = n - detail::kSegmentFanIn; i < n; ++i)
       if (segments[i]->level != level) return;
-    // A merged segment spans at most kSegmentSpan ids, so that its entries
-    // stay 16-bit (6 bytes per posting, not 8): the oldest of these segments
-    // that fit together merge, if at least two do.
+    // A merged segment spans at most kSegmentSpan ids, so that a query's
+    // sums for it stay in cache: the oldest of these segments that fit
+    // together merge, if at least two do.
     const std::size_t begin = n - detail::kSegmentFanIn;
     std::size_t end = begin + 1;
     while (end < n &&
@@ -642,63 +711,69 @@ void Database::Impl::merge_segments_if_many() {
 namespace {
 
 // Row by row, the rows of the segments [begin, end), oldest first: entries
-// stay in increasing order. Every source is read sequentially. Merged
-// segments and their sources span at most kSegmentSpan ids (16-bit entries).
-void merge_rows(const std::unique_ptr<detail::Segment>* begin,
-                const std::unique_ptr<detail::Segment>* end, detail::Segment& merged) noexcept {
+// stay in increasing order, every source is read sequentially. Merged
+// segments and their sources span at most kSegmentSpan ids. Returns the
+// bytes written.
+std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
+                       const std::unique_ptr<detail::Segment>* end,
+                       detail::Segment& merged) noexcept {
   // The sources' arrays, read once: the stores below could alias their fields.
   // merge_segments_if_many merges at most kSegmentFanIn segments.
   struct Source {
     const std::uint32_t* offsets;
-    const std::uint16_t* entries;
-    const float* weights;
-    std::uint16_t delta;
+    const std::uint8_t* bytes;
+    std::uint32_t shift;  // first_entry - merged.first_entry
   };
   Source sources[detail::kSegmentFanIn];
   std::size_t source_count = 0;
   for (auto source = begin; source != end; ++source, ++source_count) {
     const detail::Segment& s = **source;
-    sources[source_count] = {s.offsets.data(), s.entries16.data(), s.weights.data(),
-                             static_cast<std::uint16_t>(s.first_entry - merged.first_entry)};
+    sources[source_count] = {s.offsets.data(), s.bytes.data(), s.first_entry - merged.first_entry};
   }
-  std::uint16_t* entries = merged.entries16.data();
+  std::uint8_t* const out_begin = merged.bytes.data();
+  std::uint8_t* out = out_begin;
   const std::size_t rows = merged.offsets.size() - 1;
-  float* weights = merged.weights.data();
   std::uint32_t* offsets = merged.offsets.data();
-  std::uint32_t at = 0;
   offsets[0] = 0;
   for (std::size_t r = 0; r < rows; ++r) {
+    std::uint32_t last = detail::kRowStart;  // relative to merged.first_entry
+    detail::RowWriter row(out);
     for (std::size_t k = 0; k < source_count; ++k) {
       const Source& s = sources[k];
-      const std::uint32_t from = s.offsets[r];
-      const std::uint32_t count = s.offsets[r + 1] - from;
-      // Most rows hold a few postings: a call to memcpy would cost more.
-      for (std::uint32_t i = 0; i < count; ++i) {
-        entries[at + i] = static_cast<std::uint16_t>(s.entries[from + i] + s.delta);
-        weights[at + i] = s.weights[from + i];
-      }
-      at += count;
+      detail::for_each_posting(s.bytes + s.offsets[r], s.bytes + s.offsets[r + 1],
+                               [&](std::uint32_t relative, float weight) {
+                                 const std::uint32_t entry = s.shift + relative;
+                                 row.put(entry - last - 1, weight);
+                                 last = entry;
+                               });
     }
-    offsets[r + 1] = at;
+    out = row.finish();
+    offsets[r + 1] = static_cast<std::uint32_t>(out - out_begin);
   }
+  return static_cast<std::size_t>(out - out_begin);
 }
 
 }  // namespace
 
 void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
-  std::size_t total = 0;
-  for (std::size_t i = begin; i < end; ++i) total += segments[i]->postings();
-  if (total > std::numeric_limits<std::uint32_t>::max())
-    throw InvalidArgument("Database: more than 2^32 postings in one segment");
+  // Rows are written with 2-byte gaps, then narrowed: room for that, then
+  // the block shrinks to what was written.
+  std::size_t postings = 0;
+  for (std::size_t i = begin; i < end; ++i) postings += segments[i]->postings();
+  const std::size_t rows = segments[begin]->offsets.size() - 1;
+  const std::size_t bytes =
+      postings * (detail::kMaxGapWidth + detail::kWeightBytes) + std::min(postings, rows);
+  if (bytes > std::numeric_limits<std::uint32_t>::max())
+    throw InvalidArgument("Database: more than 4 GiB of postings in one segment");
   auto merged = std::make_unique<detail::Segment>();
   merged->first_entry = segments[begin]->first_entry;
   merged->end_entry = segments[end - 1]->end_entry;
   merged->level = segments[begin]->level + 1;
   merged->offsets.resize(segments[begin]->offsets.size());
-  merged->entries16.resize(total);
-  merged->weights.resize(total);
-  // Nothing below can throw.
-  merge_rows(segments.data() + begin, segments.data() + end, *merged);
+  merged->bytes.resize(bytes);
+  merged->posting_count = postings;
+  // Nothing below can throw (shrinking never does).
+  merged->bytes.resize(merge_rows(segments.data() + begin, segments.data() + end, *merged));
   for (std::size_t i = begin; i < end; ++i) merged->dead_postings += segments[i]->dead_postings;
   segments[begin] = std::move(merged);
   segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(begin) + 1,
@@ -708,60 +783,98 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
 std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   const std::size_t live = tail_postings - tail_dead_postings;
   if (live == 0) return nullptr;
-  std::vector<std::uint32_t> next(std::size_t{1}
-                                  << high_bits);  // per word of a group: its row's next slot
+  // Per word of a group: its row's last entry, then its next byte.
+  const std::size_t words_per_group = std::size_t{1} << high_bits;
+  std::vector<std::uint32_t> last(words_per_group);
+  std::vector<std::uint32_t> next(words_per_group);
+  std::vector<std::uint32_t> gaps(words_per_group);  // per word: its row's gaps ORed
   auto segment = std::make_unique<detail::Segment>();
   segment->offsets.resize(word_capacity + 1);
-  segment->entries16.resize(live);
-  segment->weights.resize(live);
   segment->first_entry = tail_first_entry;
   segment->end_entry = static_cast<EntryId>(alive.size());
-  std::uint32_t* offsets = segment->offsets.data();
-  std::uint16_t* entries = segment->entries16.data();
-  float* weights = segment->weights.data();
+  segment->posting_count = live;
   const std::uint8_t* live_at = alive.data() + tail_first_entry;
   const bool drop_dead = tail_dead_postings > 0;
-  // One pass over the groups: a group's rows are consecutive (RowOrder),
-  // so each group's postings are counted by word, which gives its rows'
-  // offsets, then put in their rows, all written sequentially. Within a
-  // group's list entries increase, so the rows come out in entry order.
+  // Two passes over the groups: the first sizes every row (a gap's length
+  // depends on the row's previous entry), the second writes the postings. A
+  // group's rows are consecutive (RowOrder), so each pass writes
+  // sequentially. Within a group's list entries increase, so the rows come
+  // out in entry order.
   const std::uint32_t high_mask = (1u << high_bits) - 1;
   constexpr std::size_t kAhead = 4;
   constexpr std::uint32_t kLinesAhead = 8;
+  const auto for_each_group = [&](const auto& visit) {
+    for (std::size_t group = 0; group < tail_lists.size(); ++group) {
+      if (group + kAhead < tail_lists.size()) {
+        const detail::TailList ahead = tail_lists[group + kAhead];
+        const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
+        for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
+          __builtin_prefetch(block + i);
+      }
+      const auto g = static_cast<std::uint32_t>(group);
+      const std::uint32_t first_row = row_order.group_start(g);
+      const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
+      const detail::TailList list = tail_lists[group];
+      const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
+      std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
+      visit(first_row, rows, postings, list.size);
+    }
+  };
+  std::uint32_t* offsets = segment->offsets.data();
   std::uint32_t row_end = 0;  // of the previous group
-  for (std::size_t group = 0; group < tail_lists.size(); ++group) {
-    if (group + kAhead < tail_lists.size()) {
-      const detail::TailList ahead = tail_lists[group + kAhead];
-      const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
-      for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
-        __builtin_prefetch(block + i);
-    }
-    const auto g = static_cast<std::uint32_t>(group);
-    const std::uint32_t first_row = row_order.group_start(g);
-    const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
-    const detail::TailList list = tail_lists[group];
-    const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
+  for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
+                     const detail::TailPosting* postings, std::uint32_t size) {
     std::fill(next.begin(), next.begin() + rows, 0);
-    for (std::uint32_t i = 0; i < list.size; ++i) {
-      const std::uint32_t key = postings[i].key;
-      if (!drop_dead || live_at[key >> high_bits] != 0) ++next[key & high_mask];
-    }
-    for (std::uint32_t r = 0; r < rows; ++r) {
-      const std::uint32_t count = next[r];
-      next[r] = row_end;
-      row_end += count;
-      offsets[first_row + r + 1] = row_end;
-    }
-    for (std::uint32_t i = 0; i < list.size; ++i) {
+    std::fill(gaps.begin(), gaps.begin() + rows, 0);
+    for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
-      const std::uint32_t at = next[key & high_mask]++;
-      entries[at] = static_cast<std::uint16_t>(relative);
-      weights[at] = postings[i].weight;
+      const std::uint32_t word = key & high_mask;
+      ++next[word];
+      gaps[word] |= relative - last[word] - 1;
+      last[word] = relative;
     }
-  }
+    for (std::uint32_t r = 0; r < rows; ++r) {
+      row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r]));
+      offsets[first_row + r + 1] = row_end;
+    }
+  });
   offsets[0] = 0;
+  segment->bytes.resize(row_end);
+  std::uint8_t* bytes = segment->bytes.data();
+  for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
+                     const detail::TailPosting* postings, std::uint32_t size) {
+    // Each row's width, as the first pass found it (the group is in cache).
+    std::fill(gaps.begin(), gaps.begin() + rows, 0);
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      const std::uint32_t relative = key >> high_bits;
+      if (drop_dead && live_at[relative] == 0) continue;
+      const std::uint32_t word = key & high_mask;
+      gaps[word] |= relative - last[word] - 1;
+      last[word] = relative;
+    }
+    std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
+    for (std::uint32_t r = 0; r < rows; ++r) {
+      const std::uint32_t begin = offsets[first_row + r], end = offsets[first_row + r + 1];
+      next[r] = begin + (begin != end ? 1 : 0);
+      if (begin == end) continue;
+      gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
+      bytes[begin] = static_cast<std::uint8_t>(gaps[r]);
+    }
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      const std::uint32_t relative = key >> high_bits;
+      if (drop_dead && live_at[relative] == 0) continue;
+      const std::uint32_t word = key & high_mask;
+      next[word] = static_cast<std::uint32_t>(detail::put_posting(bytes + next[word], gaps[word],
+                                                                  relative - last[word] - 1,
+                                                                  postings[i].weight) -
+                                              bytes);
+      last[word] = relative;
+    }
+  });
   return segment;
 }
 
@@ -787,24 +900,32 @@ void Database::Impl::freeze_tail() {
 
 namespace {
 
-template <typename Relative>
-std::uint32_t drop_dead_postings(detail::Segment& segment, Relative* entries,
-                                 const std::uint8_t* live_at) noexcept {
+// Writes the rows without the postings of removed entries into `out`
+// (room for each kept posting with a 2-byte gap, and a header per row);
+// returns the bytes written.
+std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at,
+                               std::uint8_t* const out_begin) noexcept {
   std::uint32_t* offsets = segment.offsets.data();
-  float* weights = segment.weights.data();
-  std::uint32_t kept = 0;
-  std::uint32_t begin = 0;
+  const std::uint8_t* const bytes = segment.bytes.data();
+  std::uint8_t* out = out_begin;
+  std::size_t kept = 0;
+  std::uint32_t begin = offsets[0];
   for (std::size_t w = 0; w + 1 < segment.offsets.size(); ++w) {
     const std::uint32_t end = offsets[w + 1];
-    for (std::uint32_t i = begin; i < end; ++i) {
-      entries[kept] = entries[i];
-      weights[kept] = weights[i];
-      kept += live_at[entries[i]];
-    }
+    std::uint32_t last = detail::kRowStart;
+    detail::RowWriter row(out);
+    detail::for_each_posting(bytes + begin, bytes + end, [&](std::uint32_t entry, float weight) {
+      if (live_at[entry] == 0) return;
+      row.put(entry - last - 1, weight);
+      last = entry;
+      ++kept;
+    });
+    out = row.finish();
+    offsets[w + 1] = static_cast<std::uint32_t>(out - out_begin);
     begin = end;
-    offsets[w + 1] = kept;
   }
-  return kept;
+  segment.posting_count = kept;
+  return static_cast<std::size_t>(out - out_begin);
 }
 
 }  // namespace
@@ -815,10 +936,20 @@ void Database::Impl::compact(std::size_t index) {
     segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(index));
     return;
   }
-  const std::uint8_t* live_at = alive.data() + segment.first_entry;
+  // A gap that absorbs dropped postings may widen its row: the rows go to
+  // a new block. Without memory for it the segment stays as it is (queries
+  // skip removed entries), so that remove never fails half done.
+  const std::size_t live = segment.postings() - segment.dead_postings;
+  detail::GrowableArray<std::uint8_t> kept;
+  try {
+    kept.resize(live * (detail::kMaxGapWidth + detail::kWeightBytes) +
+                std::min(live, segment.offsets.size() - 1));
+  } catch (const std::bad_alloc&) {
+    return;
+  }
   // Shrinking never throws.
-  segment.entries16.resize(drop_dead_postings(segment, segment.entries16.data(), live_at));
-  segment.weights.resize(segment.entries16.size());
+  kept.resize(drop_dead_postings(segment, alive.data() + segment.first_entry, kept.data()));
+  segment.bytes.swap(kept);
   segment.dead_postings = 0;
 }
 
@@ -989,7 +1120,7 @@ std::size_t Database::memory_usage() const {
                       impl.labels.capacity() * sizeof(std::string);
   for (const auto& segment : impl.segments)
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
-             segment->postings() * (sizeof(std::uint16_t) + sizeof(float));
+             segment->bytes.size();
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
   bytes += impl.journal.memory_usage();

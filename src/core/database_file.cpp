@@ -5,18 +5,26 @@
 //   every byte is covered by a CRC. Sections, always present (maybe empty):
 //   1 embedded .bbw vocabulary   2 vocabulary description (text)
 //   3 entry states (u8 per id)
-//   Version 2 (written): the index in parts of 65,536 ids (part k holds the
-//   postings of ids [65,536 k, 65,536 (k + 1))), as a database keeps them:
+//   Version 3 (written): the index in parts of 65,536 ids (part k holds the
+//   postings of ids [65,536 k, 65,536 (k + 1))), each part's rows exactly
+//   the bytes a database keeps in memory:
 //   4 parts (per part: u32 rows, u32 postings)
-//   5 rows (per part, per word with postings: u32 word, u32 length), by
+//   5 rows (per part, per word with postings: u32 word, u32 bytes), by
 //     word mod 65,536, then word / 65,536
-//   6 posting entries (u16: id - the part's first id), by part, row, id
-//   7 posting weights (f32), in the same order
+//   6 postings, by part, row: the row's gap width (u8: 1 if every gap of
+//     the row is below 256, else 2; no other), then by id per posting the
+//     gap from the row's previous id minus 1 (the first: id - the part's
+//     first id; u8 or u16 by the width), then its weight (f32)
+//   7 empty
 //   8 direct index sizes (per id: u32 nodes, u32 features, u32 bytes)
 //   9 direct index data (per live entry: u8 layout, u32 bytes of node ids,
 //     the node ids as steps from the previous one (LEB128), then per
-//     feature its node's position (u8 or u16: layouts 0, 1) or per node the
-//     end of its features and the feature indices (u16 or u32: layouts 2, 3))
+//     feature its node's position (u8, u16 or 7 bits packed from the low
+//     bit of the first byte: layouts 0, 1, 4) or per node the end of its
+//     features and the feature indices (u16 or u32: layouts 2, 3))
+//   Version 2 (read): as version 3, but 5 rows count postings (u32 length),
+//   6 holds their ids (u16: id - the part's first id), 7 their weights
+//   (f32), and the direct index has no layout 4.
 //   Version 1 (read): the index by word over every id:
 //   4 words with postings (u32, increasing)  5 posting list lengths (u32)
 //   6 posting entry ids (u32)  7 weights (f32)
@@ -51,7 +59,7 @@ namespace binbow {
 namespace {
 
 constexpr char kMagic[8] = {'B', 'I', 'N', 'B', 'O', 'W', 'D', 'B'};
-constexpr std::uint32_t kVersion = 2;  // written; version 1 is read too
+constexpr std::uint32_t kVersion = 3;  // written; versions 1 and 2 are read too
 constexpr std::size_t kHeaderSize = detail::kSectionedHeaderSize;
 
 enum Section : std::uint32_t {
@@ -60,8 +68,8 @@ enum Section : std::uint32_t {
   kEntryStates,
   kParts,           // version 1: kWords
   kRows,            // version 1: kListLengths
-  kPostingEntries,  // version 1: kPostingIds
-  kPostingWeights,
+  kPostingEntries,  // version 1: kPostingIds; version 3: kPostingBytes
+  kPostingWeights,  // empty in version 3
   kDirectSizes,
   kDirectData,
   kLabelLengths,
@@ -70,12 +78,16 @@ enum Section : std::uint32_t {
   kWords = kParts,
   kListLengths = kRows,
   kPostingIds = kPostingEntries,
+  kPostingBytes = kPostingEntries,
 };
 
 constexpr const char* kSectionNames[kSectionCount] = {
     "vocabulary",   "vocabulary description", "entry states",    "parts",
     "rows",         "posting entries",        "posting weights", "direct index sizes",
     "direct index", "label lengths",          "labels"};
+constexpr const char* kVersion3SectionNames[kSectionCount] = {
+    "vocabulary", "vocabulary description", "entry states", "parts",         "rows",  "postings",
+    "unused",     "direct index sizes",     "direct index", "label lengths", "labels"};
 constexpr const char* kVersion1SectionNames[kSectionCount] = {
     "vocabulary",  "vocabulary description", "entry states",       "words",        "list lengths",
     "posting ids", "posting weights",        "direct index sizes", "direct index", "label lengths",
@@ -120,11 +132,13 @@ class Layout {
            std::to_string(kHeaderSize) + "-byte header of a .bbdb database");
     if (std::memcmp(data, kMagic, 8) != 0) fail("not a binbow database (.bbdb): wrong magic bytes");
     header_.version = detail::load_le<std::uint32_t>(data + 8);
-    if (header_.version != 1 && header_.version != kVersion)
+    if (header_.version < 1 || header_.version > kVersion)
       fail("unsupported .bbdb format version " + std::to_string(header_.version) +
            " (this binbow reads versions 1 to " + std::to_string(kVersion) +
            "): saved by a newer binbow?");
-    names_ = header_.version == 1 ? kVersion1SectionNames : kSectionNames;
+    names_ = header_.version == 1   ? kVersion1SectionNames
+             : header_.version == 2 ? kSectionNames
+                                    : kVersion3SectionNames;
     if (detail::load_le<std::uint32_t>(data + 60) != detail::crc32c(data, 60))
       fail("header checksum mismatch: the file is corrupted");
     if (detail::load_le<std::uint32_t>(data + 12) != kHeaderSize) fail("unexpected header size");
@@ -236,36 +250,29 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     while (s < sources.size() && sources[s]->end_entry <= k * span) ++s;
     source_begin[k] = s;
   }
-  // Calls visit(source, begin, end) for the postings [begin, end) of the
-  // row's runs in part k (removed entries included).
-  const auto for_each_run = [&](std::size_t k, std::uint32_t row, const auto& visit) {
+  // Calls visit(relative_entry, weight) for the live postings of the row in
+  // part k, in entry order (relative to the part's first id).
+  const auto for_each_posting = [&](std::size_t k, std::uint32_t row, const auto& visit) {
     const auto part_begin = static_cast<EntryId>(k * span);
     const auto part_end = static_cast<EntryId>(std::min<std::size_t>(next_id, (k + 1) * span));
     for (std::size_t s = source_begin[k]; s < sources.size(); ++s) {
       const detail::Segment& source = *sources[s];
       if (source.first_entry >= part_end) break;
-      const std::uint16_t* entries = source.entries16.data();
-      std::uint32_t begin = source.offsets[row], end = source.offsets[row + 1];
-      if (begin == end) continue;
-      if (source.first_entry < part_begin)
-        begin = static_cast<std::uint32_t>(
-            std::lower_bound(entries + begin, entries + end, part_begin - source.first_entry) -
-            entries);
-      if (source.end_entry > part_end)
-        end = static_cast<std::uint32_t>(
-            std::lower_bound(entries + begin, entries + end, part_end - source.first_entry) -
-            entries);
-      if (begin < end) visit(source, begin, end);
+      const bool check_alive = source.dead_postings > 0;
+      detail::for_each_posting(source.row_begin(row), source.row_end(row),
+                               [&](std::uint32_t relative, float weight) {
+                                 const EntryId entry = source.first_entry + relative;
+                                 if (entry < part_begin || entry >= part_end) return;
+                                 if (check_alive && impl.alive[entry] == 0) return;
+                                 visit(entry - part_begin, weight);
+                               });
     }
-  };
-  const auto is_live = [&](const detail::Segment& source, std::uint32_t i) {
-    return source.dead_postings == 0 || impl.alive[source.entry(i)] != 0;
   };
 
   struct PartRow {
     std::uint32_t row;
     WordId word;
-    std::uint32_t length;
+    std::uint32_t bytes;
   };
   std::vector<std::vector<PartRow>> part_rows(part_count);
   std::vector<std::uint32_t> part_postings(part_count, 0);
@@ -274,18 +281,16 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   for (std::size_t k = 0; k < part_count; ++k) {
     if (source_begin[k] == sources.size()) break;
     detail::RowOrder::for_each_row(impl.word_capacity, [&](std::uint32_t row, WordId word) {
-      std::uint32_t length = 0;
-      for_each_run(k, row,
-                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
-                     if (source.dead_postings == 0) {
-                       length += end - begin;
-                       return;
-                     }
-                     for (std::uint32_t i = begin; i < end; ++i) length += is_live(source, i);
-                   });
-      if (length == 0) return;
-      part_rows[k].push_back({row, word, length});
-      part_postings[k] += length;
+      std::uint32_t gaps = 0, postings = 0, last = detail::kRowStart;
+      for_each_posting(k, row, [&](std::uint32_t relative, float) {
+        gaps |= relative - last - 1;
+        last = relative;
+        ++postings;
+      });
+      if (postings == 0) return;
+      part_rows[k].push_back(
+          {row, word, static_cast<std::uint32_t>(detail::row_bytes(postings, gaps))});
+      part_postings[k] += postings;
       largest_word_end = std::max<std::uint64_t>(largest_word_end, std::uint64_t{word} + 1);
     });
     posting_count += part_postings[k];
@@ -298,36 +303,24 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   for (const auto& rows : part_rows)
     for (const PartRow& row : rows) {
       out.append_le<std::uint32_t>(row.word);
-      out.append_le<std::uint32_t>(row.length);
+      out.append_le<std::uint32_t>(row.bytes);
     }
   out.next_section();
+  std::vector<std::uint8_t> row_bytes;
   for (std::size_t k = 0; k < part_count; ++k)
-    for (const PartRow& row : part_rows[k])
-      for_each_run(k, row.row,
-                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
-                     const auto shift = static_cast<std::uint16_t>(source.first_entry - k * span);
-                     if (shift == 0 && source.dead_postings == 0) {
-                       out.append(source.entries16.data() + begin, std::size_t{end - begin} * 2);
-                       return;
-                     }
-                     for (std::uint32_t i = begin; i < end; ++i)
-                       if (is_live(source, i))
-                         out.append_le<std::uint16_t>(
-                             static_cast<std::uint16_t>(source.entries16.data()[i] + shift));
-                   });
+    for (const PartRow& row : part_rows[k]) {
+      row_bytes.resize(row.bytes + detail::kMaxGapWidth * (row.bytes / detail::kWeightBytes));
+      detail::RowWriter writer(row_bytes.data());
+      std::uint32_t last = detail::kRowStart;
+      for_each_posting(k, row.row, [&](std::uint32_t relative, float weight) {
+        writer.put(relative - last - 1, weight);
+        last = relative;
+      });
+      writer.finish();  // row.bytes long: the same postings were sized above
+      out.append(row_bytes.data(), row.bytes);
+    }
   out.next_section();
-  for (std::size_t k = 0; k < part_count; ++k)
-    for (const PartRow& row : part_rows[k])
-      for_each_run(k, row.row,
-                   [&](const detail::Segment& source, std::uint32_t begin, std::uint32_t end) {
-                     if (source.dead_postings == 0) {
-                       out.append(source.weights.data() + begin, std::size_t{end - begin} * 4);
-                       return;
-                     }
-                     for (std::uint32_t i = begin; i < end; ++i)
-                       if (is_live(source, i)) out.append_le<float>(source.weights.data()[i]);
-                   });
-  out.next_section();
+  out.next_section();  // weights: within the postings since version 3
 
   if (impl.options.direct_index) {
     for (EntryId entry = 0; entry < next_id; ++entry) {
@@ -398,6 +391,26 @@ std::string hex(std::uint32_t value) {
   std::snprintf(text, sizeof text, "%08x", value);
   return text;
 }
+// Moves rows written into slots of row_bytes(n, 0xFFFF) bytes (RowWriter
+// leaves 1-byte rows shorter) next to each other, and shrinks the block.
+void squeeze_rows(detail::Segment& segment) noexcept {
+  std::uint32_t* offsets = segment.offsets.data();
+  std::uint8_t* const bytes = segment.bytes.data();
+  std::uint32_t out = 0;
+  for (std::size_t r = 0; r + 1 < segment.offsets.size(); ++r) {
+    const std::uint32_t begin = offsets[r], slot = offsets[r + 1] - begin;
+    offsets[r] = out;
+    if (slot == 0) continue;
+    const std::uint32_t postings = static_cast<std::uint32_t>(
+        (slot - detail::kRowHeaderBytes) / (detail::kMaxGapWidth + detail::kWeightBytes));
+    const auto size = static_cast<std::uint32_t>(detail::kRowHeaderBytes +
+                                                 postings * (bytes[begin] + detail::kWeightBytes));
+    std::memmove(bytes + out, bytes + begin, size);
+    out += size;
+  }
+  offsets[segment.offsets.size() - 1] = out;
+  segment.bytes.resize(out);
+}
 
 // The readers below check every count against the length of the section it
 // comes from before anything is allocated, so a hostile file cannot make
@@ -443,9 +456,9 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
   }
   if (at != posting_count) layout.fail("posting lists do not cover every posting");
 
-  // The postings go to one segment per kSegmentSpan ids (16-bit entries, as
-  // in a database that was filled by add()): a first pass checks them and
-  // counts each segment's rows, a second puts them in place. Within a list
+  // The postings go to one segment per kSegmentSpan ids (as in a database
+  // that was filled by add()): a first pass checks them and sizes each
+  // segment's rows, a second encodes them in place. Within a list
   // the entries increase, so each segment's part of a row is one run of it.
   // The sections are released as they are read, a part at a time.
   const auto for_each_list = [&](const auto& visit) {
@@ -486,7 +499,13 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
         segment->level = detail::kLoadedLevel;
         segment->offsets.assign(word_count + 1, 0);
       }
-      ++segment->offsets[rows[l] + 1];
+      // The row's previous posting in this segment, if any, precedes it in the list.
+      const bool first_in_row = i == from || previous < segment->first_entry;
+      // Room for a 2-byte gap: pass two writes the row, pass three squeezes it.
+      segment->offsets[rows[l] + 1] +=
+          static_cast<std::uint32_t>((first_in_row ? detail::kRowHeaderBytes : 0) +
+                                     detail::kMaxGapWidth + detail::kWeightBytes);
+      ++segment->posting_count;
       previous = id;
     }
   });
@@ -494,41 +513,55 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     if (!segment) continue;
     std::uint32_t* offsets = segment->offsets.data();
     for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
-    segment->entries16.resize(offsets[word_count]);
-    segment->weights.resize(offsets[word_count]);
+    segment->bytes.resize(offsets[word_count]);
   }
   for_each_list([&](std::size_t l, std::size_t from) {
     std::size_t i = from;
     const std::size_t end = from + lengths[l];
     while (i < end) {
       detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
-      std::uint32_t to = segment.offsets[rows[l]];
-      for (; i < end; ++i, ++to) {
+      detail::RowWriter row(segment.bytes.data() + segment.offsets[rows[l]]);
+      std::uint32_t last = detail::kRowStart;
+      for (; i < end; ++i) {
         const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
         if (id >= segment.end_entry) break;
-        segment.entries16.data()[to] = static_cast<std::uint16_t>(id - segment.first_entry);
-        segment.weights.data()[to] = detail::load_le<float>(weights + 4 * i);
+        const std::uint32_t relative = id - segment.first_entry;
+        row.put(relative - last - 1, detail::load_le<float>(weights + 4 * i));
+        last = relative;
       }
+      row.finish();
     }
   });
   for (auto& segment : segments)
-    if (segment) impl->segments.push_back(std::move(segment));
+    if (segment) {
+      squeeze_rows(*segment);
+      impl->segments.push_back(std::move(segment));
+    }
 }
 
-// Version 2: the parts are the segments, row by row as in memory.
+// Versions 2 and 3: the parts are the segments, row by row. Version 3 rows
+// are the bytes a segment keeps (copied once checked); version 2 rows hold
+// 16-bit ids and the weights apart, encoded here.
 template <class Impl>
 void read_postings(const Layout& layout, const Release& release, Impl* impl) {
   const Header& header = layout.header();
+  const bool encoded = header.version >= 3;
   const std::size_t word_count = impl->word_capacity;
   const EntryId next_id = header.next_entry_id;
   const std::size_t span = detail::kSegmentSpan;
   const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
   const auto parts = layout.values<std::uint32_t>(kParts, 2 * part_count);
   const std::size_t row_count = layout.count_of(kRows, 8);
-  const std::size_t posting_count = layout.count_of(kPostingEntries, 2);
-  if (posting_count != header.postings)
+  // Version 3: bytes of the rows; version 2: postings.
+  const std::size_t posting_units =
+      encoded ? layout.count_of(kPostingBytes, 1) : layout.count_of(kPostingEntries, 2);
+  if (!encoded && posting_units != header.postings)
     layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
-                std::to_string(posting_count));
+                std::to_string(posting_units));
+  if (encoded && layout.section(kPostingWeights).size != 0)
+    layout.fail("the unused section holds " + std::to_string(layout.section(kPostingWeights).size) +
+                " bytes");
+  layout.verify(kPostingWeights);
   std::uint64_t rows_in_parts = 0, postings_in_parts = 0;
   for (std::size_t k = 0; k < part_count; ++k) {
     rows_in_parts += parts[2 * k];
@@ -537,29 +570,34 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       layout.fail("part " + std::to_string(k) + " has " + std::to_string(parts[2 * k]) +
                   " rows for " + std::to_string(parts[2 * k + 1]) + " postings");
   }
-  if (rows_in_parts != row_count || postings_in_parts != posting_count)
+  if (rows_in_parts != row_count || postings_in_parts != header.postings)
     layout.fail("the parts count " + std::to_string(rows_in_parts) + " rows and " +
                 std::to_string(postings_in_parts) + " postings, the sections " +
-                std::to_string(row_count) + " and " + std::to_string(posting_count));
+                std::to_string(row_count) + " and " + std::to_string(header.postings));
   const std::uint8_t* rows = layout.array(kRows, row_count, 8);
-  const std::uint8_t* entries = layout.array(kPostingEntries, posting_count, 2);
-  const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
+  const std::uint8_t* postings = layout.array(kPostingEntries, posting_units, encoded ? 1 : 2);
+  const std::uint8_t* weights = encoded ? nullptr : layout.array(kPostingWeights, posting_units, 4);
   impl->word_counts.assign(next_id, 0);
-  std::size_t row_at = 0, posting_at = 0;
+  std::size_t row_at = 0, unit_at = 0;
   for (std::size_t k = 0; k < part_count; ++k) {
     const std::uint32_t part_rows = parts[2 * k];
     const std::uint32_t part_postings = parts[2 * k + 1];
     if (part_postings == 0) continue;
     const auto first = static_cast<EntryId>(k * span);
     const auto end = static_cast<EntryId>(std::min<std::size_t>(next_id, first + span));
+    const std::uint32_t part_span = end - first;
     const std::string where = "part " + std::to_string(k);
     auto segment = std::make_unique<detail::Segment>();
     segment->first_entry = first;
     segment->end_entry = end;
     segment->level = detail::kLoadedLevel;
+    segment->posting_count = part_postings;
     segment->offsets.assign(word_count + 1, 0);
     std::uint32_t* offsets = segment->offsets.data();
-    std::uint64_t previous_row = 0, total = 0;
+    // Each row is checked where the file has it (unit_at + its start):
+    // every posting names a live entry of the part, in increasing order,
+    // with a finite weight; its size in memory goes to offsets.
+    std::uint64_t previous_row = 0, part_units = 0, part_read = 0, part_bytes = 0;
     for (std::uint32_t r = 0; r < part_rows; ++r) {
       const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
       const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
@@ -569,46 +607,105 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       const std::uint32_t row = impl->row_order.row(word);
       if (r > 0 && row <= previous_row)
         layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
-      if (length == 0 || length > end - first || length > part_postings - total)
+      const std::uint64_t most =
+          encoded ? detail::row_bytes(part_span, 0xFFFF)
+                  : std::min<std::uint64_t>(part_span, part_postings - part_read);
+      if (length == 0 || length > most || length > posting_units - unit_at - part_units)
         layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
-      offsets[row + 1] = length;
-      previous_row = row;
-      total += length;
-    }
-    if (total != part_postings)
-      layout.fail(where + ": its rows hold " + std::to_string(total) + " postings, not " +
-                  std::to_string(part_postings));
-    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
-    segment->entries16.resize(part_postings);
-    segment->weights.resize(part_postings);
-    std::uint16_t* part_entries = segment->entries16.data();
-    float* part_weights = segment->weights.data();
-    std::memcpy(part_entries, entries + 2 * posting_at, std::size_t{part_postings} * 2);
-    std::memcpy(part_weights, weights + 4 * posting_at, std::size_t{part_postings} * 4);
-    release(entries + 2 * posting_at, std::size_t{part_postings} * 2);
-    release(weights + 4 * posting_at, std::size_t{part_postings} * 4);
-    // Within a row the entries increase; each names a live entry of the part.
-    const std::uint32_t part_span = end - first;
-    for (std::uint32_t r = 0; r < part_rows; ++r) {
-      const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
-      const std::uint32_t row = impl->row_order.row(word);
-      for (std::uint32_t i = offsets[row]; i < offsets[row + 1]; ++i) {
-        const std::uint32_t relative = part_entries[i];
-        if (relative >= part_span || impl->alive[first + relative] == 0 ||
-            (i > offsets[row] && relative <= part_entries[i - 1]))
-          layout.fail(where + ": the row of word " + std::to_string(word) +
-                      " names a missing entry or is not in increasing order");
-        if (!std::isfinite(part_weights[i]))
+      const auto invalid_posting = [&] {
+        layout.fail(where + ": the row of word " + std::to_string(word) +
+                    " names a missing entry or is not in increasing order");
+      };
+      const auto check = [&](std::uint32_t relative, float weight) {
+        if (relative >= part_span || impl->alive[first + relative] == 0) invalid_posting();
+        if (!std::isfinite(weight))
           layout.fail(where + ": the row of word " + std::to_string(word) +
                       " has a non-finite weight");
-        impl->values.include(part_weights[i]);
+        impl->values.include(weight);
         ++impl->word_counts[first + relative];
+      };
+      std::uint32_t last = detail::kRowStart;
+      std::uint64_t bytes = 0;
+      if (encoded) {
+        // The header's width (1 or 2), postings at its stride, and the
+        // width the narrowest the gaps allow, so that a row has one form.
+        const std::uint8_t* at = postings + unit_at + part_units;
+        const std::size_t width = at[0];
+        const std::size_t stride = width + detail::kWeightBytes;
+        if ((width != 1 && width != 2) || (length - detail::kRowHeaderBytes) % stride != 0)
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " has a malformed posting");
+        std::uint32_t gaps = 0;
+        for (at += detail::kRowHeaderBytes; at != postings + unit_at + part_units + length;
+             at += stride) {
+          const std::uint32_t gap = width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at);
+          gaps |= gap;
+          last += gap + 1;
+          check(last, detail::read_weight(at + width));
+          ++part_read;
+        }
+        if (detail::gap_width(gaps) != width)
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " has gaps wider than needed");
+        bytes = length;
+      } else {
+        std::uint32_t gaps = 0;
+        for (std::uint32_t i = 0; i < length; ++i) {
+          const std::size_t at = unit_at + part_units + i;
+          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
+          if (i > 0 && relative <= last) invalid_posting();
+          check(relative, detail::load_le<float>(weights + 4 * at));
+          gaps |= relative - last - 1;
+          last = relative;
+        }
+        bytes = detail::row_bytes(length, gaps);
+        part_read += length;
       }
+      offsets[row + 1] = static_cast<std::uint32_t>(bytes);
+      previous_row = row;
+      part_units += length;
+      part_bytes += bytes;
+    }
+    if (part_read != part_postings)
+      layout.fail(where + ": its rows hold " + std::to_string(part_read) + " postings, not " +
+                  std::to_string(part_postings));
+    if (part_bytes > std::numeric_limits<std::uint32_t>::max())
+      layout.fail(where + " holds more than 4 GiB of postings");
+    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
+    segment->bytes.resize(offsets[word_count]);
+    if (encoded) {
+      std::memcpy(segment->bytes.data(), postings + unit_at, part_units);
+      release(postings + unit_at, part_units);
+    } else {
+      // The rows in row order, as in the file.
+      std::uint8_t* to = segment->bytes.data();
+      std::size_t at = unit_at;
+      for (std::uint32_t r = 0; r < part_rows; ++r) {
+        const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
+        std::uint32_t gaps = 0, last = detail::kRowStart;
+        for (std::uint32_t i = 0; i < length; ++i) {
+          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * (at + i));
+          gaps |= relative - last - 1;
+          last = relative;
+        }
+        const std::size_t width = detail::gap_width(gaps);
+        *to++ = static_cast<std::uint8_t>(width);
+        last = detail::kRowStart;
+        for (std::uint32_t i = 0; i < length; ++i, ++at) {
+          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
+          to = detail::put_posting(to, width, relative - last - 1,
+                                   detail::load_le<float>(weights + 4 * at));
+          last = relative;
+        }
+      }
+      release(postings + 2 * unit_at, part_units * 2);
+      release(weights + 4 * unit_at, part_units * 4);
     }
     impl->segments.push_back(std::move(segment));
     row_at += part_rows;
-    posting_at += part_postings;
+    unit_at += part_units;
   }
+  if (unit_at != posting_units) layout.fail("the postings section has trailing data");
 }
 
 // Version 1: per entry, its node ids, node end offsets and feature indices.
@@ -687,6 +784,9 @@ void read_direct_index(const Layout& layout, const Release& release, Impl* impl,
       layout.fail("direct index of entry " + std::to_string(entry) +
                   " is inconsistent: " + e.what());
     }
+    // Node positions saved in 8 bits take 7 since version 3.
+    if (layout.header().version < 3 && size[0] <= 0x80)
+      impl->direct[entry] = detail::PackedFeatureVector(impl->direct[entry].unpack());
     cursor += size[2];
     if (cursor - released >= kReleaseBytes) {
       release(data.data + released, cursor - released);

@@ -111,7 +111,10 @@ constexpr bool tail_list_full(std::uint32_t size, unsigned first_block_log) noex
 // per-list malloc, free or header.
 class PostingArena {
  public:
-  static constexpr unsigned kChunkBits = 17;  // 2^17 postings: 1 MiB chunks
+  // 2^18 postings: 2 MiB chunks, aligned so that each is one huge page
+  // where the kernel allows: appends write all over the tail, and with 4 KiB
+  // pages most of them would also miss the TLB.
+  static constexpr unsigned kChunkBits = 18;
 
   PostingArena() noexcept { clear(); }
   // A block for `capacity` postings (a power of two).
@@ -132,7 +135,10 @@ class PostingArena {
   static constexpr std::uint32_t kNoBlock = 0xFFFFFFFF;
   std::uint32_t new_chunk(std::size_t postings);
 
-  std::vector<std::unique_ptr<TailPosting[]>> chunks_;
+  struct Free {
+    void operator()(TailPosting* chunk) const noexcept { std::free(chunk); }
+  };
+  std::vector<std::unique_ptr<TailPosting[], Free>> chunks_;
   std::vector<TailPosting*> chunk_starts_;
   std::vector<std::size_t> chunk_postings_;
   std::uint32_t free_lists_[33];  // per log2(capacity)
@@ -150,6 +156,9 @@ class PostingArena {
 // 4 KiB as merges write it (adds 2-10% faster at 300,000 real images).
 // Does nothing where the kernel cannot.
 void populate(void* data, std::size_t bytes) noexcept;
+// `bytes` (a multiple of 2 MiB) of memory aligned to 2 MiB, backed by huge
+// pages where the kernel allows; throws std::bad_alloc. Free with std::free.
+void* allocate_huge(std::size_t bytes);
 
 // A trivially copyable array in one malloc'd block, resized with realloc: a
 // segment's arrays are allocated at their final size without initialising
@@ -201,8 +210,9 @@ class GrowableArray {
 // One entry's FeatureVector, packed. Node ids are the steps from the
 // previous one (LEB128: siblings take a byte each). When every feature
 // 0..n-1 sits under exactly one node (what transform produces), each feature
-// just stores the position of its node, in 8 bits when there are at most 256
-// nodes (about 1 byte per feature) or 16 bits; otherwise the end offset of
+// just stores the position of its node: in 7 bits when there are at most 128
+// nodes (a direct index 4 levels up a k=10 L=6 tree has at most 100: 7/8 of
+// a byte per feature), 8 bits up to 256 nodes, else 16; otherwise the end offset of
 // every node's features and the feature indices follow, 16 bit when they fit
 // (images have fewer than 65,536 features), else 32 bit.
 class PackedFeatureVector {
@@ -212,11 +222,12 @@ class PackedFeatureVector {
   FeatureVector unpack() const;
   std::uint32_t node_count() const noexcept { return node_count_; }
   std::uint32_t feature_count() const noexcept { return feature_count_; }
-  std::size_t memory_usage() const noexcept { return bytes_.capacity(); }
+  std::size_t memory_usage() const noexcept { return packed_size(); }
 
-  // The form a .bbdb (version 2) stores: the layout (u8), the bytes of the
-  // node ids (u32), then the packed bytes, little-endian.
-  std::size_t encoded_size() const noexcept { return 5 + bytes_.size(); }
+  // The form a .bbdb (versions 2 and 3) stores: the layout (u8, with
+  // kNodeRuns when the node ids are runs), the bytes of the node ids (u32),
+  // then the packed bytes, little-endian.
+  std::size_t encoded_size() const noexcept { return 5 + packed_size(); }
   void encode(std::uint8_t* out) const noexcept;
   // The inverse, for `node_count` nodes below `node_limit` and
   // `feature_count` features; throws InvalidArgument unless the bytes are
@@ -226,10 +237,26 @@ class PackedFeatureVector {
                                     std::uint64_t node_limit);
 
  private:
-  enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32 };
+  // Numbered as stored; kPartition7 came last.
+  enum class Layout : std::uint8_t { kPartition8, kPartition16, kRows16, kRows32, kPartition7 };
+  bool partition() const noexcept {
+    return layout_ != Layout::kRows16 && layout_ != Layout::kRows32;
+  }
+  // The position of the node of feature `f` (partition layouts).
+  std::uint32_t slot(std::size_t f) const noexcept {
+    const std::size_t base = node_bytes_;
+    if (layout_ == Layout::kPartition7) {
+      const std::size_t bit = 7 * f;
+      const std::size_t byte = base + bit / 8;
+      std::uint32_t v = bytes_[byte];
+      if (byte + 1 < packed_size()) v |= std::uint32_t{bytes_[byte + 1]} << 8;
+      return (v >> (bit % 8)) & 0x7F;
+    }
+    return layout_ == Layout::kPartition8 ? value(base + f, 1) : value(base + 2 * f, 2);
+  }
   // The little-endian value of `width` (1, 2 or 4) bytes at `byte_offset`.
   std::uint32_t value(std::size_t byte_offset, std::size_t width) const noexcept {
-    const std::uint8_t* at = bytes_.data() + byte_offset;
+    const std::uint8_t* at = bytes_.get() + byte_offset;
     if (width == 1) return *at;
     if (width == 2) {
       std::uint16_t v;
@@ -240,17 +267,25 @@ class PackedFeatureVector {
     std::memcpy(&v, at, 4);
     return v;
   }
-  // Adds the step at `at` (LEB128, before `end`) to `id`, and moves past it;
-  // false if it is cut short or makes `id` exceed 32 bits.
-  static bool next_node(const std::uint8_t*& at, const std::uint8_t* end, NodeId& id) noexcept;
+  static constexpr unsigned kNodeRuns = 0x80;  // in the stored layout byte
+  // The LEB128 value at `at` (before `end`, at most 5 bytes), moving past it;
+  // false if it is cut short or longer.
+  static bool read_leb128(const std::uint8_t*& at, const std::uint8_t* end,
+                          std::uint64_t& value) noexcept;
+  // Calls visit(id) for the node ids in order; false unless the node bytes
+  // are exactly node_count_ strictly increasing 32-bit ids.
+  template <class Visit>
+  bool for_each_node(const Visit& visit) const;
   // The packed size for the layout and widths, in bytes.
   std::size_t packed_size() const noexcept;
 
-  std::vector<std::uint8_t> bytes_;
+  // packed_size() bytes: 24 bytes per entry in all, the vector's own.
+  std::unique_ptr<std::uint8_t[]> bytes_;
   std::uint32_t node_count_ = 0;
   std::uint32_t feature_count_ = 0;
-  Layout layout_ = Layout::kPartition8;
   std::uint32_t node_bytes_ = 0;  // of the node ids, at the start of bytes_
+  Layout layout_ = Layout::kPartition8;
+  bool node_runs_ = false;
 };
 
 }  // namespace binbow::detail
@@ -260,12 +295,96 @@ namespace binbow {
 namespace detail {
 
 // A part of the inverted index: the postings of the entries
-// [first_entry, end_entry) as compressed rows by word (in RowOrder): one
-// offset per word, then the entries as offsets from first_entry and the
-// weights. A segment spans at most kSegmentSpan ids, so its entries are 16
-// bits (6 bytes per posting; 32-bit entries would cost 8). A query pays one
-// offset lookup per word and segment, small next to the postings it reads.
+// [first_entry, end_entry) as rows by word (in RowOrder): one byte offset
+// per word, then the row's bytes. An empty row has none; otherwise a header
+// byte holds the row's gap width (1 if every gap of the row is below 256,
+// else 2), then come its postings in increasing entry order at a fixed
+// stride: the gap from the previous entry (entry - previous - 1, the first
+// from first_entry - 1; little-endian, of the row's width) and the weight
+// (f32, little-endian, unaligned): 5 bytes per posting in common rows. A
+// fixed stride lets a query read a row with no branch per posting, so the
+// cache misses of its score sums overlap. A segment spans at most
+// kSegmentSpan ids, so that 2 bytes hold any gap. A query pays one offset
+// lookup per word and segment, small next to the postings it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
+constexpr std::size_t kWeightBytes = 4;
+constexpr std::size_t kRowHeaderBytes = 1;
+constexpr std::size_t kMaxGapWidth = 2;
+
+// The gap width of a row whose gaps OR to `gaps`.
+constexpr std::size_t gap_width(std::uint32_t gaps) noexcept {
+  return gaps < 0x100 ? 1 : 2;
+}
+// The bytes of a row of `postings` postings whose gaps OR to `gaps`.
+constexpr std::size_t row_bytes(std::size_t postings, std::uint32_t gaps) noexcept {
+  return postings == 0 ? 0 : kRowHeaderBytes + postings * (gap_width(gaps) + kWeightBytes);
+}
+// Writes a posting of a row of gap width `width` at `out`; returns the byte after it.
+inline std::uint8_t* put_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
+                                 float weight) noexcept {
+  out[0] = static_cast<std::uint8_t>(gap);
+  if (width == 2) out[1] = static_cast<std::uint8_t>(gap >> 8);
+  std::memcpy(out + width, &weight, kWeightBytes);  // little-endian hosts only (as the whole index)
+  return out + width + kWeightBytes;
+}
+template <std::size_t kWidth>
+inline std::uint32_t read_gap(const std::uint8_t* at) noexcept {
+  return kWidth == 1 ? at[0] : std::uint32_t{at[0]} | std::uint32_t{at[1]} << 8;
+}
+inline float read_weight(const std::uint8_t* at) noexcept {
+  float weight;
+  std::memcpy(&weight, at, kWeightBytes);
+  return weight;
+}
+// The entry before a row's first, relative to first_entry: gaps are
+// differences minus 1, in wrapping 32-bit arithmetic.
+constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
+
+// Writes a row from its postings alone: each with a 2-byte gap, narrowed to
+// 1 byte by finish() when every gap allows. Needs row_bytes(n, 0xFFFF) bytes
+// for n postings.
+class RowWriter {
+ public:
+  explicit RowWriter(std::uint8_t* out) noexcept : begin_(out), at_(out + kRowHeaderBytes) {}
+  void put(std::uint32_t gap, float weight) noexcept {
+    at_ = put_posting(at_, 2, gap, weight);
+    gaps_ |= gap;
+  }
+  // Returns the byte after the row.
+  std::uint8_t* finish() noexcept {
+    const std::uint8_t* const postings = begin_ + kRowHeaderBytes;
+    if (at_ == postings) return begin_;
+    const std::size_t width = gap_width(gaps_);
+    *begin_ = static_cast<std::uint8_t>(width);
+    if (width == 2) return at_;
+    std::uint8_t* out = begin_ + kRowHeaderBytes;
+    for (const std::uint8_t* in = postings; in != at_; in += 2 + kWeightBytes) {
+      out[0] = in[0];
+      std::memmove(out + 1, in + 2, kWeightBytes);
+      out += 1 + kWeightBytes;
+    }
+    return out;
+  }
+
+ private:
+  std::uint8_t* begin_;
+  std::uint8_t* at_;
+  std::uint32_t gaps_ = 0;
+};
+
+// Calls visit(relative_entry, weight) for the postings of the row in
+// [begin, end), in order.
+template <class Visit>
+inline void for_each_posting(const std::uint8_t* begin, const std::uint8_t* end,
+                             const Visit& visit) {
+  if (begin == end) return;
+  const std::size_t width = *begin;
+  std::uint32_t entry = kRowStart;
+  for (const std::uint8_t* at = begin + kRowHeaderBytes; at != end; at += width + kWeightBytes) {
+    entry += (width == 1 ? read_gap<1>(at) : read_gap<2>(at)) + 1;
+    visit(entry, read_weight(at + width));
+  }
+}
 
 // So that a query's offset lookups stay few as the database grows, every
 // kSegmentFanIn segments of one level are merged into one of the next, as
@@ -283,14 +402,22 @@ struct Segment {
   // Frozen from the tail: 0; merged from segments of level l: l + 1;
   // loaded (one per kSegmentSpan ids): kLoadedLevel, never merged.
   unsigned level = 0;
-  std::vector<std::uint32_t> offsets;      // word_count + 1, by RowOrder
-  GrowableArray<std::uint16_t> entries16;  // entry - first_entry
-  GrowableArray<float> weights;
+  std::vector<std::uint32_t> offsets;  // word_count + 1 byte offsets into `bytes`, by RowOrder
+  GrowableArray<std::uint8_t> bytes;   // the rows' postings (see above)
+  std::size_t posting_count = 0;
   std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 
-  std::size_t postings() const noexcept { return weights.size(); }
-  EntryId entry(std::size_t posting) const noexcept {
-    return first_entry + entries16.data()[posting];
+  std::size_t postings() const noexcept { return posting_count; }
+  const std::uint8_t* row_begin(std::uint32_t row) const noexcept {
+    return bytes.data() + offsets[row];
+  }
+  const std::uint8_t* row_end(std::uint32_t row) const noexcept {
+    return bytes.data() + offsets[row + 1];
+  }
+  std::size_t row_postings(std::uint32_t row) const noexcept {
+    const std::uint32_t size = offsets[row + 1] - offsets[row];
+    if (size == 0) return 0;
+    return (size - kRowHeaderBytes) / (bytes.data()[offsets[row]] + kWeightBytes);
   }
 };
 

@@ -134,33 +134,43 @@ struct MinimumTerm {
 // ahead are prefetched so that their cache misses overlap.
 constexpr std::size_t kPrefetchAhead = 8;
 
+// A row's postings at their fixed stride: the entries are a running sum of
+// the gaps, with no branch per posting but the (predicted) cut.
+template <std::size_t kWidth, class Term>
+inline void accumulate_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
+                           std::uint32_t last, const Term& term, PartScores scores) {
+  std::uint32_t entry = detail::kRowStart;
+  for (; at != end; at += kWidth + detail::kWeightBytes) {
+    entry += detail::read_gap<kWidth>(at) + 1;
+    if (cut && entry > last) return;
+    scores.add(entry, term(detail::read_weight(at + kWidth)));
+  }
+}
+
 // Entries are increasing within a row, so `last_entry` cuts it short.
 template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
                         EntryId last_entry, PartScores scores) {
   const std::uint32_t* offsets = segment.offsets.data();
-  const std::uint16_t* entries = segment.entries16.data();
-  const float* weights = segment.weights.data();
+  const std::uint8_t* bytes = segment.bytes.data();
   const bool cut = last_entry < segment.end_entry - 1;
-  const auto last = static_cast<std::uint16_t>(cut ? last_entry - segment.first_entry : 0);
+  const std::uint32_t last = cut ? last_entry - segment.first_entry : detail::kRowStart;
   const std::size_t n = bow.size();
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + 2 * kPrefetchAhead < n)
       __builtin_prefetch(offsets + order.row(query[q + 2 * kPrefetchAhead].word));
-    if (q + kPrefetchAhead < n) {
-      const std::uint32_t begin = offsets[order.row(query[q + kPrefetchAhead].word)];
-      __builtin_prefetch(entries + begin);
-      __builtin_prefetch(weights + begin);
-    }
+    if (q + kPrefetchAhead < n)
+      __builtin_prefetch(bytes + offsets[order.row(query[q + kPrefetchAhead].word)]);
     const std::uint32_t row = order.row(query[q].word);
-    const std::uint32_t begin = offsets[row];
-    std::uint32_t end = offsets[row + 1];
-    if (cut)
-      end = static_cast<std::uint32_t>(std::upper_bound(entries + begin, entries + end, last) -
-                                       entries);
+    const std::uint8_t* const begin = bytes + offsets[row];
+    const std::uint8_t* const end = bytes + offsets[row + 1];
+    if (begin == end) continue;
     const Term term{query[q].value};
-    for (std::uint32_t i = begin; i < end; ++i) scores.add(entries[i], term(weights[i]));
+    if (*begin == 1)
+      accumulate_row<1>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
+    else
+      accumulate_row<2>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
   }
 }
 
@@ -436,10 +446,8 @@ Span<BowEntry> rare_words(const QueryContext& c) {
   for (std::size_t q = 0; q < c.words.size(); ++q) {
     const std::uint32_t row = c.index.row_order.row(c.words[q].word);
     std::uint64_t count = 0;
-    for (std::size_t s = 0; s < c.visible_segments; ++s) {
-      const std::uint32_t* offsets = c.index.segments[s]->offsets.data();
-      count += offsets[row + 1] - offsets[row];
-    }
+    for (std::size_t s = 0; s < c.visible_segments; ++s)
+      count += c.index.segments[s]->row_postings(row);
     postings.emplace_back(count, static_cast<std::uint32_t>(q));
     total += count;
   }

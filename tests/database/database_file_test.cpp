@@ -203,17 +203,33 @@ std::vector<std::uint8_t> with_section(
   return changed;
 }
 
-// Each hostile version-2 index is refused with a message naming the problem.
+void expect_refused(const std::vector<std::pair<std::vector<std::uint8_t>, std::string>>& cases) {
+  for (const auto& [data, expected] : cases) {
+    const std::string found = load_problem(data);
+    EXPECT_NE(found.find(expected), std::string::npos)
+        << "expected '" << expected << "': " << found;
+  }
+}
+
+void put_u32(std::uint8_t* at, std::uint32_t value) {
+  std::memcpy(at, &value, 4);
+}
+
+// Each hostile version-3 index is refused with a message naming the problem.
 TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
   const Fixture fixture(12);  // removed: entries 4 and 6
   const std::vector<std::uint8_t> bytes = fixture.database.serialize();
   ASSERT_EQ(load_problem(bytes), "loaded");
-  const auto u32 = [](std::uint8_t* at, std::uint32_t value) { std::memcpy(at, &value, 4); };
-  const auto u16 = [](std::uint8_t* at, std::uint16_t value) { std::memcpy(at, &value, 2); };
-  enum : std::uint32_t { kParts = 3, kRows = 4, kEntries = 5, kWeights = 6, kDirect = 8 };
-  const std::vector<std::pair<std::vector<std::uint8_t>, std::string>> cases = {
-      {with_section(bytes, kParts, [&](std::uint8_t* d, std::size_t) { u32(d, 0); }), "rows for"},
-      {with_section(bytes, kParts, [&](std::uint8_t* d, std::size_t) { u32(d + 4, 0xFFFFFFF0u); }),
+  enum : std::uint32_t { kParts = 3, kRows = 4, kPostings = 5, kDirect = 8 };
+  const auto posting = [&](const std::function<void(std::uint8_t*)>& change) {
+    return with_section(bytes, kPostings, [&](std::uint8_t* d, std::size_t) { change(d); });
+  };
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  expect_refused({
+      {with_section(bytes, kParts, [&](std::uint8_t* d, std::size_t) { put_u32(d, 0); }),
+       "rows for"},
+      {with_section(bytes, kParts,
+                    [&](std::uint8_t* d, std::size_t) { put_u32(d + 4, 0xFFFFFFF0u); }),
        "the parts count"},
       {with_section(bytes, kRows,
                     [&](std::uint8_t* d, std::size_t) {
@@ -222,13 +238,41 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
                       std::memcpy(d + 8, first.data(), 8);
                     }),
        "not in order"},
-      {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { u32(d, 1u << 30); }),
+      {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { put_u32(d, 1u << 30); }),
        "beyond"},
-      {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { u32(d + 4, 0); }),
+      {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { put_u32(d + 4, 0); }),
        "invalid length"},
-      {with_section(bytes, kEntries, [&](std::uint8_t* d, std::size_t) { u16(d, 4); }),
-       "missing entry"},
-      {with_section(bytes, kEntries, [&](std::uint8_t* d, std::size_t) { u16(d, 12); }),
+      // The first row: its header (gap width 1), then its first posting's
+      // 1-byte gap (the entry itself) and weight.
+      {posting([](std::uint8_t* d) { d[1] = 4; }), "missing entry"},
+      {posting([](std::uint8_t* d) { d[1] = 12; }), "missing entry"},
+      // Gap widths other than 1 and 2.
+      {posting([](std::uint8_t* d) { d[0] = 0; }), "malformed posting"},
+      {posting([](std::uint8_t* d) { d[0] = 3; }), "malformed posting"},
+      // A row whose last posting is cut short.
+      {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { d[4] -= 1; }),
+       "malformed posting"},
+      {posting([&](std::uint8_t* d) { std::memcpy(d + 2, &nan, 4); }), "non-finite"},
+      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
+       "unknown layout"},
+      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[1] ^= 1; }),
+       "not what its"},
+      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[6] = 0; }),
+       "not strictly increasing"},
+  });
+}
+
+// The same for a version-2 index (a fuzzing seed: 3 entries over word ids).
+TEST(DatabaseFile, InconsistentVersion2IndexIsRefused) {
+  const std::vector<std::uint8_t> bytes =
+      test::read_file(test::source_path("fuzz/corpus/bbdb/over_word_ids_v2.bbdb"));
+  ASSERT_EQ(load_problem(bytes), "loaded");
+  const auto u16 = [](std::uint8_t* at, std::uint16_t value) { std::memcpy(at, &value, 2); };
+  enum : std::uint32_t { kRows = 4, kEntries = 5, kWeights = 6 };
+  expect_refused({
+      {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { put_u32(d + 4, 0); }),
+       "invalid length"},
+      {with_section(bytes, kEntries, [&](std::uint8_t* d, std::size_t) { u16(d, 3); }),
        "missing entry"},
       {with_section(bytes, kWeights,
                     [&](std::uint8_t* d, std::size_t) {
@@ -236,18 +280,7 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
                       std::memcpy(d, &nan, 4);
                     }),
        "non-finite"},
-      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
-       "unknown layout"},
-      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[1] ^= 1; }),
-       "not what its"},
-      {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[6] = 0; }),
-       "not strictly increasing"},
-  };
-  for (const auto& [data, expected] : cases) {
-    const std::string found = load_problem(data);
-    EXPECT_NE(found.find(expected), std::string::npos)
-        << "expected '" << expected << "': " << found;
-  }
+  });
 }
 
 // Sorted random BoW vectors over ids [0, ids).
@@ -296,40 +329,46 @@ TEST(DatabaseFile, PartsOf65536IdsRoundTrip) {
   EXPECT_EQ(loaded.serialize(), database.serialize());
 }
 
-// Databases saved in format version 1 (the fuzzing seeds) still load, and
-// answer as the same database saved again in version 2.
-TEST(DatabaseFile, Version1FilesStillLoad) {
+// Databases saved in format versions 1 and 2 (the fuzzing seeds) still
+// load, answer as the same database saved again in the current version, and
+// both versions of a seed hold the same database.
+TEST(DatabaseFile, OlderVersionsStillLoad) {
   std::size_t loaded_files = 0;
   // (fuzz/corpus/bbdb/over_word_ids.bbdb names ids too sparse for its size:
-  // refused in both versions.)
+  // refused in every version.)
   for (const std::string name :
        {"code8_k3L1", "direct_three", "empty", "plain_two", "removed_one"}) {
-    SCOPED_TRACE(name);
-    const std::string path = test::source_path("fuzz/corpus/bbdb/" + name + ".bbdb");
-    ASSERT_EQ(Database::inspect(path).version, 1u);
-    const Database version1 = Database::load(path);
-    const std::vector<std::uint8_t> bytes = version1.serialize();
-    const Database version2 = Database::deserialize(bytes.data(), bytes.size(), "version 2");
-    ASSERT_EQ(version2.next_entry_id(), version1.next_entry_id());
-    ASSERT_EQ(version2.size(), version1.size());
-    for (EntryId id = 0; id < version1.next_entry_id(); ++id) {
-      ASSERT_EQ(version2.contains(id), version1.contains(id));
-      if (!version1.contains(id)) continue;
-      EXPECT_EQ(version2.label(id), version1.label(id));
-      if (version1.options().direct_index) {
-        EXPECT_EQ(version2.feature_vector(id), version1.feature_vector(id));
+    std::vector<std::uint8_t> saved_again[2];
+    for (std::uint32_t version : {1u, 2u}) {
+      SCOPED_TRACE(name + " version " + std::to_string(version));
+      const std::string path =
+          test::source_path("fuzz/corpus/bbdb/" + name + (version == 1 ? "" : "_v2") + ".bbdb");
+      ASSERT_EQ(Database::inspect(path).version, version);
+      const Database old = Database::load(path);
+      const std::vector<std::uint8_t> bytes = old.serialize();
+      saved_again[version - 1] = bytes;
+      const Database current = Database::deserialize(bytes.data(), bytes.size(), "current");
+      ASSERT_EQ(current.next_entry_id(), old.next_entry_id());
+      ASSERT_EQ(current.size(), old.size());
+      for (EntryId id = 0; id < old.next_entry_id(); ++id) {
+        ASSERT_EQ(current.contains(id), old.contains(id));
+        if (!old.contains(id)) continue;
+        EXPECT_EQ(current.label(id), old.label(id));
+        if (old.options().direct_index) {
+          EXPECT_EQ(current.feature_vector(id), old.feature_vector(id));
+        }
       }
+      std::mt19937_64 rng(1);
+      const std::size_t words = old.vocabulary().empty() ? 70'000 : old.vocabulary().word_count();
+      for (int i = 0; i < 20; ++i) {
+        const BowVector bow = random_word_bow(8, words, rng);
+        EXPECT_EQ(current.query(bow, 10), old.query(bow, 10));
+      }
+      ++loaded_files;
     }
-    std::mt19937_64 rng(1);
-    const std::size_t words =
-        version1.vocabulary().empty() ? 70'000 : version1.vocabulary().word_count();
-    for (int i = 0; i < 20; ++i) {
-      const BowVector bow = random_word_bow(8, words, rng);
-      EXPECT_EQ(version2.query(bow, 10), version1.query(bow, 10));
-    }
-    ++loaded_files;
+    EXPECT_EQ(saved_again[0], saved_again[1]) << name;
   }
-  EXPECT_EQ(loaded_files, 5u);
+  EXPECT_EQ(loaded_files, 10u);
 }
 
 // A database over word ids (an online vocabulary's) saves its scoring and
