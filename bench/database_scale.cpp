@@ -1,4 +1,4 @@
-// The image database at scale: 10k → 200k → 1M entries of real images on the
+// The image database at scale: 10k → 100k → 200k → 1M entries of real images on the
 // trained k=10 L=6 ORB vocabulary (scripts/make_benchmark_vocabulary.sh; its
 // path in BINBOW_BENCH_VOCABULARY, as for bench_transform).
 //
@@ -567,6 +567,9 @@ void BM_Save(benchmark::State& state) {
 BENCHMARK(BM_Fill)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Save)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Fill)->Arg(100000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_Query)->Arg(100000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Save)->Arg(100000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(200000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(200000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_QueryBounds)->Arg(200000)->Iterations(1)->Unit(benchmark::kSecond);
