@@ -26,12 +26,8 @@
 
 namespace binbow::detail {
 
-// The tail keeps one list per group of words: word w is in group
-// w mod 2^kGroupBits, so there are at most 65,536 lists, whose 8-byte heads
-// (512 KiB) and growing ends stay in cache while images are added, where a
-// list per word would cost two cache misses per posting. Words of a group
-// are 65,536 ids apart: sibling leaves of the vocabulary tree, which similar
-// descriptors reach, fall in different groups.
+// A segment's rows are ordered by group of words: word w is in group
+// w mod 2^kGroupBits (see RowOrder).
 constexpr unsigned kGroupBits = 16;
 // The word-id capacity a database over word ids starts with.
 constexpr std::size_t kInitialWordCapacity = std::size_t{1} << 16;
@@ -39,8 +35,20 @@ constexpr std::uint32_t group_of(WordId word) noexcept {
   return word & ((1u << kGroupBits) - 1);
 }
 
-// The order of a segment's rows: by group, then word (w, w + 65,536, ...),
-// so that a segment is written from the tail group by group, sequentially.
+// The tail keeps one list per 2^kTailListShift consecutive groups (4096
+// lists for 65,536 groups): their 8-byte heads (32 KiB) and the cache lines
+// their next postings go to (256 KiB) stay in a core's cache while images
+// are added, so that appends miss the cache once per 64 bytes of postings
+// (with a list per group, twice per posting). A list's rows are consecutive
+// (RowOrder), so freezing the tail writes the rows sequentially, a list at
+// a time within the cache. Fewer groups per list where the word capacity
+// needs it: a tail key holds the entry's 16 bits and the word's row among
+// its list's.
+constexpr unsigned kTailListShift = 4;
+constexpr unsigned kTailEntryBits = 16;
+
+// The order of a segment's rows (and of a .bbdb's): by group, then word
+// (w, w + 65,536, ...), so that a tail list's rows are consecutive.
 // Identity for vocabularies of up to 65,536 words.
 class RowOrder {
  public:
@@ -72,16 +80,16 @@ class RowOrder {
 };
 
 // A posting of the tail: the entry (relative to the tail's first entry, so
-// it fits) and the word's bits above kGroupBits in one key, then the weight.
-// A group's list is in increasing entry order.
+// it fits) and the word's row among its list's in one key, then the
+// weight. A list is in increasing entry order.
 struct TailPosting {
-  std::uint32_t key;  // (entry - tail_first_entry) << high_bits | word >> kGroupBits
+  std::uint32_t key;  // (entry - tail_first_entry) << high_bits | the word's tail_row
   float weight;
 };
 
-// The tail postings of one group: where its block is in the arena, and how
+// The tail postings of one list: where its block is in the arena, and how
 // many postings it holds. A list's first block holds 2^first_block_log
-// postings (the group's size when the tail was last frozen, so that most
+// postings (the list's size when the tail was last frozen, so that most
 // lists never move), and each time the list outgrows its block it moves to
 // one twice as large: the block holds max(2^first_block_log, the smallest
 // power of two ≥ size) postings (at least that many: undoing an append may
@@ -106,7 +114,7 @@ constexpr bool tail_list_full(std::uint32_t size, unsigned first_block_log) noex
 // Storage of the tail's posting lists: blocks of 2^k postings carved
 // from large chunks, with a free list per block size for the blocks that
 // growing lists leave behind. Blocks are named by 32-bit addresses (chunk
-// index, then position in the chunk) so a group's TailList is 8 bytes. The
+// index, then position in the chunk) so a list's TailList is 8 bytes. The
 // whole tail is dropped at once when it becomes a segment, so there is no
 // per-list malloc, free or header.
 class PostingArena {
@@ -478,12 +486,23 @@ struct Database::Impl {
 
   std::vector<std::unique_ptr<detail::Segment>> segments;
 
-  // Tail: one list per group of words (see kGroupBits); a word id has
-  // kGroupBits + high_bits significant bits.
+  // Tail: one list per 2^tail_list_shift groups (see kTailListShift); a
+  // list has at most 2^high_bits rows.
+  unsigned tail_list_shift = 0;
   unsigned high_bits = 0;
   detail::RowOrder row_order;
+  std::uint32_t tail_list(WordId word) const noexcept {
+    return detail::group_of(word) >> tail_list_shift;
+  }
+  // The first row of a list, and a word's row among its list's rows.
+  std::uint32_t tail_list_start(std::uint32_t list) const noexcept {
+    return row_order.group_start(list << tail_list_shift);
+  }
+  std::uint32_t tail_row(WordId word) const noexcept {
+    return row_order.row(word) - tail_list_start(tail_list(word));
+  }
   std::vector<detail::TailList> tail_lists;
-  std::vector<std::uint8_t> first_block_logs;  // per group, see TailList
+  std::vector<std::uint8_t> first_block_logs;  // per list, see TailList
   detail::PostingArena arena;
   std::size_t tail_postings = 0;
   std::size_t tail_dead_postings = 0;

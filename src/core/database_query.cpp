@@ -179,6 +179,7 @@ struct IndexView {
   const std::vector<std::unique_ptr<detail::Segment>>& segments;
   const detail::TailList* tail_lists;
   const detail::PostingArena& arena;
+  unsigned tail_list_shift;
   unsigned high_bits;
   detail::RowOrder row_order;
   std::size_t tail_postings;
@@ -215,13 +216,15 @@ inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t 
     if ((postings[i].key & mask) == low && !take(i)) return;
 }
 
-// A query word's group list holds the postings of up to 2^high_bits words,
-// in increasing entry order: the word's own are picked out by their high
-// bits.
+// A query word's tail list holds the postings of up to 2^high_bits words,
+// in increasing entry order: the word's own are picked out by the key's
+// low bits, its row among the list's.
 template <class Term>
 void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_entry,
                      PartScores scores) {
   const detail::TailList* lists = index.tail_lists;
+  const detail::RowOrder order = index.row_order;
+  const unsigned shift = index.tail_list_shift;
   const unsigned bits = index.high_bits;
   const std::uint32_t mask = (1u << bits) - 1;
   const std::uint64_t key_end = (std::uint64_t{last_entry} - index.tail_first_entry + 1) << bits;
@@ -229,10 +232,11 @@ void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_en
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + 2 * kPrefetchAhead < n)
-      __builtin_prefetch(lists + detail::group_of(query[q + 2 * kPrefetchAhead].word));
+      __builtin_prefetch(lists + (detail::group_of(query[q + 2 * kPrefetchAhead].word) >> shift));
     if (q + kPrefetchAhead < n) {
-      // The whole list (up to 2 KiB) is read: fetch it all, not its start.
-      const detail::TailList ahead = lists[detail::group_of(query[q + kPrefetchAhead].word)];
+      // The whole list is read: fetch up to 2 KiB of it, not just its start.
+      const detail::TailList ahead =
+          lists[detail::group_of(query[q + kPrefetchAhead].word) >> shift];
       if (ahead.size != 0) {
         const auto* block = reinterpret_cast<const char*>(index.arena.at(ahead.block));
         const std::size_t bytes =
@@ -241,11 +245,13 @@ void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_en
       }
     }
     const WordId word = query[q].word;
-    const detail::TailList list = lists[detail::group_of(word)];
+    const std::uint32_t l = detail::group_of(word) >> shift;
+    const detail::TailList list = lists[l];
     if (list.size == 0) continue;
     const detail::TailPosting* postings = index.arena.at(list.block);
     const Term term{query[q].value};
-    for_each_of_word(postings, list.size, mask, word >> detail::kGroupBits, [&](std::uint32_t i) {
+    const std::uint32_t row = order.row(word) - order.group_start(l << shift);
+    for_each_of_word(postings, list.size, mask, row, [&](std::uint32_t i) {
       const std::uint32_t key = postings[i].key;
       if (key >= key_end) return false;
       scores.add(key >> bits, term(postings[i].weight));
@@ -584,9 +590,11 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const std::size_t entry_count = impl_->alive.size();
   if (impl_->live_entries == 0) return {};
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
-  const IndexView index{impl_->segments,         impl_->tail_lists.data(), impl_->arena,
-                        impl_->high_bits,        impl_->row_order,         impl_->tail_postings,
-                        impl_->tail_first_entry, impl_->alive.data(),      entry_count,
+  const IndexView index{impl_->segments,      impl_->tail_lists.data(),
+                        impl_->arena,         impl_->tail_list_shift,
+                        impl_->high_bits,     impl_->row_order,
+                        impl_->tail_postings, impl_->tail_first_entry,
+                        impl_->alive.data(),  entry_count,
                         &impl_->forward};
   if (options.mode == QueryMode::kFast) impl_->build_forward_index();
   std::size_t visible = 0;
