@@ -114,11 +114,16 @@ def test_save_and_load_round_trip(client, vocabulary, tmp_path):
     assert manifest["shards"] == 3 and manifest["next_entry_id"] == 11
     assert manifest["vocabulary_checksum"] == vocabulary.checksum
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        "manifest.json", "shard-0.bbdb", "shard-1.bbdb", "shard-2.bbdb"]
+        "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb", "shard-2.gen1.bbdb"]
     loaded = sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
     assert loaded.shards == 3 and len(loaded) == 10 and loaded.label(4) == "l4"
     assert_same_answers(single, loaded, [vocabulary.transform(images[i]) for i in (0, 3, 9)])
     assert loaded.add(images[1]) == 11
+    # The next save is a new generation; the previous one is removed once committed.
+    loaded.save(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "manifest.json", "shard-0.gen2.bbdb", "shard-1.gen2.bbdb", "shard-2.gen2.bbdb"]
+    assert sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary).label(4) == "l4"
 
 
 def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp_path):
@@ -127,10 +132,15 @@ def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp
     module = sharded_module()
     sharded.save_incremental(tmp_path)  # never saved: a full save
     assert not list(tmp_path.glob("*.journal"))
+    saved = {path.name: path.read_bytes() for path in tmp_path.glob("*.bbdb")}
     for image in images[6:8]:
         single.add(image)
     sharded.add_many(images[6:8])
-    sharded.save_incremental(tmp_path)  # shards saved under staging names: whole files
+    sharded.save_incremental(tmp_path)  # right after a full save, the shards append
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    journals = [tmp_path / (name + ".journal") for name in manifest["files"]]
+    assert all(path.stat().st_size > 0 for path in journals)
+    assert {path.name: path.read_bytes() for path in tmp_path.glob("*.bbdb")} == saved
     for image in images[8:10]:
         single.add(image)
     sharded.add_many(images[8:10])
@@ -138,9 +148,9 @@ def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp
     sharded.remove(3)
     sharded.save_incremental(tmp_path)
     manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
-    journals = [tmp_path / f"shard-{shard}.bbdb.journal" for shard in range(2)]
     assert manifest["journal_bytes"] == [path.stat().st_size for path in journals]
     assert all(size > 0 for size in manifest["journal_bytes"])
+    assert {path.name: path.read_bytes() for path in tmp_path.glob("*.bbdb")} == saved
     queries = [vocabulary.transform(images[i]) for i in (0, 7, 9)]
     loaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
     assert_same_answers(single, loaded, queries)
@@ -169,7 +179,7 @@ def test_load_refuses_another_vocabulary_and_broken_manifests(client, vocabulary
     manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
     manifest["next_entry_id"] = 5
     (tmp_path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
-    with pytest.raises(binbow.Error, match="shard-0.bbdb holds 2 ids"):
+    with pytest.raises(binbow.Error, match=r"shard-0.gen1.bbdb holds 2 ids"):
         sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
     with pytest.raises(binbow.Error, match="cannot read"):
         sharded_module().ShardedDatabase.load(client, tmp_path / "missing", vocabulary)
@@ -290,10 +300,42 @@ def test_a_shard_lost_during_a_save_leaves_the_previous_save(client, vocabulary,
     sharded.save(tmp_path)
     saved = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     sharded.add_many(random_images(15, 2))
-    # Shard 1 cannot write its file (a folder holds its staging name): shard 0 has
-    # written its own by then, which must not replace the saved one.
-    (tmp_path / ".shard-1.bbdb.saving").mkdir()
+    # Shard 1 cannot write its file (a folder holds the name of its next
+    # generation): shard 0 has written its own by then, which must not replace
+    # the saved one.
+    (tmp_path / "shard-1.gen2.bbdb").mkdir()
     with pytest.raises(OSError):
         sharded.save(tmp_path)
-    (tmp_path / ".shard-1.bbdb.saving").rmdir()
+    (tmp_path / "shard-1.gen2.bbdb").rmdir()
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == saved
+    # The shards' files changed: the next incremental save is a full one.
+    sharded.save_incremental(tmp_path)
+    assert not list(tmp_path.glob("*.journal"))
+    loaded = sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert len(loaded) == 6
+
+
+def test_saves_named_without_generation_still_load_and_append(client, vocabulary, tmp_path):
+    """A manifest may name shard-<i>.bbdb: loaded, appended to, then replaced by a full save."""
+    images = random_images(16, 6)
+    single, sharded = both(client, vocabulary, images[:4], 2)
+    sharded.save(tmp_path)
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    for shard, name in enumerate(manifest["files"]):
+        (tmp_path / name).rename(tmp_path / f"shard-{shard}.bbdb")
+    manifest["files"] = ["shard-0.bbdb", "shard-1.bbdb"]
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    module = sharded_module()
+    loaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    loaded.add_many(images[4:])
+    for image in images[4:]:
+        single.add(image)
+    loaded.save_incremental(tmp_path)
+    assert sorted(p.name for p in tmp_path.glob("*.journal")) == [
+        "shard-0.bbdb.journal", "shard-1.bbdb.journal"]
+    queries = [vocabulary.transform(images[i]) for i in (0, 5)]
+    assert_same_answers(single, module.ShardedDatabase.load(client, tmp_path, vocabulary), queries)
+    loaded.save(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb"]
+    assert_same_answers(single, module.ShardedDatabase.load(client, tmp_path, vocabulary), queries)
