@@ -63,6 +63,8 @@ def test_queries_equal_one_database_with_ties(client, vocabulary, shards):
         fast = sharded.query(bow, 5, fast=True)
         assert fast and fast[0] == single.query(bow, 1)[0]
         assert all(exact[entry] == (score, shared) for entry, score, shared in fast)
+        if shards == 1:  # one shard holds what the one Database holds
+            assert fast == single.query(bow, 5, fast=True)
     assert len(sharded) == len(images) and sharded.next_entry_id == len(images)
 
 
@@ -81,8 +83,13 @@ def test_real_descriptors(client):
     extractor = binbow.FeatureExtractor("orb", max_features=500)
     images = [extractor.extract(str(frame))[1] for frame in sample_frames()[:24]]
     single, sharded = both(client, vocabulary, images, 3)
-    assert_same_answers(single, sharded, [vocabulary.transform(images[i]) for i in (0, 11, 23)],
-                        (None, 10))
+    queries = [vocabulary.transform(images[i]) for i in (0, 11, 23)]
+    assert_same_answers(single, sharded, queries, (None, 10))
+    for query in queries:  # fast mode: the exact top 1, every score exact
+        exact = {entry: (score, shared) for entry, score, shared in single.query(query, 100)}
+        fast = sharded.query(query, 10, fast=True)
+        assert fast[0] == single.query(query, 1)[0]
+        assert all(exact[entry] == (score, shared) for entry, score, shared in fast)
 
 
 def test_remove_and_labels(client, vocabulary):
