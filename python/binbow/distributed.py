@@ -174,7 +174,7 @@ class ShardedDatabase:
                  **database_options):
         self._setup(client, vocabulary, shards, timeout)
         self._entries = 0
-        self._start([(vocabulary, database_options, None)] * shards)
+        self._start([(database_options, None)] * shards)
 
     def _setup(self, client, vocabulary, shards, timeout):
         distributed = _distributed()
@@ -196,20 +196,31 @@ class ShardedDatabase:
         self._shard_count = shards
 
     def _start(self, arguments):
+        """Starts a shard per (database options, file to load) pair."""
         workers = sorted(self._client.scheduler_info()["workers"])
         if not workers:
             raise Error("ShardedDatabase: the Dask cluster has no workers")
+        placed = [workers[shard % len(workers)] for shard in range(len(arguments))]
+        # Sent once to each worker rather than in every shard's task: the shards
+        # of a worker share one copy, and no large task passes the scheduler.
+        try:
+            vocabulary = self._client.scatter(self._vocabulary, workers=sorted(set(placed)),
+                                              broadcast=True, hash=False,
+                                              timeout=self._timeout)
+        except Exception as error:
+            raise Error(f"ShardedDatabase: sending the vocabulary to the workers failed "
+                        f"({type(error).__name__}: {error}): is the Dask cluster alive?") \
+                from error
         futures = [
-            self._client.submit(_Shard, *argument, actor=True, pure=False,
-                                workers=[workers[shard % len(workers)]],
-                                allow_other_workers=False)
-            for shard, argument in enumerate(arguments)
+            self._client.submit(_Shard, vocabulary, *argument, actor=True, pure=False,
+                                workers=[worker], allow_other_workers=False)
+            for worker, argument in zip(placed, arguments)
         ]
         self._actor_futures = futures  # keep the actors alive
         self._lost = {}  # shard: what failed
         self._shards = [self._wait(future, f"starting shard {shard}")
                         for shard, future in enumerate(futures)]
-        self.workers = [workers[shard % len(workers)] for shard in range(len(arguments))]
+        self.workers = placed
 
     def _wait(self, future, what, shard=None, changes=False):
         """The result of a Dask future or actor call; binbow.Error when it cannot be had.
@@ -535,7 +546,7 @@ class ShardedDatabase:
         self._saved_folder = folder
         self._saved_files = files
         self._entries = entries
-        self._start([(vocabulary, None, os.path.join(folder, name)) for name in files])
+        self._start([(None, os.path.join(folder, name)) for name in files])
         found = self._call_all("load", "next_entry_id", [()] * shards)
         for shard, next_id in found.items():
             if next_id != _shard_size(entries, shard, shards):

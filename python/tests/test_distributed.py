@@ -1,6 +1,8 @@
 """binbow.distributed.ShardedDatabase on a local Dask cluster of worker processes."""
 import ast
 import json
+import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -212,6 +214,33 @@ def test_bad_inputs_are_refused_before_any_shard_adds(client, vocabulary):
 def test_the_workers_hold_the_shards(client, vocabulary):
     sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=4)
     assert len(set(sharded.workers)) == 2  # spread over both workers
+
+
+def test_the_vocabulary_is_sent_to_each_worker_not_in_every_shard_s_task(client, tmp_path):
+    """Dask warns when a task carries more than 1 MB: a large vocabulary is
+    scattered once to the workers, which their shards share."""
+    rng = np.random.default_rng(17)
+    large = binbow.Vocabulary.build(
+        [rng.integers(0, 256, size=(1000, 32), dtype=np.uint8) for _ in range(40)],
+        branching=16, levels=4, seed=1, max_iterations=2)
+    assert len(pickle.dumps(large)) > 1_000_000
+    module = sharded_module()
+    worker_module = require_module("distributed.worker", "python3-distributed")
+    images = random_images(18, 6)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message="Large object")
+        # Dask warns once per process: a large task of another test must not hide this one.
+        worker_module._warn_dumps_warned[0] = False
+        sharded = module.ShardedDatabase(client, large, shards=4)
+        sharded.add_many(images)
+        sharded.save(tmp_path)
+        worker_module._warn_dumps_warned[0] = False
+        loaded = module.ShardedDatabase.load(client, tmp_path, large)
+    single = binbow.Database(large)
+    for image in images:
+        single.add(image)
+    assert_same_answers(loaded, sharded, [large.transform(images[i]) for i in (0, 5)])
+    assert_same_answers(single, loaded, [large.transform(images[i]) for i in (0, 5)])
 
 
 def test_the_stubs_describe_the_runtime_api():
