@@ -370,8 +370,10 @@ def test_saves_named_without_generation_still_load_and_append(client, vocabulary
     assert sorted(p.name for p in tmp_path.glob("*.journal")) == [
         "shard-0.bbdb.journal", "shard-1.bbdb.journal"]
     queries = [vocabulary.transform(images[i]) for i in (0, 5)]
-    assert_same_answers(single, module.ShardedDatabase.load(client, tmp_path, vocabulary), queries)
+    reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert_same_answers(single, reloaded, queries)
     loaded.save(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb"]
-    assert_same_answers(single, module.ShardedDatabase.load(client, tmp_path, vocabulary), queries)
+    reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert_same_answers(single, reloaded, queries)
