@@ -15,8 +15,11 @@ query time (top 10, exact and fast; queries are BowVectors, so only the query
 is timed), resident memory (VmRSS) of the process(es) holding the entries,
 a full save, then a save_incremental after adding 1 % more entries.
 
-    BINBOW_BENCH_VOCABULARY=/work/bench/orb_k10l6_benchmark.bbw \\
+    BINBOW_BENCH_VOCABULARY=<trained .bbw> \\
         PYTHONPATH=build/python python3 bench/sharded_scale.py --entries 200000
+
+The vocabulary comes from scripts/make_benchmark_vocabulary.sh; the saves go
+to a temporary folder in $BINBOW_BENCH_DIR (default /tmp), removed at the end.
 """
 import argparse
 import ctypes
@@ -49,16 +52,17 @@ def training_photographs():
 
 
 def thousand_descriptors(extractor, path):
-    """1000 descriptors of a photograph, enlarged (twice, up to 3 times) until it
-    gives them; None if it never does."""
+    """1000 descriptors of a photograph, at its size or enlarged 2 or 4 times;
+    None if it never gives them."""
     image = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise SystemExit(f"sharded_scale: cannot read {path}")
-    for _ in range(3):
+    for attempt in range(3):
+        if attempt > 0:
+            image = cv2.resize(image, None, fx=2.0, fy=2.0)
         _, descriptors = extractor.extract(image)
         if len(descriptors) >= FEATURES:
             return np.ascontiguousarray(descriptors[:FEATURES])
-        image = cv2.resize(image, None, fx=2.0, fy=2.0)
     return None
 
 
