@@ -496,7 +496,8 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   float threshold = heap.size() == keep ? heap.front().key : 0.0f;
   for (std::size_t r = 0; r < span; ++r) {
     const float key = out[r];
-    if (!(key > threshold) || c.index.alive[first + r] == 0) continue;
+    // Ties with the worst kept are left to `better` (entry order).
+    if (!(key >= threshold) || !(key > 0.0f) || c.index.alive[first + r] == 0) continue;
     const Candidate candidate{key, static_cast<EntryId>(first + r)};
     if (heap.size() < keep) {
       heap.push_back(candidate);
