@@ -178,15 +178,15 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
 
 TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
   // Images of 400 places share most of their words (Zipf), as photographs
-  // of a few scenes do; queries are new images of known places. 12,000
-  // images: enough postings per query that fast mode scores candidates
-  // rather than reading every posting. The images are made once and indexed
-  // under each scoring.
+  // of a few scenes do; queries are new images of known places. 24,000
+  // images (~2.5M postings per query): enough that fast mode scores
+  // candidates rather than reading every posting (it reads at least 2^20). The images are made once
+  // and indexed under each scoring.
   ZipfWords zipf(80'000, 3);
   std::vector<std::map<WordId, float>> places;
   for (int p = 0; p < 400; ++p) places.push_back(place_words(zipf, 700));
   std::vector<BowVector> bows;
-  for (std::size_t i = 0; i < 12'000; ++i)
+  for (std::size_t i = 0; i < 24'000; ++i)
     bows.push_back(image_of(places[i % places.size()], zipf, 150));
   const std::vector<bool> live(bows.size(), true);
   constexpr int kQueries = 60;
