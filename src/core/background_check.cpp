@@ -1,5 +1,6 @@
 #include "core/background_check.h"
 
+#include <chrono>
 #include <exception>
 #include <system_error>
 #include <utility>
@@ -8,11 +9,20 @@
 
 namespace binbow::detail {
 
+std::atomic<bool>& hold_background_checks() {
+  static std::atomic<bool> hold{false};
+  return hold;
+}
+
 BackgroundCheck::BackgroundCheck(std::string path, Task task, bool background)
     : task_(std::move(task)), path_(std::move(path)) {
   if (background) {
     try {
-      thread_ = std::thread([this] { run(); });
+      thread_ = std::thread([this] {
+        while (hold_background_checks().load() && !stop_.load())
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        run();
+      });
       return;
     } catch (const std::system_error&) {
       // No thread to spare: checked now instead.

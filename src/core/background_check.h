@@ -15,6 +15,11 @@
 
 namespace binbow::detail {
 
+// For tests: while set, a check started on a thread waits before it reads
+// anything (until cleared, or its database is destroyed), so that a test
+// can use a database whose check has not ended.
+std::atomic<bool>& hold_background_checks();
+
 class BackgroundCheck {
  public:
   // What a check learns while it reads every posting: what load() would
