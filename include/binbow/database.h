@@ -227,9 +227,10 @@ class Database {
   std::size_t size() const;       // live entries
   EntryId next_entry_id() const;  // the id the next add() returns
   void clear();                   // removes every entry; ids restart at 0
-  // Bytes of heap memory held by the index (posting lists, direct index,
+  // Bytes of memory held by the index (posting lists, direct index,
   // per-entry state, labels, changes kept for the next save_incremental),
-  // excluding the vocabulary.
+  // excluding the vocabulary. A loaded database's postings and direct index
+  // are counted too, though they are the mapped file's pages (see load()).
   std::size_t memory_usage() const;
 
   const Vocabulary& vocabulary() const noexcept;  // empty over word ids
@@ -273,8 +274,8 @@ class Database {
   // where it is an incremental save that never completed and is dropped.
   //
   // A version 3 file is memory-mapped, not copied: its postings and direct
-  // index stay the file's pages (shared with the page cache, not counted by
-  // memory_usage()), so opening costs little per entry and nothing per
+  // index stay the file's pages (shared with the page cache; memory_usage()
+  // counts them), so opening costs little per entry and nothing per
   // posting, and the first query answers at once. binbow's saves replace a
   // file by renaming a new one over it, which leaves the mapped one intact
   // (saving a loaded database to its own path is fine); a file truncated or

@@ -1166,10 +1166,13 @@ std::size_t Database::memory_usage() const {
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
                       impl.loaded_direct.offsets.capacity() * sizeof(std::uint64_t) +
                       impl.labels.capacity() * sizeof(std::string);
-  // A loaded segment's rows are the file's pages (see Database::load).
+  // A loaded database's rows and direct index are the file's pages, counted
+  // too: what the index occupies in memory once read (see Database::load).
   for (const auto& segment : impl.segments)
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
-             (segment->bytes.is_view() ? 0 : segment->bytes.size());
+             segment->bytes.size();
+  if (!impl.loaded_direct.offsets.empty())
+    bytes += static_cast<std::size_t>(impl.loaded_direct.offsets.back());
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
   bytes += impl.journal.memory_usage();
