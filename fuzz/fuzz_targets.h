@@ -171,6 +171,9 @@ inline bool load_mapped_bbdb(const std::uint8_t* data, std::size_t size) {
   if (file == nullptr) throw std::runtime_error("cannot write " + path);
   const bool written = std::fwrite(data, 1, size, file) == size;
   if (std::fclose(file) != 0 || !written) throw std::runtime_error("cannot write " + path);
+  struct Remove {  // at once: the mapping keeps the file's bytes
+    ~Remove() { std::remove(path.c_str()); }
+  } remove;
   struct Hold {
     Hold() { detail::hold_background_checks() = true; }
     ~Hold() { detail::hold_background_checks() = false; }
