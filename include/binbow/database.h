@@ -113,7 +113,7 @@ enum class Verification {
   // load() checks the header, the section table and the small sections, and
   // lays the index out over the mapped file, then returns: the large
   // sections (the postings and the direct index) are checked by a thread of
-  // their own (about a second per GB), while the database already answers.
+  // their own (one to two seconds per GB), while the database already answers.
   // Until that check ends a query reads bytes not verified yet: safe (never
   // outside the file or the query's buffers), but a damaged file may give
   // wrong results meanwhile. Damage found makes every later call throw
@@ -121,7 +121,7 @@ enum class Verification {
   // postings (remove, save, serialize, the first fast query) wait for it.
   kBackground,
   // Everything is checked before load() returns, as deserialize() does:
-  // the whole file is read once (about a second per GB more to open).
+  // the whole file is read once (one to two seconds per GB more to open).
   kBeforeReturn,
 };
 
