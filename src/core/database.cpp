@@ -640,6 +640,7 @@ void Database::Impl::build_forward_index() const {
   if (forward_built.load(std::memory_order_acquire)) return;
   std::lock_guard<std::mutex> lock(forward_mutex);
   if (forward_built.load(std::memory_order_relaxed)) return;
+  wait_for_file();  // reads every posting: only checked ones
   detail::ForwardIndex built(over_word_ids ? nullptr : &vocabulary, scoring);
   built.resize(alive.size());
   // The words of kChunk entries at a time, so that the BoW vectors in
@@ -658,7 +659,7 @@ void Database::Impl::build_forward_index() const {
   std::vector<std::uint32_t> cursors, last_entries;
   for (const auto& segment : segments) {
     const std::uint32_t* offsets = segment->offsets.data();
-    const std::uint8_t* bytes = segment->bytes.data();
+    const std::uint8_t* bytes = std::as_const(segment->bytes).data();
     // By row: the next posting's byte, past the row's header.
     cursors.resize(word_capacity);
     for (std::size_t row = 0; row < word_capacity; ++row)
@@ -929,7 +930,7 @@ namespace {
 std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at,
                                std::uint8_t* const out_begin) noexcept {
   std::uint32_t* offsets = segment.offsets.data();
-  const std::uint8_t* const bytes = segment.bytes.data();
+  const std::uint8_t* const bytes = std::as_const(segment.bytes).data();
   std::uint8_t* out = out_begin;
   std::size_t kept = 0;
   std::uint32_t begin = offsets[0];
@@ -976,6 +977,29 @@ void Database::Impl::compact(std::size_t index) {
   segment.dead_postings = 0;
 }
 
+void Database::Impl::merge_file_check() {
+  throw_if_damaged();
+  if (file_check_merged) return;
+  const detail::BackgroundCheck::Found& found = file_check->wait();
+  // Entries added since load() have their counts already.
+  std::copy(found.word_counts.begin(), found.word_counts.end(), word_counts.begin());
+  values.negative = values.negative || found.values.negative;
+  values.min_positive = std::min(values.min_positive, found.values.min_positive);
+  values.max = std::max(values.max, found.values.max);
+  file_check_merged = true;
+}
+
+bool Database::Impl::index_values(detail::ValueRange& range) const noexcept {
+  range = values;
+  if (file_check_merged) return true;
+  if (!file_check->passed()) return false;
+  const detail::ValueRange& found = file_check->found().values;
+  range.negative = range.negative || found.negative;
+  range.min_positive = std::min(range.min_positive, found.min_positive);
+  range.max = std::max(range.max, found.max);
+  return true;
+}
+
 std::size_t Database::Impl::segment_of(EntryId entry) const noexcept {
   if (entry >= tail_first_entry) return segments.size();
   const auto after = std::upper_bound(
@@ -1011,6 +1035,7 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
   else
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   const EntryId entry = impl_->append(bow, features);
   impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
                             label);
@@ -1022,6 +1047,7 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
 EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::string label) {
   if (impl_->over_word_ids) {
     std::unique_lock lock(impl_->mutex);
+    impl_->throw_if_damaged();
     if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
     const EntryId entry = impl_->append(bow, features);
     impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
@@ -1039,6 +1065,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
                           " is outside the vocabulary (" +
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   const EntryId entry = impl_->append(bow, features);
   impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
                             label);
@@ -1049,6 +1076,8 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
 
 void Database::remove(EntryId entry) {
   std::unique_lock lock(impl_->mutex);
+  // The entry's postings are counted by the file's check.
+  impl_->merge_file_check();
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::remove: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
@@ -1073,21 +1102,32 @@ void Database::remove(EntryId entry) {
 
 bool Database::contains(EntryId entry) const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   return impl_->is_live(entry);
 }
 
 FeatureVector Database::feature_vector(EntryId entry) const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   if (!impl_->options.direct_index)
     throw InvalidArgument("Database::feature_vector: this database keeps no direct index");
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::feature_vector: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
-  return impl_->direct[entry].unpack();
+  if (entry >= impl_->loaded_direct.entries()) return impl_->direct[entry].unpack();
+  try {
+    return impl_->loaded_direct.decode(entry).unpack();
+  } catch (const InvalidArgument& e) {
+    // Only in a damaged file, whose check has not ended yet.
+    throw FileError(
+        impl_->loaded_direct.name,
+        "the direct index of entry " + std::to_string(entry) + " is damaged (" + e.what() + ")");
+  }
 }
 
 void Database::set_label(EntryId entry, std::string label) {
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::set_label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
@@ -1097,6 +1137,7 @@ void Database::set_label(EntryId entry, std::string label) {
 
 std::string Database::label(EntryId entry) const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
@@ -1105,17 +1146,23 @@ std::string Database::label(EntryId entry) const {
 
 std::size_t Database::size() const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   return impl_->live_entries;
 }
 
 EntryId Database::next_entry_id() const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   return static_cast<EntryId>(impl_->alive.size());
 }
 
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   impl_->journal.record_clear();
+  impl_->file_check.reset();  // stops it: nothing of the file is left
+  impl_->file_check_merged = true;
+  impl_->loaded_direct = {};
   std::vector<std::unique_ptr<detail::Segment>>().swap(impl_->segments);
   std::fill(impl_->tail_lists.begin(), impl_->tail_lists.end(), detail::TailList{});
   std::fill(impl_->first_block_logs.begin(), impl_->first_block_logs.end(), detail::kFirstBlockLog);
@@ -1140,10 +1187,15 @@ std::size_t Database::memory_usage() const {
                       impl.first_block_logs.capacity() + impl.alive.capacity() +
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
+                      impl.loaded_direct.offsets.capacity() * sizeof(std::uint64_t) +
                       impl.labels.capacity() * sizeof(std::string);
+  // A loaded database's rows and direct index are the file's pages, counted
+  // too: what the index occupies in memory once read (see Database::load).
   for (const auto& segment : impl.segments)
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
              segment->bytes.size();
+  if (!impl.loaded_direct.offsets.empty())
+    bytes += static_cast<std::size_t>(impl.loaded_direct.offsets.back());
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
   bytes += impl.journal.memory_usage();

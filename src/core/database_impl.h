@@ -19,6 +19,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/background_check.h"
 #include "core/database_journal.h"
 #include "core/forward_index.h"
 #include "core/scoring.h"
@@ -215,6 +216,62 @@ class GrowableArray {
   std::size_t size_ = 0;
 };
 
+// A segment's row bytes: owned (a GrowableArray), or a read-only view of
+// the rows of a loaded .bbdb file, which `keeper` (the file's mapping) keeps
+// alive: a loaded database costs no copy of its index, and the pages are the
+// file's, shared with the page cache. Writing through a view (non-const
+// data(), resize) first copies it into owned memory, so code that changes a
+// segment (compaction) needs no special case.
+class SegmentBytes {
+ public:
+  SegmentBytes() = default;
+  const std::uint8_t* data() const noexcept { return view_ != nullptr ? view_ : owned_.data(); }
+  std::uint8_t* data() {
+    own();
+    return owned_.data();
+  }
+  std::size_t size() const noexcept { return view_ != nullptr ? view_size_ : owned_.size(); }
+  void resize(std::size_t n) {
+    own();
+    owned_.resize(n);
+  }
+  void swap(SegmentBytes& other) noexcept {
+    owned_.swap(other.owned_);
+    std::swap(view_, other.view_);
+    std::swap(view_size_, other.view_size_);
+    keeper_.swap(other.keeper_);
+  }
+  // Takes `other`'s bytes, owned; `other` gets these bytes if they were
+  // owned, else none.
+  void swap(GrowableArray<std::uint8_t>& other) noexcept {
+    view_ = nullptr;
+    view_size_ = 0;
+    keeper_.reset();
+    owned_.swap(other);
+  }
+  void view(const std::uint8_t* data, std::size_t size, std::shared_ptr<const void> keeper) {
+    owned_.resize(0);
+    view_ = data;
+    view_size_ = size;
+    keeper_ = std::move(keeper);
+  }
+  bool is_view() const noexcept { return view_ != nullptr; }
+
+ private:
+  void own() {
+    if (view_ == nullptr) return;
+    owned_.assign(view_, view_size_);
+    view_ = nullptr;
+    view_size_ = 0;
+    keeper_.reset();
+  }
+
+  GrowableArray<std::uint8_t> owned_;
+  const std::uint8_t* view_ = nullptr;
+  std::size_t view_size_ = 0;
+  std::shared_ptr<const void> keeper_;
+};
+
 // One entry's FeatureVector, packed. Node ids are the steps from the
 // previous one (LEB128: siblings take a byte each). When every feature
 // 0..n-1 sits under exactly one node (what transform produces), each feature
@@ -294,6 +351,38 @@ class PackedFeatureVector {
   std::uint32_t node_bytes_ = 0;  // of the node ids, at the start of bytes_
   Layout layout_ = Layout::kPartition8;
   bool node_runs_ = false;
+};
+
+// The direct index of the entries a database was loaded with, left in the
+// file's mapping (its encodings, as PackedFeatureVector::encode writes
+// them) and decoded when asked for: loading allocates nothing per entry.
+struct LoadedDirectIndex {
+  std::shared_ptr<const void> keeper;   // the mapping
+  std::string name;                     // the file's
+  const std::uint8_t* sizes = nullptr;  // per entry: u32 nodes, u32 features, u32 bytes
+  const std::uint8_t* data = nullptr;
+  std::vector<std::uint64_t> offsets;  // of each entry's encoding in `data`, then the end
+  std::uint64_t node_limit = 0;
+
+  // Entries [0, entries()) are the file's.
+  EntryId entries() const noexcept {
+    return offsets.empty() ? 0 : static_cast<EntryId>(offsets.size() - 1);
+  }
+  std::uint32_t size_field(EntryId entry, unsigned field) const noexcept {
+    std::uint32_t value;
+    std::memcpy(&value, sizes + 12 * std::size_t{entry} + 4 * field, 4);
+    return value;
+  }
+  const std::uint8_t* encoding(EntryId entry) const noexcept { return data + offsets[entry]; }
+  std::size_t encoded_size(EntryId entry) const noexcept {
+    return static_cast<std::size_t>(offsets[entry + 1] - offsets[entry]);
+  }
+  // Throws InvalidArgument unless the bytes are a valid encoding (they are
+  // read whatever they hold: the file may not be verified yet).
+  PackedFeatureVector decode(EntryId entry) const {
+    return PackedFeatureVector::decode(encoding(entry), encoded_size(entry), size_field(entry, 0),
+                                       size_field(entry, 1), node_limit);
+  }
 };
 
 }  // namespace binbow::detail
@@ -411,7 +500,7 @@ struct Segment {
   // loaded (one per kSegmentSpan ids): kLoadedLevel, never merged.
   unsigned level = 0;
   std::vector<std::uint32_t> offsets;  // word_count + 1 byte offsets into `bytes`, by RowOrder
-  GrowableArray<std::uint8_t> bytes;   // the rows' postings (see above)
+  SegmentBytes bytes;                  // the rows' postings (see above)
   std::size_t posting_count = 0;
   std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 
@@ -513,7 +602,10 @@ struct Database::Impl {
   std::vector<std::uint8_t> alive;
   std::vector<std::uint32_t> word_counts;           // postings the entry put in the index
   std::vector<detail::PackedFeatureVector> direct;  // empty without a direct index
-  std::vector<std::string> labels;                  // empty until a label is set
+  // Of a loaded database: the file's entries' direct index (theirs in
+  // `direct` stay empty).
+  detail::LoadedDirectIndex loaded_direct;
+  std::vector<std::string> labels;  // empty until a label is set
 
   // Each entry's BoW vector, for fast queries: built by the first one, then
   // kept up to date by add, remove and clear.
@@ -528,6 +620,25 @@ struct Database::Impl {
 
   // The file last saved to or loaded from, and the changes since.
   mutable detail::DatabaseJournal journal;
+
+  // The check of the file the database was loaded from, while it runs or
+  // after it (null for a database not loaded, or cleared since). Once it
+  // failed, every call throws its FileError (throw_if_damaged); calls that
+  // read the index's bytes as a whole wait for it first (wait_for_file).
+  std::unique_ptr<detail::BackgroundCheck> file_check;
+  // Whether file_check's word counts and values are in word_counts and values.
+  bool file_check_merged = true;
+  void throw_if_damaged() const {
+    if (file_check) file_check->throw_if_failed();
+  }
+  void wait_for_file() const {
+    if (file_check) file_check->wait();
+  }
+  // Waits for file_check and takes what it found; exclusive lock held.
+  void merge_file_check();
+  // The range of the index's values, or false while it is not known (the
+  // loaded file's are being checked).
+  bool index_values(detail::ValueRange& range) const noexcept;
 };
 
 }  // namespace binbow

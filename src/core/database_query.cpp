@@ -132,8 +132,10 @@ thread_local QueryScratch scratch;
 struct PartScores {
   EntryScore* entries;
 
+  // Within the kSegmentSpan sums whatever `relative_entry` is (a loaded
+  // file's gaps are summed before its check ends).
   void add(std::uint32_t relative_entry, double term) const {
-    EntryScore& score = entries[relative_entry];
+    EntryScore& score = entries[relative_entry & (detail::kSegmentSpan - 1)];
     score.sum += term;
     ++score.shared;
   }
@@ -185,13 +187,19 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
       __builtin_prefetch(bytes + offsets[order.row(query[q + kPrefetchAhead].word)]);
     const std::uint32_t row = order.row(query[q].word);
     const std::uint8_t* const begin = bytes + offsets[row];
-    const std::uint8_t* const end = bytes + offsets[row + 1];
-    if (begin == end) continue;
+    const std::size_t size = offsets[row + 1] - offsets[row];
+    if (size == 0) continue;
     const Term term{query[q].value};
+    // The rows of a loaded file may be read before its check ends: a row is
+    // read as whole postings of its header's width (any byte but 1 is 2),
+    // never past its end.
+    const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
+    const std::size_t postings = size - detail::kRowHeaderBytes;
+    constexpr std::size_t kStride1 = 1 + detail::kWeightBytes, kStride2 = 2 + detail::kWeightBytes;
     if (*begin == 1)
-      accumulate_row<1>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
+      accumulate_row<1>(first, first + postings / kStride1 * kStride1, cut, last, term, scores);
     else
-      accumulate_row<2>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
+      accumulate_row<2>(first, first + postings / kStride2 * kStride2, cut, last, term, scores);
   }
 }
 
@@ -717,6 +725,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const double base = detail::score_base(scoring, bow);
 
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   // Over word ids, words beyond the capacity are in no entry yet: the index
   // is searched for the others (base() above still counts them, for KL).
   Span<BowEntry> searched(bow.begin(), bow.size());
@@ -753,8 +762,11 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   if (buffers.workers.size() < workers) buffers.workers.resize(workers);
   detail::ValueRange query_values;
   for (const BowEntry& e : searched) query_values.include(e.value);
-  const bool minimums =
-      scoring == Scoring::kL1 && detail::l1_terms_are_minimums(impl_->values, query_values);
+  // While a loaded file's values are not known, L1 sums DBoW2's terms: the
+  // same scores, to the last bit.
+  detail::ValueRange index_values;
+  const bool minimums = scoring == Scoring::kL1 && impl_->index_values(index_values) &&
+                        detail::l1_terms_are_minimums(index_values, query_values);
   const QueryContext context{index,
                              searched,
                              last_entry,

@@ -249,9 +249,10 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
       // Gap widths other than 1 and 2.
       {posting([](std::uint8_t* d) { d[0] = 0; }), "malformed posting"},
       {posting([](std::uint8_t* d) { d[0] = 3; }), "malformed posting"},
-      // A row whose last posting is cut short.
+      // A row whose last posting is cut short: the rows no longer cover the
+      // postings section.
       {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { d[4] -= 1; }),
-       "malformed posting"},
+       "trailing data"},
       {posting([&](std::uint8_t* d) { std::memcpy(d + 2, &nan, 4); }), "non-finite"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
        "unknown layout"},
