@@ -325,8 +325,11 @@ class BestResults {
   }
 
   // Offers the live entries of a part whose scores are done, and zeroes
-  // their sums and counts for the next part.
-  void take_part(EntryId first, std::size_t span, PartScores scores, const std::uint8_t* alive) {
+  // their sums and counts for the next part. Unchecked postings may have
+  // summed past the part's span (damaged gaps): those sums are zeroed too,
+  // so that no later query, of any database, starts from them.
+  void take_part(EntryId first, std::size_t span, PartScores scores, const std::uint8_t* alive,
+                 bool unchecked) {
     for (std::size_t r = 0; r < span; ++r) {
       EntryScore& score = scores.entries[r];
       if (score.shared == 0) continue;
@@ -334,6 +337,8 @@ class BestResults {
         offer({static_cast<EntryId>(first + r), finish(score.sum), score.shared});
       score = {};
     }
+    if (unchecked)
+      std::fill(scores.entries + span, scores.entries + detail::kSegmentSpan, EntryScore{});
   }
 
   // An entry's result from its sum of terms.
@@ -384,7 +389,8 @@ struct QueryContext {
   Span<BowEntry> words;  // sorted by word id
   EntryId last_entry;
   Scoring scoring;
-  bool minimums;  // L1 terms summed as minimums (MinimumTerm)
+  bool minimums;   // L1 terms summed as minimums (MinimumTerm)
+  bool unchecked;  // a loaded file's postings are not checked yet
   double base;
   std::size_t keep;              // results wanted, at most the live entries
   std::size_t visible_segments;  // those with an entry ≤ last_entry: a prefix
@@ -432,7 +438,7 @@ void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, P
                              scores);
   else
     accumulate_tail<Term>(c.index, words, c.last_entry, scores);
-  best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive);
+  best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive, c.unchecked);
 }
 
 // The workers' results, merged: the order is total (ties by entry id), so
@@ -765,19 +771,13 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   // While a loaded file's values are not known, L1 sums DBoW2's terms: the
   // same scores, to the last bit.
   detail::ValueRange index_values;
-  const bool minimums = scoring == Scoring::kL1 && impl_->index_values(index_values) &&
+  const bool checked = impl_->index_values(index_values);
+  const bool minimums = scoring == Scoring::kL1 && checked &&
                         detail::l1_terms_are_minimums(index_values, query_values);
-  const QueryContext context{index,
-                             searched,
-                             last_entry,
-                             scoring,
-                             minimums,
-                             base,
-                             std::min(max_results, impl_->live_entries),
-                             visible,
-                             tail_visible,
-                             workers,
-                             buffers};
+  const QueryContext context{
+      index,    searched,     last_entry, scoring,
+      minimums, !checked,     base,       std::min(max_results, impl_->live_entries),
+      visible,  tail_visible, workers,    buffers};
   std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();
   return results;
