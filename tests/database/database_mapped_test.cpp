@@ -101,6 +101,11 @@ TEST(DatabaseMapped, AnswersAsSavedBeforeAndAfterTheCheck) {
 
 TEST(DatabaseMapped, DamagedPostingsNeverCrashAndThenEveryCallThrows) {
   const Fixture fixture;
+  // 65,536 entries of word 0 alone: a query of word 1 finds none of them,
+  // unless a sum left over from another query is read as theirs.
+  Database other = Database::over_word_ids(Scoring::kL1, DatabaseOptions{false, 0});
+  for (int i = 0; i < 65'536; ++i) other.add(BowVector(std::vector<BowEntry>{{0, 1.0f}}));
+  const BowVector word_one(std::vector<BowEntry>{{1, 1.0f}});
   test::TempDir dir;
   const std::string path = dir.file("db.bbdb");
   const std::vector<std::uint8_t> saved = fixture.database.serialize();
@@ -125,6 +130,9 @@ TEST(DatabaseMapped, DamagedPostingsNeverCrashAndThenEveryCallThrows) {
       loaded.query(query, 20, {QueryMode::kExact, 2});
     }
     EXPECT_EQ(loaded.size(), fixture.database.size());
+    // What the damaged postings summed leaves nothing behind for the
+    // thread's next queries, of another database.
+    EXPECT_TRUE(other.query(word_one, 10).empty()) << "damage " << damage;
     held.release();
     try {
       loaded.wait_until_verified();
