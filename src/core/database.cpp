@@ -545,6 +545,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   try {
     alive.push_back(0);
     word_counts.push_back(static_cast<std::uint32_t>(n));
+    divisors.push_back(divisor_of(Span<BowEntry>(words, n)));
     if (options.direct_index) direct.emplace_back(features);
     if (!labels.empty()) labels.emplace_back();
     // The group heads and the ends of their blocks mostly are in cache, and
@@ -584,6 +585,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     for (std::size_t i = 0; i < appended; ++i) --tail_lists[detail::group_of(words[i].word)].size;
     alive.resize(entry);
     word_counts.resize(entry);
+    divisors.resize(entry);
     if (direct.size() > entry) direct.resize(entry);
     if (labels.size() > entry) labels.resize(entry);
     if (forward_built) forward.truncate(entry);
@@ -593,6 +595,11 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   ++live_entries;
   tail_postings += n;
   return entry;
+}
+
+double Database::Impl::divisor_of(Span<BowEntry> words) {
+  if (over_word_ids || !count_form.find(vocabulary, scoring, words)) return 0;
+  return count_form.largest_count() <= detail::kMaxRowCount ? count_form.divisor() : 0;
 }
 
 void Database::Impl::build_forward_index() const {
@@ -630,14 +637,22 @@ void Database::Impl::build_forward_index() const {
         const std::uint32_t row = row_order.row(static_cast<WordId>(word));
         std::uint32_t& i = cursors[row];
         std::uint32_t& last = last_entries[row];
-        const std::uint32_t width = i < offsets[row + 1] ? bytes[offsets[row]] : 0;
-        for (; i < offsets[row + 1]; i += width + detail::kWeightBytes) {
+        if (i >= offsets[row + 1]) continue;
+        const std::uint8_t header = bytes[offsets[row]];
+        const std::size_t width = detail::header_width(header);
+        const std::size_t stride = detail::header_stride(header);
+        const detail::RowWeights weights =
+            detail::header_counts(header)
+                ? segment_weights(segment->first_entry).row(static_cast<WordId>(word))
+                : detail::RowWeights{};
+        for (; i < offsets[row + 1]; i += static_cast<std::uint32_t>(stride)) {
           const std::uint8_t* at = bytes + i;
-          const std::uint32_t relative =
-              last + (width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at)) + 1;
+          const std::uint32_t relative = last + detail::read_gap(at, width) + 1;
           if (relative >= relative_end) break;
+          const float weight = detail::header_counts(header) ? weights.weight(relative, at[width])
+                                                             : detail::read_weight(at + width);
           words[segment->first_entry + relative - first].push_back(
-              {static_cast<WordId>(word), detail::read_weight(at + width)});
+              {static_cast<WordId>(word), weight});
           last = relative;
         }
       }
@@ -715,8 +730,8 @@ namespace {
 // segments and their sources span at most kSegmentSpan ids. Returns the
 // bytes written.
 std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
-                       const std::unique_ptr<detail::Segment>* end,
-                       detail::Segment& merged) noexcept {
+                       const std::unique_ptr<detail::Segment>* end, detail::Segment& merged,
+                       const detail::SegmentWeights& weights) {
   // The sources' arrays, read once: the stores below could alias their fields.
   // merge_segments_if_many merges at most kSegmentFanIn segments.
   struct Source {
@@ -735,34 +750,33 @@ std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
   const std::size_t rows = merged.offsets.size() - 1;
   std::uint32_t* offsets = merged.offsets.data();
   offsets[0] = 0;
-  for (std::size_t r = 0; r < rows; ++r) {
+  detail::RowOrder::for_each_row(rows, [&](std::uint32_t r, WordId word) {
     std::uint32_t last = detail::kRowStart;  // relative to merged.first_entry
     detail::RowWriter row(out);
     for (std::size_t k = 0; k < source_count; ++k) {
       const Source& s = sources[k];
       detail::for_each_posting(s.bytes + s.offsets[r], s.bytes + s.offsets[r + 1],
-                               [&](std::uint32_t relative, float weight) {
+                               [&](std::uint32_t relative, detail::PostingValue value) {
                                  const std::uint32_t entry = s.shift + relative;
-                                 row.put(entry - last - 1, weight);
+                                 row.put(entry - last - 1, value);
                                  last = entry;
                                });
     }
-    out = row.finish();
+    out = row.finish(weights, word);
     offsets[r + 1] = static_cast<std::uint32_t>(out - out_begin);
-  }
+  });
   return static_cast<std::size_t>(out - out_begin);
 }
 
 }  // namespace
 
 void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
-  // Rows are written with 2-byte gaps, then narrowed: room for that, then
-  // the block shrinks to what was written.
+  // Rows are written in RowWriter's slots, then narrowed: room for that,
+  // then the block shrinks to what was written.
   std::size_t postings = 0;
   for (std::size_t i = begin; i < end; ++i) postings += segments[i]->postings();
   const std::size_t rows = segments[begin]->offsets.size() - 1;
-  const std::size_t bytes =
-      postings * (detail::kMaxGapWidth + detail::kWeightBytes) + std::min(postings, rows);
+  const std::size_t bytes = postings * detail::kWriterSlotBytes + std::min(postings, rows);
   if (bytes > std::numeric_limits<std::uint32_t>::max())
     throw InvalidArgument("Database: more than 4 GiB of postings in one segment");
   auto merged = std::make_unique<detail::Segment>();
@@ -772,8 +786,10 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
   merged->offsets.resize(segments[begin]->offsets.size());
   merged->bytes.resize(bytes);
   merged->posting_count = postings;
-  // Nothing below can throw (shrinking never does).
-  merged->bytes.resize(merge_rows(segments.data() + begin, segments.data() + end, *merged));
+  // Nothing below can throw (shrinking never does; word weights are of
+  // words in the vocabulary).
+  merged->bytes.resize(merge_rows(segments.data() + begin, segments.data() + end, *merged,
+                                  segment_weights(merged->first_entry)));
   for (std::size_t i = begin; i < end; ++i) merged->dead_postings += segments[i]->dead_postings;
   segments[begin] = std::move(merged);
   segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(begin) + 1,
@@ -788,6 +804,11 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   std::vector<std::uint32_t> last(words_per_group);
   std::vector<std::uint32_t> next(words_per_group);
   std::vector<std::uint32_t> gaps(words_per_group);  // per word: its row's gaps ORed
+  // Per word: whether every entry of its row is in count form, then its
+  // row's word weight if so.
+  std::vector<std::uint8_t> counted(words_per_group);
+  std::vector<double> word_weights(words_per_group);
+  const double* divisor_at = divisors.data() + tail_first_entry;
   auto segment = std::make_unique<detail::Segment>();
   segment->offsets.resize(word_capacity + 1);
   segment->first_entry = tail_first_entry;
@@ -817,15 +838,16 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
       const detail::TailList list = tail_lists[group];
       const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
       std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
-      visit(first_row, rows, postings, list.size);
+      visit(g, first_row, rows, postings, list.size);
     }
   };
   std::uint32_t* offsets = segment->offsets.data();
   std::uint32_t row_end = 0;  // of the previous group
-  for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
+  for_each_group([&](std::uint32_t, std::uint32_t first_row, std::uint32_t rows,
                      const detail::TailPosting* postings, std::uint32_t size) {
     std::fill(next.begin(), next.begin() + rows, 0);
     std::fill(gaps.begin(), gaps.begin() + rows, 0);
+    std::fill(counted.begin(), counted.begin() + rows, 1);
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
@@ -833,26 +855,30 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
       const std::uint32_t word = key & high_mask;
       ++next[word];
       gaps[word] |= relative - last[word] - 1;
+      counted[word] &= divisor_at[relative] > 0 ? 1 : 0;
       last[word] = relative;
     }
     for (std::uint32_t r = 0; r < rows; ++r) {
-      row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r]));
+      row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r], counted[r] != 0));
       offsets[first_row + r + 1] = row_end;
     }
   });
   offsets[0] = 0;
   segment->bytes.resize(row_end);
   std::uint8_t* bytes = segment->bytes.data();
-  for_each_group([&](std::uint32_t first_row, std::uint32_t rows,
+  for_each_group([&](std::uint32_t g, std::uint32_t first_row, std::uint32_t rows,
                      const detail::TailPosting* postings, std::uint32_t size) {
-    // Each row's width, as the first pass found it (the group is in cache).
+    // Each row's width and kind, as the first pass found them (the group is
+    // in cache).
     std::fill(gaps.begin(), gaps.begin() + rows, 0);
+    std::fill(counted.begin(), counted.begin() + rows, 1);
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
       const std::uint32_t word = key & high_mask;
       gaps[word] |= relative - last[word] - 1;
+      counted[word] &= divisor_at[relative] > 0 ? 1 : 0;
       last[word] = relative;
     }
     std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
@@ -861,17 +887,24 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
       next[r] = begin + (begin != end ? 1 : 0);
       if (begin == end) continue;
       gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
-      bytes[begin] = static_cast<std::uint8_t>(gaps[r]);
+      bytes[begin] = static_cast<std::uint8_t>(gaps[r] | (counted[r] != 0 ? detail::kCountRow : 0));
+      if (counted[r] != 0)
+        word_weights[r] = vocabulary.word_weight(static_cast<WordId>(r << detail::kGroupBits | g));
     }
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
       const std::uint32_t word = key & high_mask;
-      next[word] = static_cast<std::uint32_t>(detail::put_posting(bytes + next[word], gaps[word],
-                                                                  relative - last[word] - 1,
-                                                                  postings[i].weight) -
-                                              bytes);
+      std::uint8_t* const at = bytes + next[word];
+      const std::uint32_t gap = relative - last[word] - 1;
+      next[word] = static_cast<std::uint32_t>(
+          (counted[word] != 0
+               ? detail::put_count_posting(
+                     at, gaps[word], gap,
+                     detail::count_of(postings[i].weight, word_weights[word], divisor_at[relative]))
+               : detail::put_posting(at, gaps[word], gap, postings[i].weight)) -
+          bytes);
       last[word] = relative;
     }
   });
@@ -904,26 +937,28 @@ namespace {
 // (room for each kept posting with a 2-byte gap, and a header per row);
 // returns the bytes written.
 std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at,
-                               std::uint8_t* const out_begin) noexcept {
+                               const detail::SegmentWeights& weights,
+                               std::uint8_t* const out_begin) {
   std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* const bytes = segment.bytes.data();
   std::uint8_t* out = out_begin;
   std::size_t kept = 0;
   std::uint32_t begin = offsets[0];
-  for (std::size_t w = 0; w + 1 < segment.offsets.size(); ++w) {
+  detail::RowOrder::for_each_row(segment.offsets.size() - 1, [&](std::uint32_t w, WordId word) {
     const std::uint32_t end = offsets[w + 1];
     std::uint32_t last = detail::kRowStart;
     detail::RowWriter row(out);
-    detail::for_each_posting(bytes + begin, bytes + end, [&](std::uint32_t entry, float weight) {
-      if (live_at[entry] == 0) return;
-      row.put(entry - last - 1, weight);
-      last = entry;
-      ++kept;
-    });
-    out = row.finish();
+    detail::for_each_posting(bytes + begin, bytes + end,
+                             [&](std::uint32_t entry, detail::PostingValue value) {
+                               if (live_at[entry] == 0) return;
+                               row.put(entry - last - 1, value);
+                               last = entry;
+                               ++kept;
+                             });
+    out = row.finish(weights, word);
     offsets[w + 1] = static_cast<std::uint32_t>(out - out_begin);
     begin = end;
-  }
+  });
   segment.posting_count = kept;
   return static_cast<std::size_t>(out - out_begin);
 }
@@ -942,13 +977,13 @@ void Database::Impl::compact(std::size_t index) {
   const std::size_t live = segment.postings() - segment.dead_postings;
   detail::GrowableArray<std::uint8_t> kept;
   try {
-    kept.resize(live * (detail::kMaxGapWidth + detail::kWeightBytes) +
-                std::min(live, segment.offsets.size() - 1));
+    kept.resize(live * detail::kWriterSlotBytes + std::min(live, segment.offsets.size() - 1));
   } catch (const std::bad_alloc&) {
     return;
   }
-  // Shrinking never throws.
-  kept.resize(drop_dead_postings(segment, alive.data() + segment.first_entry, kept.data()));
+  // Shrinking never throws (nor do word weights of the vocabulary's words).
+  kept.resize(drop_dead_postings(segment, alive.data() + segment.first_entry,
+                                 segment_weights(segment.first_entry), kept.data()));
   segment.bytes.swap(kept);
   segment.dead_postings = 0;
 }
@@ -1102,6 +1137,7 @@ void Database::clear() {
   impl_->tail_first_entry = 0;
   std::vector<std::uint8_t>().swap(impl_->alive);
   std::vector<std::uint32_t>().swap(impl_->word_counts);
+  std::vector<double>().swap(impl_->divisors);
   std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
   std::vector<std::string>().swap(impl_->labels);
   impl_->live_entries = 0;
@@ -1116,6 +1152,7 @@ std::size_t Database::memory_usage() const {
                       impl.tail_lists.capacity() * sizeof(detail::TailList) +
                       impl.first_block_logs.capacity() + impl.alive.capacity() +
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
+                      impl.divisors.capacity() * sizeof(double) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
                       impl.labels.capacity() * sizeof(std::string);
   for (const auto& segment : impl.segments)

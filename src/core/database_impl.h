@@ -19,6 +19,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/count_form.h"
 #include "core/database_journal.h"
 #include "core/forward_index.h"
 #include "core/scoring.h"
@@ -298,38 +299,73 @@ namespace detail {
 // [first_entry, end_entry) as rows by word (in RowOrder): one byte offset
 // per word, then the row's bytes. An empty row has none; otherwise a header
 // byte holds the row's gap width (1 if every gap of the row is below 256,
-// else 2), then come its postings in increasing entry order at a fixed
-// stride: the gap from the previous entry (entry - previous - 1, the first
-// from first_entry - 1; little-endian, of the row's width) and the weight
-// (f32, little-endian, unaligned): 5 bytes per posting in common rows. A
-// fixed stride lets a query read a row with no branch per posting, so the
-// cache misses of its score sums overlap. A segment spans at most
-// kSegmentSpan ids, so that 2 bytes hold any gap. A query pays one offset
-// lookup per word and segment, small next to the postings it reads.
+// else 2) and its kind, then come its postings in increasing entry order at
+// a fixed stride: the gap from the previous entry (entry - previous - 1, the
+// first from first_entry - 1; little-endian, of the row's width), then the
+// value. In a count row (kCountRow), every posting's entry is in count form
+// (its divisor, in Database::Impl::divisors, is above 0) and the value is
+// the word's count in it (u8, ≥ 1): its weight is count_weight(the word's
+// vocabulary weight, count, divisor), bit for bit what the entry was added
+// with; 2-3 bytes per posting. Otherwise the value is the weight (f32,
+// little-endian, unaligned): 5-6 bytes. A fixed stride lets a query read a
+// row with no branch per posting, so the cache misses of its score sums
+// overlap. A segment spans at most kSegmentSpan ids, so that 2 bytes hold
+// any gap. A query pays one offset lookup per word and segment, small next
+// to the postings it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
 constexpr std::size_t kWeightBytes = 4;
+constexpr std::size_t kCountBytes = 1;
+constexpr std::uint32_t kMaxRowCount = 0xFF;
 constexpr std::size_t kRowHeaderBytes = 1;
 constexpr std::size_t kMaxGapWidth = 2;
+constexpr std::uint8_t kCountRow = 0x10;  // in the header, with the gap width
+// What RowWriter needs per posting: a 2-byte gap, the value and its kind.
+constexpr std::size_t kWriterSlotBytes = kMaxGapWidth + kWeightBytes + 1;
 
 // The gap width of a row whose gaps OR to `gaps`.
 constexpr std::size_t gap_width(std::uint32_t gaps) noexcept {
   return gaps < 0x100 ? 1 : 2;
 }
-// The bytes of a row of `postings` postings whose gaps OR to `gaps`.
-constexpr std::size_t row_bytes(std::size_t postings, std::uint32_t gaps) noexcept {
-  return postings == 0 ? 0 : kRowHeaderBytes + postings * (gap_width(gaps) + kWeightBytes);
+// A row header's gap width, value bytes and posting stride.
+constexpr std::size_t header_width(std::uint8_t header) noexcept {
+  return header & 3;
 }
-// Writes a posting of a row of gap width `width` at `out`; returns the byte after it.
-inline std::uint8_t* put_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
-                                 float weight) noexcept {
+constexpr bool header_counts(std::uint8_t header) noexcept {
+  return (header & kCountRow) != 0;
+}
+constexpr std::size_t header_stride(std::uint8_t header) noexcept {
+  return header_width(header) + (header_counts(header) ? kCountBytes : kWeightBytes);
+}
+// The bytes of a row of `postings` postings whose gaps OR to `gaps`.
+constexpr std::size_t row_bytes(std::size_t postings, std::uint32_t gaps, bool counts) noexcept {
+  return postings == 0 ? 0
+                       : kRowHeaderBytes +
+                             postings * (gap_width(gaps) + (counts ? kCountBytes : kWeightBytes));
+}
+inline void put_gap(std::uint8_t* out, std::size_t width, std::uint32_t gap) noexcept {
   out[0] = static_cast<std::uint8_t>(gap);
   if (width == 2) out[1] = static_cast<std::uint8_t>(gap >> 8);
+}
+// Writes a posting of an f32 row of gap width `width` at `out`; returns the byte after it.
+inline std::uint8_t* put_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
+                                 float weight) noexcept {
+  put_gap(out, width, gap);
   std::memcpy(out + width, &weight, kWeightBytes);  // little-endian hosts only (as the whole index)
   return out + width + kWeightBytes;
+}
+// The same, in a count row.
+inline std::uint8_t* put_count_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
+                                       std::uint32_t count) noexcept {
+  put_gap(out, width, gap);
+  out[width] = static_cast<std::uint8_t>(count);
+  return out + width + kCountBytes;
 }
 template <std::size_t kWidth>
 inline std::uint32_t read_gap(const std::uint8_t* at) noexcept {
   return kWidth == 1 ? at[0] : std::uint32_t{at[0]} | std::uint32_t{at[1]} << 8;
+}
+inline std::uint32_t read_gap(const std::uint8_t* at, std::size_t width) noexcept {
+  return width == 1 ? read_gap<1>(at) : read_gap<2>(at);
 }
 inline float read_weight(const std::uint8_t* at) noexcept {
   float weight;
@@ -340,28 +376,86 @@ inline float read_weight(const std::uint8_t* at) noexcept {
 // differences minus 1, in wrapping 32-bit arithmetic.
 constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
 
-// Writes a row from its postings alone: each with a 2-byte gap, narrowed to
-// 1 byte by finish() when every gap allows. Needs row_bytes(n, 0xFFFF) bytes
-// for n postings.
+// The count of a posting of an entry in count form, from its weight: the
+// weight is count_weight(word_weight, c, divisor) for a count c ≤ 255, within
+// 2^-24 relatively, so the quotient is within 2^-15 of c.
+inline std::uint32_t count_of(float weight, double word_weight, double divisor) noexcept {
+  return static_cast<std::uint32_t>(static_cast<double>(weight) * divisor / word_weight + 0.5);
+}
+
+// What turns a row's counts into weights: its word's vocabulary weight, and
+// the divisors of the segment's entries (indexed relative to first_entry).
+struct RowWeights {
+  double word_weight = 0;
+  const double* divisors = nullptr;
+  float weight(std::uint32_t relative_entry, std::uint32_t count) const noexcept {
+    return count_weight(word_weight, count, divisors[relative_entry]);
+  }
+};
+// The same for every row of a segment.
+struct SegmentWeights {
+  const Vocabulary* vocabulary = nullptr;  // null over word ids, which have no counts
+  const double* divisors = nullptr;        // from the segment's first entry
+  RowWeights row(WordId word) const {
+    return {vocabulary != nullptr ? static_cast<double>(vocabulary->word_weight(word)) : 0.0,
+            divisors};
+  }
+};
+
+// A posting's value as a row holds it: a count (1 to kMaxRowCount), or 0
+// and the weight.
+struct PostingValue {
+  std::uint32_t count;
+  float weight;  // meaningful when count is 0
+};
+
+// Writes a row from its postings alone: each in a slot of kWriterSlotBytes
+// (a 2-byte gap, the value, its kind), narrowed by finish() to a count row
+// when every posting has a count, else to an f32 row, and to
+// 1-byte gaps when every gap allows. Needs row_bytes of kWriterSlotBytes per
+// posting and a header.
 class RowWriter {
  public:
   explicit RowWriter(std::uint8_t* out) noexcept : begin_(out), at_(out + kRowHeaderBytes) {}
-  void put(std::uint32_t gap, float weight) noexcept {
-    at_ = put_posting(at_, 2, gap, weight);
+  // `value` has a count of at most kMaxRowCount, or a weight.
+  void put(std::uint32_t gap, PostingValue value) noexcept {
+    at_[0] = static_cast<std::uint8_t>(gap);
+    at_[1] = static_cast<std::uint8_t>(gap >> 8);
+    const bool count = value.count != 0;
+    if (count)
+      std::memcpy(at_ + 2, &value.count, 4);
+    else
+      std::memcpy(at_ + 2, &value.weight, 4);
+    at_[6] = count ? 1 : 0;
+    all_counts_ = all_counts_ && count;
+    at_ += kWriterSlotBytes;
     gaps_ |= gap;
   }
-  // Returns the byte after the row.
-  std::uint8_t* finish() noexcept {
+  // Returns the byte after the row (of `word`). A row of counts and weights
+  // computes the weights of its counts from `weights`.
+  std::uint8_t* finish(const SegmentWeights& weights, WordId word) {
     const std::uint8_t* const postings = begin_ + kRowHeaderBytes;
     if (at_ == postings) return begin_;
     const std::size_t width = gap_width(gaps_);
-    *begin_ = static_cast<std::uint8_t>(width);
-    if (width == 2) return at_;
+    *begin_ = static_cast<std::uint8_t>(width | (all_counts_ ? kCountRow : 0));
     std::uint8_t* out = begin_ + kRowHeaderBytes;
-    for (const std::uint8_t* in = postings; in != at_; in += 2 + kWeightBytes) {
-      out[0] = in[0];
-      std::memmove(out + 1, in + 2, kWeightBytes);
-      out += 1 + kWeightBytes;
+    std::uint32_t entry = kRowStart;
+    const RowWeights row = all_counts_ ? RowWeights{} : weights.row(word);
+    for (const std::uint8_t* in = postings; in != at_; in += kWriterSlotBytes) {
+      const std::uint32_t gap = read_gap<2>(in);
+      std::uint32_t value;
+      std::memcpy(&value, in + 2, 4);
+      if (all_counts_) {
+        out = put_count_posting(out, width, gap, value);
+        continue;
+      }
+      entry += gap + 1;
+      float weight;
+      if (in[6] != 0)
+        weight = row.weight(entry, value);
+      else
+        std::memcpy(&weight, &value, 4);
+      out = put_posting(out, width, gap, weight);
     }
     return out;
   }
@@ -370,20 +464,33 @@ class RowWriter {
   std::uint8_t* begin_;
   std::uint8_t* at_;
   std::uint32_t gaps_ = 0;
+  bool all_counts_ = true;
 };
 
-// Calls visit(relative_entry, weight) for the postings of the row in
+// Calls visit(relative_entry, PostingValue) for the postings of the row in
 // [begin, end), in order.
 template <class Visit>
 inline void for_each_posting(const std::uint8_t* begin, const std::uint8_t* end,
                              const Visit& visit) {
   if (begin == end) return;
-  const std::size_t width = *begin;
+  const std::uint8_t header = *begin;
+  const std::size_t width = header_width(header);
+  const std::size_t stride = header_stride(header);
+  const bool counts = header_counts(header);
   std::uint32_t entry = kRowStart;
-  for (const std::uint8_t* at = begin + kRowHeaderBytes; at != end; at += width + kWeightBytes) {
-    entry += (width == 1 ? read_gap<1>(at) : read_gap<2>(at)) + 1;
-    visit(entry, read_weight(at + width));
+  for (const std::uint8_t* at = begin + kRowHeaderBytes; at != end; at += stride) {
+    entry += read_gap(at, width) + 1;
+    visit(entry, counts ? PostingValue{at[width], 0.0f} : PostingValue{0, read_weight(at + width)});
   }
+}
+
+// The same with the weights: visit(relative_entry, weight).
+template <class Visit>
+inline void for_each_weight(const std::uint8_t* begin, const std::uint8_t* end,
+                            const RowWeights& weights, const Visit& visit) {
+  for_each_posting(begin, end, [&](std::uint32_t entry, PostingValue value) {
+    visit(entry, value.count != 0 ? weights.weight(entry, value.count) : value.weight);
+  });
 }
 
 // So that a query's offset lookups stay few as the database grows, every
@@ -417,7 +524,7 @@ struct Segment {
   std::size_t row_postings(std::uint32_t row) const noexcept {
     const std::uint32_t size = offsets[row + 1] - offsets[row];
     if (size == 0) return 0;
-    return (size - kRowHeaderBytes) / (bytes.data()[offsets[row]] + kWeightBytes);
+    return (size - kRowHeaderBytes) / header_stride(bytes.data()[offsets[row]]);
   }
 };
 
@@ -467,6 +574,12 @@ struct Database::Impl {
   // queries (shared lock held), so that only databases queried in fast
   // mode pay its memory.
   void build_forward_index() const;
+  // The divisor an entry of these words gets (see divisors).
+  double divisor_of(Span<BowEntry> words);
+  // What turns counts into weights in a segment from `first_entry`.
+  detail::SegmentWeights segment_weights(EntryId first_entry) const noexcept {
+    return {over_word_ids ? nullptr : &vocabulary, divisors.data() + first_entry};
+  }
 
   Vocabulary vocabulary;  // empty over word ids
   DatabaseOptions options;
@@ -492,12 +605,18 @@ struct Database::Impl {
 
   // Per entry, indexed by entry id (dead entries keep their place).
   std::vector<std::uint8_t> alive;
-  std::vector<std::uint32_t> word_counts;           // postings the entry put in the index
+  std::vector<std::uint32_t> word_counts;  // postings the entry put in the index
+  // The divisor of an entry in count form (CountForm, with counts up to
+  // kMaxRowCount), whose segment postings may be counts; 0 for the others
+  // (vectors not made by transform, databases over word ids, removed ones).
+  std::vector<double> divisors;
   std::vector<detail::PackedFeatureVector> direct;  // empty without a direct index
   std::vector<std::string> labels;                  // empty until a label is set
 
   // Each entry's BoW vector, for fast queries: built by the first one, then
   // kept up to date by add, remove and clear.
+  detail::CountForm count_form;  // divisor_of's buffers
+
   mutable detail::ForwardIndex forward;
   mutable std::atomic<bool> forward_built{false};
   mutable std::mutex forward_mutex;

@@ -147,10 +147,25 @@ inline void accumulate_row(const std::uint8_t* at, const std::uint8_t* end, bool
   }
 }
 
+// The same for a count row: each weight computed from the count, as the
+// entry's was when it was added.
+template <std::size_t kWidth, class Term>
+inline void accumulate_count_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
+                                 std::uint32_t last, const Term& term,
+                                 const detail::RowWeights& weights, PartScores scores) {
+  std::uint32_t entry = detail::kRowStart;
+  for (; at != end; at += kWidth + detail::kCountBytes) {
+    entry += detail::read_gap<kWidth>(at) + 1;
+    if (cut && entry > last) return;
+    scores.add(entry, term(weights.weight(entry, at[kWidth])));
+  }
+}
+
 // Entries are increasing within a row, so `last_entry` cuts it short.
 template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
-                        EntryId last_entry, PartScores scores) {
+                        EntryId last_entry, const detail::SegmentWeights& weights,
+                        PartScores scores) {
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
   const bool cut = last_entry < segment.end_entry - 1;
@@ -167,10 +182,20 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
     const std::uint8_t* const end = bytes + offsets[row + 1];
     if (begin == end) continue;
     const Term term{query[q].value};
-    if (*begin == 1)
-      accumulate_row<1>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
-    else
-      accumulate_row<2>(begin + detail::kRowHeaderBytes, end, cut, last, term, scores);
+    const std::uint8_t* const postings = begin + detail::kRowHeaderBytes;
+    switch (*begin) {
+      case 1:
+        accumulate_row<1>(postings, end, cut, last, term, scores);
+        break;
+      case 2:
+        accumulate_row<2>(postings, end, cut, last, term, scores);
+        break;
+      case 1 | detail::kCountRow:
+        accumulate_count_row<1>(postings, end, cut, last, term, weights.row(query[q].word), scores);
+        break;
+      default:
+        accumulate_count_row<2>(postings, end, cut, last, term, weights.row(query[q].word), scores);
+    }
   }
 }
 
@@ -186,6 +211,8 @@ struct IndexView {
   const std::uint8_t* alive;
   std::size_t entry_count;
   const detail::ForwardIndex* forward;  // built for fast queries
+  const Vocabulary* vocabulary;         // null over word ids
+  const double* divisors;               // Database::Impl::divisors
 };
 
 // Calls take(i) for the postings of a group list whose key has the given
@@ -393,8 +420,9 @@ template <class Term>
 void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, PartScores scores,
                 BestResults& best) {
   if (part < c.visible_segments)
-    accumulate_segment<Term>(*c.index.segments[part], c.index.row_order, words, c.last_entry,
-                             scores);
+    accumulate_segment<Term>(
+        *c.index.segments[part], c.index.row_order, words, c.last_entry,
+        {c.index.vocabulary, c.index.divisors + c.index.segments[part]->first_entry}, scores);
   else
     accumulate_tail<Term>(c.index, words, c.last_entry, scores);
   best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive);
@@ -584,10 +612,18 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const std::size_t entry_count = impl_->alive.size();
   if (impl_->live_entries == 0) return {};
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
-  const IndexView index{impl_->segments,         impl_->tail_lists.data(), impl_->arena,
-                        impl_->high_bits,        impl_->row_order,         impl_->tail_postings,
-                        impl_->tail_first_entry, impl_->alive.data(),      entry_count,
-                        &impl_->forward};
+  const IndexView index{impl_->segments,
+                        impl_->tail_lists.data(),
+                        impl_->arena,
+                        impl_->high_bits,
+                        impl_->row_order,
+                        impl_->tail_postings,
+                        impl_->tail_first_entry,
+                        impl_->alive.data(),
+                        entry_count,
+                        &impl_->forward,
+                        impl_->over_word_ids ? nullptr : &impl_->vocabulary,
+                        impl_->divisors.data()};
   if (options.mode == QueryMode::kFast) impl_->build_forward_index();
   std::size_t visible = 0;
   std::size_t postings = impl_->tail_postings;
