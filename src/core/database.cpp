@@ -752,7 +752,7 @@ std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
   offsets[0] = 0;
   detail::RowOrder::for_each_row(rows, [&](std::uint32_t r, WordId word) {
     std::uint32_t last = detail::kRowStart;  // relative to merged.first_entry
-    detail::RowWriter row(out);
+    detail::RowWriter row(out, weights, word);
     for (std::size_t k = 0; k < source_count; ++k) {
       const Source& s = sources[k];
       detail::for_each_posting(s.bytes + s.offsets[r], s.bytes + s.offsets[r + 1],
@@ -762,7 +762,7 @@ std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
                                  last = entry;
                                });
     }
-    out = row.finish(weights, word);
+    out = row.finish();
     offsets[r + 1] = static_cast<std::uint32_t>(out - out_begin);
   });
   return static_cast<std::size_t>(out - out_begin);
@@ -947,7 +947,7 @@ std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* liv
   detail::RowOrder::for_each_row(segment.offsets.size() - 1, [&](std::uint32_t w, WordId word) {
     const std::uint32_t end = offsets[w + 1];
     std::uint32_t last = detail::kRowStart;
-    detail::RowWriter row(out);
+    detail::RowWriter row(out, weights, word);
     detail::for_each_posting(bytes + begin, bytes + end,
                              [&](std::uint32_t entry, detail::PostingValue value) {
                                if (live_at[entry] == 0) return;
@@ -955,7 +955,7 @@ std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* liv
                                last = entry;
                                ++kept;
                              });
-    out = row.finish(weights, word);
+    out = row.finish();
     offsets[w + 1] = static_cast<std::uint32_t>(out - out_begin);
     begin = end;
   });

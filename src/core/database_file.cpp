@@ -321,13 +321,13 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     for (const PartRow& row : part_rows[k]) {
       row_bytes.resize(detail::kRowHeaderBytes +
                        std::size_t{row.postings} * detail::kWriterSlotBytes);
-      detail::RowWriter writer(row_bytes.data());
+      detail::RowWriter writer(row_bytes.data(), weights, row.word);
       std::uint32_t last = detail::kRowStart;
       for_each_posting(k, row.row, [&](std::uint32_t relative, detail::PostingValue value) {
         writer.put(relative - last - 1, value);
         last = relative;
       });
-      writer.finish(weights, row.word);  // row.bytes long: the same postings were sized above
+      writer.finish();  // row.bytes long: the same postings were sized above
       out.append(row_bytes.data(), row.bytes);
     }
   }
@@ -535,7 +535,8 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     const std::size_t end = from + lengths[l];
     while (i < end) {
       detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
-      detail::RowWriter row(segment.bytes.data() + segment.offsets[rows[l]]);
+      // Weights only: no counts to compute.
+      detail::RowWriter row(segment.bytes.data() + segment.offsets[rows[l]], {}, words[l]);
       std::uint32_t last = detail::kRowStart;
       for (; i < end; ++i) {
         const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
@@ -544,7 +545,7 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
         row.put(relative - last - 1, {0, detail::load_le<float>(weights + 4 * i)});
         last = relative;
       }
-      row.finish({}, words[l]);  // weights only: no counts to compute
+      row.finish();
     }
   });
   for (auto& segment : segments)

@@ -319,8 +319,8 @@ constexpr std::uint32_t kMaxRowCount = 0xFF;
 constexpr std::size_t kRowHeaderBytes = 1;
 constexpr std::size_t kMaxGapWidth = 2;
 constexpr std::uint8_t kCountRow = 0x10;  // in the header, with the gap width
-// What RowWriter needs per posting: a 2-byte gap, the value and its kind.
-constexpr std::size_t kWriterSlotBytes = kMaxGapWidth + kWeightBytes + 1;
+// What RowWriter needs per posting: a 2-byte gap and a weight.
+constexpr std::size_t kWriterSlotBytes = kMaxGapWidth + kWeightBytes;
 
 // The gap width of a row whose gaps OR to `gaps`.
 constexpr std::size_t gap_width(std::uint32_t gaps) noexcept {
@@ -409,62 +409,79 @@ struct PostingValue {
   float weight;  // meaningful when count is 0
 };
 
-// Writes a row from its postings alone: each in a slot of kWriterSlotBytes
-// (a 2-byte gap, the value, its kind), narrowed by finish() to a count row
-// when every posting has a count, else to an f32 row, and to
-// 1-byte gaps when every gap allows. Needs row_bytes of kWriterSlotBytes per
-// posting and a header.
+// Writes a row from its postings alone: each with a 2-byte gap, narrowed to
+// 1 byte by finish() when every gap allows, and with its count while every
+// posting has one (a count row), else with its weight (the weights of the
+// counts so far are then computed). Needs kRowHeaderBytes +
+// kWriterSlotBytes per posting.
 class RowWriter {
  public:
-  explicit RowWriter(std::uint8_t* out) noexcept : begin_(out), at_(out + kRowHeaderBytes) {}
+  // For a row of `word` in a segment whose counts `weights` computes.
+  RowWriter(std::uint8_t* out, const SegmentWeights& weights, WordId word) noexcept
+      : begin_(out), at_(out + kRowHeaderBytes), weights_(weights), word_(word) {}
   // `value` has a count of at most kMaxRowCount, or a weight.
-  void put(std::uint32_t gap, PostingValue value) noexcept {
+  void put(std::uint32_t gap, PostingValue value) {
+    entry_ += gap + 1;
+    gaps_ |= gap;
+    if (counts_ && value.count == 0) to_weights(gap);
     at_[0] = static_cast<std::uint8_t>(gap);
     at_[1] = static_cast<std::uint8_t>(gap >> 8);
-    const bool count = value.count != 0;
-    if (count)
-      std::memcpy(at_ + 2, &value.count, 4);
-    else
-      std::memcpy(at_ + 2, &value.weight, 4);
-    at_[6] = count ? 1 : 0;
-    all_counts_ = all_counts_ && count;
-    at_ += kWriterSlotBytes;
-    gaps_ |= gap;
+    if (counts_) {
+      at_[2] = static_cast<std::uint8_t>(value.count);
+      at_ += kMaxGapWidth + kCountBytes;
+      return;
+    }
+    const float weight = value.count != 0 ? row_.weight(entry_, value.count) : value.weight;
+    std::memcpy(at_ + 2, &weight, kWeightBytes);
+    at_ += kMaxGapWidth + kWeightBytes;
   }
-  // Returns the byte after the row (of `word`). A row of counts and weights
-  // computes the weights of its counts from `weights`.
-  std::uint8_t* finish(const SegmentWeights& weights, WordId word) {
+  // Returns the byte after the row.
+  std::uint8_t* finish() noexcept {
     const std::uint8_t* const postings = begin_ + kRowHeaderBytes;
     if (at_ == postings) return begin_;
     const std::size_t width = gap_width(gaps_);
-    *begin_ = static_cast<std::uint8_t>(width | (all_counts_ ? kCountRow : 0));
+    *begin_ = static_cast<std::uint8_t>(width | (counts_ ? kCountRow : 0));
+    if (width == 2) return at_;
+    const std::size_t value_bytes = counts_ ? kCountBytes : kWeightBytes;
     std::uint8_t* out = begin_ + kRowHeaderBytes;
-    std::uint32_t entry = kRowStart;
-    const RowWeights row = all_counts_ ? RowWeights{} : weights.row(word);
-    for (const std::uint8_t* in = postings; in != at_; in += kWriterSlotBytes) {
-      const std::uint32_t gap = read_gap<2>(in);
-      std::uint32_t value;
-      std::memcpy(&value, in + 2, 4);
-      if (all_counts_) {
-        out = put_count_posting(out, width, gap, value);
-        continue;
-      }
-      entry += gap + 1;
-      float weight;
-      if (in[6] != 0)
-        weight = row.weight(entry, value);
-      else
-        std::memcpy(&weight, &value, 4);
-      out = put_posting(out, width, gap, weight);
+    for (const std::uint8_t* in = postings; in != at_; in += 2 + value_bytes) {
+      out[0] = in[0];
+      std::memmove(out + 1, in + 2, value_bytes);
+      out += 1 + value_bytes;
     }
     return out;
   }
 
  private:
+  // Rewrites the count postings so far as weight postings, from the last
+  // (the entry before the one of `gap` being put) back: each moves to a
+  // larger slot, past the ones still to read.
+  void to_weights(std::uint32_t gap) {
+    row_ = weights_.row(word_);
+    counts_ = false;
+    constexpr std::size_t kFrom = kMaxGapWidth + kCountBytes;
+    constexpr std::size_t kTo = kMaxGapWidth + kWeightBytes;
+    std::uint8_t* const postings = begin_ + kRowHeaderBytes;
+    const std::size_t n = static_cast<std::size_t>(at_ - postings) / kFrom;
+    std::uint32_t entry = entry_ - gap - 1;
+    for (std::size_t i = n; i-- > 0;) {
+      const std::uint8_t* in = postings + i * kFrom;
+      const std::uint32_t previous_gap = read_gap<2>(in);
+      const float weight = row_.weight(entry, in[2]);
+      put_posting(postings + i * kTo, 2, previous_gap, weight);
+      entry -= previous_gap + 1;
+    }
+    at_ = postings + n * kTo;
+  }
+
   std::uint8_t* begin_;
   std::uint8_t* at_;
+  SegmentWeights weights_;
+  WordId word_;
+  RowWeights row_;  // set when the first weight comes
+  std::uint32_t entry_ = kRowStart;
   std::uint32_t gaps_ = 0;
-  bool all_counts_ = true;
+  bool counts_ = true;
 };
 
 // Calls visit(relative_entry, PostingValue) for the postings of the row in
