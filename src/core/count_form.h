@@ -37,7 +37,9 @@ class CountForm {
   std::uint32_t largest_count() const noexcept { return largest_count_; }
 
  private:
-  std::vector<double> weights_;  // word_weight of each word
+  std::vector<float> weights_;  // word_weight of each word
+  std::vector<float> values_;
+  std::vector<float> ratios_;  // value / word weight
   std::vector<std::uint32_t> counts_;
   double divisor_ = 0;
   std::uint32_t largest_count_ = 0;

@@ -809,6 +809,7 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   std::vector<std::uint8_t> counted(words_per_group);
   std::vector<double> word_weights(words_per_group);
   const double* divisor_at = divisors.data() + tail_first_entry;
+  const float* vocabulary_weights = detail::word_weights(vocabulary);
   auto segment = std::make_unique<detail::Segment>();
   segment->offsets.resize(word_capacity + 1);
   segment->first_entry = tail_first_entry;
@@ -888,8 +889,7 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
       if (begin == end) continue;
       gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
       bytes[begin] = static_cast<std::uint8_t>(gaps[r] | (counted[r] != 0 ? detail::kCountRow : 0));
-      if (counted[r] != 0)
-        word_weights[r] = vocabulary.word_weight(static_cast<WordId>(r << detail::kGroupBits | g));
+      if (counted[r] != 0) word_weights[r] = vocabulary_weights[r << detail::kGroupBits | g];
     }
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;

@@ -394,11 +394,10 @@ struct RowWeights {
 };
 // The same for every row of a segment.
 struct SegmentWeights {
-  const Vocabulary* vocabulary = nullptr;  // null over word ids, which have no counts
-  const double* divisors = nullptr;        // from the segment's first entry
-  RowWeights row(WordId word) const {
-    return {vocabulary != nullptr ? static_cast<double>(vocabulary->word_weight(word)) : 0.0,
-            divisors};
+  const float* word_weights = nullptr;  // the vocabulary's; null over word ids (no counts)
+  const double* divisors = nullptr;     // from the segment's first entry
+  RowWeights row(WordId word) const noexcept {
+    return {word_weights != nullptr ? static_cast<double>(word_weights[word]) : 0.0, divisors};
   }
 };
 
@@ -595,7 +594,8 @@ struct Database::Impl {
   double divisor_of(Span<BowEntry> words);
   // What turns counts into weights in a segment from `first_entry`.
   detail::SegmentWeights segment_weights(EntryId first_entry) const noexcept {
-    return {over_word_ids ? nullptr : &vocabulary, divisors.data() + first_entry};
+    return {over_word_ids ? nullptr : detail::word_weights(vocabulary),
+            divisors.data() + first_entry};
   }
 
   Vocabulary vocabulary;  // empty over word ids

@@ -211,7 +211,7 @@ struct IndexView {
   const std::uint8_t* alive;
   std::size_t entry_count;
   const detail::ForwardIndex* forward;  // built for fast queries
-  const Vocabulary* vocabulary;         // null over word ids
+  const float* word_weights;            // the vocabulary's; null over word ids
   const double* divisors;               // Database::Impl::divisors
 };
 
@@ -422,7 +422,7 @@ void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, P
   if (part < c.visible_segments)
     accumulate_segment<Term>(
         *c.index.segments[part], c.index.row_order, words, c.last_entry,
-        {c.index.vocabulary, c.index.divisors + c.index.segments[part]->first_entry}, scores);
+        {c.index.word_weights, c.index.divisors + c.index.segments[part]->first_entry}, scores);
   else
     accumulate_tail<Term>(c.index, words, c.last_entry, scores);
   best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive);
@@ -622,7 +622,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
                         impl_->alive.data(),
                         entry_count,
                         &impl_->forward,
-                        impl_->over_word_ids ? nullptr : &impl_->vocabulary,
+                        impl_->over_word_ids ? nullptr : detail::word_weights(impl_->vocabulary),
                         impl_->divisors.data()};
   if (options.mode == QueryMode::kFast) impl_->build_forward_index();
   std::size_t visible = 0;
