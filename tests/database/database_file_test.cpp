@@ -297,6 +297,21 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
   });
 }
 
+// A database over word ids has no vocabulary to compute weights from
+// counts: a divisor is refused (a fuzzing seed: 3 entries over word ids).
+TEST(DatabaseFile, DivisorsOverWordIdsAreRefused) {
+  const std::vector<std::uint8_t> bytes =
+      test::read_file(test::source_path("fuzz/corpus/bbdb/over_word_ids_v3.bbdb"));
+  ASSERT_EQ(load_problem(bytes), "loaded");
+  enum : std::uint32_t { kDivisors = 6 };
+  expect_refused({{with_section(bytes, kDivisors,
+                                [&](std::uint8_t* d, std::size_t) {
+                                  const double one = 1;
+                                  std::memcpy(d, &one, 8);
+                                }),
+                   "entry 0 has an invalid divisor"}});
+}
+
 // The same for a version-2 index (a fuzzing seed: 3 entries over word ids).
 TEST(DatabaseFile, InconsistentVersion2IndexIsRefused) {
   const std::vector<std::uint8_t> bytes =
