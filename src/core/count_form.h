@@ -30,7 +30,7 @@ class CountForm {
   // True when every weight of `words` is count_weight(word_weight(w), count,
   // divisor) to the last bit, for counts in [1, 65535] and one divisor; then
   // divisor() and counts() (parallel to `words`) hold them. Empty vectors,
-  // words of weight 0 and values ≤ 0 have none.
+  // words beyond the vocabulary or of weight 0 and values ≤ 0 have none.
   bool find(const Vocabulary& vocabulary, Scoring scoring, Span<BowEntry> words);
   double divisor() const noexcept { return divisor_; }
   const std::vector<std::uint32_t>& counts() const noexcept { return counts_; }

@@ -500,15 +500,6 @@ inline void for_each_posting(const std::uint8_t* begin, const std::uint8_t* end,
   }
 }
 
-// The same with the weights: visit(relative_entry, weight).
-template <class Visit>
-inline void for_each_weight(const std::uint8_t* begin, const std::uint8_t* end,
-                            const RowWeights& weights, const Visit& visit) {
-  for_each_posting(begin, end, [&](std::uint32_t entry, PostingValue value) {
-    visit(entry, value.count != 0 ? weights.weight(entry, value.count) : value.weight);
-  });
-}
-
 // So that a query's offset lookups stay few as the database grows, every
 // kSegmentFanIn segments of one level are merged into one of the next, as
 // long as the result spans at most kSegmentSpan ids (else the oldest of them
