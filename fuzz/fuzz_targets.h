@@ -5,9 +5,12 @@
 // accepted file breaks an invariant (a bug).
 #pragma once
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -18,6 +21,7 @@
 #include "binbow/formats.h"
 #include "binbow/online_vocabulary.h"
 #include "binbow/vocabulary.h"
+#include "core/background_check.h"
 #include "core/crc32c.h"
 #include "core/database_journal.h"
 #include "core/little_endian.h"
@@ -157,17 +161,62 @@ inline void check_accepted_database(const Database& database) {
   if (again.serialize() != saved) throw std::logic_error("save/load round trip changed the file");
 }
 
+// The .bbdb image loaded as Database::load does: from a file, mapped, the
+// check of its large sections held while the database answers queries and
+// returns feature vectors over bytes not verified yet (which must never
+// crash). Whether it is accepted in the end.
+inline bool load_mapped_bbdb(const std::uint8_t* data, std::size_t size) {
+  static const std::string path = "/tmp/binbow-fuzz-" + std::to_string(::getpid()) + ".bbdb";
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) throw std::runtime_error("cannot write " + path);
+  const bool written = std::fwrite(data, 1, size, file) == size;
+  if (std::fclose(file) != 0 || !written) throw std::runtime_error("cannot write " + path);
+  struct Remove {  // at once: the mapping keeps the file's bytes
+    ~Remove() { std::remove(path.c_str()); }
+  } remove;
+  struct Hold {
+    Hold() { detail::hold_background_checks() = true; }
+    ~Hold() { detail::hold_background_checks() = false; }
+  } hold;
+  try {
+    const Database database = Database::load(path);
+    const std::size_t words = std::min<std::size_t>(database.vocabulary().word_count(), 16);
+    std::vector<BowEntry> entries;
+    for (WordId w = 0; w < words; ++w) entries.push_back({w, 1.0f / static_cast<float>(words)});
+    (void)database.query(BowVector(entries), 5);
+    for (EntryId id = 0; id < database.next_entry_id() && database.options().direct_index; ++id) {
+      if (!database.contains(id)) continue;
+      try {
+        (void)database.feature_vector(id);
+      } catch (const FileError&) {
+      }
+    }
+    detail::hold_background_checks() = false;
+    database.wait_until_verified();
+    return true;
+  } catch (const FileError&) {
+    return false;
+  }
+}
+
 // .bbdb: the input as is (the CRCs reject almost all mutations), then with
 // its CRCs recomputed, so that mutations reach the structural checks behind
-// them. Throws FileError if the input as is was rejected.
+// them; both also loaded from a file, mapped, which must accept exactly what
+// deserialize() accepts. Throws FileError if the input as is was rejected.
 inline void load_bbdb(const std::uint8_t* data, std::size_t size) {
   std::vector<std::uint8_t> fixed(data, data + size);
   fix_bbdb_checksums(fixed);
+  bool accepted = true;
   try {
     check_accepted_database(Database::deserialize(fixed.data(), fixed.size(), "fuzz"));
   } catch (const FileError&) {
+    accepted = false;
   }
+  if (load_mapped_bbdb(fixed.data(), fixed.size()) != accepted)
+    throw std::logic_error("load() and deserialize() disagree on a file");
+  accepted = load_mapped_bbdb(data, size);
   check_accepted_database(Database::deserialize(data, size, "fuzz"));
+  if (!accepted) throw std::logic_error("load() refuses a file deserialize() accepts");
 }
 
 // Rewrites the header CRC of a database journal and every record's CRCs,

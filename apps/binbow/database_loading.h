@@ -10,9 +10,12 @@
 namespace binbow::cli {
 
 // The database, with the --vocab given for one built with --external-vocab.
+// Checked whole before use: a command is over before a background check
+// would end, and must not print results from a damaged file.
 inline Database load_database(const std::string& path, const std::string& vocabulary) {
-  return vocabulary.empty() ? Database::load(path)
-                            : Database::load(path, load_vocabulary(vocabulary));
+  const DatabaseLoadOptions options{Verification::kBeforeReturn};
+  return vocabulary.empty() ? Database::load(path, options)
+                            : Database::load(path, load_vocabulary(vocabulary), options);
 }
 
 // db add and db remove append their changes to the database's journal, or

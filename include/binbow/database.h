@@ -82,16 +82,16 @@ enum class QueryMode {
   // Reads every posting of the query's words: the best entries, always.
   kExact,
   // Reads the postings of the query's rarest words only (an eighth of the
-  // exact query's postings, the words that tell images apart, heavy ones
-  // first), keeps the 1000 entries that score best on them as candidates,
-  // then computes the exact score of every candidate from a copy of its BoW
-  // vector. An entry can only be missing, never ranked by a wrong score. The
+  // exact query's postings, at least ~1M, the words that tell images apart,
+  // heavy ones first), keeps the 1000 entries that score best on them as
+  // candidates, then computes the exact score of every candidate from a copy
+  // of its BoW vector. An entry can only be missing, never ranked by a wrong score. The
   // first fast query makes that copy of every entry, compact: about 2 bytes
   // per word (~2 KiB per ORB-1000 image, 30% more memory_usage()) for vectors
   // that Vocabulary::transform made, whose weights it computes again from
   // word counts bit for bit, 6 bytes per word for others (over word ids);
   // add, remove and clear keep it up to date. Indexes where skipping words
-  // would save fewer postings than the candidates hold words (under ~1M
+  // would save fewer postings than the candidates hold words (under ~2M
   // postings per query) are read whole, as kExact does. Worth it when a query
   // reads millions of postings (large databases of images that share most
   // words; docs/benchmarks.md has the speed and agreement).
@@ -106,6 +106,27 @@ struct QueryOptions {
   // postings per thread) uses fewer. Servers answering many queries at
   // once get more from threads = 1 per query.
   unsigned threads = 0;
+};
+
+// How Database::load checks a file (docs/database-files.md).
+enum class Verification {
+  // load() checks the header, the section table and the small sections, and
+  // lays the index out over the mapped file, then returns: the large
+  // sections (the postings and the direct index) are checked by a thread of
+  // their own (one to two seconds per GB), while the database already answers.
+  // Until that check ends a query reads bytes not verified yet: safe (never
+  // outside the file or the query's buffers), but a damaged file may give
+  // wrong results meanwhile. Damage found makes every later call throw
+  // FileError naming the file and the section. Calls that need the checked
+  // postings (remove, save, serialize, the first fast query) wait for it.
+  kBackground,
+  // Everything is checked before load() returns, as deserialize() does:
+  // the whole file is read once (one to two seconds per GB more to open).
+  kBeforeReturn,
+};
+
+struct DatabaseLoadOptions {
+  Verification verification = Verification::kBackground;
 };
 
 // What the header of a .bbdb file says (Database::inspect).
@@ -206,9 +227,10 @@ class Database {
   std::size_t size() const;       // live entries
   EntryId next_entry_id() const;  // the id the next add() returns
   void clear();                   // removes every entry; ids restart at 0
-  // Bytes of heap memory held by the index (posting lists, direct index,
+  // Bytes of memory held by the index (posting lists, direct index,
   // per-entry state, labels, changes kept for the next save_incremental),
-  // excluding the vocabulary.
+  // excluding the vocabulary. A loaded database's postings and direct index
+  // are counted too, though they are the mapped file's pages (see load()).
   std::size_t memory_usage() const;
 
   const Vocabulary& vocabulary() const noexcept;  // empty over word ids
@@ -250,8 +272,25 @@ class Database {
   // labels). A journal that extends another save of the file is refused
   // (FileError naming it), a damaged record in it too, except at its end,
   // where it is an incremental save that never completed and is dropped.
-  static Database load(const std::string& path);
-  static Database load(const std::string& path, Vocabulary vocabulary);
+  //
+  // A version 3 file is memory-mapped, not copied: its postings and direct
+  // index stay the file's pages (shared with the page cache; memory_usage()
+  // counts them), so opening costs little per entry and nothing per
+  // posting, and the first query answers at once. binbow's saves replace a
+  // file by renaming a new one over it, which leaves the mapped one intact
+  // (saving a loaded database to its own path is fine); a file truncated or
+  // rewritten in place by another program while loaded is undefined
+  // behaviour (the process may be killed by SIGBUS). Where the file cannot
+  // be mapped it is read into memory. Changing a segment of the index
+  // (compaction after remove) copies it into memory first.
+  static Database load(const std::string& path, const DatabaseLoadOptions& options = {});
+  static Database load(const std::string& path, Vocabulary vocabulary,
+                       const DatabaseLoadOptions& options = {});
+  // Waits until the background check of the file this database was loaded
+  // from (Verification::kBackground) has ended. Throws FileError naming the
+  // file and the damaged section if the file is not intact; returns at once
+  // when there is nothing to wait for.
+  void wait_until_verified() const;
   // The exact bytes save() writes, and their parsing; `name` is used in error
   // messages (FileError) in place of a path.
   std::vector<std::uint8_t> serialize(bool include_vocabulary = true) const;

@@ -13,6 +13,7 @@ without it. See docs/distributed.md.
 import json
 import math
 import os
+import re
 import tempfile
 
 import numpy as _np
@@ -94,8 +95,36 @@ class _Shard:
 _JOURNAL = ".journal"  # Database.journal_path: beside each shard's file
 
 
-def _shard_files(shards):
-    return [f"shard-{shard}.bbdb" for shard in range(shards)]
+# Each full save writes a new generation of shard files: a shard's Database
+# stays tied to the name it wrote (so that the next save_incremental appends
+# to its journal), while the previous generation stays whole until the
+# manifest names the new one. A manifest may also name shard-<i>.bbdb, a
+# file without generation.
+_SHARD_FILE = re.compile(r"shard-[0-9]+(?:\.gen([0-9]+))?\.bbdb(?:\.journal)?")
+
+
+def _shard_files(shards, generation):
+    return [f"shard-{shard}.gen{generation}.bbdb" for shard in range(shards)]
+
+
+def _next_generation(folder):
+    """One past the newest generation of shard files in `folder`, so that a save
+    never writes over a file that a manifest may name."""
+    newest = 0
+    with os.scandir(folder) as found:
+        for entry in found:
+            match = _SHARD_FILE.fullmatch(entry.name)
+            if match and match.group(1) and entry.is_file(follow_symlinks=False):
+                newest = max(newest, int(match.group(1)))
+    return newest + 1
+
+
+def _remove_shard_files(folder, keep):
+    """Removes the shard files and journals in `folder` that `keep` does not name."""
+    for name in os.listdir(folder):
+        path = os.path.join(folder, name)
+        if name not in keep and _SHARD_FILE.fullmatch(name) and os.path.isfile(path):
+            os.unlink(path)
 
 
 def _cut_journal(journal, size, manifest):
@@ -145,7 +174,7 @@ class ShardedDatabase:
                  **database_options):
         self._setup(client, vocabulary, shards, timeout)
         self._entries = 0
-        self._start([(vocabulary, database_options, None)] * shards)
+        self._start([(database_options, None)] * shards)
 
     def _setup(self, client, vocabulary, shards, timeout):
         distributed = _distributed()
@@ -161,25 +190,37 @@ class ShardedDatabase:
             raise ValueError(f"ShardedDatabase: timeout must be positive seconds, got {timeout!r}")
         self._client = client
         self._saved_folder = None  # of the last save or load, which incremental saves extend
+        self._saved_files = None  # the shard files there, as its manifest names them
         self._vocabulary = vocabulary
         self._timeout = float(timeout)
         self._shard_count = shards
 
     def _start(self, arguments):
+        """Starts a shard per (database options, file to load) pair."""
         workers = sorted(self._client.scheduler_info()["workers"])
         if not workers:
             raise Error("ShardedDatabase: the Dask cluster has no workers")
+        placed = [workers[shard % len(workers)] for shard in range(len(arguments))]
+        # Sent once to each worker rather than in every shard's task: the shards
+        # of a worker share one copy, and no large task passes the scheduler.
+        try:
+            vocabulary = self._client.scatter(self._vocabulary, workers=sorted(set(placed)),
+                                              broadcast=True, hash=False,
+                                              timeout=self._timeout)
+        except Exception as error:
+            raise Error(f"ShardedDatabase: sending the vocabulary to the workers failed "
+                        f"({type(error).__name__}: {error}): is the Dask cluster alive?") \
+                from error
         futures = [
-            self._client.submit(_Shard, *argument, actor=True, pure=False,
-                                workers=[workers[shard % len(workers)]],
-                                allow_other_workers=False)
-            for shard, argument in enumerate(arguments)
+            self._client.submit(_Shard, vocabulary, *argument, actor=True, pure=False,
+                                workers=[worker], allow_other_workers=False)
+            for worker, argument in zip(placed, arguments)
         ]
         self._actor_futures = futures  # keep the actors alive
         self._lost = {}  # shard: what failed
         self._shards = [self._wait(future, f"starting shard {shard}")
                         for shard, future in enumerate(futures)]
-        self.workers = [workers[shard % len(workers)] for shard in range(len(arguments))]
+        self.workers = placed
 
     def _wait(self, future, what, shard=None, changes=False):
         """The result of a Dask future or actor call; binbow.Error when it cannot be had.
@@ -389,35 +430,32 @@ class ShardedDatabase:
         return self._vocabulary
 
     def save(self, folder):
-        """Saves shard-<i>.bbdb per shard (written by its worker) and manifest.json.
+        """Saves shard-<i>.gen<g>.bbdb per shard (written by its worker) and manifest.json.
 
         `folder` must be reachable at the same path from the workers and the
         client (a shared file system when they are on several machines). A
         database that lost a shard is refused (binbow.Error) before anything is
-        written. The shards write beside the previous save and their files
-        replace it only once every shard has written: a shard lost during the
-        save leaves the previous save as it was.
+        written. The shards write a new generation <g> of files beside the
+        previous save, which stays until the manifest names the new one: a
+        shard lost during the save leaves the previous save as it was. Then
+        the previous generation's files and journals are removed.
         """
         self._check_usable("save")
         folder = os.path.abspath(os.fspath(folder))
         # Every shard must answer before any writes (binbow.Error otherwise).
         options = self._call_all("save", "options", [()] * self._shard_count)[0]
         os.makedirs(folder, exist_ok=True)
-        files = _shard_files(self._shard_count)
-        staged = [os.path.join(folder, f".{name}.saving") for name in files]
+        self._saved_folder = None  # until the manifest commits: the shards' files change
+        files = _shard_files(self._shard_count, _next_generation(folder))
         try:
-            self._call_all("save", "save", [(path,) for path in staged])
-            for path, name in zip(staged, files):
-                os.replace(path, os.path.join(folder, name))
-                # The journal of the shard's previous file extends it no more.
-                journal = os.path.join(folder, name) + _JOURNAL
-                if os.path.lexists(journal):
-                    os.unlink(journal)
-        finally:
-            for path in staged:
-                if os.path.isfile(path):
-                    os.unlink(path)
-        self._write_manifest(folder, files, options, [0] * self._shard_count)
+            self._call_all("save", "save", [(os.path.join(folder, name),) for name in files])
+            self._write_manifest(folder, files, options, [0] * self._shard_count)
+        except BaseException:
+            for name in files:  # none of them existed before this save
+                if os.path.isfile(os.path.join(folder, name)):
+                    os.unlink(os.path.join(folder, name))
+            raise
+        _remove_shard_files(folder, keep=set(files))
 
     def save_incremental(self, folder):
         """Appends each shard's changes since the last save to its journal, then
@@ -426,10 +464,9 @@ class ShardedDatabase:
         A save to another folder than this database's last save or load is a
         full save(folder). Each shard appends with Database.save_incremental
         (atomic per shard; a shard whose journal would pass a quarter of its
-        file, or that was last saved under the name save() stages, writes its
-        file whole instead). The manifest, written last, is what a load
-        follows: records appended after the manifest's sizes (a save that did
-        not finish) are cut off by load().
+        file writes its file whole instead). The manifest, written last, is
+        what a load follows: records appended after the manifest's sizes (a
+        save that did not finish) are cut off by load().
         """
         self._check_usable("save_incremental")
         folder = os.path.abspath(os.fspath(folder))
@@ -437,7 +474,7 @@ class ShardedDatabase:
             self.save(folder)
             return
         options = self._call_all("save_incremental", "options", [()] * self._shard_count)[0]
-        files = _shard_files(self._shard_count)
+        files = self._saved_files
         paths = [os.path.join(folder, name) for name in files]
         self._call_all("save_incremental", "save_incremental", [(path,) for path in paths])
         sizes = [os.path.getsize(path + _JOURNAL) if os.path.exists(path + _JOURNAL) else 0
@@ -465,6 +502,7 @@ class ShardedDatabase:
             os.unlink(temporary)
             raise
         self._saved_folder = folder
+        self._saved_files = files
 
     @classmethod
     def load(cls, client, folder, vocabulary, timeout=DEFAULT_TIMEOUT):
@@ -506,8 +544,9 @@ class ShardedDatabase:
         self = cls.__new__(cls)
         self._setup(client, vocabulary, shards, timeout)
         self._saved_folder = folder
+        self._saved_files = files
         self._entries = entries
-        self._start([(vocabulary, None, os.path.join(folder, name)) for name in files])
+        self._start([(None, os.path.join(folder, name)) for name in files])
         found = self._call_all("load", "next_entry_id", [()] * shards)
         for shard, next_id in found.items():
             if next_id != _shard_size(entries, shard, shards):

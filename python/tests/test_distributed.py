@@ -1,6 +1,8 @@
 """binbow.distributed.ShardedDatabase on a local Dask cluster of worker processes."""
 import ast
 import json
+import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -63,6 +65,8 @@ def test_queries_equal_one_database_with_ties(client, vocabulary, shards):
         fast = sharded.query(bow, 5, fast=True)
         assert fast and fast[0] == single.query(bow, 1)[0]
         assert all(exact[entry] == (score, shared) for entry, score, shared in fast)
+        if shards == 1:  # one shard holds what the one Database holds
+            assert fast == single.query(bow, 5, fast=True)
     assert len(sharded) == len(images) and sharded.next_entry_id == len(images)
 
 
@@ -81,8 +85,13 @@ def test_real_descriptors(client):
     extractor = binbow.FeatureExtractor("orb", max_features=500)
     images = [extractor.extract(str(frame))[1] for frame in sample_frames()[:24]]
     single, sharded = both(client, vocabulary, images, 3)
-    assert_same_answers(single, sharded, [vocabulary.transform(images[i]) for i in (0, 11, 23)],
-                        (None, 10))
+    queries = [vocabulary.transform(images[i]) for i in (0, 11, 23)]
+    assert_same_answers(single, sharded, queries, (None, 10))
+    for query in queries:  # fast mode: the exact top 1, every score exact
+        exact = {entry: (score, shared) for entry, score, shared in single.query(query, 100)}
+        fast = sharded.query(query, 10, fast=True)
+        assert fast[0] == single.query(query, 1)[0]
+        assert all(exact[entry] == (score, shared) for entry, score, shared in fast)
 
 
 def test_remove_and_labels(client, vocabulary):
@@ -114,11 +123,16 @@ def test_save_and_load_round_trip(client, vocabulary, tmp_path):
     assert manifest["shards"] == 3 and manifest["next_entry_id"] == 11
     assert manifest["vocabulary_checksum"] == vocabulary.checksum
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        "manifest.json", "shard-0.bbdb", "shard-1.bbdb", "shard-2.bbdb"]
+        "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb", "shard-2.gen1.bbdb"]
     loaded = sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
     assert loaded.shards == 3 and len(loaded) == 10 and loaded.label(4) == "l4"
     assert_same_answers(single, loaded, [vocabulary.transform(images[i]) for i in (0, 3, 9)])
     assert loaded.add(images[1]) == 11
+    # The next save is a new generation; the previous one is removed once committed.
+    loaded.save(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "manifest.json", "shard-0.gen2.bbdb", "shard-1.gen2.bbdb", "shard-2.gen2.bbdb"]
+    assert sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary).label(4) == "l4"
 
 
 def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp_path):
@@ -127,10 +141,15 @@ def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp
     module = sharded_module()
     sharded.save_incremental(tmp_path)  # never saved: a full save
     assert not list(tmp_path.glob("*.journal"))
+    saved = {path.name: path.read_bytes() for path in tmp_path.glob("*.bbdb")}
     for image in images[6:8]:
         single.add(image)
     sharded.add_many(images[6:8])
-    sharded.save_incremental(tmp_path)  # shards saved under staging names: whole files
+    sharded.save_incremental(tmp_path)  # right after a full save, the shards append
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    journals = [tmp_path / (name + ".journal") for name in manifest["files"]]
+    assert all(path.stat().st_size > 0 for path in journals)
+    assert {path.name: path.read_bytes() for path in tmp_path.glob("*.bbdb")} == saved
     for image in images[8:10]:
         single.add(image)
     sharded.add_many(images[8:10])
@@ -138,9 +157,9 @@ def test_incremental_saves_append_to_the_shards_journals(client, vocabulary, tmp
     sharded.remove(3)
     sharded.save_incremental(tmp_path)
     manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
-    journals = [tmp_path / f"shard-{shard}.bbdb.journal" for shard in range(2)]
     assert manifest["journal_bytes"] == [path.stat().st_size for path in journals]
     assert all(size > 0 for size in manifest["journal_bytes"])
+    assert {path.name: path.read_bytes() for path in tmp_path.glob("*.bbdb")} == saved
     queries = [vocabulary.transform(images[i]) for i in (0, 7, 9)]
     loaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
     assert_same_answers(single, loaded, queries)
@@ -169,7 +188,7 @@ def test_load_refuses_another_vocabulary_and_broken_manifests(client, vocabulary
     manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
     manifest["next_entry_id"] = 5
     (tmp_path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
-    with pytest.raises(binbow.Error, match="shard-0.bbdb holds 2 ids"):
+    with pytest.raises(binbow.Error, match=r"shard-0.gen1.bbdb holds 2 ids"):
         sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
     with pytest.raises(binbow.Error, match="cannot read"):
         sharded_module().ShardedDatabase.load(client, tmp_path / "missing", vocabulary)
@@ -195,6 +214,33 @@ def test_bad_inputs_are_refused_before_any_shard_adds(client, vocabulary):
 def test_the_workers_hold_the_shards(client, vocabulary):
     sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=4)
     assert len(set(sharded.workers)) == 2  # spread over both workers
+
+
+def test_the_vocabulary_is_sent_to_each_worker_not_in_every_shard_s_task(client, tmp_path):
+    """Dask warns when a task carries more than 1 MB: a large vocabulary is
+    scattered once to the workers, which their shards share."""
+    rng = np.random.default_rng(17)
+    large = binbow.Vocabulary.build(
+        [rng.integers(0, 256, size=(1000, 32), dtype=np.uint8) for _ in range(40)],
+        branching=16, levels=4, seed=1, max_iterations=2)
+    assert len(pickle.dumps(large)) > 1_000_000
+    module = sharded_module()
+    worker_module = require_module("distributed.worker", "python3-distributed")
+    images = random_images(18, 6)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message="Large object")
+        # Dask warns once per process: a large task of another test must not hide this one.
+        worker_module._warn_dumps_warned[0] = False
+        sharded = module.ShardedDatabase(client, large, shards=4)
+        sharded.add_many(images)
+        sharded.save(tmp_path)
+        worker_module._warn_dumps_warned[0] = False
+        loaded = module.ShardedDatabase.load(client, tmp_path, large)
+    single = binbow.Database(large)
+    for image in images:
+        single.add(image)
+    assert_same_answers(loaded, sharded, [large.transform(images[i]) for i in (0, 5)])
+    assert_same_answers(single, loaded, [large.transform(images[i]) for i in (0, 5)])
 
 
 def test_the_stubs_describe_the_runtime_api():
@@ -290,10 +336,44 @@ def test_a_shard_lost_during_a_save_leaves_the_previous_save(client, vocabulary,
     sharded.save(tmp_path)
     saved = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     sharded.add_many(random_images(15, 2))
-    # Shard 1 cannot write its file (a folder holds its staging name): shard 0 has
-    # written its own by then, which must not replace the saved one.
-    (tmp_path / ".shard-1.bbdb.saving").mkdir()
+    # Shard 1 cannot write its file (a folder holds the name of its next
+    # generation): shard 0 has written its own by then, which must not replace
+    # the saved one.
+    (tmp_path / "shard-1.gen2.bbdb").mkdir()
     with pytest.raises(OSError):
         sharded.save(tmp_path)
-    (tmp_path / ".shard-1.bbdb.saving").rmdir()
+    (tmp_path / "shard-1.gen2.bbdb").rmdir()
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == saved
+    # The shards' files changed: the next incremental save is a full one.
+    sharded.save_incremental(tmp_path)
+    assert not list(tmp_path.glob("*.journal"))
+    loaded = sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert len(loaded) == 6
+
+
+def test_saves_named_without_generation_still_load_and_append(client, vocabulary, tmp_path):
+    """A manifest may name shard-<i>.bbdb: loaded, appended to, then replaced by a full save."""
+    images = random_images(16, 6)
+    single, sharded = both(client, vocabulary, images[:4], 2)
+    sharded.save(tmp_path)
+    manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
+    for shard, name in enumerate(manifest["files"]):
+        (tmp_path / name).rename(tmp_path / f"shard-{shard}.bbdb")
+    manifest["files"] = ["shard-0.bbdb", "shard-1.bbdb"]
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    module = sharded_module()
+    loaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    loaded.add_many(images[4:])
+    for image in images[4:]:
+        single.add(image)
+    loaded.save_incremental(tmp_path)
+    assert sorted(p.name for p in tmp_path.glob("*.journal")) == [
+        "shard-0.bbdb.journal", "shard-1.bbdb.journal"]
+    queries = [vocabulary.transform(images[i]) for i in (0, 5)]
+    reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert_same_answers(single, reloaded, queries)
+    loaded.save(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb"]
+    reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    assert_same_answers(single, reloaded, queries)

@@ -148,20 +148,44 @@ void check_bow_values(const BowVector& bow, const char* what) {
 
 namespace {
 
-// A full list moves to a block twice its size (see TailList).
-void push_back(TailList& list, unsigned first_block_log, TailPosting posting, PostingArena& arena) {
-  if (tail_list_full(list.size, first_block_log)) {
-    const std::uint32_t capacity = list.size == 0 ? 1u << first_block_log : list.size * 2;
-    const std::uint32_t block = arena.allocate(capacity);
-    if (list.size > 0) {
-      const TailPosting* from = arena.at(list.block);
-      TailPosting* to = arena.at(block);
-      for (std::uint32_t i = 0; i < list.size; ++i) to[i] = from[i];
-      arena.release(list.block, list.size);
-    }
-    list.block = block;
+// Moves a full list to a block twice its size (see TailList).
+__attribute__((noinline)) void grow(TailList& list, unsigned first_block_log, PostingArena& arena) {
+  const std::uint32_t capacity = list.size == 0 ? 1u << first_block_log : list.size * 2;
+  const std::uint32_t block = arena.allocate(capacity);
+  if (list.size > 0) {
+    std::memcpy(arena.at(block), arena.at(list.block), list.size * sizeof(TailPosting));
+    arena.release(list.block, list.size);
   }
-  arena.at(list.block)[list.size++] = posting;
+  list.block = block;
+}
+
+// The range of a vector's values; false if one is not finite. Branch-free,
+// so that the compiler may check several values at once.
+bool finite_value_range(const BowEntry* words, std::size_t n, ValueRange& range) noexcept {
+  // Four of each, so that the comparisons need not wait for one another.
+  constexpr std::size_t kWays = 4;
+  float min_positive[kWays], max[kWays], lowest[kWays];
+  bool finite = true;
+  std::fill(min_positive, min_positive + kWays, INFINITY);
+  std::fill(max, max + kWays, 0.0f);
+  std::fill(lowest, lowest + kWays, 0.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v = words[i].value;
+    const std::size_t k = i % kWays;
+    finite &= std::fabs(v) <= std::numeric_limits<float>::max();
+    min_positive[k] = std::min(min_positive[k], v > 0.0f ? v : INFINITY);
+    max[k] = std::max(max[k], v);
+    lowest[k] = std::min(lowest[k], v);
+  }
+  for (std::size_t k = 1; k < kWays; ++k) {
+    min_positive[0] = std::min(min_positive[0], min_positive[k]);
+    max[0] = std::max(max[0], max[k]);
+    lowest[0] = std::min(lowest[0], lowest[k]);
+  }
+  range.min_positive = min_positive[0];
+  range.max = max[0];
+  range.negative = lowest[0] < 0.0f;
+  return finite;
 }
 
 }  // namespace
@@ -239,15 +263,18 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
       put_leb128(features.node(node) - (node > 0 ? features.node(node - 1) : 0));
   }
   if (layout_ == Layout::kPartition7) {
-    // Feature f's 7 bits start at bit 7 f, from the low bit of each byte.
-    std::fill(out, bytes_.get() + packed_size(), 0);
+    // Feature f's 7 bits start at bit 7 f, from the low bit of each byte:
+    // each feature's node position, then eight features per 7 bytes.
+    std::vector<std::uint8_t> slots((std::size_t{feature_count_} + 7) / 8 * 8, 0);
     for (std::size_t node = 0; node < node_count_; ++node)
-      for (std::uint32_t index : features.features(node)) {
-        const std::size_t bit = std::size_t{7} * index;
-        const std::uint32_t v = static_cast<std::uint32_t>(node) << (bit % 8);
-        out[bit / 8] |= static_cast<std::uint8_t>(v);
-        if (v > 0xFF) out[bit / 8 + 1] |= static_cast<std::uint8_t>(v >> 8);
-      }
+      for (std::uint32_t index : features.features(node))
+        slots[index] = static_cast<std::uint8_t>(node);
+    std::uint8_t* const end = bytes_.get() + packed_size();
+    for (std::size_t f = 0; f < slots.size(); f += 8, out += 7) {
+      std::uint64_t eight = 0;
+      for (std::size_t k = 0; k < 8; ++k) eight |= std::uint64_t{slots[f + k]} << (7 * k);
+      std::memcpy(out, &eight, std::min<std::size_t>(7, static_cast<std::size_t>(end - out)));
+    }
     return;
   }
   if (partition) {
@@ -446,16 +473,43 @@ Database::Impl::Impl(Scoring scoring_in, DatabaseOptions options_in)
   lay_out(detail::kInitialWordCapacity);
 }
 
+namespace {
+
+// The bits of the word ids below `capacity`.
+unsigned word_bits(std::size_t capacity) noexcept {
+  unsigned bits = 0;
+  while (((capacity - 1) >> bits) != 0) ++bits;
+  return bits;
+}
+
+// log2 of the groups per tail list for word ids below `capacity`:
+// kTailListShift, or less where a key (the entry, then the word's row
+// among its list's) needs it.
+unsigned tail_list_shift_for(std::size_t capacity) noexcept {
+  const unsigned bits = word_bits(capacity);
+  const unsigned group_row_bits = bits > detail::kGroupBits ? bits - detail::kGroupBits : 0;
+  return std::min(detail::kTailListShift, 32 - detail::kTailEntryBits - group_row_bits);
+}
+
+std::size_t tail_list_count(std::size_t capacity) noexcept {
+  const std::size_t groups = std::min(capacity, std::size_t{1} << detail::kGroupBits);
+  const unsigned shift = tail_list_shift_for(capacity);
+  return (groups + (std::size_t{1} << shift) - 1) >> shift;
+}
+
+}  // namespace
+
 void Database::Impl::lay_out(std::size_t capacity) {
-  tail_lists.assign(std::min(capacity, std::size_t{1} << detail::kGroupBits), {});
+  tail_lists.assign(tail_list_count(capacity), {});
   first_block_logs.assign(tail_lists.size(), detail::kFirstBlockLog);
   set_word_capacity(capacity);
 }
 
 void Database::Impl::set_word_capacity(std::size_t capacity) noexcept {
   word_capacity = capacity;
-  high_bits = 0;
-  while ((word_capacity - 1) >> (detail::kGroupBits + high_bits) != 0) ++high_bits;
+  tail_list_shift = tail_list_shift_for(capacity);
+  const unsigned bits = word_bits(capacity);
+  high_bits = (bits > detail::kGroupBits ? bits - detail::kGroupBits : 0) + tail_list_shift;
   row_order = detail::RowOrder(word_capacity);
   // Two postings per word: a segment's offsets (4 bytes per word) cost 2
   // bytes per posting; two thousand images of 1000 words for a million
@@ -517,7 +571,7 @@ void Database::Impl::grow_words(std::size_t needed) {
     out.bytes.resize(segment.bytes.size());
     out.offsets = relay_rows(segment, out.bytes.data(), word_capacity, new_words);
   }
-  std::vector<detail::TailList> lists(std::min(new_words, std::size_t{1} << detail::kGroupBits));
+  std::vector<detail::TailList> lists(tail_list_count(new_words));
   std::vector<std::uint8_t> block_logs(lists.size(), detail::kFirstBlockLog);
   for (std::size_t i = 0; i < segments.size(); ++i) {
     detail::Segment& segment = *segments[i];
@@ -540,6 +594,11 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   if (entry - tail_first_entry >= detail::kSegmentSpan) freeze_tail();
   const BowEntry* words = bow.begin();
   const std::size_t n = bow.size();
+  detail::ValueRange range;
+  if (!detail::finite_value_range(words, n, range))
+    for (std::size_t i = 0; i < n; ++i)
+      if (!std::isfinite(words[i].value))
+        throw detail::non_finite_value("Database::add", words[i].word);
   const std::uint32_t key_base = (entry - tail_first_entry) << high_bits;
   std::size_t appended = 0;
   try {
@@ -548,41 +607,22 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     divisors.push_back(divisor_of(Span<BowEntry>(words, n)));
     if (options.direct_index) direct.emplace_back(features);
     if (!labels.empty()) labels.emplace_back();
-    // The group heads and the ends of their blocks mostly are in cache, and
-    // are fetched a few words ahead for when they are not.
-    constexpr std::size_t kHeadAhead = 32;
-    constexpr std::size_t kAhead = 16;
+    // The lists' heads and the ends of their blocks stay in cache (see
+    // kTailListShift).
     detail::TailList* lists = tail_lists.data();
     for (; appended < n; ++appended) {
-      if (appended + kHeadAhead < n)
-        __builtin_prefetch(lists + detail::group_of(words[appended + kHeadAhead].word));
-      if (appended + kAhead < n) {
-        const std::uint32_t group = detail::group_of(words[appended + kAhead].word);
-        const detail::TailList ahead = lists[group];
-        if (ahead.size != 0) {
-          const detail::TailPosting* block = arena.at(ahead.block);
-          if (!detail::tail_list_full(ahead.size, first_block_logs[group])) {
-            __builtin_prefetch(block + ahead.size);
-          } else {
-            // A full list is copied to a bigger block: fetch all of it (the
-            // hardware prefetcher follows longer blocks).
-            const std::uint32_t lines = std::min<std::uint32_t>(ahead.size, 64);
-            for (std::uint32_t i = 0; i < lines; i += 8) __builtin_prefetch(block + i);
-          }
-        }
-      }
       const WordId word = words[appended].word;
-      if (!std::isfinite(words[appended].value))
-        throw detail::non_finite_value("Database::add", word);
-      values.include(words[appended].value);
-      const std::uint32_t group = detail::group_of(word);
-      detail::push_back(lists[group], first_block_logs[group],
-                        {key_base | (word >> detail::kGroupBits), words[appended].value}, arena);
+      const std::uint32_t l = tail_list(word);
+      detail::TailList& list = lists[l];
+      if (detail::tail_list_full(list.size, first_block_logs[l]))
+        detail::grow(list, first_block_logs[l], arena);
+      arena.at(list.block)[list.size++] = {key_base | (row_order.row(word) - tail_list_start(l)),
+                                           words[appended].value};
     }
     if (forward_built) forward.append(Span<BowEntry>(words, n));
   } catch (...) {
     // The lists that got this entry end with it; undo them.
-    for (std::size_t i = 0; i < appended; ++i) --tail_lists[detail::group_of(words[i].word)].size;
+    for (std::size_t i = 0; i < appended; ++i) --tail_lists[tail_list(words[i].word)].size;
     alive.resize(entry);
     word_counts.resize(entry);
     divisors.resize(entry);
@@ -591,6 +631,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     if (forward_built) forward.truncate(entry);
     throw;
   }
+  values.include(range);
   alive[entry] = 1;
   ++live_entries;
   tail_postings += n;
@@ -606,6 +647,7 @@ void Database::Impl::build_forward_index() const {
   if (forward_built.load(std::memory_order_acquire)) return;
   std::lock_guard<std::mutex> lock(forward_mutex);
   if (forward_built.load(std::memory_order_relaxed)) return;
+  wait_for_file();  // reads every posting: only checked ones
   detail::ForwardIndex built(over_word_ids ? nullptr : &vocabulary, scoring);
   built.resize(alive.size());
   // The words of kChunk entries at a time, so that the BoW vectors in
@@ -624,7 +666,7 @@ void Database::Impl::build_forward_index() const {
   std::vector<std::uint32_t> cursors, last_entries;
   for (const auto& segment : segments) {
     const std::uint32_t* offsets = segment->offsets.data();
-    const std::uint8_t* bytes = segment->bytes.data();
+    const std::uint8_t* bytes = std::as_const(segment->bytes).data();
     // By row: the next posting's byte, past the row's header.
     cursors.resize(word_capacity);
     for (std::size_t row = 0; row < word_capacity; ++row)
@@ -660,24 +702,23 @@ void Database::Impl::build_forward_index() const {
     }
   }
   const std::uint32_t high_mask = (1u << high_bits) - 1;
-  const std::size_t groups = std::min(word_capacity, std::size_t{1} << detail::kGroupBits);
-  cursors.assign(groups, 0);
+  cursors.assign(tail_lists.size(), 0);
   for (EntryId first = tail_first_entry; first < alive.size() && tail_postings > 0;
        first += kChunk) {
     const EntryId end = static_cast<EntryId>(std::min<std::size_t>(first + kChunk, alive.size()));
     const std::uint64_t key_end = std::uint64_t{end - tail_first_entry} << high_bits;
     for (std::size_t word = 0; word < word_capacity; ++word) {
-      const std::uint32_t group = detail::group_of(static_cast<WordId>(word));
+      const std::uint32_t group = tail_list(static_cast<WordId>(word));
       const detail::TailList list = tail_lists[group];
       if (list.size == 0) continue;
       const detail::TailPosting* postings = arena.at(list.block);
-      const auto high = static_cast<std::uint32_t>(word >> detail::kGroupBits);
+      const std::uint32_t high = tail_row(static_cast<WordId>(word));
       for (std::uint32_t i = cursors[group]; i < list.size && postings[i].key < key_end; ++i)
         if ((postings[i].key & high_mask) == high)
           words[tail_first_entry + (postings[i].key >> high_bits) - first].push_back(
               {static_cast<WordId>(word), postings[i].weight});
     }
-    for (std::size_t group = 0; group < groups; ++group) {
+    for (std::size_t group = 0; group < tail_lists.size(); ++group) {
       const detail::TailList list = tail_lists[group];
       if (list.size == 0) continue;
       const detail::TailPosting* postings = arena.at(list.block);
@@ -799,115 +840,101 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
 std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   const std::size_t live = tail_postings - tail_dead_postings;
   if (live == 0) return nullptr;
-  // Per word of a group: its row's last entry, then its next byte.
-  const std::size_t words_per_group = std::size_t{1} << high_bits;
-  std::vector<std::uint32_t> last(words_per_group);
-  std::vector<std::uint32_t> next(words_per_group);
-  std::vector<std::uint32_t> gaps(words_per_group);  // per word: its row's gaps ORed
-  // Per word: whether every entry of its row is in count form, then its
-  // row's word weight if so.
-  std::vector<std::uint8_t> counted(words_per_group);
-  std::vector<double> word_weights(words_per_group);
-  const double* divisor_at = divisors.data() + tail_first_entry;
-  const float* vocabulary_weights = detail::word_weights(vocabulary);
   auto segment = std::make_unique<detail::Segment>();
   segment->offsets.resize(word_capacity + 1);
   segment->first_entry = tail_first_entry;
   segment->end_entry = static_cast<EntryId>(alive.size());
   segment->posting_count = live;
+  // Room for every posting with a 2-byte gap and a header per row; shrunk to
+  // what the rows take.
+  segment->bytes.resize(live * (detail::kMaxGapWidth + detail::kWeightBytes) +
+                        std::min(live, word_capacity) * detail::kRowHeaderBytes);
+  std::uint8_t* const bytes = segment->bytes.data();
+  std::uint32_t* const offsets = segment->offsets.data();
   const std::uint8_t* live_at = alive.data() + tail_first_entry;
+  const double* divisor_at = divisors.data() + tail_first_entry;
+  const float* vocabulary_weights = detail::word_weights(vocabulary);
   const bool drop_dead = tail_dead_postings > 0;
-  // Two passes over the groups: the first sizes every row (a gap's length
-  // depends on the row's previous entry), the second writes the postings. A
-  // group's rows are consecutive (RowOrder), so each pass writes
-  // sequentially. Within a group's list entries increase, so the rows come
+  const std::uint32_t row_mask = (1u << high_bits) - 1;
+  // Per row of a list: its postings then next byte, its gaps ORed then gap
+  // width, its last entry; whether every entry of the row is in count form
+  // (a count row), then its word's vocabulary weight if so.
+  const std::size_t list_rows = std::size_t{1} << high_bits;
+  std::vector<std::uint32_t> next(list_rows), gaps(list_rows), last(list_rows);
+  std::vector<std::uint8_t> counted(list_rows);
+  std::vector<double> word_weights(list_rows);
+  constexpr std::size_t kAhead = 2;
+  constexpr std::size_t kLinesAhead = 4;
+  std::uint32_t row_end = 0;
+  // List by list, its consecutive rows: the first pass over the list's
+  // postings sizes them (a gap's width depends on the row's previous entry),
+  // the second writes them. Within a list entries increase, so the rows come
   // out in entry order.
-  const std::uint32_t high_mask = (1u << high_bits) - 1;
-  constexpr std::size_t kAhead = 4;
-  constexpr std::uint32_t kLinesAhead = 8;
-  const auto for_each_group = [&](const auto& visit) {
-    for (std::size_t group = 0; group < tail_lists.size(); ++group) {
-      if (group + kAhead < tail_lists.size()) {
-        const detail::TailList ahead = tail_lists[group + kAhead];
-        const detail::TailPosting* block = ahead.size != 0 ? arena.at(ahead.block) : nullptr;
-        for (std::uint32_t i = 0; i < std::min(ahead.size, kLinesAhead * 8); i += 8)
-          __builtin_prefetch(block + i);
-      }
-      const auto g = static_cast<std::uint32_t>(group);
-      const std::uint32_t first_row = row_order.group_start(g);
-      const std::uint32_t rows = row_order.group_start(g + 1) - first_row;
-      const detail::TailList list = tail_lists[group];
-      const detail::TailPosting* postings = list.size != 0 ? arena.at(list.block) : nullptr;
-      std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
-      visit(g, first_row, rows, postings, list.size);
+  for (std::size_t l = 0; l < tail_lists.size(); ++l) {
+    if (l + kAhead < tail_lists.size() && tail_lists[l + kAhead].size != 0) {
+      const auto* ahead = reinterpret_cast<const char*>(arena.at(tail_lists[l + kAhead].block));
+      for (std::size_t line = 0; line < kLinesAhead; ++line) __builtin_prefetch(ahead + 64 * line);
     }
-  };
-  std::uint32_t* offsets = segment->offsets.data();
-  std::uint32_t row_end = 0;  // of the previous group
-  for_each_group([&](std::uint32_t, std::uint32_t first_row, std::uint32_t rows,
-                     const detail::TailPosting* postings, std::uint32_t size) {
+    const auto list = static_cast<std::uint32_t>(l);
+    const std::uint32_t first_row = tail_list_start(list);
+    const std::uint32_t rows =
+        (l + 1 < tail_lists.size() ? tail_list_start(list + 1)
+                                   : static_cast<std::uint32_t>(word_capacity)) -
+        first_row;
+    const detail::TailPosting* postings =
+        tail_lists[l].size != 0 ? arena.at(tail_lists[l].block) : nullptr;
+    const std::uint32_t size = tail_lists[l].size;
     std::fill(next.begin(), next.begin() + rows, 0);
     std::fill(gaps.begin(), gaps.begin() + rows, 0);
     std::fill(counted.begin(), counted.begin() + rows, 1);
-    for (std::uint32_t i = 0; i < size; ++i) {
-      const std::uint32_t key = postings[i].key;
-      const std::uint32_t relative = key >> high_bits;
-      if (drop_dead && live_at[relative] == 0) continue;
-      const std::uint32_t word = key & high_mask;
-      ++next[word];
-      gaps[word] |= relative - last[word] - 1;
-      counted[word] &= divisor_at[relative] > 0 ? 1 : 0;
-      last[word] = relative;
-    }
-    for (std::uint32_t r = 0; r < rows; ++r) {
-      row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r], counted[r] != 0));
-      offsets[first_row + r + 1] = row_end;
-    }
-  });
-  offsets[0] = 0;
-  segment->bytes.resize(row_end);
-  std::uint8_t* bytes = segment->bytes.data();
-  for_each_group([&](std::uint32_t g, std::uint32_t first_row, std::uint32_t rows,
-                     const detail::TailPosting* postings, std::uint32_t size) {
-    // Each row's width and kind, as the first pass found them (the group is
-    // in cache).
-    std::fill(gaps.begin(), gaps.begin() + rows, 0);
-    std::fill(counted.begin(), counted.begin() + rows, 1);
-    for (std::uint32_t i = 0; i < size; ++i) {
-      const std::uint32_t key = postings[i].key;
-      const std::uint32_t relative = key >> high_bits;
-      if (drop_dead && live_at[relative] == 0) continue;
-      const std::uint32_t word = key & high_mask;
-      gaps[word] |= relative - last[word] - 1;
-      counted[word] &= divisor_at[relative] > 0 ? 1 : 0;
-      last[word] = relative;
-    }
     std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
-    for (std::uint32_t r = 0; r < rows; ++r) {
-      const std::uint32_t begin = offsets[first_row + r], end = offsets[first_row + r + 1];
-      next[r] = begin + (begin != end ? 1 : 0);
-      if (begin == end) continue;
-      gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
-      bytes[begin] = static_cast<std::uint8_t>(gaps[r] | (counted[r] != 0 ? detail::kCountRow : 0));
-      if (counted[r] != 0) word_weights[r] = vocabulary_weights[r << detail::kGroupBits | g];
+    for (std::uint32_t i = 0; i < size; ++i) {
+      const std::uint32_t key = postings[i].key;
+      const std::uint32_t relative = key >> high_bits;
+      if (drop_dead && live_at[relative] == 0) continue;
+      const std::uint32_t row = key & row_mask;
+      ++next[row];
+      gaps[row] |= relative - last[row] - 1;
+      counted[row] &= divisor_at[relative] > 0 ? 1 : 0;
+      last[row] = relative;
+    }
+    // The list's rows are its groups' in order, a group's words increasing
+    // (RowOrder).
+    std::uint32_t r = 0;
+    for (std::uint32_t g = list << tail_list_shift; r < rows; ++g) {
+      for (std::size_t word = g; word < word_capacity;
+           word += std::size_t{1} << detail::kGroupBits, ++r) {
+        offsets[first_row + r] = row_end;
+        if (next[r] == 0) continue;
+        const std::uint32_t begin = row_end;
+        row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r], counted[r] != 0));
+        gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
+        bytes[begin] =
+            static_cast<std::uint8_t>(gaps[r] | (counted[r] != 0 ? detail::kCountRow : 0));
+        if (counted[r] != 0) word_weights[r] = vocabulary_weights[word];
+        next[r] = begin + static_cast<std::uint32_t>(detail::kRowHeaderBytes);
+        last[r] = detail::kRowStart;
+      }
     }
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
-      const std::uint32_t word = key & high_mask;
-      std::uint8_t* const at = bytes + next[word];
-      const std::uint32_t gap = relative - last[word] - 1;
-      next[word] = static_cast<std::uint32_t>(
-          (counted[word] != 0
+      const std::uint32_t row = key & row_mask;
+      std::uint8_t* const at = bytes + next[row];
+      const std::uint32_t gap = relative - last[row] - 1;
+      next[row] = static_cast<std::uint32_t>(
+          (counted[row] != 0
                ? detail::put_count_posting(
-                     at, gaps[word], gap,
-                     detail::count_of(postings[i].weight, word_weights[word], divisor_at[relative]))
-               : detail::put_posting(at, gaps[word], gap, postings[i].weight)) -
+                     at, gaps[row], gap,
+                     detail::count_of(postings[i].weight, word_weights[row], divisor_at[relative]))
+               : detail::put_posting(at, gaps[row], gap, postings[i].weight)) -
           bytes);
-      last[word] = relative;
+      last[row] = relative;
     }
-  });
+  }
+  offsets[word_capacity] = row_end;
+  segment->bytes.resize(row_end);  // shrinking never throws
   return segment;
 }
 
@@ -916,14 +943,14 @@ void Database::Impl::freeze_tail() {
   if (segment) segments.reserve(segments.size() + 1);
   // Nothing below can throw: the index changes all at once.
   if (segment) segments.push_back(std::move(segment));
-  for (std::size_t group = 0; group < tail_lists.size(); ++group) {
-    const std::uint32_t size = tail_lists[group].size;
+  for (std::size_t list = 0; list < tail_lists.size(); ++list) {
+    const std::uint32_t size = tail_lists[list].size;
     // At most 2^16 postings (512 KiB): a burst in one round does not
     // reserve much in the next.
-    first_block_logs[group] = static_cast<std::uint8_t>(
+    first_block_logs[list] = static_cast<std::uint8_t>(
         size <= (1u << detail::kFirstBlockLog) ? detail::kFirstBlockLog
                                                : std::min(32 - __builtin_clz(size - 1), 16));
-    tail_lists[group] = {};
+    tail_lists[list] = {};
   }
   arena.reset();
   tail_postings = 0;
@@ -940,7 +967,7 @@ std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* liv
                                const detail::SegmentWeights& weights,
                                std::uint8_t* const out_begin) {
   std::uint32_t* offsets = segment.offsets.data();
-  const std::uint8_t* const bytes = segment.bytes.data();
+  const std::uint8_t* const bytes = std::as_const(segment.bytes).data();
   std::uint8_t* out = out_begin;
   std::size_t kept = 0;
   std::uint32_t begin = offsets[0];
@@ -988,6 +1015,29 @@ void Database::Impl::compact(std::size_t index) {
   segment.dead_postings = 0;
 }
 
+void Database::Impl::merge_file_check() {
+  throw_if_damaged();
+  if (file_check_merged) return;
+  const detail::BackgroundCheck::Found& found = file_check->wait();
+  // Entries added since load() have their counts already.
+  std::copy(found.word_counts.begin(), found.word_counts.end(), word_counts.begin());
+  values.negative = values.negative || found.values.negative;
+  values.min_positive = std::min(values.min_positive, found.values.min_positive);
+  values.max = std::max(values.max, found.values.max);
+  file_check_merged = true;
+}
+
+bool Database::Impl::index_values(detail::ValueRange& range) const noexcept {
+  range = values;
+  if (file_check_merged) return true;
+  if (!file_check->passed()) return false;
+  const detail::ValueRange& found = file_check->found().values;
+  range.negative = range.negative || found.negative;
+  range.min_positive = std::min(range.min_positive, found.min_positive);
+  range.max = std::max(range.max, found.max);
+  return true;
+}
+
 std::size_t Database::Impl::segment_of(EntryId entry) const noexcept {
   if (entry >= tail_first_entry) return segments.size();
   const auto after = std::upper_bound(
@@ -1023,6 +1073,7 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
   else
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   const EntryId entry = impl_->append(bow, features);
   impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
                             label);
@@ -1034,6 +1085,7 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
 EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::string label) {
   if (impl_->over_word_ids) {
     std::unique_lock lock(impl_->mutex);
+    impl_->throw_if_damaged();
     if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
     const EntryId entry = impl_->append(bow, features);
     impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
@@ -1042,7 +1094,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
     impl_->freeze_tail_if_full();
     return entry;
   }
-  // The values are checked while they are added (one pass over the image).
+  // append checks the values.
   detail::check_bow_words(bow, impl_->vocabulary, "Database::add");
   if (impl_->options.direct_index && !features.empty() &&
       features.node(features.size() - 1) >= impl_->vocabulary.node_count())
@@ -1051,6 +1103,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
                           " is outside the vocabulary (" +
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   const EntryId entry = impl_->append(bow, features);
   impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
                             label);
@@ -1061,6 +1114,8 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
 
 void Database::remove(EntryId entry) {
   std::unique_lock lock(impl_->mutex);
+  // The entry's postings are counted by the file's check.
+  impl_->merge_file_check();
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::remove: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
@@ -1085,21 +1140,32 @@ void Database::remove(EntryId entry) {
 
 bool Database::contains(EntryId entry) const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   return impl_->is_live(entry);
 }
 
 FeatureVector Database::feature_vector(EntryId entry) const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   if (!impl_->options.direct_index)
     throw InvalidArgument("Database::feature_vector: this database keeps no direct index");
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::feature_vector: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
-  return impl_->direct[entry].unpack();
+  if (entry >= impl_->loaded_direct.entries()) return impl_->direct[entry].unpack();
+  try {
+    return impl_->loaded_direct.decode(entry).unpack();
+  } catch (const InvalidArgument& e) {
+    // Only in a damaged file, whose check has not ended yet.
+    throw FileError(
+        impl_->loaded_direct.name,
+        "the direct index of entry " + std::to_string(entry) + " is damaged (" + e.what() + ")");
+  }
 }
 
 void Database::set_label(EntryId entry, std::string label) {
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::set_label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
@@ -1109,6 +1175,7 @@ void Database::set_label(EntryId entry, std::string label) {
 
 std::string Database::label(EntryId entry) const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   if (!impl_->is_live(entry))
     throw InvalidArgument("Database::label: " +
                           no_entry_message(entry, static_cast<EntryId>(impl_->alive.size())));
@@ -1117,17 +1184,23 @@ std::string Database::label(EntryId entry) const {
 
 std::size_t Database::size() const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   return impl_->live_entries;
 }
 
 EntryId Database::next_entry_id() const {
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   return static_cast<EntryId>(impl_->alive.size());
 }
 
 void Database::clear() {
   std::unique_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   impl_->journal.record_clear();
+  impl_->file_check.reset();  // stops it: nothing of the file is left
+  impl_->file_check_merged = true;
+  impl_->loaded_direct = {};
   std::vector<std::unique_ptr<detail::Segment>>().swap(impl_->segments);
   std::fill(impl_->tail_lists.begin(), impl_->tail_lists.end(), detail::TailList{});
   std::fill(impl_->first_block_logs.begin(), impl_->first_block_logs.end(), detail::kFirstBlockLog);
@@ -1154,10 +1227,15 @@ std::size_t Database::memory_usage() const {
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
                       impl.divisors.capacity() * sizeof(double) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
+                      impl.loaded_direct.offsets.capacity() * sizeof(std::uint64_t) +
                       impl.labels.capacity() * sizeof(std::string);
+  // A loaded database's rows and direct index are the file's pages, counted
+  // too: what the index occupies in memory once read (see Database::load).
   for (const auto& segment : impl.segments)
     bytes += sizeof(*segment) + segment->offsets.capacity() * sizeof(std::uint32_t) +
              segment->bytes.size();
+  if (!impl.loaded_direct.offsets.empty())
+    bytes += static_cast<std::size_t>(impl.loaded_direct.offsets.back());
   bytes += impl.arena.memory_usage();
   if (impl.forward_built) bytes += impl.forward.memory_usage();
   bytes += impl.journal.memory_usage();

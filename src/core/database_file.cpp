@@ -40,11 +40,13 @@
 // vocabulary: its checksum (32) is 0, section 1 and 2 are empty, the scoring
 // is at 36 (u32) and the word-id capacity of its index at 52 (u64).
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <shared_mutex>
 #include <string>
@@ -180,6 +182,7 @@ class Layout {
   }
 
   [[noreturn]] void fail(const std::string& problem) const { throw FileError(name_, problem); }
+  const std::string& name() const { return name_; }
   const Header& header() const { return header_; }
   std::size_t file_size() const { return size_; }
   const detail::Section& section(Section s) const { return sections_[s]; }
@@ -222,12 +225,26 @@ class Layout {
 // Told when the reader is done with a section of the file.
 using Release = std::function<void(const std::uint8_t* data, std::size_t size)>;
 
+// Where a reader's bytes come from. With `file` (load), the large sections
+// of a version 3 file (the rows, the direct index) stay in it as the
+// database's storage, and are checked by a BackgroundCheck, on a thread of
+// its own if `background`; without (deserialize: a caller's buffer), they
+// are copied, and checked before the reader returns.
+struct Source {
+  Release release;
+  std::shared_ptr<const detail::MappedFile> file;
+  bool background = false;
+};
+
 // Writes the .bbdb sections of `impl` in order, streaming: nothing the size
 // of the index is held besides it (the vocabulary section, when included, is
 // serialised whole). The caller holds the database's lock. (A template only
 // because Database::Impl is private to the class.)
 template <class Impl>
 void write_database(const Impl& impl, bool include_vocabulary, detail::SectionedFileWriter& out) {
+  // A loaded file's bytes are written again only once checked: a save never
+  // gives damaged postings fresh checksums.
+  impl.wait_for_file();
   include_vocabulary = include_vocabulary && !impl.over_word_ids;
   const auto next_id = static_cast<EntryId>(impl.alive.size());
   if (include_vocabulary) {
@@ -337,8 +354,16 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   out.next_section();
 
   if (impl.options.direct_index) {
+    // The entries of a loaded file keep their encodings, as the file has them.
+    const detail::LoadedDirectIndex& loaded = impl.loaded_direct;
     for (EntryId entry = 0; entry < next_id; ++entry) {
       const bool alive = impl.alive[entry] != 0;
+      if (alive && entry < loaded.entries()) {
+        out.append_le<std::uint32_t>(loaded.size_field(entry, 0));
+        out.append_le<std::uint32_t>(loaded.size_field(entry, 1));
+        out.append_le<std::uint32_t>(loaded.size_field(entry, 2));
+        continue;
+      }
       const detail::PackedFeatureVector& features = impl.direct[entry];
       out.append_le<std::uint32_t>(alive ? features.node_count() : 0);
       out.append_le<std::uint32_t>(alive ? features.feature_count() : 0);
@@ -348,6 +373,10 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     std::vector<std::uint8_t> encoded;
     for (EntryId entry = 0; entry < next_id; ++entry) {
       if (impl.alive[entry] == 0) continue;
+      if (entry < loaded.entries()) {
+        out.append(loaded.encoding(entry), loaded.encoded_size(entry));
+        continue;
+      }
       encoded.resize(impl.direct[entry].encoded_size());
       impl.direct[entry].encode(encoded.data());
       out.append(encoded.data(), encoded.size());
@@ -557,6 +586,7 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
 
 // Version 3: per entry, the divisor of its counts, or 0: finite and
 // positive, and only for live entries of a database with a vocabulary.
+// Checked at open (8 bytes per entry): check_postings() reads them.
 template <class Impl>
 void read_divisors(const Layout& layout, Impl* impl) {
   const EntryId next_id = layout.header().next_entry_id;
@@ -572,29 +602,11 @@ void read_divisors(const Layout& layout, Impl* impl) {
   }
 }
 
-// Versions 2 and 3: the parts are the segments, row by row. Version 3 rows
-// are the bytes a segment keeps (copied once checked); version 2 rows hold
-// 16-bit ids and the weights apart, encoded here.
-template <class Impl>
-void read_postings(const Layout& layout, const Release& release, Impl* impl) {
-  const Header& header = layout.header();
-  const bool encoded = header.version >= 3;
-  const std::size_t word_count = impl->word_capacity;
-  const EntryId next_id = header.next_entry_id;
-  const std::size_t span = detail::kSegmentSpan;
-  const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
+// Versions 2 and 3: the parts (one per kSegmentSpan ids) must add up to
+// the rows and postings of the file; returns them, two u32 per part.
+std::vector<std::uint32_t> read_parts(const Layout& layout, std::size_t part_count,
+                                      std::size_t row_count) {
   const auto parts = layout.values<std::uint32_t>(kParts, 2 * part_count);
-  const std::size_t row_count = layout.count_of(kRows, 8);
-  // Version 3: bytes of the rows; version 2: postings.
-  const std::size_t posting_units =
-      encoded ? layout.count_of(kPostingBytes, 1) : layout.count_of(kPostingEntries, 2);
-  if (!encoded && posting_units != header.postings)
-    layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
-                std::to_string(posting_units));
-  if (encoded)
-    read_divisors(layout, impl);
-  else
-    impl->divisors.assign(next_id, 0.0);
   std::uint64_t rows_in_parts = 0, postings_in_parts = 0;
   for (std::size_t k = 0; k < part_count; ++k) {
     rows_in_parts += parts[2 * k];
@@ -603,15 +615,180 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       layout.fail("part " + std::to_string(k) + " has " + std::to_string(parts[2 * k]) +
                   " rows for " + std::to_string(parts[2 * k + 1]) + " postings");
   }
-  if (rows_in_parts != row_count || postings_in_parts != header.postings)
+  if (rows_in_parts != row_count || postings_in_parts != layout.header().postings)
     layout.fail("the parts count " + std::to_string(rows_in_parts) + " rows and " +
                 std::to_string(postings_in_parts) + " postings, the sections " +
-                std::to_string(row_count) + " and " + std::to_string(header.postings));
+                std::to_string(row_count) + " and " + std::to_string(layout.header().postings));
+  return parts;
+}
+
+// Version 3: the parts are the segments, and a part's rows are the bytes a
+// segment keeps: a view of source.file, or a copy. Checked here is what
+// costs nothing per posting: the parts and rows sections, and each row's
+// word, order and length, so that a row is never read outside its part
+// (the offsets are built here); check_postings() checks the postings.
+template <class Impl>
+void lay_out_rows(const Layout& layout, const Source& source, Impl* impl) {
+  const std::size_t word_count = impl->word_capacity;
+  const EntryId next_id = layout.header().next_entry_id;
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
+  const std::size_t row_count = layout.count_of(kRows, 8);
+  const std::vector<std::uint32_t> parts = read_parts(layout, part_count, row_count);
   const std::uint8_t* rows = layout.array(kRows, row_count, 8);
-  const std::uint8_t* postings = layout.array(kPostingEntries, posting_units, encoded ? 1 : 2);
-  const std::uint8_t* weights = encoded ? nullptr : layout.array(kPostingWeights, posting_units, 4);
+  const detail::Section& postings = layout.section(kPostingBytes);
+  impl->word_counts.assign(next_id, 0);  // counted by check_postings
+  std::size_t row_at = 0, byte_at = 0;
+  for (std::size_t k = 0; k < part_count; ++k) {
+    const std::uint32_t part_rows = parts[2 * k];
+    if (part_rows == 0) continue;
+    const auto first = static_cast<EntryId>(k * span);
+    const auto end = static_cast<EntryId>(std::min<std::size_t>(next_id, first + span));
+    const std::string where = "part " + std::to_string(k);
+    auto segment = std::make_unique<detail::Segment>();
+    segment->first_entry = first;
+    segment->end_entry = end;
+    segment->level = detail::kLoadedLevel;
+    segment->posting_count = parts[2 * k + 1];
+    segment->offsets.assign(word_count + 1, 0);
+    std::uint32_t* offsets = segment->offsets.data();
+    std::uint64_t previous_row = 0, part_bytes = 0;
+    for (std::uint32_t r = 0; r < part_rows; ++r) {
+      const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
+      const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
+      if (word >= word_count)
+        layout.fail(where + " has a row for word " + std::to_string(word) + ", beyond the " +
+                    std::to_string(word_count) + " words");
+      const std::uint32_t row = impl->row_order.row(word);
+      if (r > 0 && row <= previous_row)
+        layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
+      if (length < detail::row_bytes(1, 0, true) ||
+          length > detail::row_bytes(end - first, 0xFFFF, false) ||
+          length > postings.size - byte_at - part_bytes)
+        layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
+      offsets[row + 1] = length;
+      previous_row = row;
+      part_bytes += length;
+    }
+    if (part_bytes > std::numeric_limits<std::uint32_t>::max())
+      layout.fail(where + " holds more than 4 GiB of postings");
+    for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
+    if (source.file) {
+      segment->bytes.view(postings.data + byte_at, part_bytes, source.file);
+    } else {
+      segment->bytes.resize(part_bytes);
+      std::memcpy(segment->bytes.data(), postings.data + byte_at, part_bytes);
+    }
+    impl->segments.push_back(std::move(segment));
+    row_at += part_rows;
+    byte_at += part_bytes;
+  }
+  if (byte_at != postings.size) layout.fail("the postings section has trailing data");
+}
+
+// Version 3: every posting, as lay_out_rows() left them: each names a live
+// entry of its part, in increasing order, with a finite weight, in a row
+// whose gap width is the narrowest its gaps allow (so that a row has one
+// form). A count row's word has a weight, and each of its counts is at
+// least 1 and of an entry with a divisor (read_divisors() checked them);
+// its weights are computed as a query computes them. Counts each entry's
+// postings and the weights' range: what load() would compute reading them
+// itself. `word_weights` are the vocabulary's (null over word ids: no count
+// rows).
+detail::BackgroundCheck::Found check_postings(const Layout& layout, const float* word_weights,
+                                              const std::atomic<bool>& stop) {
+  layout.verify(kPostingBytes);
+  const EntryId next_id = layout.header().next_entry_id;
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
+  const std::uint8_t* parts = layout.section(kParts).data;
+  const std::uint8_t* rows = layout.section(kRows).data;
+  const std::uint8_t* postings = layout.section(kPostingBytes).data;
+  const std::uint8_t* alive = layout.section(kEntryStates).data;
+  const std::uint8_t* divisors = layout.section(kDivisors).data;
+  detail::BackgroundCheck::Found found;
+  found.word_counts.assign(next_id, 0);
+  std::size_t row_at = 0, byte_at = 0;
+  for (std::size_t k = 0; k < part_count && !stop.load(std::memory_order_relaxed); ++k) {
+    const auto part_rows = detail::load_le<std::uint32_t>(parts + 8 * k);
+    const auto part_postings = detail::load_le<std::uint32_t>(parts + 8 * k + 4);
+    const auto first = static_cast<EntryId>(k * span);
+    const auto part_span =
+        static_cast<std::uint32_t>(std::min<std::size_t>(next_id, first + span) - first);
+    const std::string where = "part " + std::to_string(k);
+    std::uint64_t part_read = 0;
+    for (std::uint32_t r = 0; r < part_rows; ++r) {
+      const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
+      const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
+      const auto row_fail = [&](const std::string& problem) {
+        layout.fail(where + ": the row of word " + std::to_string(word) + " " + problem);
+      };
+      const std::uint8_t* at = postings + byte_at;
+      const std::uint8_t* const row_end = at + length;
+      const std::uint8_t row_header = at[0];
+      const std::size_t width = detail::header_width(row_header);
+      const bool counts = detail::header_counts(row_header);
+      const std::size_t stride = detail::header_stride(row_header);
+      if ((width != 1 && width != 2) || (row_header & ~(3u | detail::kCountRow)) != 0 ||
+          (length - detail::kRowHeaderBytes) % stride != 0)
+        row_fail("has a malformed posting");
+      const double word_weight =
+          counts && word_weights != nullptr ? static_cast<double>(word_weights[word]) : 0.0;
+      if (counts && !(word_weight > 0)) row_fail("holds counts, but the word has no weight");
+      std::uint32_t gaps = 0, last = detail::kRowStart;
+      for (at += detail::kRowHeaderBytes; at != row_end; at += stride) {
+        const std::uint32_t gap = detail::read_gap(at, width);
+        gaps |= gap;
+        last += gap + 1;
+        if (last >= part_span || alive[first + last] == 0)
+          row_fail("names a missing entry or is not in increasing order");
+        float weight;
+        if (counts) {
+          const std::uint32_t count = at[width];
+          const auto divisor = detail::load_le<double>(divisors + 8 * (std::size_t{first} + last));
+          if (count == 0 || divisor == 0)
+            row_fail("has a count of " + std::to_string(count) + " for entry " +
+                     std::to_string(first + last) + (count == 0 ? "" : ", which has no divisor"));
+          weight = detail::count_weight(word_weight, count, divisor);
+        } else {
+          weight = detail::read_weight(at + width);
+        }
+        if (!std::isfinite(weight)) row_fail("has a non-finite weight");
+        found.values.include(weight);
+        ++found.word_counts[first + last];
+        ++part_read;
+      }
+      if (detail::gap_width(gaps) != width) row_fail("has gaps wider than needed");
+      byte_at += length;
+    }
+    if (part_read != part_postings)
+      layout.fail(where + ": its rows hold " + std::to_string(part_read) + " postings, not " +
+                  std::to_string(part_postings));
+    row_at += part_rows;
+  }
+  return found;
+}
+
+// Version 2: the parts are the segments, row by row; rows hold 16-bit ids
+// and the weights apart, encoded here.
+template <class Impl>
+void read_postings_v2(const Layout& layout, const Release& release, Impl* impl) {
+  const Header& header = layout.header();
+  const std::size_t word_count = impl->word_capacity;
+  const EntryId next_id = header.next_entry_id;
+  const std::size_t span = detail::kSegmentSpan;
+  const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
+  const std::size_t row_count = layout.count_of(kRows, 8);
+  const std::vector<std::uint32_t> parts = read_parts(layout, part_count, row_count);
+  const std::size_t posting_count = layout.count_of(kPostingEntries, 2);
+  if (posting_count != header.postings)
+    layout.fail("the header counts " + std::to_string(header.postings) + " postings, the index " +
+                std::to_string(posting_count));
+  const std::uint8_t* rows = layout.array(kRows, row_count, 8);
+  const std::uint8_t* postings = layout.array(kPostingEntries, posting_count, 2);
+  const std::uint8_t* weights = layout.array(kPostingWeights, posting_count, 4);
   impl->word_counts.assign(next_id, 0);
-  std::size_t row_at = 0, unit_at = 0;
+  std::size_t row_at = 0, posting_at = 0;
   for (std::size_t k = 0; k < part_count; ++k) {
     const std::uint32_t part_rows = parts[2 * k];
     const std::uint32_t part_postings = parts[2 * k + 1];
@@ -627,10 +804,10 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
     segment->posting_count = part_postings;
     segment->offsets.assign(word_count + 1, 0);
     std::uint32_t* offsets = segment->offsets.data();
-    // Each row is checked where the file has it (unit_at + its start):
+    // Each row is checked where the file has it (posting_at + its start):
     // every posting names a live entry of the part, in increasing order,
     // with a finite weight; its size in memory goes to offsets.
-    std::uint64_t previous_row = 0, part_units = 0, part_read = 0, part_bytes = 0;
+    std::uint64_t previous_row = 0, part_read = 0, part_bytes = 0;
     for (std::uint32_t r = 0; r < part_rows; ++r) {
       const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
       const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
@@ -640,82 +817,29 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       const std::uint32_t row = impl->row_order.row(word);
       if (r > 0 && row <= previous_row)
         layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
-      const std::uint64_t most =
-          encoded ? detail::row_bytes(part_span, 0xFFFF, false)
-                  : std::min<std::uint64_t>(part_span, part_postings - part_read);
-      if (length == 0 || length > most || length > posting_units - unit_at - part_units)
+      if (length == 0 || length > std::min<std::uint64_t>(part_span, part_postings - part_read))
         layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
-      const auto invalid_posting = [&] {
-        layout.fail(where + ": the row of word " + std::to_string(word) +
-                    " names a missing entry or is not in increasing order");
-      };
-      const auto check = [&](std::uint32_t relative, float weight) {
-        if (relative >= part_span || impl->alive[first + relative] == 0) invalid_posting();
+      std::uint32_t last = detail::kRowStart, gaps = 0;
+      for (std::uint32_t i = 0; i < length; ++i) {
+        const std::size_t at = posting_at + part_read + i;
+        const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
+        if ((i > 0 && relative <= last) || relative >= part_span ||
+            impl->alive[first + relative] == 0)
+          layout.fail(where + ": the row of word " + std::to_string(word) +
+                      " names a missing entry or is not in increasing order");
+        const float weight = detail::load_le<float>(weights + 4 * at);
         if (!std::isfinite(weight))
           layout.fail(where + ": the row of word " + std::to_string(word) +
                       " has a non-finite weight");
         impl->values.include(weight);
         ++impl->word_counts[first + relative];
-      };
-      std::uint32_t last = detail::kRowStart;
-      std::uint64_t bytes = 0;
-      if (encoded) {
-        // The header's width (1 or 2) and kind, postings at its stride, and
-        // the width the narrowest the gaps allow, so that a row has one form.
-        // A count row's entries have divisors, its word a weight, and its
-        // weights are computed as a query computes them.
-        const std::uint8_t* at = postings + unit_at + part_units;
-        const std::uint8_t row_header = at[0];
-        const std::size_t width = detail::header_width(row_header);
-        const bool counts = detail::header_counts(row_header);
-        const std::size_t stride = detail::header_stride(row_header);
-        if ((width != 1 && width != 2) || (row_header & ~(3u | detail::kCountRow)) != 0 ||
-            (length - detail::kRowHeaderBytes) % stride != 0)
-          layout.fail(where + ": the row of word " + std::to_string(word) +
-                      " has a malformed posting");
-        const detail::RowWeights row_weights =
-            counts ? impl->segment_weights(first).row(word) : detail::RowWeights{};
-        if (counts && !(row_weights.word_weight > 0))
-          layout.fail(where + ": the row of word " + std::to_string(word) +
-                      " holds counts, but the word has no weight");
-        std::uint32_t gaps = 0;
-        for (at += detail::kRowHeaderBytes; at != postings + unit_at + part_units + length;
-             at += stride) {
-          const std::uint32_t gap = detail::read_gap(at, width);
-          gaps |= gap;
-          last += gap + 1;
-          if (counts) {
-            if (last >= part_span || impl->alive[first + last] == 0) invalid_posting();
-            if (at[width] == 0 || impl->divisors[first + last] == 0)
-              layout.fail(where + ": the row of word " + std::to_string(word) + " has a count of " +
-                          std::to_string(at[width]) + " for entry " + std::to_string(first + last) +
-                          (at[width] == 0 ? "" : ", which has no divisor"));
-            check(last, row_weights.weight(last, at[width]));
-          } else {
-            check(last, detail::read_weight(at + width));
-          }
-          ++part_read;
-        }
-        if (detail::gap_width(gaps) != width)
-          layout.fail(where + ": the row of word " + std::to_string(word) +
-                      " has gaps wider than needed");
-        bytes = length;
-      } else {
-        std::uint32_t gaps = 0;
-        for (std::uint32_t i = 0; i < length; ++i) {
-          const std::size_t at = unit_at + part_units + i;
-          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
-          if (i > 0 && relative <= last) invalid_posting();
-          check(relative, detail::load_le<float>(weights + 4 * at));
-          gaps |= relative - last - 1;
-          last = relative;
-        }
-        bytes = detail::row_bytes(length, gaps, false);
-        part_read += length;
+        gaps |= relative - last - 1;
+        last = relative;
       }
+      const std::uint64_t bytes = detail::row_bytes(length, gaps, false);
       offsets[row + 1] = static_cast<std::uint32_t>(bytes);
       previous_row = row;
-      part_units += length;
+      part_read += length;
       part_bytes += bytes;
     }
     if (part_read != part_postings)
@@ -725,39 +849,33 @@ void read_postings(const Layout& layout, const Release& release, Impl* impl) {
       layout.fail(where + " holds more than 4 GiB of postings");
     for (std::size_t r = 0; r < word_count; ++r) offsets[r + 1] += offsets[r];
     segment->bytes.resize(offsets[word_count]);
-    if (encoded) {
-      std::memcpy(segment->bytes.data(), postings + unit_at, part_units);
-      release(postings + unit_at, part_units);
-    } else {
-      // The rows in row order, as in the file.
-      std::uint8_t* to = segment->bytes.data();
-      std::size_t at = unit_at;
-      for (std::uint32_t r = 0; r < part_rows; ++r) {
-        const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
-        std::uint32_t gaps = 0, last = detail::kRowStart;
-        for (std::uint32_t i = 0; i < length; ++i) {
-          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * (at + i));
-          gaps |= relative - last - 1;
-          last = relative;
-        }
-        const std::size_t width = detail::gap_width(gaps);
-        *to++ = static_cast<std::uint8_t>(width);
-        last = detail::kRowStart;
-        for (std::uint32_t i = 0; i < length; ++i, ++at) {
-          const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
-          to = detail::put_posting(to, width, relative - last - 1,
-                                   detail::load_le<float>(weights + 4 * at));
-          last = relative;
-        }
+    // The rows in row order, as in the file.
+    std::uint8_t* to = segment->bytes.data();
+    std::size_t at = posting_at;
+    for (std::uint32_t r = 0; r < part_rows; ++r) {
+      const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
+      std::uint32_t gaps = 0, last = detail::kRowStart;
+      for (std::uint32_t i = 0; i < length; ++i) {
+        const auto relative = detail::load_le<std::uint16_t>(postings + 2 * (at + i));
+        gaps |= relative - last - 1;
+        last = relative;
       }
-      release(postings + 2 * unit_at, part_units * 2);
-      release(weights + 4 * unit_at, part_units * 4);
+      const std::size_t width = detail::gap_width(gaps);
+      *to++ = static_cast<std::uint8_t>(width);
+      last = detail::kRowStart;
+      for (std::uint32_t i = 0; i < length; ++i, ++at) {
+        const auto relative = detail::load_le<std::uint16_t>(postings + 2 * at);
+        to = detail::put_posting(to, width, relative - last - 1,
+                                 detail::load_le<float>(weights + 4 * at));
+        last = relative;
+      }
     }
+    release(postings + 2 * posting_at, part_read * 2);
+    release(weights + 4 * posting_at, part_read * 4);
     impl->segments.push_back(std::move(segment));
     row_at += part_rows;
-    unit_at += part_units;
+    posting_at += part_read;
   }
-  if (unit_at != posting_units) layout.fail("the postings section has trailing data");
 }
 
 // Version 1: per entry, its node ids, node end offsets and feature indices.
@@ -849,9 +967,103 @@ void read_direct_index(const Layout& layout, const Release& release, Impl* impl,
   release(data.data + released, cursor - released);
 }
 
+// Version 3 in source.file: each entry's encoding stays in the file, found
+// through the sizes (checked here); check_direct_index() decodes them.
+template <class Impl>
+void index_direct_index(const Layout& layout, const Source& source, Impl* impl,
+                        std::uint64_t node_count) {
+  const EntryId next_id = layout.header().next_entry_id;
+  const std::uint8_t* sizes = layout.array(kDirectSizes, std::size_t{next_id} * 3, 4);
+  const detail::Section& data = layout.section(kDirectData);
+  detail::LoadedDirectIndex& loaded = impl->loaded_direct;
+  loaded.offsets.resize(std::size_t{next_id} + 1);
+  std::uint64_t cursor = 0;
+  for (EntryId entry = 0; entry < next_id; ++entry) {
+    const std::uint8_t* size = sizes + 12 * std::size_t{entry};
+    const auto bytes = detail::load_le<std::uint32_t>(size + 8);
+    if (impl->alive[entry] == 0 && (detail::load_le<std::uint32_t>(size) != 0 ||
+                                    detail::load_le<std::uint32_t>(size + 4) != 0 || bytes != 0))
+      layout.fail("removed entry " + std::to_string(entry) + " has a direct index");
+    if (bytes > data.size - cursor)
+      layout.fail("direct index of entry " + std::to_string(entry) + " runs past its section");
+    loaded.offsets[entry] = cursor;
+    cursor += bytes;
+  }
+  if (cursor != data.size) layout.fail("direct index section has trailing data");
+  loaded.offsets[next_id] = cursor;
+  loaded.keeper = source.file;
+  loaded.name = layout.name();
+  loaded.sizes = sizes;
+  loaded.data = data.data;
+  loaded.node_limit = node_count;
+  impl->direct.resize(next_id);
+}
+
+// Version 3 in a file: every live entry's encoding decodes (as
+// read_direct_index() checks), as index_direct_index() found them.
+void check_direct_index(const Layout& layout, std::uint64_t node_count,
+                        const std::atomic<bool>& stop) {
+  layout.verify(kDirectData);
+  const EntryId next_id = layout.header().next_entry_id;
+  const std::uint8_t* sizes = layout.section(kDirectSizes).data;
+  const std::uint8_t* alive = layout.section(kEntryStates).data;
+  const std::uint8_t* data = layout.section(kDirectData).data;
+  std::size_t cursor = 0;
+  for (EntryId entry = 0; entry < next_id; ++entry) {
+    if (entry % 4096 == 0 && stop.load(std::memory_order_relaxed)) return;
+    const std::uint8_t* size = sizes + 12 * std::size_t{entry};
+    const auto bytes = detail::load_le<std::uint32_t>(size + 8);
+    if (alive[entry] == 0) continue;
+    try {
+      detail::PackedFeatureVector::decode(data + cursor, bytes,
+                                          detail::load_le<std::uint32_t>(size),
+                                          detail::load_le<std::uint32_t>(size + 4), node_count);
+    } catch (const InvalidArgument& e) {
+      layout.fail("direct index of entry " + std::to_string(entry) +
+                  " is inconsistent: " + e.what());
+    }
+    cursor += bytes;
+  }
+}
+
+// What a file's check adds to the FileError it finds after load() returned.
+constexpr char kDamagedAfterLoad[] =
+    " (found by the check that follows load(): every call on the database loaded from it now "
+    "throws this error; restore the file from a backup, or build the database again)";
+
+// Version 3: checks what lay_out_rows() and index_direct_index() left
+// unchecked, in the background when the source allows, else now (throwing
+// FileError if the file is damaged).
+template <class Impl>
+void check_file(const Layout& layout, const Source& source, Impl* impl, std::uint64_t node_count,
+                bool direct_in_file) {
+  const bool background = source.file && source.background;
+  // The task keeps the file mapped, the vocabulary (whose word weights it
+  // reads) and its own copy of the layout.
+  auto task = [layout, file = source.file, vocabulary = impl->vocabulary,
+               over_word_ids = impl->over_word_ids, node_count, direct_in_file,
+               background](const std::atomic<bool>& stop) {
+    try {
+      detail::BackgroundCheck::Found found =
+          check_postings(layout, over_word_ids ? nullptr : detail::word_weights(vocabulary), stop);
+      if (direct_in_file) check_direct_index(layout, node_count, stop);
+      return found;
+    } catch (const FileError& e) {
+      if (!background) throw;
+      throw FileError(e.path(), e.problem() + kDamagedAfterLoad);
+    }
+  };
+  impl->file_check = std::make_unique<detail::BackgroundCheck>(layout.name(), task, background);
+  impl->file_check_merged = false;
+  if (background) return;
+  impl->merge_file_check();
+  impl->file_check.reset();
+}
+
 // `impl` is empty, laid out for the file's words.
 template <class Impl>
-void read_index(const Layout& layout, const Release& release, Impl* impl) {
+void read_index(const Layout& layout, const Source& source, Impl* impl) {
+  const Release& release = source.release;
   const Header& header = layout.header();
   const std::uint64_t node_count =
       impl->over_word_ids ? kMaxWordCapacity : impl->vocabulary.node_count();
@@ -868,13 +1080,21 @@ void read_index(const Layout& layout, const Release& release, Impl* impl) {
                 " entries, the entry states " + std::to_string(live));
   impl->live_entries = live;
 
-  if (header.version == 1)
+  if (header.version == 1) {
     read_postings_v1(layout, release, impl);
-  else
-    read_postings(layout, release, impl);
+  } else if (header.version == 2) {
+    read_postings_v2(layout, release, impl);
+    impl->divisors.assign(next_id, 0.0);
+  } else {
+    read_divisors(layout, impl);
+    lay_out_rows(layout, source, impl);
+  }
   impl->tail_first_entry = next_id;
 
-  if (impl->options.direct_index) {
+  const bool direct_in_file = impl->options.direct_index && header.version >= 3 && source.file;
+  if (direct_in_file) {
+    index_direct_index(layout, source, impl, node_count);
+  } else if (impl->options.direct_index) {
     if (header.version == 1)
       read_direct_index_v1(layout, release, impl, node_count);
     else
@@ -906,6 +1126,7 @@ void read_index(const Layout& layout, const Release& release, Impl* impl) {
     layout.verify(kLabelLengths);
     layout.verify(kLabelBytes);
   }
+  if (header.version >= 3) check_file(layout, source, impl, node_count, direct_in_file);
 }
 
 DatabaseOptions options_of(const Header& header) {
@@ -918,7 +1139,7 @@ DatabaseOptions options_of(const Header& header) {
 // A database over a fixed vocabulary, which must be the one it was built with.
 template <class Impl>
 std::unique_ptr<Impl> read_vocabulary_database(const Layout& layout, Vocabulary vocabulary,
-                                               const Release& release) {
+                                               const Source& source) {
   const Header& header = layout.header();
   if (header.over_word_ids())
     layout.fail(
@@ -933,7 +1154,7 @@ std::unique_ptr<Impl> read_vocabulary_database(const Layout& layout, Vocabulary 
   layout.verify(kVocabularyBytes);
   layout.verify(kDescription);
   auto impl = std::make_unique<Impl>(std::move(vocabulary), options_of(header));
-  read_index(layout, release, impl.get());
+  read_index(layout, source, impl.get());
   return impl;
 }
 
@@ -958,7 +1179,7 @@ std::uint64_t largest_word_end(const Layout& layout) {
 // A database over word ids: its capacity is checked against its words before
 // the index is laid out for it.
 template <class Impl>
-std::unique_ptr<Impl> read_word_id_database(const Layout& layout, const Release& release) {
+std::unique_ptr<Impl> read_word_id_database(const Layout& layout, const Source& source) {
   const Header& header = layout.header();
   layout.verify(kVocabularyBytes);
   layout.verify(kDescription);
@@ -975,15 +1196,15 @@ std::unique_ptr<Impl> read_word_id_database(const Layout& layout, const Release&
                 " does not fit its words (the largest ends at " + std::to_string(word_end) + ")");
   auto impl = std::make_unique<Impl>(header.scoring, options_of(header));
   impl->lay_out(static_cast<std::size_t>(header.word_capacity));
-  read_index(layout, release, impl.get());
+  read_index(layout, source, impl.get());
   return impl;
 }
 
 // A database whose file says what it is over: its own vocabulary or word ids.
 template <class Impl>
 std::unique_ptr<Impl> read_self_contained_database(const Layout& layout, const std::string& name,
-                                                   const Release& release) {
-  if (layout.header().over_word_ids()) return read_word_id_database<Impl>(layout, release);
+                                                   const Source& source) {
+  if (layout.header().over_word_ids()) return read_word_id_database<Impl>(layout, source);
   if ((layout.header().flags & kFlagVocabulary) == 0)
     layout.fail("the database does not include its vocabulary (checksum " +
                 hex(layout.header().vocabulary_checksum) +
@@ -991,24 +1212,34 @@ std::unique_ptr<Impl> read_self_contained_database(const Layout& layout, const s
   layout.verify(kVocabularyBytes);
   const detail::Section& bytes = layout.section(kVocabularyBytes);
   return read_vocabulary_database<Impl>(
-      layout, Vocabulary::deserialize(bytes.data, bytes.size, name + " (vocabulary)"), release);
+      layout, Vocabulary::deserialize(bytes.data, bytes.size, name + " (vocabulary)"), source);
 }
 
-// What deserialize() tells about sections it is done with: nothing to drop.
-void ignore_release(const std::uint8_t*, std::size_t) {}
+// What deserialize() reads: a caller's buffer, copied, with nothing to drop.
+Source buffer_source() {
+  return {[](const std::uint8_t*, std::size_t) {}, nullptr, false};
+}
+
+// What load() reads: the mapped file, kept as the index's storage (version
+// 3), or dropped from memory a section at a time once read (versions 1, 2).
+Source file_source(const std::shared_ptr<const detail::MappedFile>& file,
+                   const DatabaseLoadOptions& options) {
+  return {[file](const std::uint8_t* data, std::size_t size) { file->release(data, size); }, file,
+          options.verification == Verification::kBackground};
+}
 
 }  // namespace
 
 Database Database::deserialize(const std::uint8_t* data, std::size_t size, const std::string& name,
                                Vocabulary vocabulary) {
   const Layout layout(data, size, name, false);
-  return Database(read_vocabulary_database<Impl>(layout, std::move(vocabulary), ignore_release));
+  return Database(read_vocabulary_database<Impl>(layout, std::move(vocabulary), buffer_source()));
 }
 
 Database Database::deserialize(const std::uint8_t* data, std::size_t size,
                                const std::string& name) {
   const Layout layout(data, size, name, false);
-  return Database(read_self_contained_database<Impl>(layout, name, ignore_release));
+  return Database(read_self_contained_database<Impl>(layout, name, buffer_source()));
 }
 
 // Streams the file: the memory a save needs does not grow with the database.
@@ -1036,25 +1267,27 @@ void Database::save(const std::string& path, bool include_vocabulary) const {
   });
 }
 
-// load() reads a mapped file, dropping each large section's pages once read.
-// Then the journal beside it is replayed.
-Database Database::load(const std::string& path) {
-  const detail::MappedFile file(path);
-  const Layout layout(file.data(), file.size(), path, false);
-  Database database(read_self_contained_database<Impl>(
-      layout, path, [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }));
-  database.replay_journal(path, file.data(), file.size());
+// load() maps the file, then replays the journal beside it.
+Database Database::load(const std::string& path, const DatabaseLoadOptions& options) {
+  const auto file = std::make_shared<const detail::MappedFile>(path);
+  const Layout layout(file->data(), file->size(), path, false);
+  Database database(read_self_contained_database<Impl>(layout, path, file_source(file, options)));
+  database.replay_journal(path, file->data(), file->size());
   return database;
 }
 
-Database Database::load(const std::string& path, Vocabulary vocabulary) {
-  const detail::MappedFile file(path);
-  const Layout layout(file.data(), file.size(), path, false);
-  Database database(read_vocabulary_database<Impl>(
-      layout, std::move(vocabulary),
-      [&](const std::uint8_t* data, std::size_t size) { file.release(data, size); }));
-  database.replay_journal(path, file.data(), file.size());
+Database Database::load(const std::string& path, Vocabulary vocabulary,
+                        const DatabaseLoadOptions& options) {
+  const auto file = std::make_shared<const detail::MappedFile>(path);
+  const Layout layout(file->data(), file->size(), path, false);
+  Database database(
+      read_vocabulary_database<Impl>(layout, std::move(vocabulary), file_source(file, options)));
+  database.replay_journal(path, file->data(), file->size());
   return database;
+}
+
+void Database::wait_until_verified() const {
+  impl_->wait_for_file();
 }
 
 DatabaseFileInfo Database::inspect(const std::string& path, bool verify) {

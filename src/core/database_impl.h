@@ -19,6 +19,7 @@
 #include "binbow/error.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/background_check.h"
 #include "core/count_form.h"
 #include "core/database_journal.h"
 #include "core/forward_index.h"
@@ -27,12 +28,8 @@
 
 namespace binbow::detail {
 
-// The tail keeps one list per group of words: word w is in group
-// w mod 2^kGroupBits, so there are at most 65,536 lists, whose 8-byte heads
-// (512 KiB) and growing ends stay in cache while images are added, where a
-// list per word would cost two cache misses per posting. Words of a group
-// are 65,536 ids apart: sibling leaves of the vocabulary tree, which similar
-// descriptors reach, fall in different groups.
+// A segment's rows are ordered by group of words: word w is in group
+// w mod 2^kGroupBits (see RowOrder).
 constexpr unsigned kGroupBits = 16;
 // The word-id capacity a database over word ids starts with.
 constexpr std::size_t kInitialWordCapacity = std::size_t{1} << 16;
@@ -40,8 +37,20 @@ constexpr std::uint32_t group_of(WordId word) noexcept {
   return word & ((1u << kGroupBits) - 1);
 }
 
-// The order of a segment's rows: by group, then word (w, w + 65,536, ...),
-// so that a segment is written from the tail group by group, sequentially.
+// The tail keeps one list per 2^kTailListShift consecutive groups (4096
+// lists for 65,536 groups): their 8-byte heads (32 KiB) and the cache lines
+// their next postings go to (256 KiB) stay in a core's cache while images
+// are added, so that appends miss the cache once per 64 bytes of postings
+// (with a list per group, twice per posting). A list's rows are consecutive
+// (RowOrder), so freezing the tail writes the rows sequentially, a list at
+// a time within the cache. Fewer groups per list where the word capacity
+// needs it: a tail key holds the entry's 16 bits and the word's row among
+// its list's.
+constexpr unsigned kTailListShift = 4;
+constexpr unsigned kTailEntryBits = 16;
+
+// The order of a segment's rows (and of a .bbdb's): by group, then word
+// (w, w + 65,536, ...), so that a tail list's rows are consecutive.
 // Identity for vocabularies of up to 65,536 words.
 class RowOrder {
  public:
@@ -73,16 +82,16 @@ class RowOrder {
 };
 
 // A posting of the tail: the entry (relative to the tail's first entry, so
-// it fits) and the word's bits above kGroupBits in one key, then the weight.
-// A group's list is in increasing entry order.
+// it fits) and the word's row among its list's in one key, then the
+// weight. A list is in increasing entry order.
 struct TailPosting {
-  std::uint32_t key;  // (entry - tail_first_entry) << high_bits | word >> kGroupBits
+  std::uint32_t key;  // (entry - tail_first_entry) << high_bits | the word's tail_row
   float weight;
 };
 
-// The tail postings of one group: where its block is in the arena, and how
+// The tail postings of one list: where its block is in the arena, and how
 // many postings it holds. A list's first block holds 2^first_block_log
-// postings (the group's size when the tail was last frozen, so that most
+// postings (the list's size when the tail was last frozen, so that most
 // lists never move), and each time the list outgrows its block it moves to
 // one twice as large: the block holds max(2^first_block_log, the smallest
 // power of two ≥ size) postings (at least that many: undoing an append may
@@ -107,7 +116,7 @@ constexpr bool tail_list_full(std::uint32_t size, unsigned first_block_log) noex
 // Storage of the tail's posting lists: blocks of 2^k postings carved
 // from large chunks, with a free list per block size for the blocks that
 // growing lists leave behind. Blocks are named by 32-bit addresses (chunk
-// index, then position in the chunk) so a group's TailList is 8 bytes. The
+// index, then position in the chunk) so a list's TailList is 8 bytes. The
 // whole tail is dropped at once when it becomes a segment, so there is no
 // per-list malloc, free or header.
 class PostingArena {
@@ -208,6 +217,62 @@ class GrowableArray {
   std::size_t size_ = 0;
 };
 
+// A segment's row bytes: owned (a GrowableArray), or a read-only view of
+// the rows of a loaded .bbdb file, which `keeper` (the file's mapping) keeps
+// alive: a loaded database costs no copy of its index, and the pages are the
+// file's, shared with the page cache. Writing through a view (non-const
+// data(), resize) first copies it into owned memory, so code that changes a
+// segment (compaction) needs no special case.
+class SegmentBytes {
+ public:
+  SegmentBytes() = default;
+  const std::uint8_t* data() const noexcept { return view_ != nullptr ? view_ : owned_.data(); }
+  std::uint8_t* data() {
+    own();
+    return owned_.data();
+  }
+  std::size_t size() const noexcept { return view_ != nullptr ? view_size_ : owned_.size(); }
+  void resize(std::size_t n) {
+    own();
+    owned_.resize(n);
+  }
+  void swap(SegmentBytes& other) noexcept {
+    owned_.swap(other.owned_);
+    std::swap(view_, other.view_);
+    std::swap(view_size_, other.view_size_);
+    keeper_.swap(other.keeper_);
+  }
+  // Takes `other`'s bytes, owned; `other` gets these bytes if they were
+  // owned, else none.
+  void swap(GrowableArray<std::uint8_t>& other) noexcept {
+    view_ = nullptr;
+    view_size_ = 0;
+    keeper_.reset();
+    owned_.swap(other);
+  }
+  void view(const std::uint8_t* data, std::size_t size, std::shared_ptr<const void> keeper) {
+    owned_.resize(0);
+    view_ = data;
+    view_size_ = size;
+    keeper_ = std::move(keeper);
+  }
+  bool is_view() const noexcept { return view_ != nullptr; }
+
+ private:
+  void own() {
+    if (view_ == nullptr) return;
+    owned_.assign(view_, view_size_);
+    view_ = nullptr;
+    view_size_ = 0;
+    keeper_.reset();
+  }
+
+  GrowableArray<std::uint8_t> owned_;
+  const std::uint8_t* view_ = nullptr;
+  std::size_t view_size_ = 0;
+  std::shared_ptr<const void> keeper_;
+};
+
 // One entry's FeatureVector, packed. Node ids are the steps from the
 // previous one (LEB128: siblings take a byte each). When every feature
 // 0..n-1 sits under exactly one node (what transform produces), each feature
@@ -287,6 +352,38 @@ class PackedFeatureVector {
   std::uint32_t node_bytes_ = 0;  // of the node ids, at the start of bytes_
   Layout layout_ = Layout::kPartition8;
   bool node_runs_ = false;
+};
+
+// The direct index of the entries a database was loaded with, left in the
+// file's mapping (its encodings, as PackedFeatureVector::encode writes
+// them) and decoded when asked for: loading allocates nothing per entry.
+struct LoadedDirectIndex {
+  std::shared_ptr<const void> keeper;   // the mapping
+  std::string name;                     // the file's
+  const std::uint8_t* sizes = nullptr;  // per entry: u32 nodes, u32 features, u32 bytes
+  const std::uint8_t* data = nullptr;
+  std::vector<std::uint64_t> offsets;  // of each entry's encoding in `data`, then the end
+  std::uint64_t node_limit = 0;
+
+  // Entries [0, entries()) are the file's.
+  EntryId entries() const noexcept {
+    return offsets.empty() ? 0 : static_cast<EntryId>(offsets.size() - 1);
+  }
+  std::uint32_t size_field(EntryId entry, unsigned field) const noexcept {
+    std::uint32_t value;
+    std::memcpy(&value, sizes + 12 * std::size_t{entry} + 4 * field, 4);
+    return value;
+  }
+  const std::uint8_t* encoding(EntryId entry) const noexcept { return data + offsets[entry]; }
+  std::size_t encoded_size(EntryId entry) const noexcept {
+    return static_cast<std::size_t>(offsets[entry + 1] - offsets[entry]);
+  }
+  // Throws InvalidArgument unless the bytes are a valid encoding (they are
+  // read whatever they hold: the file may not be verified yet).
+  PackedFeatureVector decode(EntryId entry) const {
+    return PackedFeatureVector::decode(encoding(entry), encoded_size(entry), size_field(entry, 0),
+                                       size_field(entry, 1), node_limit);
+  }
 };
 
 }  // namespace binbow::detail
@@ -517,7 +614,7 @@ struct Segment {
   // loaded (one per kSegmentSpan ids): kLoadedLevel, never merged.
   unsigned level = 0;
   std::vector<std::uint32_t> offsets;  // word_count + 1 byte offsets into `bytes`, by RowOrder
-  GrowableArray<std::uint8_t> bytes;   // the rows' postings (see above)
+  SegmentBytes bytes;                  // the rows' postings (see above)
   std::size_t posting_count = 0;
   std::size_t dead_postings = 0;  // of removed entries, not yet dropped
 
@@ -599,12 +696,23 @@ struct Database::Impl {
 
   std::vector<std::unique_ptr<detail::Segment>> segments;
 
-  // Tail: one list per group of words (see kGroupBits); a word id has
-  // kGroupBits + high_bits significant bits.
+  // Tail: one list per 2^tail_list_shift groups (see kTailListShift); a
+  // list has at most 2^high_bits rows.
+  unsigned tail_list_shift = 0;
   unsigned high_bits = 0;
   detail::RowOrder row_order;
+  std::uint32_t tail_list(WordId word) const noexcept {
+    return detail::group_of(word) >> tail_list_shift;
+  }
+  // The first row of a list, and a word's row among its list's rows.
+  std::uint32_t tail_list_start(std::uint32_t list) const noexcept {
+    return row_order.group_start(list << tail_list_shift);
+  }
+  std::uint32_t tail_row(WordId word) const noexcept {
+    return row_order.row(word) - tail_list_start(tail_list(word));
+  }
   std::vector<detail::TailList> tail_lists;
-  std::vector<std::uint8_t> first_block_logs;  // per group, see TailList
+  std::vector<std::uint8_t> first_block_logs;  // per list, see TailList
   detail::PostingArena arena;
   std::size_t tail_postings = 0;
   std::size_t tail_dead_postings = 0;
@@ -619,12 +727,15 @@ struct Database::Impl {
   // (vectors not made by transform, databases over word ids, removed ones).
   std::vector<double> divisors;
   std::vector<detail::PackedFeatureVector> direct;  // empty without a direct index
-  std::vector<std::string> labels;                  // empty until a label is set
+  // Of a loaded database: the file's entries' direct index (theirs in
+  // `direct` stay empty).
+  detail::LoadedDirectIndex loaded_direct;
+  std::vector<std::string> labels;  // empty until a label is set
+
+  detail::CountForm count_form;  // divisor_of's buffers
 
   // Each entry's BoW vector, for fast queries: built by the first one, then
   // kept up to date by add, remove and clear.
-  detail::CountForm count_form;  // divisor_of's buffers
-
   mutable detail::ForwardIndex forward;
   mutable std::atomic<bool> forward_built{false};
   mutable std::mutex forward_mutex;
@@ -636,6 +747,25 @@ struct Database::Impl {
 
   // The file last saved to or loaded from, and the changes since.
   mutable detail::DatabaseJournal journal;
+
+  // The check of the file the database was loaded from, while it runs or
+  // after it (null for a database not loaded, or cleared since). Once it
+  // failed, every call throws its FileError (throw_if_damaged); calls that
+  // read the index's bytes as a whole wait for it first (wait_for_file).
+  std::unique_ptr<detail::BackgroundCheck> file_check;
+  // Whether file_check's word counts and values are in word_counts and values.
+  bool file_check_merged = true;
+  void throw_if_damaged() const {
+    if (file_check) file_check->throw_if_failed();
+  }
+  void wait_for_file() const {
+    if (file_check) file_check->wait();
+  }
+  // Waits for file_check and takes what it found; exclusive lock held.
+  void merge_file_check();
+  // The range of the index's values, or false while it is not known (the
+  // loaded file's are being checked).
+  bool index_values(detail::ValueRange& range) const noexcept;
 };
 
 }  // namespace binbow

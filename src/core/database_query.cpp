@@ -44,16 +44,20 @@ static_assert(sizeof(EntryScore) == 12);
 // instructions, from 1 bit per word id (68 KiB for 540k words, in cache).
 class QueryWordSet {
  public:
-  // Inline: without -mpopcnt, __builtin_popcountll is a library call.
-  static std::uint32_t popcount(std::uint64_t x) noexcept {
-#if defined(__POPCNT__)
-    return static_cast<std::uint32_t>(__builtin_popcountll(x));
-#else
-    x -= (x >> 1) & 0x5555555555555555ull;
-    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
-    x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
-    return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
+  // Inline: without -mpopcnt, __builtin_popcountll is a library call. With
+  // kInstruction, the caller is compiled for the popcnt instruction
+  // (rescore_popcnt), where the builtin is that instruction.
+  template <bool kInstruction = false>
+  [[gnu::always_inline]] static std::uint32_t popcount(std::uint64_t x) noexcept {
+#if !defined(__POPCNT__)
+    if constexpr (!kInstruction) {
+      x -= (x >> 1) & 0x5555555555555555ull;
+      x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+      x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+      return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
+    }
 #endif
+    return static_cast<std::uint32_t>(__builtin_popcountll(x));
   }
 
   void assign(Span<BowEntry> words) {
@@ -71,11 +75,12 @@ class QueryWordSet {
   // The word's position in the query, or the query's size if it lacks it.
   // Without branches (a mask, not a conditional, which compilers turn into
   // a branch): about half the words looked up are the query's.
+  template <bool kPopcnt = false>
   [[gnu::always_inline]] std::uint32_t position(WordId word) const noexcept {
     const std::size_t block = std::min<std::size_t>(word / 64, bits_.size() - 1);
     const std::uint64_t bits = word / 64 < bits_.size() ? bits_[block] : 0;
     const std::uint64_t below = (std::uint64_t{1} << (word % 64)) - 1;
-    const std::uint32_t rank = ranks_[block] + popcount(bits & below);
+    const std::uint32_t rank = ranks_[block] + popcount<kPopcnt>(bits & below);
     const auto present = static_cast<std::uint32_t>((bits >> (word % 64)) & 1);
     return absent_ + ((rank - absent_) & (0u - present));
   }
@@ -86,13 +91,26 @@ class QueryWordSet {
   std::uint32_t absent_ = 0;
 };
 
+// A fast query's candidate: its sum over the rare words, signed so that
+// larger is better.
+struct Candidate {
+  float key;
+  EntryId entry;
+};
+struct BetterCandidate {
+  bool operator()(const Candidate& a, const Candidate& b) const {
+    return a.key != b.key ? a.key > b.key : a.entry < b.entry;
+  }
+};
+
 // What one thread of a query writes: its part sums, its best results and
 // (fast mode) its best candidates.
 struct WorkerScratch {
   std::vector<EntryScore> scores;
   std::vector<QueryResult> best;
-  std::vector<QueryResult> candidates;
-  std::vector<std::uint32_t> hits;  // ForwardIndex::for_each_shared's buffer
+  std::vector<std::uint32_t> hits;        // ForwardIndex::for_each_shared's buffer
+  std::vector<float> candidate_sums;      // a segment's, over the rare words
+  std::vector<Candidate> candidate_heap;  // the best candidates of its segments
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -100,7 +118,10 @@ struct WorkerScratch {
 struct QueryScratch {
   std::vector<WorkerScratch> workers;
   std::vector<BowEntry> rare_words;
+  std::vector<QueryResult> best;      // fast mode's results
+  std::vector<QueryResult> rescored;  // fast mode's candidates' exact results
   std::vector<std::pair<std::uint64_t, std::uint32_t>> word_postings;  // (postings, position)
+  std::vector<std::uint32_t> rows;                                     // of the query's words
   QueryWordSet query_words;
   std::vector<double> query_weights;  // ForwardIndex::word_weight of each query word
 };
@@ -111,8 +132,10 @@ thread_local QueryScratch scratch;
 struct PartScores {
   EntryScore* entries;
 
+  // Within the kSegmentSpan sums whatever `relative_entry` is (a loaded
+  // file's gaps are summed before its check ends).
   void add(std::uint32_t relative_entry, double term) const {
-    EntryScore& score = entries[relative_entry];
+    EntryScore& score = entries[relative_entry & (detail::kSegmentSpan - 1)];
     score.sum += term;
     ++score.shared;
   }
@@ -148,16 +171,19 @@ inline void accumulate_row(const std::uint8_t* at, const std::uint8_t* end, bool
 }
 
 // The same for a count row: each weight computed from the count, as the
-// entry's was when it was added.
+// entry's was when it was added. Entries are at most `entry_bound` (the
+// segment's last) where the divisors are looked up: a row of an unchecked
+// file may reach past them.
 template <std::size_t kWidth, class Term>
 inline void accumulate_count_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
                                  std::uint32_t last, const Term& term,
-                                 const detail::RowWeights& weights, PartScores scores) {
+                                 const detail::RowWeights& weights, std::uint32_t entry_bound,
+                                 PartScores scores) {
   std::uint32_t entry = detail::kRowStart;
   for (; at != end; at += kWidth + detail::kCountBytes) {
     entry += detail::read_gap<kWidth>(at) + 1;
     if (cut && entry > last) return;
-    scores.add(entry, term(weights.weight(entry, at[kWidth])));
+    scores.add(entry, term(weights.weight(std::min(entry, entry_bound), at[kWidth])));
   }
 }
 
@@ -170,6 +196,7 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
   const std::uint8_t* bytes = segment.bytes.data();
   const bool cut = last_entry < segment.end_entry - 1;
   const std::uint32_t last = cut ? last_entry - segment.first_entry : detail::kRowStart;
+  const std::uint32_t entry_bound = segment.end_entry - segment.first_entry - 1;
   const std::size_t n = bow.size();
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
@@ -179,22 +206,32 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
       __builtin_prefetch(bytes + offsets[order.row(query[q + kPrefetchAhead].word)]);
     const std::uint32_t row = order.row(query[q].word);
     const std::uint8_t* const begin = bytes + offsets[row];
-    const std::uint8_t* const end = bytes + offsets[row + 1];
-    if (begin == end) continue;
+    const std::size_t size = offsets[row + 1] - offsets[row];
+    if (size == 0) continue;
     const Term term{query[q].value};
-    const std::uint8_t* const postings = begin + detail::kRowHeaderBytes;
-    switch (*begin) {
-      case 1:
-        accumulate_row<1>(postings, end, cut, last, term, scores);
-        break;
-      case 2:
-        accumulate_row<2>(postings, end, cut, last, term, scores);
-        break;
-      case 1 | detail::kCountRow:
-        accumulate_count_row<1>(postings, end, cut, last, term, weights.row(query[q].word), scores);
-        break;
-      default:
-        accumulate_count_row<2>(postings, end, cut, last, term, weights.row(query[q].word), scores);
+    // The rows of a loaded file may be read before its check ends: a row is
+    // read as whole postings of its header's width (any width but 1 is 2)
+    // and kind, never past its end, and a count row's divisors are looked up
+    // within the segment's entries.
+    const std::uint8_t header = *begin;
+    const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
+    const std::size_t postings = size - detail::kRowHeaderBytes;
+    const bool narrow = detail::header_width(header) == 1;
+    if (detail::header_counts(header)) {
+      const detail::RowWeights row_weights = weights.row(query[q].word);
+      const std::size_t stride = (narrow ? 1 : 2) + detail::kCountBytes;
+      const std::uint8_t* const end = first + postings / stride * stride;
+      if (narrow)
+        accumulate_count_row<1>(first, end, cut, last, term, row_weights, entry_bound, scores);
+      else
+        accumulate_count_row<2>(first, end, cut, last, term, row_weights, entry_bound, scores);
+    } else {
+      const std::size_t stride = (narrow ? 1 : 2) + detail::kWeightBytes;
+      const std::uint8_t* const end = first + postings / stride * stride;
+      if (narrow)
+        accumulate_row<1>(first, end, cut, last, term, scores);
+      else
+        accumulate_row<2>(first, end, cut, last, term, scores);
     }
   }
 }
@@ -204,6 +241,7 @@ struct IndexView {
   const std::vector<std::unique_ptr<detail::Segment>>& segments;
   const detail::TailList* tail_lists;
   const detail::PostingArena& arena;
+  unsigned tail_list_shift;
   unsigned high_bits;
   detail::RowOrder row_order;
   std::size_t tail_postings;
@@ -242,13 +280,15 @@ inline void for_each_of_word(const detail::TailPosting* postings, std::uint32_t 
     if ((postings[i].key & mask) == low && !take(i)) return;
 }
 
-// A query word's group list holds the postings of up to 2^high_bits words,
-// in increasing entry order: the word's own are picked out by their high
-// bits.
+// A query word's tail list holds the postings of up to 2^high_bits words,
+// in increasing entry order: the word's own are picked out by the key's
+// low bits, its row among the list's.
 template <class Term>
 void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_entry,
                      PartScores scores) {
   const detail::TailList* lists = index.tail_lists;
+  const detail::RowOrder order = index.row_order;
+  const unsigned shift = index.tail_list_shift;
   const unsigned bits = index.high_bits;
   const std::uint32_t mask = (1u << bits) - 1;
   const std::uint64_t key_end = (std::uint64_t{last_entry} - index.tail_first_entry + 1) << bits;
@@ -256,10 +296,11 @@ void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_en
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + 2 * kPrefetchAhead < n)
-      __builtin_prefetch(lists + detail::group_of(query[q + 2 * kPrefetchAhead].word));
+      __builtin_prefetch(lists + (detail::group_of(query[q + 2 * kPrefetchAhead].word) >> shift));
     if (q + kPrefetchAhead < n) {
-      // The whole list (up to 2 KiB) is read: fetch it all, not its start.
-      const detail::TailList ahead = lists[detail::group_of(query[q + kPrefetchAhead].word)];
+      // The whole list is read: fetch up to 2 KiB of it, not just its start.
+      const detail::TailList ahead =
+          lists[detail::group_of(query[q + kPrefetchAhead].word) >> shift];
       if (ahead.size != 0) {
         const auto* block = reinterpret_cast<const char*>(index.arena.at(ahead.block));
         const std::size_t bytes =
@@ -268,11 +309,13 @@ void accumulate_tail(const IndexView& index, Span<BowEntry> bow, EntryId last_en
       }
     }
     const WordId word = query[q].word;
-    const detail::TailList list = lists[detail::group_of(word)];
+    const std::uint32_t l = detail::group_of(word) >> shift;
+    const detail::TailList list = lists[l];
     if (list.size == 0) continue;
     const detail::TailPosting* postings = index.arena.at(list.block);
     const Term term{query[q].value};
-    for_each_of_word(postings, list.size, mask, word >> detail::kGroupBits, [&](std::uint32_t i) {
+    const std::uint32_t row = order.row(word) - order.group_start(l << shift);
+    for_each_of_word(postings, list.size, mask, row, [&](std::uint32_t i) {
       const std::uint32_t key = postings[i].key;
       if (key >= key_end) return false;
       scores.add(key >> bits, term(postings[i].weight));
@@ -317,8 +360,11 @@ class BestResults {
   }
 
   // Offers the live entries of a part whose scores are done, and zeroes
-  // their sums and counts for the next part.
-  void take_part(EntryId first, std::size_t span, PartScores scores, const std::uint8_t* alive) {
+  // their sums and counts for the next part. Unchecked postings may have
+  // summed past the part's span (damaged gaps): those sums are zeroed too,
+  // so that no later query, of any database, starts from them.
+  void take_part(EntryId first, std::size_t span, PartScores scores, const std::uint8_t* alive,
+                 bool unchecked) {
     for (std::size_t r = 0; r < span; ++r) {
       EntryScore& score = scores.entries[r];
       if (score.shared == 0) continue;
@@ -326,24 +372,19 @@ class BestResults {
         offer({static_cast<EntryId>(first + r), finish(score.sum), score.shared});
       score = {};
     }
+    if (unchecked)
+      std::fill(scores.entries + span, scores.entries + detail::kSegmentSpan, EntryScore{});
   }
 
-  // Offers an entry by its sum of terms.
-  void offer_sum(EntryId entry, double sum, std::uint32_t shared) {
-    offer({entry, finish(sum), shared});
+  // An entry's result from its sum of terms.
+  QueryResult result(EntryId entry, double sum, std::uint32_t shared) const {
+    return {entry, finish(sum), shared};
   }
   // Offers every result another BestResults kept.
   void take_results(const BestResults& other) {
     for (const QueryResult& result : other.results_) offer(result);
   }
 
-  // Best first.
-  std::vector<QueryResult> sorted() {
-    std::sort(results_.begin(), results_.end(), better_);
-    return {results_.begin(), results_.end()};
-  }
-
- private:
   void offer(const QueryResult& result) {
     if (results_.size() < keep_) {
       results_.push_back(result);
@@ -355,6 +396,13 @@ class BestResults {
     }
   }
 
+  // Best first.
+  std::vector<QueryResult> sorted() {
+    std::sort(results_.begin(), results_.end(), better_);
+    return {results_.begin(), results_.end()};
+  }
+
+ private:
   double finish(double sum) const {
     return minimums_ ? detail::l1_score_of_minimums(sum)
                      : detail::finish_score(scoring_, sum, base_);
@@ -376,7 +424,8 @@ struct QueryContext {
   Span<BowEntry> words;  // sorted by word id
   EntryId last_entry;
   Scoring scoring;
-  bool minimums;  // L1 terms summed as minimums (MinimumTerm)
+  bool minimums;   // L1 terms summed as minimums (MinimumTerm)
+  bool unchecked;  // a loaded file's postings are not checked yet
   double base;
   std::size_t keep;              // results wanted, at most the live entries
   std::size_t visible_segments;  // those with an entry ≤ last_entry: a prefix
@@ -425,7 +474,7 @@ void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, P
         {c.index.word_weights, c.index.divisors + c.index.segments[part]->first_entry}, scores);
   else
     accumulate_tail<Term>(c.index, words, c.last_entry, scores);
-  best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive);
+  best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive, c.unchecked);
 }
 
 // The workers' results, merged: the order is total (ties by entry id), so
@@ -444,22 +493,89 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
   return merged(best);
 }
 
-// Fast mode: the share of the query's postings read to find candidates, and
-// how many candidates are scored exactly. Chosen at 200,000 real images
-// (docs/benchmarks.md) on other noisy copies of the held-out photographs
-// than the benchmark reports: 1000 candidates keep the exact top 10 for 98%
-// of those queries (2000: 98.6%, 30% slower; a share of 1/16: 95%).
+// Fast mode: the share of the query's postings read to find candidates, at
+// least kFastMinPostings of them, and how many candidates are scored
+// exactly. Chosen at 200,000 real images (docs/benchmarks.md) on a tuning
+// set, four other noisy copies of each held-out photograph (296 queries,
+// other seeds than the 148 the benchmark reports): with at least 2^20
+// postings, 1000 candidates kept the exact top 10 for all of them (with
+// 2^18, 97.0%: a query of few postings read too few to tell near-copies
+// apart; 500 candidates: 96.3%; a share of 1/16: 98.6%).
 constexpr double kFastPostingShare = 1.0 / 8;
 constexpr std::size_t kFastCandidates = 1000;
+constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 20;
 // Small indexes are read whole (the candidates are then the exact best), and
 // so is any index where skipping the other words would save fewer postings
 // than kRescorePostings per word of the candidates (a query's size): a
-// candidate's word costs about 3 postings (7 µs per candidate of 1000 words,
+// candidate's word costs about 3 postings (~6 µs per candidate of 1000 words,
 // 2.2 ns per posting at 200,000 images), so between ~1M and ~3M postings per
 // query fast mode can be slower than exact; 10,000 ORB-1000 images of the
 // benchmark (600k postings per query) are read whole.
-constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 18;
 constexpr std::uint64_t kRescorePostings = 1;
+
+// +1 where a larger sum of terms means a better score, -1 where a smaller.
+float better_sign(Scoring scoring, bool minimums) {
+  if (scoring == Scoring::kL1) return minimums ? 1.0f : -1.0f;
+  return scoring == Scoring::kKL ? -1.0f : 1.0f;
+}
+
+// Sums the rare words' terms of a segment's entries in floats (a part's
+// sums, 256 KiB, stay in the core's cache), and keeps its best `keep` live
+// entries with a positive sum in the worker's candidate_heap.
+template <class Term>
+void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> words, float sign,
+                     std::size_t keep, WorkerScratch& worker) {
+  const detail::Segment& segment = *c.index.segments[part];
+  std::vector<float>& sums = worker.candidate_sums;
+  if (sums.size() < detail::kSegmentSpan) sums.assign(detail::kSegmentSpan, 0.0f);
+  const std::uint32_t* offsets = segment.offsets.data();
+  const std::uint8_t* bytes = segment.bytes.data();
+  const detail::RowOrder order = c.index.row_order;
+  const detail::SegmentWeights weights{c.index.word_weights,
+                                       c.index.divisors + segment.first_entry};
+  const std::size_t n = words.size();
+  float* const out = sums.data();
+  for (std::size_t q = 0; q < n; ++q) {
+    if (q + 2 * kPrefetchAhead < n)
+      __builtin_prefetch(offsets + order.row(words[q + 2 * kPrefetchAhead].word));
+    if (q + kPrefetchAhead < n)
+      __builtin_prefetch(bytes + offsets[order.row(words[q + kPrefetchAhead].word)]);
+    const std::uint32_t row = order.row(words[q].word);
+    const Term term{words[q].value};
+    const detail::RowWeights row_weights = weights.row(words[q].word);
+    detail::for_each_posting(bytes + offsets[row], bytes + offsets[row + 1],
+                             [&](std::uint32_t entry, detail::PostingValue value) {
+                               const float weight = value.count != 0
+                                                        ? row_weights.weight(entry, value.count)
+                                                        : value.weight;
+                               out[entry] += sign * static_cast<float>(term(weight));
+                             });
+  }
+  std::vector<Candidate>& heap = worker.candidate_heap;
+  const EntryId first = segment.first_entry;
+  const std::size_t span = c.part_span(part);
+  const BetterCandidate better;
+  float threshold = heap.size() == keep ? heap.front().key : 0.0f;
+  for (std::size_t r = 0; r < span; ++r) {
+    const float key = out[r];
+    // Ties with the worst kept are left to `better` (entry order).
+    if (!(key >= threshold) || !(key > 0.0f) || c.index.alive[first + r] == 0) continue;
+    const Candidate candidate{key, static_cast<EntryId>(first + r)};
+    if (heap.size() < keep) {
+      heap.push_back(candidate);
+      if (heap.size() == keep) {
+        std::make_heap(heap.begin(), heap.end(), better);
+        threshold = heap.front().key;
+      }
+    } else if (better(candidate, heap.front())) {
+      std::pop_heap(heap.begin(), heap.end(), better);
+      heap.back() = candidate;
+      std::push_heap(heap.begin(), heap.end(), better);
+      threshold = heap.front().key;
+    }
+  }
+  std::fill(out, out + (segment.end_entry - first), 0.0f);
+}
 
 // The query's words that find candidates, in word order: those that can add
 // most to a score for the postings they cost (the query's value over the
@@ -469,16 +585,26 @@ constexpr std::uint64_t kRescorePostings = 1;
 // pay off.
 Span<BowEntry> rare_words(const QueryContext& c) {
   auto& postings = c.buffers.word_postings;
+  const std::size_t n = c.words.size();
   postings.clear();
-  std::uint64_t total = 0;
-  for (std::size_t q = 0; q < c.words.size(); ++q) {
-    const std::uint32_t row = c.index.row_order.row(c.words[q].word);
-    std::uint64_t count = 0;
-    for (std::size_t s = 0; s < c.visible_segments; ++s)
-      count += c.index.segments[s]->row_postings(row);
-    postings.emplace_back(count, static_cast<std::uint32_t>(q));
-    total += count;
+  for (std::size_t q = 0; q < n; ++q) postings.emplace_back(0, static_cast<std::uint32_t>(q));
+  // A segment at a time, its rows' offsets and headers fetched ahead: each
+  // is a cache miss, about as many as the query's rare postings otherwise.
+  std::vector<std::uint32_t>& rows = c.buffers.rows;
+  rows.clear();
+  for (const BowEntry& e : c.words) rows.push_back(c.index.row_order.row(e.word));
+  for (std::size_t s = 0; s < c.visible_segments; ++s) {
+    const detail::Segment& segment = *c.index.segments[s];
+    const std::uint32_t* offsets = segment.offsets.data();
+    for (std::size_t q = 0; q < n; ++q) {
+      if (q + 2 * kPrefetchAhead < n) __builtin_prefetch(offsets + rows[q + 2 * kPrefetchAhead]);
+      if (q + kPrefetchAhead < n)
+        __builtin_prefetch(segment.bytes.data() + offsets[rows[q + kPrefetchAhead]]);
+      postings[q].first += segment.row_postings(rows[q]);
+    }
   }
+  std::uint64_t total = 0;
+  for (const auto& [count, q] : postings) total += count;
   // value_a / (postings_a + 1) > value_b / (postings_b + 1), without division;
   // ties by position, so the choice is deterministic.
   std::sort(postings.begin(), postings.end(), [&](const auto& a, const auto& b) {
@@ -506,21 +632,56 @@ Span<BowEntry> rare_words(const QueryContext& c) {
   return {rare.data(), rare.size()};
 }
 
-// The exact score of an entry from its BoW vector: the same terms, summed in
-// the same order (increasing word id), as a pass over the index gives it.
-template <class Term>
-void rescore(const QueryContext& c, EntryId entry, WorkerScratch& worker, BestResults& best) {
+// The exact scores of candidates from their BoW vectors: the same terms,
+// summed in the same order (increasing word id), as a pass over the index
+// gives them. Inlined whole into rescore_popcnt, so that the query's word
+// positions count bits with the popcnt instruction there.
+template <class Term, bool kPopcnt>
+[[gnu::always_inline]] inline void rescore(const QueryContext& c, const Candidate* first,
+                                           const Candidate* last, QueryResult* out,
+                                           WorkerScratch& worker, const BestResults& best) {
   const QueryWordSet& query = c.buffers.query_words;
-  double sum = 0;
-  std::uint32_t shared = 0;
-  c.index.forward->for_each_shared(
-      entry, [&](WordId word) { return query.position(word); },
-      static_cast<std::uint32_t>(c.words.size()), c.buffers.query_weights.data(), worker.hits,
-      [&](std::uint32_t q, float weight) {
-        sum += Term{c.words[q].value}(weight);
-        ++shared;
-      });
-  best.offer_sum(entry, sum, shared);
+  const detail::ForwardIndex& forward = *c.index.forward;
+  for (const Candidate* candidate = first; candidate != last; ++candidate) {
+    if (candidate + 1 != last) forward.prefetch(candidate[1].entry);
+    double sum = 0;
+    std::uint32_t shared = 0;
+    forward.for_each_shared(
+        candidate->entry, [&](WordId word) { return query.position<kPopcnt>(word); },
+        static_cast<std::uint32_t>(c.words.size()), c.buffers.query_weights.data(), worker.hits,
+        [&](std::uint32_t q, float weight) {
+          sum += Term{c.words[q].value}(weight);
+          ++shared;
+        });
+    *out++ = best.result(candidate->entry, sum, shared);
+  }
+}
+
+template <class Term>
+void rescore_portable(const QueryContext& c, const Candidate* first, const Candidate* last,
+                      QueryResult* out, WorkerScratch& worker, const BestResults& best) {
+  rescore<Term, false>(c, first, last, out, worker, best);
+}
+
+#if defined(BINBOW_X86_DISPATCH)
+// The same, for CPUs with popcnt (the build targets any x86-64): a word's
+// position costs one instruction instead of the portable bit count's ten.
+template <class Term>
+[[gnu::target("popcnt")]] void rescore_popcnt(const QueryContext& c, const Candidate* first,
+                                              const Candidate* last, QueryResult* out,
+                                              WorkerScratch& worker, const BestResults& best) {
+  rescore<Term, true>(c, first, last, out, worker, best);
+}
+#endif
+
+template <class Term>
+void rescore_candidates(const QueryContext& c, const Candidate* first, const Candidate* last,
+                        QueryResult* out, WorkerScratch& worker, const BestResults& best) {
+#if defined(BINBOW_X86_DISPATCH)
+  static const bool has_popcnt = __builtin_cpu_supports("popcnt") != 0;
+  if (has_popcnt) return rescore_popcnt<Term>(c, first, last, out, worker, best);
+#endif
+  rescore_portable<Term>(c, first, last, out, worker, best);
 }
 
 template <class Term>
@@ -528,29 +689,42 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   const Span<BowEntry> rare = rare_words(c);
   if (rare.size() == c.words.size()) return exact_query<Term>(c);  // a small index, read whole
   // Candidates from the segments' rare words; the tail, small, is scored in full.
-  std::vector<BestResults> best = c.per_worker(c.keep, &WorkerScratch::best);
-  std::vector<BestResults> candidates =
-      c.per_worker(std::max(kFastCandidates, c.keep), &WorkerScratch::candidates);
+  std::vector<BestResults> tail_best = c.per_worker(c.keep, &WorkerScratch::best);
+  const std::size_t keep = std::max(kFastCandidates, c.keep);
+  const float sign = better_sign(c.scoring, c.minimums);
+  for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidate_heap.clear();
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
-    const bool tail = part == c.visible_segments;
-    score_part<Term>(c, part, tail ? c.words : rare, c.scores(worker),
-                     tail ? best[worker] : candidates[worker]);
+    if (part == c.visible_segments)
+      score_part<Term>(c, part, c.words, c.scores(worker), tail_best[worker]);
+    else
+      find_candidates<Term>(c, part, rare, sign, keep, c.buffers.workers[worker]);
   });
-  // Each candidate's exact score, from its BoW vector: the same terms,
-  // summed in the same order, as a pass over the whole index gives it.
-  const std::vector<QueryResult> chosen = merged(candidates);
+  std::vector<Candidate>& chosen = c.buffers.workers[0].candidate_heap;
+  for (unsigned w = 1; w < c.workers; ++w)
+    chosen.insert(chosen.end(), c.buffers.workers[w].candidate_heap.begin(),
+                  c.buffers.workers[w].candidate_heap.end());
+  std::sort(chosen.begin(), chosen.end(), BetterCandidate{});
+  if (chosen.size() > keep) chosen.resize(keep);
   c.buffers.query_words.assign(c.words);
   std::vector<double>& weights = c.buffers.query_weights;
   weights.clear();
   for (const BowEntry& e : c.words) weights.push_back(c.index.forward->word_weight(e.word));
+  // Each candidate's exact score; then every result is offered in
+  // candidate order, so that the results do not depend on the threads.
+  BestResults best(c.scoring, c.minimums, c.base, c.keep, c.buffers.best);
+  std::vector<QueryResult>& rescored = c.buffers.rescored;
+  rescored.resize(chosen.size());
   constexpr std::size_t kChunk = 64;
   detail::parallel_for(
       c.workers, (chosen.size() + kChunk - 1) / kChunk, [&](std::size_t chunk, unsigned worker) {
-        const std::size_t end = std::min(chosen.size(), (chunk + 1) * kChunk);
-        for (std::size_t i = chunk * kChunk; i < end; ++i)
-          rescore<Term>(c, chosen[i].entry, c.buffers.workers[worker], best[worker]);
+        const std::size_t first = chunk * kChunk;
+        const std::size_t last = std::min(chosen.size(), first + kChunk);
+        rescore_candidates<Term>(c, chosen.data() + first, chosen.data() + last,
+                                 rescored.data() + first, c.buffers.workers[worker], best);
       });
-  return merged(best);
+  for (const QueryResult& result : rescored) best.offer(result);
+  for (const BestResults& tail : tail_best) best.take_results(tail);
+  return best.sorted();
 }
 
 template <class Term>
@@ -599,6 +773,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const double base = detail::score_base(scoring, bow);
 
   std::shared_lock lock(impl_->mutex);
+  impl_->throw_if_damaged();
   // Over word ids, words beyond the capacity are in no entry yet: the index
   // is searched for the others (base() above still counts them, for KL).
   Span<BowEntry> searched(bow.begin(), bow.size());
@@ -615,6 +790,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const IndexView index{impl_->segments,
                         impl_->tail_lists.data(),
                         impl_->arena,
+                        impl_->tail_list_shift,
                         impl_->high_bits,
                         impl_->row_order,
                         impl_->tail_postings,
@@ -641,19 +817,16 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   if (buffers.workers.size() < workers) buffers.workers.resize(workers);
   detail::ValueRange query_values;
   for (const BowEntry& e : searched) query_values.include(e.value);
-  const bool minimums =
-      scoring == Scoring::kL1 && detail::l1_terms_are_minimums(impl_->values, query_values);
-  const QueryContext context{index,
-                             searched,
-                             last_entry,
-                             scoring,
-                             minimums,
-                             base,
-                             std::min(max_results, impl_->live_entries),
-                             visible,
-                             tail_visible,
-                             workers,
-                             buffers};
+  // While a loaded file's values are not known, L1 sums DBoW2's terms: the
+  // same scores, to the last bit.
+  detail::ValueRange index_values;
+  const bool checked = impl_->index_values(index_values);
+  const bool minimums = scoring == Scoring::kL1 && checked &&
+                        detail::l1_terms_are_minimums(index_values, query_values);
+  const QueryContext context{
+      index,    searched,     last_entry, scoring,
+      minimums, !checked,     base,       std::min(max_results, impl_->live_entries),
+      visible,  tail_visible, workers,    buffers};
   std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();
   return results;

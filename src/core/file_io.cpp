@@ -62,12 +62,45 @@ MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
   }
   size_ = static_cast<std::size_t>(st.st_size);
   void* map = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | (populate ? MAP_POPULATE : 0), fd, 0);
+  if (map != MAP_FAILED) {
+    ::close(fd);
+    data_ = static_cast<const std::uint8_t*>(map);
+    return;
+  }
+  // A file system that cannot map (some FUSE and network mounts): the file
+  // is read into memory instead, which costs its size in memory and time.
+  const std::string why = errno_text();
+  auto* copy = static_cast<std::uint8_t*>(std::malloc(size_));
+  if (copy == nullptr) {
+    ::close(fd);
+    throw FileError(path, "cannot map into memory (" + why + ") nor allocate " +
+                              std::to_string(size_) + " bytes to read it");
+  }
+  for (std::size_t done = 0; done < size_;) {
+    const ssize_t got = ::pread(fd, copy + done, size_ - done, static_cast<off_t>(done));
+    if (got <= 0) {
+      const std::string read_why = got == 0 ? "the file shrank while read" : errno_text();
+      std::free(copy);
+      ::close(fd);
+      throw FileError(path, "cannot map into memory (" + why + ") nor read: " + read_why);
+    }
+    done += static_cast<std::size_t>(got);
+  }
   ::close(fd);
-  if (map == MAP_FAILED) throw FileError(path, "cannot map into memory: " + errno_text());
-  data_ = static_cast<const std::uint8_t*>(map);
+  data_ = copy;
+  read_ = true;
+}
+
+void MappedFile::unmap() noexcept {
+  if (data_ == nullptr) return;
+  if (read_)
+    std::free(const_cast<std::uint8_t*>(data_));
+  else
+    ::munmap(const_cast<std::uint8_t*>(data_), size_);
 }
 
 void MappedFile::release(const std::uint8_t* begin, std::size_t size) const noexcept {
+  if (read_) return;
   const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
   const auto first = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
   const auto end = (reinterpret_cast<std::uintptr_t>(begin) + size) / page * page;
@@ -76,17 +109,18 @@ void MappedFile::release(const std::uint8_t* begin, std::size_t size) const noex
 }
 
 MappedFile::MappedFile(MappedFile&& other) noexcept
-    : path_(std::move(other.path_)), data_(other.data_), size_(other.size_) {
+    : path_(std::move(other.path_)), data_(other.data_), size_(other.size_), read_(other.read_) {
   other.data_ = nullptr;
   other.size_ = 0;
 }
 
 MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
   if (this != &other) {
-    if (data_ != nullptr) ::munmap(const_cast<std::uint8_t*>(data_), size_);
+    unmap();
     path_ = std::move(other.path_);
     data_ = other.data_;
     size_ = other.size_;
+    read_ = other.read_;
     other.data_ = nullptr;
     other.size_ = 0;
   }
@@ -94,7 +128,7 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
 }
 
 MappedFile::~MappedFile() {
-  if (data_ != nullptr) ::munmap(const_cast<std::uint8_t*>(data_), size_);
+  unmap();
 }
 
 void write_all(std::FILE* file, const void* data, std::size_t size, const std::string& path) {

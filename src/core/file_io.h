@@ -18,7 +18,11 @@ const char* file_kind(unsigned mode);
 
 // A read-only memory map of a whole file. Throws FileError naming the file
 // when it is missing, a directory, not a regular file (a FIFO, a socket, a
-// device: refused without blocking), unreadable or empty.
+// device: refused without blocking), unreadable or empty. Where the file
+// system cannot map it, the file is read into memory instead (mapped() is
+// then false). The mapping stays valid while the file is replaced by a
+// rename (binbow's saves): it keeps the old inode. A file truncated or
+// rewritten in place while mapped is undefined behaviour (SIGBUS).
 class MappedFile {
  public:
   // `populate`: fault every page in at once, faster when all of it is read.
@@ -32,6 +36,7 @@ class MappedFile {
   const std::uint8_t* data() const noexcept { return data_; }
   std::size_t size() const noexcept { return size_; }
   const std::string& path() const noexcept { return path_; }
+  bool mapped() const noexcept { return !read_; }
   // Drops the whole pages within [begin, begin + size) from the process's
   // resident memory; touching them again reads them back (from the page
   // cache, usually). A large file read once in order then never occupies
@@ -39,9 +44,12 @@ class MappedFile {
   void release(const std::uint8_t* begin, std::size_t size) const noexcept;
 
  private:
+  void unmap() noexcept;
+
   std::string path_;
   const std::uint8_t* data_ = nullptr;
   std::size_t size_ = 0;
+  bool read_ = false;  // malloc'd copy, not a mapping
 };
 
 // Writes through `write` (called with a FILE* opened on a temporary file in the

@@ -57,6 +57,12 @@ class ForwardIndex {
                : 0.0;
   }
 
+  // Starts fetching an entry's first codes (the rest follow in order).
+  void prefetch(EntryId entry) const noexcept {
+    const auto* codes = reinterpret_cast<const char*>(entries_[entry].data());
+    for (int line = 0; line < 4; ++line) __builtin_prefetch(codes + 64 * line);
+  }
+
   // Calls take(q, weight) for every word of `entry` that the query holds,
   // in increasing word order, with its weight in the entry: q is
   // position(word), which is `absent` for the words the query lacks, and
@@ -66,9 +72,9 @@ class ForwardIndex {
   // candidate's words are shared, so a branch per word would mispredict
   // often.
   template <class Position, class Take>
-  void for_each_shared(EntryId entry, const Position& position, std::uint32_t absent,
-                       const double* query_weights, std::vector<std::uint32_t>& hits,
-                       Take&& take) const {
+  [[gnu::always_inline]] void for_each_shared(EntryId entry, const Position& position,
+                                              std::uint32_t absent, const double* query_weights,
+                                              std::vector<std::uint32_t>& hits, Take&& take) const {
     const std::vector<std::uint16_t>& codes = entries_[entry];
     if (codes.empty()) return;
     if (hits.size() < 2 * codes.size()) hits.resize(2 * codes.size());
@@ -113,9 +119,10 @@ class ForwardIndex {
   // word between `code` and `end` that the query holds; returns the end of
   // what it wrote.
   template <bool kWithCounts, class Position>
-  static std::uint32_t* look_up(const std::uint16_t* code, const std::uint16_t* end,
-                                const Position& position, std::uint32_t absent,
-                                std::uint32_t* out) {
+  [[gnu::always_inline]] static std::uint32_t* look_up(const std::uint16_t* code,
+                                                       const std::uint16_t* end,
+                                                       const Position& position,
+                                                       std::uint32_t absent, std::uint32_t* out) {
     std::uint32_t word = ~std::uint32_t{0};
     std::uint32_t index = 0;
     while (code < end) {
@@ -128,8 +135,12 @@ class ForwardIndex {
       word += step;
       std::uint32_t aux = index++;
       if constexpr (kWithCounts) {
-        aux = 1;
-        if ((step_code & kMany) != 0) aux = *code++;
+        // Without a branch (few words have a count): the next code, or the
+        // step's own code when it was the last, masked out unless kMany.
+        const std::uint32_t many = step_code >> 15;
+        const std::uint32_t next = *(code - (code == end ? 1 : 0));
+        aux = 1 + ((next - 1) & (0u - many));
+        code += many;
       }
       const std::uint32_t q = position(word);
       out[0] = q;

@@ -78,6 +78,11 @@ struct ValueRange {
     if (value > 0.0f) min_positive = std::min(min_positive, value);
     max = std::max(max, value);
   }
+  void include(const ValueRange& other) noexcept {
+    negative = negative || other.negative;
+    min_positive = std::min(min_positive, other.min_positive);
+    max = std::max(max, other.max);
+  }
 };
 
 inline ValueRange value_range(const BowVector& bow) noexcept {

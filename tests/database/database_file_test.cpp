@@ -284,9 +284,10 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
        "entry 4 has an invalid divisor"},
       {with_section(bytes, kDivisors, [&](std::uint8_t* d, std::size_t) { std::memset(d, 0, 8); }),
        "which has no divisor"},
-      // A row whose last posting is cut short.
+      // A row whose last posting is cut short: the rows no longer cover the
+      // postings section.
       {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { d[4] -= 1; }),
-       "malformed posting"},
+       "trailing data"},
       {weight_posting([&](std::uint8_t* d) { std::memcpy(d + 2, &nan, 4); }), "non-finite"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
        "unknown layout"},

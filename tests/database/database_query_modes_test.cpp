@@ -119,27 +119,33 @@ BowVector image_of(const std::map<WordId, float>& place, ZipfWords& zipf, std::s
 
 TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
   // Large enough (~13M postings, ~900 words per image) that a query shares its segments between
-  // threads, with ties (repeated images), removals and max_entry_id.
+  // threads, with ties (repeated images), removals and max_entry_id. The images are made once
+  // and indexed under each scoring.
+  ZipfWords zipf(60'000, 11);
+  std::vector<std::map<WordId, float>> places;
+  for (int p = 0; p < 300; ++p) places.push_back(place_words(zipf, 900));
+  std::vector<BowVector> bows;
+  for (std::size_t i = 0; i < 14'000; ++i)
+    bows.push_back(i % 7 == 3 ? bows[i - 1] : image_of(places[i % places.size()], zipf, 200));
+  std::vector<BowVector> queries;
+  for (int q = 0; q < 6; ++q) queries.push_back(image_of(places[q * 37], zipf, 200));
+  const BowVector brute_force_query = image_of(places[5], zipf, 200);
+
   for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kDotProduct}) {
     DatabaseOptions options;
     options.direct_index = false;
     Database database = Database::over_word_ids(scoring, options);
-    ZipfWords zipf(60'000, 11);
-    std::vector<std::map<WordId, float>> places;
-    for (int p = 0; p < 300; ++p) places.push_back(place_words(zipf, 900));
-    std::vector<BowVector> bows;
     std::vector<bool> live;
-    for (std::size_t i = 0; i < 14'000; ++i) {
-      bows.push_back(i % 7 == 3 ? bows[i - 1] : image_of(places[i % places.size()], zipf, 200));
+    for (std::size_t i = 0; i < bows.size(); ++i) {
       live.push_back(true);
-      database.add(bows.back());
+      database.add(bows[i]);
       if (i % 101 == 50) {
         database.remove(static_cast<EntryId>(i / 2));
         live[i / 2] = false;
       }
     }
-    for (int q = 0; q < 6; ++q) {
-      const BowVector query = image_of(places[q * 37], zipf, 200);
+    for (std::size_t q = 0; q < queries.size(); ++q) {
+      const BowVector& query = queries[q];
       const std::string context = std::string(to_string(scoring)) + " query " + std::to_string(q);
       const auto one = database.query(query, 30, kAllEntries, kOneThread);
       ASSERT_EQ(one.size(), 30u) << context;
@@ -154,47 +160,49 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
       expect_same(database.query(query, 30), one, context + ", default options");
     }
     // The one-thread result itself is the brute force's top 30.
-    const BowVector query = image_of(places[5], zipf, 200);
     std::vector<QueryResult> all;
     for (EntryId e = 0; e < bows.size(); ++e) {
       if (!live[e]) continue;
-      const std::uint32_t shared = shared_words(query, bows[e]);
-      if (shared > 0) all.push_back({e, score_bow(query, bows[e], scoring), shared});
+      const std::uint32_t shared = shared_words(brute_force_query, bows[e]);
+      if (shared > 0) all.push_back({e, score_bow(brute_force_query, bows[e], scoring), shared});
     }
     std::stable_sort(all.begin(), all.end(), [&](const QueryResult& a, const QueryResult& b) {
       return scoring == Scoring::kKL ? a.score < b.score : a.score > b.score;
     });
     all.resize(30);
-    expect_same(database.query(query, 30, kAllEntries, QueryOptions{QueryMode::kExact, 2}), all,
-                std::string(to_string(scoring)) + " brute force");
+    expect_same(
+        database.query(brute_force_query, 30, kAllEntries, QueryOptions{QueryMode::kExact, 2}), all,
+        std::string(to_string(scoring)) + " brute force");
   }
 }
 
 TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
   // Images of 400 places share most of their words (Zipf), as photographs
-  // of a few scenes do; queries are new images of known places. 12,000
-  // images: enough postings per query that fast mode scores candidates
-  // rather than reading every posting.
+  // of a few scenes do; queries are new images of known places. 24,000
+  // images (~2.5M postings per query): enough that fast mode scores
+  // candidates rather than reading every posting (it reads at least 2^20). The images are made once
+  // and indexed under each scoring.
+  ZipfWords zipf(80'000, 3);
+  std::vector<std::map<WordId, float>> places;
+  for (int p = 0; p < 400; ++p) places.push_back(place_words(zipf, 700));
+  std::vector<BowVector> bows;
+  for (std::size_t i = 0; i < 24'000; ++i)
+    bows.push_back(image_of(places[i % places.size()], zipf, 150));
+  const std::vector<bool> live(bows.size(), true);
+  constexpr int kQueries = 60;
+  std::vector<BowVector> queries;
+  for (int q = 0; q < kQueries; ++q)
+    queries.push_back(image_of(places[(q * 53) % places.size()], zipf, 150));
+
   for (Scoring scoring : {Scoring::kL1, Scoring::kL2, Scoring::kChiSquare, Scoring::kKL,
                           Scoring::kBhattacharyya, Scoring::kDotProduct}) {
     DatabaseOptions options;
     options.direct_index = false;
     Database database = Database::over_word_ids(scoring, options);
-    ZipfWords zipf(80'000, 3);
-    std::vector<std::map<WordId, float>> places;
-    for (int p = 0; p < 400; ++p) places.push_back(place_words(zipf, 700));
-    std::vector<BowVector> bows;
-    std::vector<bool> live;
-    for (std::size_t i = 0; i < 12'000; ++i) {
-      bows.push_back(image_of(places[i % places.size()], zipf, 150));
-      live.push_back(true);
-      database.add(bows.back());
-    }
+    for (const BowVector& bow : bows) database.add(bow);
     const std::string name = to_string(scoring);
     int same_top10 = 0, same_place = 0;
-    constexpr int kQueries = 60;
-    for (int q = 0; q < kQueries; ++q) {
-      const BowVector query = image_of(places[(q * 53) % places.size()], zipf, 150);
+    for (const BowVector& query : queries) {
       const auto exact = database.query(query, 10, kAllEntries, kOneThread);
       const auto fast = database.query(query, 10, kAllEntries, kFast);
       ASSERT_EQ(fast.size(), 10u) << name;

@@ -105,7 +105,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 // Fast queries (--fast-queries true) find the same loops, hence the same
 // precision and recall: the same loops.csv as exact queries. 84 frames are
-// far below the size where fast mode reads less than every posting (~1M
+// far below the size where fast mode reads less than every posting (~2M
 // postings per query), so this checks that the option is threaded through,
 // not what fast mode loses on large databases (docs/benchmarks.md).
 TEST(AccuracyFastQueries, SameLoopsAsExactQueries) {
