@@ -25,9 +25,13 @@
 
 namespace binbow {
 
+class Vocabulary;
 namespace detail {
 struct VocabularyBlock;
-}
+// The weight of every word, for the database's per-posting work (null for
+// an empty vocabulary).
+const float* word_weights(const Vocabulary& vocabulary) noexcept;
+}  // namespace detail
 
 // A vocabulary as a plain tree: the interchange form between builders, file
 // readers and writers, and the flat Vocabulary. Node 0 is the root.
@@ -173,6 +177,7 @@ class Vocabulary {
   Vocabulary with_descriptor(const std::string& descriptor) const;
 
  private:
+  friend const float* detail::word_weights(const Vocabulary& vocabulary) noexcept;
   explicit Vocabulary(std::shared_ptr<const detail::VocabularyBlock> block);
   void words_to_bow(const WordId* words, std::size_t count, BowVector& bow) const;
   std::shared_ptr<const detail::VocabularyBlock> block_;

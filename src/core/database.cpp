@@ -604,6 +604,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   try {
     alive.push_back(0);
     word_counts.push_back(static_cast<std::uint32_t>(n));
+    divisors.push_back(divisor_of(Span<BowEntry>(words, n)));
     if (options.direct_index) direct.emplace_back(features);
     if (!labels.empty()) labels.emplace_back();
     // The lists' heads and the ends of their blocks stay in cache (see
@@ -624,6 +625,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
     for (std::size_t i = 0; i < appended; ++i) --tail_lists[tail_list(words[i].word)].size;
     alive.resize(entry);
     word_counts.resize(entry);
+    divisors.resize(entry);
     if (direct.size() > entry) direct.resize(entry);
     if (labels.size() > entry) labels.resize(entry);
     if (forward_built) forward.truncate(entry);
@@ -634,6 +636,11 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   ++live_entries;
   tail_postings += n;
   return entry;
+}
+
+double Database::Impl::divisor_of(Span<BowEntry> words) {
+  if (over_word_ids || !count_form.find(vocabulary, scoring, words)) return 0;
+  return count_form.largest_count() <= detail::kMaxRowCount ? count_form.divisor() : 0;
 }
 
 void Database::Impl::build_forward_index() const {
@@ -672,14 +679,22 @@ void Database::Impl::build_forward_index() const {
         const std::uint32_t row = row_order.row(static_cast<WordId>(word));
         std::uint32_t& i = cursors[row];
         std::uint32_t& last = last_entries[row];
-        const std::uint32_t width = i < offsets[row + 1] ? bytes[offsets[row]] : 0;
-        for (; i < offsets[row + 1]; i += width + detail::kWeightBytes) {
+        if (i >= offsets[row + 1]) continue;
+        const std::uint8_t header = bytes[offsets[row]];
+        const std::size_t width = detail::header_width(header);
+        const std::size_t stride = detail::header_stride(header);
+        const detail::RowWeights weights =
+            detail::header_counts(header)
+                ? segment_weights(segment->first_entry).row(static_cast<WordId>(word))
+                : detail::RowWeights{};
+        for (; i < offsets[row + 1]; i += static_cast<std::uint32_t>(stride)) {
           const std::uint8_t* at = bytes + i;
-          const std::uint32_t relative =
-              last + (width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at)) + 1;
+          const std::uint32_t relative = last + detail::read_gap(at, width) + 1;
           if (relative >= relative_end) break;
+          const float weight = detail::header_counts(header) ? weights.weight(relative, at[width])
+                                                             : detail::read_weight(at + width);
           words[segment->first_entry + relative - first].push_back(
-              {static_cast<WordId>(word), detail::read_weight(at + width)});
+              {static_cast<WordId>(word), weight});
           last = relative;
         }
       }
@@ -756,8 +771,8 @@ namespace {
 // segments and their sources span at most kSegmentSpan ids. Returns the
 // bytes written.
 std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
-                       const std::unique_ptr<detail::Segment>* end,
-                       detail::Segment& merged) noexcept {
+                       const std::unique_ptr<detail::Segment>* end, detail::Segment& merged,
+                       const detail::SegmentWeights& weights) {
   // The sources' arrays, read once: the stores below could alias their fields.
   // merge_segments_if_many merges at most kSegmentFanIn segments.
   struct Source {
@@ -776,34 +791,33 @@ std::size_t merge_rows(const std::unique_ptr<detail::Segment>* begin,
   const std::size_t rows = merged.offsets.size() - 1;
   std::uint32_t* offsets = merged.offsets.data();
   offsets[0] = 0;
-  for (std::size_t r = 0; r < rows; ++r) {
+  detail::RowOrder::for_each_row(rows, [&](std::uint32_t r, WordId word) {
     std::uint32_t last = detail::kRowStart;  // relative to merged.first_entry
-    detail::RowWriter row(out);
+    detail::RowWriter row(out, weights, word);
     for (std::size_t k = 0; k < source_count; ++k) {
       const Source& s = sources[k];
       detail::for_each_posting(s.bytes + s.offsets[r], s.bytes + s.offsets[r + 1],
-                               [&](std::uint32_t relative, float weight) {
+                               [&](std::uint32_t relative, detail::PostingValue value) {
                                  const std::uint32_t entry = s.shift + relative;
-                                 row.put(entry - last - 1, weight);
+                                 row.put(entry - last - 1, value);
                                  last = entry;
                                });
     }
     out = row.finish();
     offsets[r + 1] = static_cast<std::uint32_t>(out - out_begin);
-  }
+  });
   return static_cast<std::size_t>(out - out_begin);
 }
 
 }  // namespace
 
 void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
-  // Rows are written with 2-byte gaps, then narrowed: room for that, then
-  // the block shrinks to what was written.
+  // Rows are written in RowWriter's slots, then narrowed: room for that,
+  // then the block shrinks to what was written.
   std::size_t postings = 0;
   for (std::size_t i = begin; i < end; ++i) postings += segments[i]->postings();
   const std::size_t rows = segments[begin]->offsets.size() - 1;
-  const std::size_t bytes =
-      postings * (detail::kMaxGapWidth + detail::kWeightBytes) + std::min(postings, rows);
+  const std::size_t bytes = postings * detail::kWriterSlotBytes + std::min(postings, rows);
   if (bytes > std::numeric_limits<std::uint32_t>::max())
     throw InvalidArgument("Database: more than 4 GiB of postings in one segment");
   auto merged = std::make_unique<detail::Segment>();
@@ -813,8 +827,10 @@ void Database::Impl::merge_segments(std::size_t begin, std::size_t end) {
   merged->offsets.resize(segments[begin]->offsets.size());
   merged->bytes.resize(bytes);
   merged->posting_count = postings;
-  // Nothing below can throw (shrinking never does).
-  merged->bytes.resize(merge_rows(segments.data() + begin, segments.data() + end, *merged));
+  // Nothing below can throw (shrinking never does; word weights are of
+  // words in the vocabulary).
+  merged->bytes.resize(merge_rows(segments.data() + begin, segments.data() + end, *merged,
+                                  segment_weights(merged->first_entry)));
   for (std::size_t i = begin; i < end; ++i) merged->dead_postings += segments[i]->dead_postings;
   segments[begin] = std::move(merged);
   segments.erase(segments.begin() + static_cast<std::ptrdiff_t>(begin) + 1,
@@ -836,12 +852,17 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   std::uint8_t* const bytes = segment->bytes.data();
   std::uint32_t* const offsets = segment->offsets.data();
   const std::uint8_t* live_at = alive.data() + tail_first_entry;
+  const double* divisor_at = divisors.data() + tail_first_entry;
+  const float* vocabulary_weights = detail::word_weights(vocabulary);
   const bool drop_dead = tail_dead_postings > 0;
   const std::uint32_t row_mask = (1u << high_bits) - 1;
   // Per row of a list: its postings then next byte, its gaps ORed then gap
-  // width, its last entry.
+  // width, its last entry; whether every entry of the row is in count form
+  // (a count row), then its word's vocabulary weight if so.
   const std::size_t list_rows = std::size_t{1} << high_bits;
   std::vector<std::uint32_t> next(list_rows), gaps(list_rows), last(list_rows);
+  std::vector<std::uint8_t> counted(list_rows);
+  std::vector<double> word_weights(list_rows);
   constexpr std::size_t kAhead = 2;
   constexpr std::size_t kLinesAhead = 4;
   std::uint32_t row_end = 0;
@@ -865,6 +886,7 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
     const std::uint32_t size = tail_lists[l].size;
     std::fill(next.begin(), next.begin() + rows, 0);
     std::fill(gaps.begin(), gaps.begin() + rows, 0);
+    std::fill(counted.begin(), counted.begin() + rows, 1);
     std::fill(last.begin(), last.begin() + rows, detail::kRowStart);
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
@@ -873,27 +895,41 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
       const std::uint32_t row = key & row_mask;
       ++next[row];
       gaps[row] |= relative - last[row] - 1;
+      counted[row] &= divisor_at[relative] > 0 ? 1 : 0;
       last[row] = relative;
     }
-    for (std::uint32_t r = 0; r < rows; ++r) {
-      offsets[first_row + r] = row_end;
-      if (next[r] == 0) continue;
-      const std::uint32_t begin = row_end;
-      row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r]));
-      gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
-      bytes[begin] = static_cast<std::uint8_t>(gaps[r]);
-      next[r] = begin + static_cast<std::uint32_t>(detail::kRowHeaderBytes);
-      last[r] = detail::kRowStart;
+    // The list's rows are its groups' in order, a group's words increasing
+    // (RowOrder).
+    std::uint32_t r = 0;
+    for (std::uint32_t g = list << tail_list_shift; r < rows; ++g) {
+      for (std::size_t word = g; word < word_capacity;
+           word += std::size_t{1} << detail::kGroupBits, ++r) {
+        offsets[first_row + r] = row_end;
+        if (next[r] == 0) continue;
+        const std::uint32_t begin = row_end;
+        row_end += static_cast<std::uint32_t>(detail::row_bytes(next[r], gaps[r], counted[r] != 0));
+        gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
+        bytes[begin] =
+            static_cast<std::uint8_t>(gaps[r] | (counted[r] != 0 ? detail::kCountRow : 0));
+        if (counted[r] != 0) word_weights[r] = vocabulary_weights[word];
+        next[r] = begin + static_cast<std::uint32_t>(detail::kRowHeaderBytes);
+        last[r] = detail::kRowStart;
+      }
     }
     for (std::uint32_t i = 0; i < size; ++i) {
       const std::uint32_t key = postings[i].key;
       const std::uint32_t relative = key >> high_bits;
       if (drop_dead && live_at[relative] == 0) continue;
       const std::uint32_t row = key & row_mask;
-      next[row] = static_cast<std::uint32_t>(detail::put_posting(bytes + next[row], gaps[row],
-                                                                 relative - last[row] - 1,
-                                                                 postings[i].weight) -
-                                             bytes);
+      std::uint8_t* const at = bytes + next[row];
+      const std::uint32_t gap = relative - last[row] - 1;
+      next[row] = static_cast<std::uint32_t>(
+          (counted[row] != 0
+               ? detail::put_count_posting(
+                     at, gaps[row], gap,
+                     detail::count_of(postings[i].weight, word_weights[row], divisor_at[relative]))
+               : detail::put_posting(at, gaps[row], gap, postings[i].weight)) -
+          bytes);
       last[row] = relative;
     }
   }
@@ -928,26 +964,28 @@ namespace {
 // (room for each kept posting with a 2-byte gap, and a header per row);
 // returns the bytes written.
 std::size_t drop_dead_postings(detail::Segment& segment, const std::uint8_t* live_at,
-                               std::uint8_t* const out_begin) noexcept {
+                               const detail::SegmentWeights& weights,
+                               std::uint8_t* const out_begin) {
   std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* const bytes = std::as_const(segment.bytes).data();
   std::uint8_t* out = out_begin;
   std::size_t kept = 0;
   std::uint32_t begin = offsets[0];
-  for (std::size_t w = 0; w + 1 < segment.offsets.size(); ++w) {
+  detail::RowOrder::for_each_row(segment.offsets.size() - 1, [&](std::uint32_t w, WordId word) {
     const std::uint32_t end = offsets[w + 1];
     std::uint32_t last = detail::kRowStart;
-    detail::RowWriter row(out);
-    detail::for_each_posting(bytes + begin, bytes + end, [&](std::uint32_t entry, float weight) {
-      if (live_at[entry] == 0) return;
-      row.put(entry - last - 1, weight);
-      last = entry;
-      ++kept;
-    });
+    detail::RowWriter row(out, weights, word);
+    detail::for_each_posting(bytes + begin, bytes + end,
+                             [&](std::uint32_t entry, detail::PostingValue value) {
+                               if (live_at[entry] == 0) return;
+                               row.put(entry - last - 1, value);
+                               last = entry;
+                               ++kept;
+                             });
     out = row.finish();
     offsets[w + 1] = static_cast<std::uint32_t>(out - out_begin);
     begin = end;
-  }
+  });
   segment.posting_count = kept;
   return static_cast<std::size_t>(out - out_begin);
 }
@@ -966,13 +1004,13 @@ void Database::Impl::compact(std::size_t index) {
   const std::size_t live = segment.postings() - segment.dead_postings;
   detail::GrowableArray<std::uint8_t> kept;
   try {
-    kept.resize(live * (detail::kMaxGapWidth + detail::kWeightBytes) +
-                std::min(live, segment.offsets.size() - 1));
+    kept.resize(live * detail::kWriterSlotBytes + std::min(live, segment.offsets.size() - 1));
   } catch (const std::bad_alloc&) {
     return;
   }
-  // Shrinking never throws.
-  kept.resize(drop_dead_postings(segment, alive.data() + segment.first_entry, kept.data()));
+  // Shrinking never throws (nor do word weights of the vocabulary's words).
+  kept.resize(drop_dead_postings(segment, alive.data() + segment.first_entry,
+                                 segment_weights(segment.first_entry), kept.data()));
   segment.bytes.swap(kept);
   segment.dead_postings = 0;
 }
@@ -1172,6 +1210,7 @@ void Database::clear() {
   impl_->tail_first_entry = 0;
   std::vector<std::uint8_t>().swap(impl_->alive);
   std::vector<std::uint32_t>().swap(impl_->word_counts);
+  std::vector<double>().swap(impl_->divisors);
   std::vector<detail::PackedFeatureVector>().swap(impl_->direct);
   std::vector<std::string>().swap(impl_->labels);
   impl_->live_entries = 0;
@@ -1186,6 +1225,7 @@ std::size_t Database::memory_usage() const {
                       impl.tail_lists.capacity() * sizeof(detail::TailList) +
                       impl.first_block_logs.capacity() + impl.alive.capacity() +
                       impl.word_counts.capacity() * sizeof(std::uint32_t) +
+                      impl.divisors.capacity() * sizeof(double) +
                       impl.direct.capacity() * sizeof(detail::PackedFeatureVector) +
                       impl.loaded_direct.offsets.capacity() * sizeof(std::uint64_t) +
                       impl.labels.capacity() * sizeof(std::string);

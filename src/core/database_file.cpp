@@ -11,18 +11,22 @@
 //   4 parts (per part: u32 rows, u32 postings)
 //   5 rows (per part, per word with postings: u32 word, u32 bytes), by
 //     word mod 65,536, then word / 65,536
-//   6 postings, by part, row: the row's gap width (u8: 1 if every gap of
-//     the row is below 256, else 2; no other), then by id per posting the
-//     gap from the row's previous id minus 1 (the first: id - the part's
-//     first id; u8 or u16 by the width), then its weight (f32)
-//   7 empty
+//   6 postings, by part, row: the row's header (u8: its gap width, 1 if
+//     every gap of the row is below 256, else 2; plus 16 for a count row),
+//     then by id per posting the gap from the row's previous id minus 1
+//     (the first: id - the part's first id; u8 or u16 by the width), then
+//     its weight (f32), or in a count row its count (u8, ≥ 1): the weight
+//     is then float(word weight * count / divisor), in doubles
+//   7 divisors (f64 per id: > 0 for an entry whose weights are its counts'
+//     as above, which count rows may hold; 0 for the others)
 //   8 direct index sizes (per id: u32 nodes, u32 features, u32 bytes)
 //   9 direct index data (per live entry: u8 layout, u32 bytes of node ids,
 //     the node ids as steps from the previous one (LEB128), then per
 //     feature its node's position (u8, u16 or 7 bits packed from the low
 //     bit of the first byte: layouts 0, 1, 4) or per node the end of its
 //     features and the feature indices (u16 or u32: layouts 2, 3))
-//   Version 2 (read): as version 3, but 5 rows count postings (u32 length),
+//   Version 2 (read): as version 3 without count rows, but 5 rows count
+//   postings (u32 length),
 //   6 holds their ids (u16: id - the part's first id), 7 their weights
 //   (f32), and the direct index has no layout 4.
 //   Version 1 (read): the index by word over every id:
@@ -71,7 +75,7 @@ enum Section : std::uint32_t {
   kParts,           // version 1: kWords
   kRows,            // version 1: kListLengths
   kPostingEntries,  // version 1: kPostingIds; version 3: kPostingBytes
-  kPostingWeights,  // empty in version 3
+  kPostingWeights,  // version 3: kDivisors
   kDirectSizes,
   kDirectData,
   kLabelLengths,
@@ -81,6 +85,7 @@ enum Section : std::uint32_t {
   kListLengths = kRows,
   kPostingIds = kPostingEntries,
   kPostingBytes = kPostingEntries,
+  kDivisors = kPostingWeights,
 };
 
 constexpr const char* kSectionNames[kSectionCount] = {
@@ -89,7 +94,7 @@ constexpr const char* kSectionNames[kSectionCount] = {
     "direct index", "label lengths",          "labels"};
 constexpr const char* kVersion3SectionNames[kSectionCount] = {
     "vocabulary", "vocabulary description", "entry states", "parts",         "rows",  "postings",
-    "unused",     "direct index sizes",     "direct index", "label lengths", "labels"};
+    "divisors",   "direct index sizes",     "direct index", "label lengths", "labels"};
 constexpr const char* kVersion1SectionNames[kSectionCount] = {
     "vocabulary",  "vocabulary description", "entry states",       "words",        "list lengths",
     "posting ids", "posting weights",        "direct index sizes", "direct index", "label lengths",
@@ -267,8 +272,8 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     while (s < sources.size() && sources[s]->end_entry <= k * span) ++s;
     source_begin[k] = s;
   }
-  // Calls visit(relative_entry, weight) for the live postings of the row in
-  // part k, in entry order (relative to the part's first id).
+  // Calls visit(relative_entry, PostingValue) for the live postings of the
+  // row in part k, in entry order (relative to the part's first id).
   const auto for_each_posting = [&](std::size_t k, std::uint32_t row, const auto& visit) {
     const auto part_begin = static_cast<EntryId>(k * span);
     const auto part_end = static_cast<EntryId>(std::min<std::size_t>(next_id, (k + 1) * span));
@@ -277,11 +282,11 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
       if (source.first_entry >= part_end) break;
       const bool check_alive = source.dead_postings > 0;
       detail::for_each_posting(source.row_begin(row), source.row_end(row),
-                               [&](std::uint32_t relative, float weight) {
+                               [&](std::uint32_t relative, detail::PostingValue value) {
                                  const EntryId entry = source.first_entry + relative;
                                  if (entry < part_begin || entry >= part_end) return;
                                  if (check_alive && impl.alive[entry] == 0) return;
-                                 visit(entry - part_begin, weight);
+                                 visit(entry - part_begin, value);
                                });
     }
   };
@@ -289,6 +294,7 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
   struct PartRow {
     std::uint32_t row;
     WordId word;
+    std::uint32_t postings;
     std::uint32_t bytes;
   };
   std::vector<std::vector<PartRow>> part_rows(part_count);
@@ -299,14 +305,17 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     if (source_begin[k] == sources.size()) break;
     detail::RowOrder::for_each_row(impl.word_capacity, [&](std::uint32_t row, WordId word) {
       std::uint32_t gaps = 0, postings = 0, last = detail::kRowStart;
-      for_each_posting(k, row, [&](std::uint32_t relative, float) {
+      bool counts = true;  // as RowWriter decides
+      for_each_posting(k, row, [&](std::uint32_t relative, detail::PostingValue value) {
         gaps |= relative - last - 1;
         last = relative;
+        counts = counts && value.count != 0;
         ++postings;
       });
       if (postings == 0) return;
       part_rows[k].push_back(
-          {row, word, static_cast<std::uint32_t>(detail::row_bytes(postings, gaps))});
+          {row, word, postings,
+           static_cast<std::uint32_t>(detail::row_bytes(postings, gaps, counts))});
       part_postings[k] += postings;
       largest_word_end = std::max<std::uint64_t>(largest_word_end, std::uint64_t{word} + 1);
     });
@@ -324,20 +333,25 @@ void write_database(const Impl& impl, bool include_vocabulary, detail::Sectioned
     }
   out.next_section();
   std::vector<std::uint8_t> row_bytes;
-  for (std::size_t k = 0; k < part_count; ++k)
+  for (std::size_t k = 0; k < part_count; ++k) {
+    const detail::SegmentWeights weights = impl.segment_weights(static_cast<EntryId>(k * span));
     for (const PartRow& row : part_rows[k]) {
-      row_bytes.resize(row.bytes + detail::kMaxGapWidth * (row.bytes / detail::kWeightBytes));
-      detail::RowWriter writer(row_bytes.data());
+      row_bytes.resize(detail::kRowHeaderBytes +
+                       std::size_t{row.postings} * detail::kWriterSlotBytes);
+      detail::RowWriter writer(row_bytes.data(), weights, row.word);
       std::uint32_t last = detail::kRowStart;
-      for_each_posting(k, row.row, [&](std::uint32_t relative, float weight) {
-        writer.put(relative - last - 1, weight);
+      for_each_posting(k, row.row, [&](std::uint32_t relative, detail::PostingValue value) {
+        writer.put(relative - last - 1, value);
         last = relative;
       });
       writer.finish();  // row.bytes long: the same postings were sized above
       out.append(row_bytes.data(), row.bytes);
     }
+  }
   out.next_section();
-  out.next_section();  // weights: within the postings since version 3
+  for (EntryId entry = 0; entry < next_id; ++entry)
+    out.append_le<double>(impl.alive[entry] != 0 ? impl.divisors[entry] : 0.0);
+  out.next_section();
 
   if (impl.options.direct_index) {
     // The entries of a loaded file keep their encodings, as the file has them.
@@ -420,8 +434,9 @@ std::string hex(std::uint32_t value) {
   std::snprintf(text, sizeof text, "%08x", value);
   return text;
 }
-// Moves rows written into slots of row_bytes(n, 0xFFFF) bytes (RowWriter
-// leaves 1-byte rows shorter) next to each other, and shrinks the block.
+// Moves rows written into RowWriter's slots (a header and kWriterSlotBytes
+// per posting; the finished row is shorter) next to each other, and shrinks
+// the block.
 void squeeze_rows(detail::Segment& segment) noexcept {
   std::uint32_t* offsets = segment.offsets.data();
   std::uint8_t* const bytes = segment.bytes.data();
@@ -430,10 +445,10 @@ void squeeze_rows(detail::Segment& segment) noexcept {
     const std::uint32_t begin = offsets[r], slot = offsets[r + 1] - begin;
     offsets[r] = out;
     if (slot == 0) continue;
-    const std::uint32_t postings = static_cast<std::uint32_t>(
-        (slot - detail::kRowHeaderBytes) / (detail::kMaxGapWidth + detail::kWeightBytes));
+    const std::uint32_t postings =
+        static_cast<std::uint32_t>((slot - detail::kRowHeaderBytes) / detail::kWriterSlotBytes);
     const auto size = static_cast<std::uint32_t>(detail::kRowHeaderBytes +
-                                                 postings * (bytes[begin] + detail::kWeightBytes));
+                                                 postings * detail::header_stride(bytes[begin]));
     std::memmove(bytes + out, bytes + begin, size);
     out += size;
   }
@@ -503,6 +518,7 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     }
   };
   impl->word_counts.assign(next_id, 0);
+  impl->divisors.assign(next_id, 0.0);
   const std::size_t span = detail::kSegmentSpan;
   const std::size_t segment_count = posting_count > 0 ? (next_id + span - 1) / span : 0;
   std::vector<std::unique_ptr<detail::Segment>> segments(segment_count);  // those with postings
@@ -530,10 +546,9 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
       }
       // The row's previous posting in this segment, if any, precedes it in the list.
       const bool first_in_row = i == from || previous < segment->first_entry;
-      // Room for a 2-byte gap: pass two writes the row, pass three squeezes it.
-      segment->offsets[rows[l] + 1] +=
-          static_cast<std::uint32_t>((first_in_row ? detail::kRowHeaderBytes : 0) +
-                                     detail::kMaxGapWidth + detail::kWeightBytes);
+      // Room for RowWriter: pass two writes the row, pass three squeezes it.
+      segment->offsets[rows[l] + 1] += static_cast<std::uint32_t>(
+          (first_in_row ? detail::kRowHeaderBytes : 0) + detail::kWriterSlotBytes);
       ++segment->posting_count;
       previous = id;
     }
@@ -549,13 +564,14 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
     const std::size_t end = from + lengths[l];
     while (i < end) {
       detail::Segment& segment = *segments[detail::load_le<std::uint32_t>(ids + 4 * i) / span];
-      detail::RowWriter row(segment.bytes.data() + segment.offsets[rows[l]]);
+      // Weights only: no counts to compute.
+      detail::RowWriter row(segment.bytes.data() + segment.offsets[rows[l]], {}, words[l]);
       std::uint32_t last = detail::kRowStart;
       for (; i < end; ++i) {
         const auto id = detail::load_le<std::uint32_t>(ids + 4 * i);
         if (id >= segment.end_entry) break;
         const std::uint32_t relative = id - segment.first_entry;
-        row.put(relative - last - 1, detail::load_le<float>(weights + 4 * i));
+        row.put(relative - last - 1, {0, detail::load_le<float>(weights + 4 * i)});
         last = relative;
       }
       row.finish();
@@ -566,6 +582,24 @@ void read_postings_v1(const Layout& layout, const Release& release, Impl* impl) 
       squeeze_rows(*segment);
       impl->segments.push_back(std::move(segment));
     }
+}
+
+// Version 3: per entry, the divisor of its counts, or 0: finite and
+// positive, and only for live entries of a database with a vocabulary.
+// Checked at open (8 bytes per entry): check_postings() reads them.
+template <class Impl>
+void read_divisors(const Layout& layout, Impl* impl) {
+  const EntryId next_id = layout.header().next_entry_id;
+  const std::uint8_t* data = layout.array(kDivisors, next_id, 8);
+  impl->divisors.resize(next_id);
+  for (EntryId entry = 0; entry < next_id; ++entry) {
+    const auto divisor = detail::load_le<double>(data + 8 * std::size_t{entry});
+    if (divisor != 0 && (!std::isfinite(divisor) || !(divisor > 0) || impl->alive[entry] == 0 ||
+                         impl->over_word_ids))
+      layout.fail("entry " + std::to_string(entry) + " has an invalid divisor (" +
+                  std::to_string(divisor) + ")");
+    impl->divisors[entry] = divisor;
+  }
 }
 
 // Versions 2 and 3: the parts (one per kSegmentSpan ids) must add up to
@@ -601,10 +635,6 @@ void lay_out_rows(const Layout& layout, const Source& source, Impl* impl) {
   const std::size_t part_count = (std::size_t{next_id} + span - 1) / span;
   const std::size_t row_count = layout.count_of(kRows, 8);
   const std::vector<std::uint32_t> parts = read_parts(layout, part_count, row_count);
-  if (layout.section(kPostingWeights).size != 0)
-    layout.fail("the unused section holds " + std::to_string(layout.section(kPostingWeights).size) +
-                " bytes");
-  layout.verify(kPostingWeights);
   const std::uint8_t* rows = layout.array(kRows, row_count, 8);
   const detail::Section& postings = layout.section(kPostingBytes);
   impl->word_counts.assign(next_id, 0);  // counted by check_postings
@@ -632,7 +662,8 @@ void lay_out_rows(const Layout& layout, const Source& source, Impl* impl) {
       const std::uint32_t row = impl->row_order.row(word);
       if (r > 0 && row <= previous_row)
         layout.fail(where + ": rows are not in order (word " + std::to_string(word) + ")");
-      if (length < detail::row_bytes(1, 0) || length > detail::row_bytes(end - first, 0xFFFF) ||
+      if (length < detail::row_bytes(1, 0, true) ||
+          length > detail::row_bytes(end - first, 0xFFFF, false) ||
           length > postings.size - byte_at - part_bytes)
         layout.fail(where + ": the row of word " + std::to_string(word) + " has an invalid length");
       offsets[row + 1] = length;
@@ -658,9 +689,14 @@ void lay_out_rows(const Layout& layout, const Source& source, Impl* impl) {
 // Version 3: every posting, as lay_out_rows() left them: each names a live
 // entry of its part, in increasing order, with a finite weight, in a row
 // whose gap width is the narrowest its gaps allow (so that a row has one
-// form). Counts each entry's postings and the weights' range: what load()
-// would compute reading them itself.
-detail::BackgroundCheck::Found check_postings(const Layout& layout, const std::atomic<bool>& stop) {
+// form). A count row's word has a weight, and each of its counts is at
+// least 1 and of an entry with a divisor (read_divisors() checked them);
+// its weights are computed as a query computes them. Counts each entry's
+// postings and the weights' range: what load() would compute reading them
+// itself. `word_weights` are the vocabulary's (null over word ids: no count
+// rows).
+detail::BackgroundCheck::Found check_postings(const Layout& layout, const float* word_weights,
+                                              const std::atomic<bool>& stop) {
   layout.verify(kPostingBytes);
   const EntryId next_id = layout.header().next_entry_id;
   const std::size_t span = detail::kSegmentSpan;
@@ -669,6 +705,7 @@ detail::BackgroundCheck::Found check_postings(const Layout& layout, const std::a
   const std::uint8_t* rows = layout.section(kRows).data;
   const std::uint8_t* postings = layout.section(kPostingBytes).data;
   const std::uint8_t* alive = layout.section(kEntryStates).data;
+  const std::uint8_t* divisors = layout.section(kDivisors).data;
   detail::BackgroundCheck::Found found;
   found.word_counts.assign(next_id, 0);
   std::size_t row_at = 0, byte_at = 0;
@@ -683,23 +720,39 @@ detail::BackgroundCheck::Found check_postings(const Layout& layout, const std::a
     for (std::uint32_t r = 0; r < part_rows; ++r) {
       const auto word = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r));
       const auto length = detail::load_le<std::uint32_t>(rows + 8 * (row_at + r) + 4);
-      const auto row_fail = [&](const char* problem) {
+      const auto row_fail = [&](const std::string& problem) {
         layout.fail(where + ": the row of word " + std::to_string(word) + " " + problem);
       };
       const std::uint8_t* at = postings + byte_at;
       const std::uint8_t* const row_end = at + length;
-      const std::size_t width = at[0];
-      const std::size_t stride = width + detail::kWeightBytes;
-      if ((width != 1 && width != 2) || (length - detail::kRowHeaderBytes) % stride != 0)
+      const std::uint8_t row_header = at[0];
+      const std::size_t width = detail::header_width(row_header);
+      const bool counts = detail::header_counts(row_header);
+      const std::size_t stride = detail::header_stride(row_header);
+      if ((width != 1 && width != 2) || (row_header & ~(3u | detail::kCountRow)) != 0 ||
+          (length - detail::kRowHeaderBytes) % stride != 0)
         row_fail("has a malformed posting");
+      const double word_weight =
+          counts && word_weights != nullptr ? static_cast<double>(word_weights[word]) : 0.0;
+      if (counts && !(word_weight > 0)) row_fail("holds counts, but the word has no weight");
       std::uint32_t gaps = 0, last = detail::kRowStart;
       for (at += detail::kRowHeaderBytes; at != row_end; at += stride) {
-        const std::uint32_t gap = width == 1 ? detail::read_gap<1>(at) : detail::read_gap<2>(at);
+        const std::uint32_t gap = detail::read_gap(at, width);
         gaps |= gap;
         last += gap + 1;
         if (last >= part_span || alive[first + last] == 0)
           row_fail("names a missing entry or is not in increasing order");
-        const float weight = detail::read_weight(at + width);
+        float weight;
+        if (counts) {
+          const std::uint32_t count = at[width];
+          const auto divisor = detail::load_le<double>(divisors + 8 * (std::size_t{first} + last));
+          if (count == 0 || divisor == 0)
+            row_fail("has a count of " + std::to_string(count) + " for entry " +
+                     std::to_string(first + last) + (count == 0 ? "" : ", which has no divisor"));
+          weight = detail::count_weight(word_weight, count, divisor);
+        } else {
+          weight = detail::read_weight(at + width);
+        }
         if (!std::isfinite(weight)) row_fail("has a non-finite weight");
         found.values.include(weight);
         ++found.word_counts[first + last];
@@ -783,7 +836,7 @@ void read_postings_v2(const Layout& layout, const Release& release, Impl* impl) 
         gaps |= relative - last - 1;
         last = relative;
       }
-      const std::uint64_t bytes = detail::row_bytes(length, gaps);
+      const std::uint64_t bytes = detail::row_bytes(length, gaps, false);
       offsets[row + 1] = static_cast<std::uint32_t>(bytes);
       previous_row = row;
       part_read += length;
@@ -985,11 +1038,14 @@ template <class Impl>
 void check_file(const Layout& layout, const Source& source, Impl* impl, std::uint64_t node_count,
                 bool direct_in_file) {
   const bool background = source.file && source.background;
-  // The task keeps the file mapped, and its own copy of the layout.
-  auto task = [layout, file = source.file, node_count, direct_in_file,
+  // The task keeps the file mapped, the vocabulary (whose word weights it
+  // reads) and its own copy of the layout.
+  auto task = [layout, file = source.file, vocabulary = impl->vocabulary,
+               over_word_ids = impl->over_word_ids, node_count, direct_in_file,
                background](const std::atomic<bool>& stop) {
     try {
-      detail::BackgroundCheck::Found found = check_postings(layout, stop);
+      detail::BackgroundCheck::Found found =
+          check_postings(layout, over_word_ids ? nullptr : detail::word_weights(vocabulary), stop);
       if (direct_in_file) check_direct_index(layout, node_count, stop);
       return found;
     } catch (const FileError& e) {
@@ -1024,12 +1080,15 @@ void read_index(const Layout& layout, const Source& source, Impl* impl) {
                 " entries, the entry states " + std::to_string(live));
   impl->live_entries = live;
 
-  if (header.version == 1)
+  if (header.version == 1) {
     read_postings_v1(layout, release, impl);
-  else if (header.version == 2)
+  } else if (header.version == 2) {
     read_postings_v2(layout, release, impl);
-  else
+    impl->divisors.assign(next_id, 0.0);
+  } else {
+    read_divisors(layout, impl);
     lay_out_rows(layout, source, impl);
+  }
   impl->tail_first_entry = next_id;
 
   const bool direct_in_file = impl->options.direct_index && header.version >= 3 && source.file;

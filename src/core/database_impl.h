@@ -20,6 +20,7 @@
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
 #include "core/background_check.h"
+#include "core/count_form.h"
 #include "core/database_journal.h"
 #include "core/forward_index.h"
 #include "core/scoring.h"
@@ -395,38 +396,73 @@ namespace detail {
 // [first_entry, end_entry) as rows by word (in RowOrder): one byte offset
 // per word, then the row's bytes. An empty row has none; otherwise a header
 // byte holds the row's gap width (1 if every gap of the row is below 256,
-// else 2), then come its postings in increasing entry order at a fixed
-// stride: the gap from the previous entry (entry - previous - 1, the first
-// from first_entry - 1; little-endian, of the row's width) and the weight
-// (f32, little-endian, unaligned): 5 bytes per posting in common rows. A
-// fixed stride lets a query read a row with no branch per posting, so the
-// cache misses of its score sums overlap. A segment spans at most
-// kSegmentSpan ids, so that 2 bytes hold any gap. A query pays one offset
-// lookup per word and segment, small next to the postings it reads.
+// else 2) and its kind, then come its postings in increasing entry order at
+// a fixed stride: the gap from the previous entry (entry - previous - 1, the
+// first from first_entry - 1; little-endian, of the row's width), then the
+// value. In a count row (kCountRow), every posting's entry is in count form
+// (its divisor, in Database::Impl::divisors, is above 0) and the value is
+// the word's count in it (u8, ≥ 1): its weight is count_weight(the word's
+// vocabulary weight, count, divisor), bit for bit what the entry was added
+// with; 2-3 bytes per posting. Otherwise the value is the weight (f32,
+// little-endian, unaligned): 5-6 bytes. A fixed stride lets a query read a
+// row with no branch per posting, so the cache misses of its score sums
+// overlap. A segment spans at most kSegmentSpan ids, so that 2 bytes hold
+// any gap. A query pays one offset lookup per word and segment, small next
+// to the postings it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
 constexpr std::size_t kWeightBytes = 4;
+constexpr std::size_t kCountBytes = 1;
+constexpr std::uint32_t kMaxRowCount = 0xFF;
 constexpr std::size_t kRowHeaderBytes = 1;
 constexpr std::size_t kMaxGapWidth = 2;
+constexpr std::uint8_t kCountRow = 0x10;  // in the header, with the gap width
+// What RowWriter needs per posting: a 2-byte gap and a weight.
+constexpr std::size_t kWriterSlotBytes = kMaxGapWidth + kWeightBytes;
 
 // The gap width of a row whose gaps OR to `gaps`.
 constexpr std::size_t gap_width(std::uint32_t gaps) noexcept {
   return gaps < 0x100 ? 1 : 2;
 }
-// The bytes of a row of `postings` postings whose gaps OR to `gaps`.
-constexpr std::size_t row_bytes(std::size_t postings, std::uint32_t gaps) noexcept {
-  return postings == 0 ? 0 : kRowHeaderBytes + postings * (gap_width(gaps) + kWeightBytes);
+// A row header's gap width, value bytes and posting stride.
+constexpr std::size_t header_width(std::uint8_t header) noexcept {
+  return header & 3;
 }
-// Writes a posting of a row of gap width `width` at `out`; returns the byte after it.
-inline std::uint8_t* put_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
-                                 float weight) noexcept {
+constexpr bool header_counts(std::uint8_t header) noexcept {
+  return (header & kCountRow) != 0;
+}
+constexpr std::size_t header_stride(std::uint8_t header) noexcept {
+  return header_width(header) + (header_counts(header) ? kCountBytes : kWeightBytes);
+}
+// The bytes of a row of `postings` postings whose gaps OR to `gaps`.
+constexpr std::size_t row_bytes(std::size_t postings, std::uint32_t gaps, bool counts) noexcept {
+  return postings == 0 ? 0
+                       : kRowHeaderBytes +
+                             postings * (gap_width(gaps) + (counts ? kCountBytes : kWeightBytes));
+}
+inline void put_gap(std::uint8_t* out, std::size_t width, std::uint32_t gap) noexcept {
   out[0] = static_cast<std::uint8_t>(gap);
   if (width == 2) out[1] = static_cast<std::uint8_t>(gap >> 8);
+}
+// Writes a posting of an f32 row of gap width `width` at `out`; returns the byte after it.
+inline std::uint8_t* put_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
+                                 float weight) noexcept {
+  put_gap(out, width, gap);
   std::memcpy(out + width, &weight, kWeightBytes);  // little-endian hosts only (as the whole index)
   return out + width + kWeightBytes;
+}
+// The same, in a count row.
+inline std::uint8_t* put_count_posting(std::uint8_t* out, std::size_t width, std::uint32_t gap,
+                                       std::uint32_t count) noexcept {
+  put_gap(out, width, gap);
+  out[width] = static_cast<std::uint8_t>(count);
+  return out + width + kCountBytes;
 }
 template <std::size_t kWidth>
 inline std::uint32_t read_gap(const std::uint8_t* at) noexcept {
   return kWidth == 1 ? at[0] : std::uint32_t{at[0]} | std::uint32_t{at[1]} << 8;
+}
+inline std::uint32_t read_gap(const std::uint8_t* at, std::size_t width) noexcept {
+  return width == 1 ? read_gap<1>(at) : read_gap<2>(at);
 }
 inline float read_weight(const std::uint8_t* at) noexcept {
   float weight;
@@ -437,49 +473,127 @@ inline float read_weight(const std::uint8_t* at) noexcept {
 // differences minus 1, in wrapping 32-bit arithmetic.
 constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
 
+// The count of a posting of an entry in count form, from its weight: the
+// weight is count_weight(word_weight, c, divisor) for a count c ≤ 255, within
+// 2^-24 relatively, so the quotient is within 2^-15 of c.
+inline std::uint32_t count_of(float weight, double word_weight, double divisor) noexcept {
+  return static_cast<std::uint32_t>(static_cast<double>(weight) * divisor / word_weight + 0.5);
+}
+
+// What turns a row's counts into weights: its word's vocabulary weight, and
+// the divisors of the segment's entries (indexed relative to first_entry).
+struct RowWeights {
+  double word_weight = 0;
+  const double* divisors = nullptr;
+  float weight(std::uint32_t relative_entry, std::uint32_t count) const noexcept {
+    return count_weight(word_weight, count, divisors[relative_entry]);
+  }
+};
+// The same for every row of a segment.
+struct SegmentWeights {
+  const float* word_weights = nullptr;  // the vocabulary's; null over word ids (no counts)
+  const double* divisors = nullptr;     // from the segment's first entry
+  RowWeights row(WordId word) const noexcept {
+    return {word_weights != nullptr ? static_cast<double>(word_weights[word]) : 0.0, divisors};
+  }
+};
+
+// A posting's value as a row holds it: a count (1 to kMaxRowCount), or 0
+// and the weight.
+struct PostingValue {
+  std::uint32_t count;
+  float weight;  // meaningful when count is 0
+};
+
 // Writes a row from its postings alone: each with a 2-byte gap, narrowed to
-// 1 byte by finish() when every gap allows. Needs row_bytes(n, 0xFFFF) bytes
-// for n postings.
+// 1 byte by finish() when every gap allows, and with its count while every
+// posting has one (a count row), else with its weight (the weights of the
+// counts so far are then computed). Needs kRowHeaderBytes +
+// kWriterSlotBytes per posting.
 class RowWriter {
  public:
-  explicit RowWriter(std::uint8_t* out) noexcept : begin_(out), at_(out + kRowHeaderBytes) {}
-  void put(std::uint32_t gap, float weight) noexcept {
-    at_ = put_posting(at_, 2, gap, weight);
+  // For a row of `word` in a segment whose counts `weights` computes.
+  RowWriter(std::uint8_t* out, const SegmentWeights& weights, WordId word) noexcept
+      : begin_(out), at_(out + kRowHeaderBytes), weights_(weights), word_(word) {}
+  // `value` has a count of at most kMaxRowCount, or a weight.
+  void put(std::uint32_t gap, PostingValue value) {
+    entry_ += gap + 1;
     gaps_ |= gap;
+    if (counts_ && value.count == 0) to_weights(gap);
+    at_[0] = static_cast<std::uint8_t>(gap);
+    at_[1] = static_cast<std::uint8_t>(gap >> 8);
+    if (counts_) {
+      at_[2] = static_cast<std::uint8_t>(value.count);
+      at_ += kMaxGapWidth + kCountBytes;
+      return;
+    }
+    const float weight = value.count != 0 ? row_.weight(entry_, value.count) : value.weight;
+    std::memcpy(at_ + 2, &weight, kWeightBytes);
+    at_ += kMaxGapWidth + kWeightBytes;
   }
   // Returns the byte after the row.
   std::uint8_t* finish() noexcept {
     const std::uint8_t* const postings = begin_ + kRowHeaderBytes;
     if (at_ == postings) return begin_;
     const std::size_t width = gap_width(gaps_);
-    *begin_ = static_cast<std::uint8_t>(width);
+    *begin_ = static_cast<std::uint8_t>(width | (counts_ ? kCountRow : 0));
     if (width == 2) return at_;
+    const std::size_t value_bytes = counts_ ? kCountBytes : kWeightBytes;
     std::uint8_t* out = begin_ + kRowHeaderBytes;
-    for (const std::uint8_t* in = postings; in != at_; in += 2 + kWeightBytes) {
+    for (const std::uint8_t* in = postings; in != at_; in += 2 + value_bytes) {
       out[0] = in[0];
-      std::memmove(out + 1, in + 2, kWeightBytes);
-      out += 1 + kWeightBytes;
+      std::memmove(out + 1, in + 2, value_bytes);
+      out += 1 + value_bytes;
     }
     return out;
   }
 
  private:
+  // Rewrites the count postings so far as weight postings, from the last
+  // (the entry before the one of `gap` being put) back: each moves to a
+  // larger slot, past the ones still to read.
+  void to_weights(std::uint32_t gap) {
+    row_ = weights_.row(word_);
+    counts_ = false;
+    constexpr std::size_t kFrom = kMaxGapWidth + kCountBytes;
+    constexpr std::size_t kTo = kMaxGapWidth + kWeightBytes;
+    std::uint8_t* const postings = begin_ + kRowHeaderBytes;
+    const std::size_t n = static_cast<std::size_t>(at_ - postings) / kFrom;
+    std::uint32_t entry = entry_ - gap - 1;
+    for (std::size_t i = n; i-- > 0;) {
+      const std::uint8_t* in = postings + i * kFrom;
+      const std::uint32_t previous_gap = read_gap<2>(in);
+      const float weight = row_.weight(entry, in[2]);
+      put_posting(postings + i * kTo, 2, previous_gap, weight);
+      entry -= previous_gap + 1;
+    }
+    at_ = postings + n * kTo;
+  }
+
   std::uint8_t* begin_;
   std::uint8_t* at_;
+  SegmentWeights weights_;
+  WordId word_;
+  RowWeights row_;  // set when the first weight comes
+  std::uint32_t entry_ = kRowStart;
   std::uint32_t gaps_ = 0;
+  bool counts_ = true;
 };
 
-// Calls visit(relative_entry, weight) for the postings of the row in
+// Calls visit(relative_entry, PostingValue) for the postings of the row in
 // [begin, end), in order.
 template <class Visit>
 inline void for_each_posting(const std::uint8_t* begin, const std::uint8_t* end,
                              const Visit& visit) {
   if (begin == end) return;
-  const std::size_t width = *begin;
+  const std::uint8_t header = *begin;
+  const std::size_t width = header_width(header);
+  const std::size_t stride = header_stride(header);
+  const bool counts = header_counts(header);
   std::uint32_t entry = kRowStart;
-  for (const std::uint8_t* at = begin + kRowHeaderBytes; at != end; at += width + kWeightBytes) {
-    entry += (width == 1 ? read_gap<1>(at) : read_gap<2>(at)) + 1;
-    visit(entry, read_weight(at + width));
+  for (const std::uint8_t* at = begin + kRowHeaderBytes; at != end; at += stride) {
+    entry += read_gap(at, width) + 1;
+    visit(entry, counts ? PostingValue{at[width], 0.0f} : PostingValue{0, read_weight(at + width)});
   }
 }
 
@@ -514,7 +628,7 @@ struct Segment {
   std::size_t row_postings(std::uint32_t row) const noexcept {
     const std::uint32_t size = offsets[row + 1] - offsets[row];
     if (size == 0) return 0;
-    return (size - kRowHeaderBytes) / (bytes.data()[offsets[row]] + kWeightBytes);
+    return (size - kRowHeaderBytes) / header_stride(bytes.data()[offsets[row]]);
   }
 };
 
@@ -564,6 +678,13 @@ struct Database::Impl {
   // queries (shared lock held), so that only databases queried in fast
   // mode pay its memory.
   void build_forward_index() const;
+  // The divisor an entry of these words gets (see divisors).
+  double divisor_of(Span<BowEntry> words);
+  // What turns counts into weights in a segment from `first_entry`.
+  detail::SegmentWeights segment_weights(EntryId first_entry) const noexcept {
+    return {over_word_ids ? nullptr : detail::word_weights(vocabulary),
+            divisors.data() + first_entry};
+  }
 
   Vocabulary vocabulary;  // empty over word ids
   DatabaseOptions options;
@@ -600,12 +721,18 @@ struct Database::Impl {
 
   // Per entry, indexed by entry id (dead entries keep their place).
   std::vector<std::uint8_t> alive;
-  std::vector<std::uint32_t> word_counts;           // postings the entry put in the index
+  std::vector<std::uint32_t> word_counts;  // postings the entry put in the index
+  // The divisor of an entry in count form (CountForm, with counts up to
+  // kMaxRowCount), whose segment postings may be counts; 0 for the others
+  // (vectors not made by transform, databases over word ids, removed ones).
+  std::vector<double> divisors;
   std::vector<detail::PackedFeatureVector> direct;  // empty without a direct index
   // Of a loaded database: the file's entries' direct index (theirs in
   // `direct` stay empty).
   detail::LoadedDirectIndex loaded_direct;
   std::vector<std::string> labels;  // empty until a label is set
+
+  detail::CountForm count_form;  // divisor_of's buffers
 
   // Each entry's BoW vector, for fast queries: built by the first one, then
   // kept up to date by add, remove and clear.

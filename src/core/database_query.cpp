@@ -170,14 +170,33 @@ inline void accumulate_row(const std::uint8_t* at, const std::uint8_t* end, bool
   }
 }
 
+// The same for a count row: each weight computed from the count, as the
+// entry's was when it was added. Entries are at most `entry_bound` (the
+// segment's last) where the divisors are looked up: a row of an unchecked
+// file may reach past them.
+template <std::size_t kWidth, class Term>
+inline void accumulate_count_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
+                                 std::uint32_t last, const Term& term,
+                                 const detail::RowWeights& weights, std::uint32_t entry_bound,
+                                 PartScores scores) {
+  std::uint32_t entry = detail::kRowStart;
+  for (; at != end; at += kWidth + detail::kCountBytes) {
+    entry += detail::read_gap<kWidth>(at) + 1;
+    if (cut && entry > last) return;
+    scores.add(entry, term(weights.weight(std::min(entry, entry_bound), at[kWidth])));
+  }
+}
+
 // Entries are increasing within a row, so `last_entry` cuts it short.
 template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
-                        EntryId last_entry, PartScores scores) {
+                        EntryId last_entry, const detail::SegmentWeights& weights,
+                        PartScores scores) {
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
   const bool cut = last_entry < segment.end_entry - 1;
   const std::uint32_t last = cut ? last_entry - segment.first_entry : detail::kRowStart;
+  const std::uint32_t entry_bound = segment.end_entry - segment.first_entry - 1;
   const std::size_t n = bow.size();
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
@@ -191,15 +210,29 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
     if (size == 0) continue;
     const Term term{query[q].value};
     // The rows of a loaded file may be read before its check ends: a row is
-    // read as whole postings of its header's width (any byte but 1 is 2),
-    // never past its end.
+    // read as whole postings of its header's width (any width but 1 is 2)
+    // and kind, never past its end, and a count row's divisors are looked up
+    // within the segment's entries.
+    const std::uint8_t header = *begin;
     const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
     const std::size_t postings = size - detail::kRowHeaderBytes;
-    constexpr std::size_t kStride1 = 1 + detail::kWeightBytes, kStride2 = 2 + detail::kWeightBytes;
-    if (*begin == 1)
-      accumulate_row<1>(first, first + postings / kStride1 * kStride1, cut, last, term, scores);
-    else
-      accumulate_row<2>(first, first + postings / kStride2 * kStride2, cut, last, term, scores);
+    const bool narrow = detail::header_width(header) == 1;
+    if (detail::header_counts(header)) {
+      const detail::RowWeights row_weights = weights.row(query[q].word);
+      const std::size_t stride = (narrow ? 1 : 2) + detail::kCountBytes;
+      const std::uint8_t* const end = first + postings / stride * stride;
+      if (narrow)
+        accumulate_count_row<1>(first, end, cut, last, term, row_weights, entry_bound, scores);
+      else
+        accumulate_count_row<2>(first, end, cut, last, term, row_weights, entry_bound, scores);
+    } else {
+      const std::size_t stride = (narrow ? 1 : 2) + detail::kWeightBytes;
+      const std::uint8_t* const end = first + postings / stride * stride;
+      if (narrow)
+        accumulate_row<1>(first, end, cut, last, term, scores);
+      else
+        accumulate_row<2>(first, end, cut, last, term, scores);
+    }
   }
 }
 
@@ -216,6 +249,8 @@ struct IndexView {
   const std::uint8_t* alive;
   std::size_t entry_count;
   const detail::ForwardIndex* forward;  // built for fast queries
+  const float* word_weights;            // the vocabulary's; null over word ids
+  const double* divisors;               // Database::Impl::divisors
 };
 
 // Calls take(i) for the postings of a group list whose key has the given
@@ -434,8 +469,9 @@ template <class Term>
 void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, PartScores scores,
                 BestResults& best) {
   if (part < c.visible_segments)
-    accumulate_segment<Term>(*c.index.segments[part], c.index.row_order, words, c.last_entry,
-                             scores);
+    accumulate_segment<Term>(
+        *c.index.segments[part], c.index.row_order, words, c.last_entry,
+        {c.index.word_weights, c.index.divisors + c.index.segments[part]->first_entry}, scores);
   else
     accumulate_tail<Term>(c.index, words, c.last_entry, scores);
   best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive, c.unchecked);
@@ -495,6 +531,8 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
   const detail::RowOrder order = c.index.row_order;
+  const detail::SegmentWeights weights{c.index.word_weights,
+                                       c.index.divisors + segment.first_entry};
   const std::size_t n = words.size();
   float* const out = sums.data();
   for (std::size_t q = 0; q < n; ++q) {
@@ -504,8 +542,12 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
       __builtin_prefetch(bytes + offsets[order.row(words[q + kPrefetchAhead].word)]);
     const std::uint32_t row = order.row(words[q].word);
     const Term term{words[q].value};
+    const detail::RowWeights row_weights = weights.row(words[q].word);
     detail::for_each_posting(bytes + offsets[row], bytes + offsets[row + 1],
-                             [&](std::uint32_t entry, float weight) {
+                             [&](std::uint32_t entry, detail::PostingValue value) {
+                               const float weight = value.count != 0
+                                                        ? row_weights.weight(entry, value.count)
+                                                        : value.weight;
                                out[entry] += sign * static_cast<float>(term(weight));
                              });
   }
@@ -745,12 +787,19 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const std::size_t entry_count = impl_->alive.size();
   if (impl_->live_entries == 0) return {};
   const EntryId last_entry = std::min<EntryId>(max_entry_id, static_cast<EntryId>(entry_count - 1));
-  const IndexView index{impl_->segments,      impl_->tail_lists.data(),
-                        impl_->arena,         impl_->tail_list_shift,
-                        impl_->high_bits,     impl_->row_order,
-                        impl_->tail_postings, impl_->tail_first_entry,
-                        impl_->alive.data(),  entry_count,
-                        &impl_->forward};
+  const IndexView index{impl_->segments,
+                        impl_->tail_lists.data(),
+                        impl_->arena,
+                        impl_->tail_list_shift,
+                        impl_->high_bits,
+                        impl_->row_order,
+                        impl_->tail_postings,
+                        impl_->tail_first_entry,
+                        impl_->alive.data(),
+                        entry_count,
+                        &impl_->forward,
+                        impl_->over_word_ids ? nullptr : detail::word_weights(impl_->vocabulary),
+                        impl_->divisors.data()};
   if (options.mode == QueryMode::kFast) impl_->build_forward_index();
   std::size_t visible = 0;
   std::size_t postings = impl_->tail_postings;

@@ -1,8 +1,6 @@
 #include "core/forward_index.h"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
+#include "core/count_form.h"
 
 namespace binbow::detail {
 
@@ -27,10 +25,6 @@ void push_raw(std::vector<std::uint16_t>& codes, T value) {
   std::uint16_t halves[sizeof(T) / 2];
   std::memcpy(halves, &value, sizeof(T));
   codes.insert(codes.end(), halves, halves + sizeof(T) / 2);
-}
-
-bool same_bits(float a, float b) {
-  return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
 }  // namespace
@@ -74,56 +68,23 @@ void ForwardIndex::encode_floats(Span<BowEntry> words, std::vector<std::uint16_t
   for (const BowEntry& e : words) push_raw(codes, e.value);
 }
 
-// Transform gives word w the weight float(weight(w) * count / divisor), in
-// doubles, where the divisor is the L1 norm of the weight(w) * count (L2
-// norm for L2; the word count, or 1, for the dot product): the counts are
-// the weights over the smallest, rounded, and the form is kept only if it
-// gives back every weight exactly.
+// The compact form of CountForm: its divisor and the counts above 1.
 bool ForwardIndex::encode_counts(Span<BowEntry> words, std::vector<std::uint16_t>& codes) const {
   if (!has_vocabulary_) return false;
+  CountForm form;
+  if (!form.find(vocabulary_, scoring_, words)) return false;
   const std::size_t n = words.size();
-  std::vector<double> weights(n);
-  double smallest = std::numeric_limits<double>::infinity();
+  codes.clear();
+  codes.reserve(kCountsHeader + n + n / 8 + 8);
+  codes.push_back(kCounts);
+  push_raw(codes, form.divisor());
+  std::uint32_t previous = ~std::uint32_t{0};
   for (std::size_t i = 0; i < n; ++i) {
-    weights[i] = word_weight(words[i].word);
-    if (!(weights[i] > 0) || !(words[i].value > 0)) return false;
-    smallest = std::min(smallest, static_cast<double>(words[i].value) / weights[i]);
+    const std::uint32_t count = form.counts()[i];
+    push_step(codes, previous, words[i].word, count > 1 ? kMany : 0);
+    if (count > 1) codes.push_back(static_cast<std::uint16_t>(count));
   }
-  std::vector<std::uint16_t> counts(n);
-  std::vector<double> raw(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double count = std::round(static_cast<double>(words[i].value) / weights[i] / smallest);
-    if (!(count >= 1 && count <= 0xFFFF)) return false;
-    counts[i] = static_cast<std::uint16_t>(count);
-    raw[i] = weights[i] * count;
-  }
-  double divisors[2] = {0, 1};
-  if (scoring_ == Scoring::kL2) {
-    for (double v : raw) divisors[0] += v * v;
-    divisors[0] = std::sqrt(divisors[0]);
-  } else if (scoring_ == Scoring::kDotProduct) {
-    divisors[0] = static_cast<double>(n);
-  } else {
-    for (double v : raw) divisors[0] += std::fabs(v);
-  }
-  for (double divisor : divisors) {
-    bool exact = true;
-    for (std::size_t i = 0; i < n && exact; ++i)
-      exact = same_bits(static_cast<float>(weights[i] * static_cast<double>(counts[i]) / divisor),
-                        words[i].value);
-    if (!exact) continue;
-    codes.clear();
-    codes.reserve(kCountsHeader + n + n / 8 + 8);
-    codes.push_back(kCounts);
-    push_raw(codes, divisor);
-    std::uint32_t previous = ~std::uint32_t{0};
-    for (std::size_t i = 0; i < n; ++i) {
-      push_step(codes, previous, words[i].word, counts[i] > 1 ? kMany : 0);
-      if (counts[i] > 1) codes.push_back(counts[i]);
-    }
-    return true;
-  }
-  return false;
+  return true;
 }
 
 }  // namespace binbow::detail

@@ -263,6 +263,10 @@ WordId Vocabulary::node_word(NodeId node) const {
   return b.tree.links[node] & ~detail::kLeafBit;
 }
 
+const float* detail::word_weights(const Vocabulary& vocabulary) noexcept {
+  return vocabulary.block_ ? vocabulary.block_->word_weights : nullptr;
+}
+
 float Vocabulary::word_weight(WordId word) const {
   const auto& b = require(block_);
   if (word >= b.word_count)

@@ -220,9 +220,18 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
   const Fixture fixture(12);  // removed: entries 4 and 6
   const std::vector<std::uint8_t> bytes = fixture.database.serialize();
   ASSERT_EQ(load_problem(bytes), "loaded");
-  enum : std::uint32_t { kParts = 3, kRows = 4, kPostings = 5, kDirect = 8 };
+  enum : std::uint32_t { kParts = 3, kRows = 4, kPostings = 5, kDivisors = 6, kDirect = 8 };
   const auto posting = [&](const std::function<void(std::uint8_t*)>& change) {
     return with_section(bytes, kPostings, [&](std::uint8_t* d, std::size_t) { change(d); });
+  };
+  // A database of vectors that transform does not make: rows of weights.
+  Database hand_made(fixture.vocabulary, {false, 0});
+  hand_made.add(BowVector({{0, 0.25f}, {3, 0.5f}}));
+  hand_made.add(BowVector({{0, 0.75f}}));
+  const std::vector<std::uint8_t> weights = hand_made.serialize();
+  ASSERT_EQ(load_problem(weights), "loaded");
+  const auto weight_posting = [&](const std::function<void(std::uint8_t*)>& change) {
+    return with_section(weights, kPostings, [&](std::uint8_t* d, std::size_t) { change(d); });
   };
   const float nan = std::numeric_limits<float>::quiet_NaN();
   expect_refused({
@@ -242,18 +251,44 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
        "beyond"},
       {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { put_u32(d + 4, 0); }),
        "invalid length"},
-      // The first row: its header (gap width 1), then its first posting's
-      // 1-byte gap (the entry itself) and weight.
+      // The first row: its header (gap width 1, counts), then its first
+      // posting's 1-byte gap (the entry itself) and count.
       {posting([](std::uint8_t* d) { d[1] = 4; }), "missing entry"},
       {posting([](std::uint8_t* d) { d[1] = 12; }), "missing entry"},
-      // Gap widths other than 1 and 2.
+      // Gap widths other than 1 and 2, unknown kinds.
       {posting([](std::uint8_t* d) { d[0] = 0; }), "malformed posting"},
       {posting([](std::uint8_t* d) { d[0] = 3; }), "malformed posting"},
+      {posting([](std::uint8_t* d) { d[0] = 0x31; }), "malformed posting"},
+      {posting([](std::uint8_t* d) { d[2] = 0; }), "a count of 0"},
+      // Weights as counts: the row's length no longer fits its stride.
+      {posting([](std::uint8_t* d) { d[0] = 1; }), "malformed posting"},
+      // Divisors: not finite, not positive, of a removed entry (4), missing
+      // for an entry with counts (0, in the first row).
+      {with_section(bytes, kDivisors,
+                    [&](std::uint8_t* d, std::size_t) {
+                      const double inf = std::numeric_limits<double>::infinity();
+                      std::memcpy(d + 8, &inf, 8);
+                    }),
+       "entry 1 has an invalid divisor"},
+      {with_section(bytes, kDivisors,
+                    [&](std::uint8_t* d, std::size_t) {
+                      const double negative = -2;
+                      std::memcpy(d + 8, &negative, 8);
+                    }),
+       "entry 1 has an invalid divisor"},
+      {with_section(bytes, kDivisors,
+                    [&](std::uint8_t* d, std::size_t) {
+                      const double one = 1;
+                      std::memcpy(d + 4 * 8, &one, 8);
+                    }),
+       "entry 4 has an invalid divisor"},
+      {with_section(bytes, kDivisors, [&](std::uint8_t* d, std::size_t) { std::memset(d, 0, 8); }),
+       "which has no divisor"},
       // A row whose last posting is cut short: the rows no longer cover the
       // postings section.
       {with_section(bytes, kRows, [&](std::uint8_t* d, std::size_t) { d[4] -= 1; }),
        "trailing data"},
-      {posting([&](std::uint8_t* d) { std::memcpy(d + 2, &nan, 4); }), "non-finite"},
+      {weight_posting([&](std::uint8_t* d) { std::memcpy(d + 2, &nan, 4); }), "non-finite"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[0] = 7; }),
        "unknown layout"},
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[1] ^= 1; }),
@@ -261,6 +296,21 @@ TEST(DatabaseFile, InconsistentPartsRowsAndDirectIndexAreRefused) {
       {with_section(bytes, kDirect, [&](std::uint8_t* d, std::size_t) { d[6] = 0; }),
        "not strictly increasing"},
   });
+}
+
+// A database over word ids has no vocabulary to compute weights from
+// counts: a divisor is refused (a fuzzing seed: 3 entries over word ids).
+TEST(DatabaseFile, DivisorsOverWordIdsAreRefused) {
+  const std::vector<std::uint8_t> bytes =
+      test::read_file(test::source_path("fuzz/corpus/bbdb/over_word_ids_v3.bbdb"));
+  ASSERT_EQ(load_problem(bytes), "loaded");
+  enum : std::uint32_t { kDivisors = 6 };
+  expect_refused({{with_section(bytes, kDivisors,
+                                [&](std::uint8_t* d, std::size_t) {
+                                  const double one = 1;
+                                  std::memcpy(d, &one, 8);
+                                }),
+                   "entry 0 has an invalid divisor"}});
 }
 
 // The same for a version-2 index (a fuzzing seed: 3 entries over word ids).
