@@ -157,6 +157,18 @@ struct MinimumTerm {
 // ahead are prefetched so that their cache misses overlap.
 constexpr std::size_t kPrefetchAhead = 8;
 
+// Before the query word q is read from a segment: the row offset of the word
+// 2 * kPrefetchAhead ahead, and the row of the word kPrefetchAhead ahead
+// (whose offset the previous steps brought in).
+inline void prefetch_rows_ahead(const std::uint32_t* offsets, const std::uint8_t* bytes,
+                                detail::RowOrder order, const BowEntry* words, std::size_t n,
+                                std::size_t q) {
+  if (q + 2 * kPrefetchAhead < n)
+    __builtin_prefetch(offsets + order.row(words[q + 2 * kPrefetchAhead].word));
+  if (q + kPrefetchAhead < n)
+    __builtin_prefetch(bytes + offsets[order.row(words[q + kPrefetchAhead].word)]);
+}
+
 // A row's postings at their fixed stride: the entries are a running sum of
 // the gaps, with no branch per posting but the (predicted) cut.
 template <std::size_t kWidth, class Term>
@@ -200,10 +212,7 @@ void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, 
   const std::size_t n = bow.size();
   const BowEntry* query = bow.data();
   for (std::size_t q = 0; q < n; ++q) {
-    if (q + 2 * kPrefetchAhead < n)
-      __builtin_prefetch(offsets + order.row(query[q + 2 * kPrefetchAhead].word));
-    if (q + kPrefetchAhead < n)
-      __builtin_prefetch(bytes + offsets[order.row(query[q + kPrefetchAhead].word)]);
+    prefetch_rows_ahead(offsets, bytes, order, query, n, q);
     const std::uint32_t row = order.row(query[q].word);
     const std::uint8_t* const begin = bytes + offsets[row];
     const std::size_t size = offsets[row + 1] - offsets[row];
@@ -536,10 +545,7 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const std::size_t n = words.size();
   float* const out = sums.data();
   for (std::size_t q = 0; q < n; ++q) {
-    if (q + 2 * kPrefetchAhead < n)
-      __builtin_prefetch(offsets + order.row(words[q + 2 * kPrefetchAhead].word));
-    if (q + kPrefetchAhead < n)
-      __builtin_prefetch(bytes + offsets[order.row(words[q + kPrefetchAhead].word)]);
+    prefetch_rows_ahead(offsets, bytes, order, words.data(), n, q);
     const std::uint32_t row = order.row(words[q].word);
     const Term term{words[q].value};
     const detail::RowWeights row_weights = weights.row(words[q].word);
