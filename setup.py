@@ -9,10 +9,13 @@ with its license notice) binbow/share/binbow, where the CLI looks for it
 (<exe>/../share/binbow); the `binbow` console script and `python -m binbow`
 exec that CLI (binbow/_cli.py). The image/video module (OpenCV's imgcodecs and
 videoio, loaded on first use) is binbow/lib/binbow/binbow_media.so. The
-version is the one of CMakeLists.txt's project(VERSION).
+version is the one of CMakeLists.txt's project(VERSION). More CMake
+arguments come from the CMAKE_ARGS environment variable (as scikit-build and
+conda-build read it), e.g. CMAKE_ARGS="-DBINBOW_WARNINGS_AS_ERRORS=ON".
 """
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -53,6 +56,7 @@ class BuildWithCMake(build_ext):
             configure += ["-G", "Ninja"]
         if shutil.which("ccache"):
             configure.append("-DCMAKE_CXX_COMPILER_LAUNCHER=ccache")
+        configure += shlex.split(os.environ.get("CMAKE_ARGS", ""))
         jobs = self.parallel or os.cpu_count() or 1
         subprocess.run(configure, check=True)
         subprocess.run(
