@@ -410,6 +410,12 @@ namespace detail {
 // any gap. A query pays one offset lookup per word and segment, small next
 // to the postings it reads.
 constexpr std::size_t kSegmentSpan = std::size_t{1} << 16;
+
+// A query starts at most one thread per this many postings of the index
+// (4M by default): a thread pays off only for large indexes. For tests: a
+// lower value splits small indexes between threads.
+std::atomic<std::size_t>& postings_per_query_thread();
+
 constexpr std::size_t kWeightBytes = 4;
 constexpr std::size_t kCountBytes = 1;
 constexpr std::uint32_t kMaxRowCount = 0xFF;

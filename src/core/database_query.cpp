@@ -757,10 +757,12 @@ std::vector<QueryResult> run_query(const QueryContext& c, QueryMode mode) {
   return {};
 }
 
-// Threads pay off only for large indexes: about one per 4M postings.
-constexpr std::size_t kPostingsPerWorker = std::size_t{1} << 22;
-
 }  // namespace
+
+std::atomic<std::size_t>& detail::postings_per_query_thread() {
+  static std::atomic<std::size_t> postings{std::size_t{1} << 22};
+  return postings;
+}
 
 std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
                                          EntryId max_entry_id) const {
@@ -815,10 +817,11 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
     postings += segment->postings();
   }
   const bool tail_visible = impl_->tail_postings > 0 && impl_->tail_first_entry <= last_entry;
-  const auto workers = static_cast<unsigned>(
-      std::min<std::size_t>({detail::resolve_thread_count(options.threads),
-                             std::max<std::size_t>(1, postings / kPostingsPerWorker),
-                             std::max<std::size_t>(1, visible + (tail_visible ? 1 : 0))}));
+  const auto workers = static_cast<unsigned>(std::min<std::size_t>(
+      {detail::resolve_thread_count(options.threads),
+       std::max<std::size_t>(
+           1, postings / std::max<std::size_t>(1, detail::postings_per_query_thread())),
+       std::max<std::size_t>(1, visible + (tail_visible ? 1 : 0))}));
   QueryScratch& buffers = scratch;
   if (buffers.workers.size() < workers) buffers.workers.resize(workers);
   detail::ValueRange query_values;

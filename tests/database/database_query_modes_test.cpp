@@ -15,6 +15,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
+#include "core/database_impl.h"
 
 namespace binbow {
 namespace {
@@ -117,19 +118,33 @@ BowVector image_of(const std::map<WordId, float>& place, ZipfWords& zipf, std::s
   return BowVector(std::move(entries));
 }
 
+// While alive, a query starts a thread per `postings` of the index, so that
+// small indexes are split between threads as large ones are.
+class ThreadsPerPostings {
+ public:
+  explicit ThreadsPerPostings(std::size_t postings)
+      : saved_(detail::postings_per_query_thread().exchange(postings)) {}
+  ~ThreadsPerPostings() { detail::postings_per_query_thread() = saved_; }
+
+ private:
+  std::size_t saved_;
+};
+
 TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
-  // Large enough (~13M postings, ~900 words per image) that a query shares its segments between
-  // threads, with ties (repeated images), removals and max_entry_id. The images are made once
+  // ~1M postings (~300 words per image) in several segments, a thread per
+  // 100,000 of them: a query shares its segments between threads, with ties
+  // (repeated images), removals and max_entry_id. The images are made once
   // and indexed under each scoring.
+  const ThreadsPerPostings split_small_indexes(100'000);
   ZipfWords zipf(60'000, 11);
   std::vector<std::map<WordId, float>> places;
-  for (int p = 0; p < 300; ++p) places.push_back(place_words(zipf, 900));
+  for (int p = 0; p < 100; ++p) places.push_back(place_words(zipf, 300));
   std::vector<BowVector> bows;
-  for (std::size_t i = 0; i < 14'000; ++i)
-    bows.push_back(i % 7 == 3 ? bows[i - 1] : image_of(places[i % places.size()], zipf, 200));
+  for (std::size_t i = 0; i < 3'500; ++i)
+    bows.push_back(i % 7 == 3 ? bows[i - 1] : image_of(places[i % places.size()], zipf, 70));
   std::vector<BowVector> queries;
-  for (int q = 0; q < 6; ++q) queries.push_back(image_of(places[q * 37], zipf, 200));
-  const BowVector brute_force_query = image_of(places[5], zipf, 200);
+  for (int q = 0; q < 6; ++q) queries.push_back(image_of(places[q * 13], zipf, 70));
+  const BowVector brute_force_query = image_of(places[5], zipf, 70);
 
   for (Scoring scoring : {Scoring::kL1, Scoring::kKL, Scoring::kDotProduct}) {
     DatabaseOptions options;
@@ -154,8 +169,8 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
         const QueryOptions split{QueryMode::kExact, threads};
         expect_same(database.query(query, 30, kAllEntries, split), one,
                     context + ", " + std::to_string(threads) + " threads");
-        expect_same(database.query(query, 30, 4'321, split),
-                    database.query(query, 30, 4'321, kOneThread), context + ", max_entry_id");
+        expect_same(database.query(query, 30, 1'234, split),
+                    database.query(query, 30, 1'234, kOneThread), context + ", max_entry_id");
       }
       expect_same(database.query(query, 30), one, context + ", default options");
     }

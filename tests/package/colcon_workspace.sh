@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# binbow in a ROS 2-style colcon workspace: src/binbow (a link to this
-# checkout) and src/binbow_colcon_consumer (tests/package/colcon_consumer, a
-# package.xml depending on binbow) are built by `colcon build`; the consumer
-# then runs from the install space with the vocabulary binbow installed, and
-# so does binbow's CLI.
+# binbow in a ROS 2-style colcon workspace: this checkout (as a clone in the
+# workspace's src/ would be) and src/binbow_colcon_consumer
+# (tests/package/colcon_consumer, a package.xml depending on binbow) are built
+# by `colcon build`; the consumer then runs from the install space with the
+# vocabulary binbow installed, and so does binbow's CLI. colcon finds binbow
+# at the checkout's own path, so that binbow compiles with the same paths and
+# flags as a Release build of the checkout, whose objects a compiler cache
+# then reuses.
 # Usage: tests/package/colcon_workspace.sh [more cmake arguments for colcon]
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/../.." && pwd)
@@ -21,20 +24,16 @@ package_version=$(sed -nE 's|^ *<version>([^<]+)</version>.*|\1|p' "$repo/packag
 workspace=$(mktemp -d)
 trap 'rm -rf "$workspace"' EXIT
 mkdir "$workspace/src"
-ln -s "$repo" "$workspace/src/binbow"
 cp -r "$repo/tests/package/colcon_consumer" "$workspace/src/binbow_colcon_consumer"
 
 # colcon passes the same arguments to every package; the consumer ignores binbow's.
-cmake_args=(-DBINBOW_BUILD_TESTS=OFF -DBINBOW_BUILD_BENCH=OFF -DBINBOW_BUILD_PYTHON=OFF
-  --no-warn-unused-cli)
+cmake_args=(-DCMAKE_BUILD_TYPE=Release -DBINBOW_WARNINGS_AS_ERRORS=ON -DBINBOW_BUILD_TESTS=OFF
+  -DBINBOW_BUILD_BENCH=OFF -DBINBOW_BUILD_PYTHON=OFF --no-warn-unused-cli)
 if command -v ccache >/dev/null 2>&1; then
   cmake_args+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  # Paths relative to the workspace, so that the next run (another temporary
-  # folder) hits the cache.
-  export CCACHE_BASEDIR=$workspace
 fi
 cd "$workspace"
-colcon build --event-handlers console_cohesion+ --parallel-workers 1 \
+colcon build --base-paths "$repo" src --event-handlers console_cohesion+ --parallel-workers 1 \
   --cmake-args "${cmake_args[@]}" "$@"
 
 for package in binbow binbow_colcon_consumer; do
