@@ -219,6 +219,18 @@ Database copy_database(const Database& db) {
                                db.vocabulary());
 }
 
+// Database.load's verification=: "background" (DatabaseLoadOptions' default)
+// or "before-return", spelled as the module's other names of a C++ enum.
+DatabaseLoadOptions load_options(const std::string& verification) {
+  DatabaseLoadOptions options;
+  if (verification == "before-return")
+    options.verification = Verification::kBeforeReturn;
+  else if (verification != "background")
+    throw InvalidArgument("unknown verification '" + verification +
+                          "' (expected one of background, before-return)");
+  return options;
+}
+
 std::string database_repr(const Database& db) {
   return "<binbow.Database with " + std::to_string(db.size()) + " entries, vocabulary " +
          db.vocabulary().description() + ">";
@@ -494,13 +506,25 @@ void bind_core(py::module_& m) {
           "of the file. Copy or remove the journal together with the .bbdb file.")
       .def_static(
           "load",
-          [](const Path& path, const std::optional<Vocabulary>& vocabulary) {
-            return vocabulary ? Database::load(path.string(), *vocabulary)
-                              : Database::load(path.string());
+          [](const Path& path, const std::optional<Vocabulary>& vocabulary,
+             const std::string& verification) {
+            const DatabaseLoadOptions options = load_options(verification);
+            return vocabulary ? Database::load(path.string(), *vocabulary, options)
+                              : Database::load(path.string(), options);
           },
           py::arg("path"), py::arg("vocabulary") = py::none(),
-          py::call_guard<py::gil_scoped_release>(),
-          "Load a .bbdb file; a file saved without its vocabulary needs the same vocabulary.")
+          py::arg("verification") = "background", py::call_guard<py::gil_scoped_release>(),
+          "Load a .bbdb file; a file saved without its vocabulary needs the same vocabulary.\n"
+          "The file is mapped, not copied. verification=\"background\": the postings and\n"
+          "the direct index are checked by a thread of their own while the database\n"
+          "already answers (a damaged file may give wrong results until then; once the\n"
+          "damage is found every call raises OSError naming the file); \"before-return\":\n"
+          "everything is checked before load returns (OSError for a damaged file).")
+      .def("wait_until_verified", &Database::wait_until_verified,
+           py::call_guard<py::gil_scoped_release>(),
+           "Wait for the background check of the file this database was loaded from;\n"
+           "OSError naming the file and the damaged section if it is not intact. Returns\n"
+           "at once when there is nothing to wait for.")
       .def("__copy__", &copy_database, "An independent copy sharing the vocabulary.")
       .def(
           "__deepcopy__", [](const Database& db, const py::object&) { return copy_database(db); },

@@ -119,6 +119,42 @@ def test_incremental_saves_append_to_a_journal(tmp_path, database, vocabulary, i
     assert binbow.Database.load(path).query(query, 10) == database.query(query, 10)
 
 
+def damaged_postings(path):
+    """Flips a byte in the middle of the postings, the section checked after load returns."""
+    data = bytearray(path.read_bytes())
+    entry = 64 + 24 * 5  # the section table's row of section 5, the postings
+    offset = int.from_bytes(data[entry + 8:entry + 16], "little")
+    length = int.from_bytes(data[entry + 16:entry + 24], "little")
+    assert length > 100, "the postings section is too small to damage"
+    data[offset + length // 2] ^= 0x10
+    path.write_bytes(bytes(data))
+
+
+def test_load_verifies_in_the_background_or_before_returning(tmp_path, database, vocabulary,
+                                                            images):
+    path = tmp_path / "db.bbdb"
+    database.save(path)
+    query = vocabulary.transform(images[2])
+    expected = database.query(query, 5)
+    for verification in ("background", "before-return"):
+        loaded = binbow.Database.load(path, verification=verification)
+        loaded.wait_until_verified()
+        assert loaded.query(query, 5) == expected
+    binbow.Database(vocabulary).wait_until_verified()  # nothing to wait for
+    damaged_postings(path)
+    with pytest.raises(OSError, match=r"db\.bbdb.*'postings'"):
+        binbow.Database.load(path, vocabulary, verification="before-return")
+    loaded = binbow.Database.load(path, verification="background")  # answers meanwhile
+    with pytest.raises(OSError, match=r"db\.bbdb.*'postings'"):
+        loaded.wait_until_verified()
+    with pytest.raises(OSError, match="'postings'"):
+        loaded.query(query, 5)
+    with pytest.raises(ValueError, match="unknown verification 'eager'"):
+        binbow.Database.load(path, verification="eager")
+    with pytest.raises(TypeError):
+        binbow.Database.load(path, verification=True)
+
+
 def test_memory_usage_grows_with_entries(vocabulary, images):
     db = binbow.Database(vocabulary)
     before = db.memory_usage

@@ -2,6 +2,7 @@
 // clear errors, and atomic replacement on save.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -15,6 +16,10 @@ namespace binbow::detail {
 // "a FIFO", "a directory", "a socket", "a device", ... for the file type bits
 // of a stat mode: what a path names when it is not a regular file.
 const char* file_kind(unsigned mode);
+
+// For tests: while set, MappedFile reads every file into memory, as where
+// the file system cannot map it, so that the fallback runs where mapping works.
+std::atomic<bool>& refuse_mappings();
 
 // A read-only memory map of a whole file. Throws FileError naming the file
 // when it is missing, a directory, not a regular file (a FIFO, a socket, a

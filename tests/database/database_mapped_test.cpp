@@ -1,10 +1,13 @@
 // Database::load maps a .bbdb file: a loaded database answers as the saved
 // one, before and after the background check of its file; a damaged file
 // never crashes a call, and once the check finds the damage every call
-// throws FileError.
+// throws FileError. Where the file cannot be mapped it is read into memory,
+// with the same answers and checks.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -13,6 +16,7 @@
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
 #include "core/background_check.h"
+#include "core/file_io.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -47,6 +51,14 @@ class HeldChecks {
   HeldChecks() { detail::hold_background_checks() = true; }
   ~HeldChecks() { release(); }
   void release() { detail::hold_background_checks() = false; }
+};
+
+// Maps no file while it lives: MappedFile reads every file into memory, as
+// on a file system that cannot map.
+class RefusedMappings {
+ public:
+  RefusedMappings() { detail::refuse_mappings() = true; }
+  ~RefusedMappings() { detail::refuse_mappings() = false; }
 };
 
 // The bytes [offset, offset + length) of a section of the file's image.
@@ -97,6 +109,65 @@ TEST(DatabaseMapped, AnswersAsSavedBeforeAndAfterTheCheck) {
   const Database verified = Database::load(path, fixture.vocabulary, {Verification::kBeforeReturn});
   expect_same_answers(fixture.database, verified, fixture);
   EXPECT_EQ(verified.serialize(), fixture.database.serialize());
+}
+
+TEST(DatabaseMapped, ReadIntoMemoryWhereTheFileCannotBeMapped) {
+  Fixture fixture;
+  test::TempDir dir;
+  const std::string mapped_path = dir.file("mapped.bbdb"), read_path = dir.file("read.bbdb");
+  fixture.database.save(mapped_path);
+  fixture.database.save(read_path);
+  Database mapped = Database::load(mapped_path, fixture.vocabulary);
+  mapped.wait_until_verified();
+  RefusedMappings refused;
+  ASSERT_FALSE(detail::MappedFile(read_path).mapped());
+  const std::vector<std::uint8_t> saved = test::read_file(read_path);
+  const auto [offset, length] = section_of(saved, kPostingsSection);
+  std::optional<Database> read;
+  {
+    HeldChecks held;
+    read.emplace(Database::load(read_path, fixture.vocabulary));
+    for (const BowVector& query : fixture.queries)
+      ASSERT_EQ(mapped.query(query, 20, {QueryMode::kExact, 1}),
+                read->query(query, 20, {QueryMode::kExact, 1}));
+    // Rewritten in place (undefined under a mapping), the file no longer
+    // matters: the index and its check read the copy.
+    std::FILE* file = std::fopen(read_path.c_str(), "r+b");
+    ASSERT_NE(file, nullptr);
+    const std::vector<std::uint8_t> zeros(length, 0);
+    ASSERT_EQ(std::fseek(file, static_cast<long>(offset), SEEK_SET), 0);
+    ASSERT_EQ(std::fwrite(zeros.data(), 1, zeros.size(), file), zeros.size());
+    ASSERT_EQ(std::fclose(file), 0);
+  }
+  read->wait_until_verified();
+  expect_same_answers(fixture.database, *read, fixture);
+  expect_same_answers(mapped, *read, fixture);
+  EXPECT_EQ(read->serialize(), fixture.database.serialize());
+  // Removals compact the segment read into memory as they do a mapped one.
+  for (EntryId id = 1; id < fixture.database.next_entry_id(); id += 2) {
+    if (!fixture.database.contains(id)) continue;
+    fixture.database.remove(id);
+    mapped.remove(id);
+    read->remove(id);
+  }
+  expect_same_answers(mapped, *read, fixture);
+  EXPECT_EQ(read->serialize(false), mapped.serialize(false));
+  // A damaged file read into memory: found by the background check, or
+  // before load returns.
+  std::vector<std::uint8_t> damaged = saved;
+  damaged[offset + length / 2] ^= 0x10;
+  write_bytes(read_path, damaged);
+  for (Verification verification : {Verification::kBackground, Verification::kBeforeReturn}) {
+    try {
+      const Database loaded = Database::load(read_path, fixture.vocabulary, {verification});
+      EXPECT_EQ(verification, Verification::kBackground) << "kBeforeReturn loaded a damaged file";
+      loaded.wait_until_verified();
+      FAIL() << "damage not found";
+    } catch (const FileError& e) {
+      EXPECT_EQ(e.path(), read_path);
+      EXPECT_NE(e.problem().find("'postings'"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(DatabaseMapped, DamagedPostingsNeverCrashAndThenEveryCallThrows) {
