@@ -21,11 +21,16 @@
 
 #include "binbow/database.h"
 #include "binbow/vocabulary.h"
+#include "support/query_results.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {
 namespace {
+
+using test::bbdb_section;
+using test::bits_of;
+using test::expect_same_results;
 
 // The .bbdb sections read here (docs/database-files.md), by their index in
 // the section table.
@@ -34,12 +39,6 @@ constexpr std::uint32_t kPostingsSection = 5;
 constexpr std::uint32_t kDivisorsSection = 6;
 constexpr std::uint8_t kCountRowFlag = 16;
 constexpr std::uint32_t kMaxRowCount = 255;
-
-std::uint64_t bits_of(double score) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &score, sizeof bits);
-  return bits;
-}
 
 std::uint32_t shared_words(const BowVector& a, const BowVector& b) {
   std::uint32_t shared = 0;
@@ -81,17 +80,6 @@ std::vector<QueryResult> best(const std::vector<QueryResult>& all, std::size_t m
   for (const QueryResult& r : all)
     if (r.entry <= max_entry_id && out.size() < max_results) out.push_back(r);
   return out;
-}
-
-// Exact queries: brute force's results, scores to the last bit.
-void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
-                 const std::string& context) {
-  ASSERT_EQ(actual.size(), expected.size()) << context;
-  for (std::size_t i = 0; i < actual.size(); ++i) {
-    EXPECT_EQ(actual[i].entry, expected[i].entry) << context << " rank " << i;
-    EXPECT_EQ(bits_of(actual[i].score), bits_of(expected[i].score)) << context << " rank " << i;
-    EXPECT_EQ(actual[i].shared_words, expected[i].shared_words) << context << " rank " << i;
-  }
 }
 
 // Fast queries may miss entries, never misscore or misrank one: each
@@ -192,20 +180,12 @@ BowVector nudged(const BowVector& bow) {
   return BowVector(std::move(entries));
 }
 
-std::pair<std::size_t, std::size_t> section_of(const std::vector<std::uint8_t>& file,
-                                               std::uint32_t section) {
-  std::uint64_t offset = 0, length = 0;
-  std::memcpy(&offset, file.data() + 64 + 24 * section + 8, 8);
-  std::memcpy(&length, file.data() + 64 + 24 * section + 16, 8);
-  return {static_cast<std::size_t>(offset), static_cast<std::size_t>(length)};
-}
-
 // The count rows of words beyond 65,535 in a saved file: the rows section
 // lists (word, bytes) per row, the postings section starts each row with
 // its header byte.
 std::size_t count_rows_beyond_65535(const std::vector<std::uint8_t>& file) {
-  const auto [rows, rows_length] = section_of(file, kRowsSection);
-  const auto [postings, postings_length] = section_of(file, kPostingsSection);
+  const auto [rows, rows_length] = bbdb_section(file, kRowsSection);
+  const auto [postings, postings_length] = bbdb_section(file, kPostingsSection);
   std::size_t found = 0, position = 0;
   for (std::size_t r = 0; r + 8 <= rows_length; r += 8) {
     std::uint32_t word = 0, bytes = 0;
@@ -239,7 +219,7 @@ TEST(DatabaseCountRows, TransformMadeEntriesOfAVocabularyOfMoreThan65536Words) {
         const std::vector<QueryResult> all = brute_force(vocabulary, bows, live, bows[self]);
         for (EntryId max_id : {kAllEntries, static_cast<EntryId>(rng() % bows.size())}) {
           const std::string where = name + " " + context + " query " + std::to_string(self);
-          expect_same(db.query(bows[self], 12, max_id), best(all, 12, max_id), where);
+          expect_same_results(db.query(bows[self], 12, max_id), best(all, 12, max_id), where);
           expect_fast(db.query(bows[self], 12, max_id, {QueryMode::kFast, 1}), vocabulary, bows,
                       live, bows[self], self, max_id, where + " fast");
         }
@@ -273,7 +253,7 @@ TEST(DatabaseCountRows, TransformMadeEntriesOfAVocabularyOfMoreThan65536Words) {
     const std::string path = dir.file("db.bbdb");
     database.save(path, false);
     const std::vector<std::uint8_t> file = test::read_file(path);
-    const auto [divisors, divisors_length] = section_of(file, kDivisorsSection);
+    const auto [divisors, divisors_length] = bbdb_section(file, kDivisorsSection);
     ASSERT_EQ(divisors_length, 8 * kImages) << name;
     for (EntryId id = 0; id < kImages; ++id) {
       double divisor = 0;

@@ -17,10 +17,13 @@
 #include "binbow/vocabulary.h"
 #include "core/background_check.h"
 #include "core/file_io.h"
+#include "support/query_results.h"
 #include "support/test_support.h"
 
 namespace binbow {
 namespace {
+
+using test::bbdb_section;
 
 constexpr std::uint32_t kPostingsSection = 5;
 constexpr std::uint32_t kDirectDataSection = 8;
@@ -60,15 +63,6 @@ class RefusedMappings {
   RefusedMappings() { detail::refuse_mappings() = true; }
   ~RefusedMappings() { detail::refuse_mappings() = false; }
 };
-
-// The bytes [offset, offset + length) of a section of the file's image.
-std::pair<std::size_t, std::size_t> section_of(const std::vector<std::uint8_t>& file,
-                                               std::uint32_t section) {
-  std::uint64_t offset = 0, length = 0;
-  std::memcpy(&offset, file.data() + 64 + 24 * section + 8, 8);
-  std::memcpy(&length, file.data() + 64 + 24 * section + 16, 8);
-  return {static_cast<std::size_t>(offset), static_cast<std::size_t>(length)};
-}
 
 void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
   std::FILE* file = std::fopen(path.c_str(), "wb");
@@ -122,7 +116,7 @@ TEST(DatabaseMapped, ReadIntoMemoryWhereTheFileCannotBeMapped) {
   RefusedMappings refused;
   ASSERT_FALSE(detail::MappedFile(read_path).mapped());
   const std::vector<std::uint8_t> saved = test::read_file(read_path);
-  const auto [offset, length] = section_of(saved, kPostingsSection);
+  const auto [offset, length] = bbdb_section(saved, kPostingsSection);
   std::optional<Database> read;
   {
     HeldChecks held;
@@ -180,7 +174,7 @@ TEST(DatabaseMapped, DamagedPostingsNeverCrashAndThenEveryCallThrows) {
   test::TempDir dir;
   const std::string path = dir.file("db.bbdb");
   const std::vector<std::uint8_t> saved = fixture.database.serialize();
-  const auto [offset, length] = section_of(saved, kPostingsSection);
+  const auto [offset, length] = bbdb_section(saved, kPostingsSection);
   ASSERT_GT(length, 1000u);
   std::mt19937_64 rng(9);
   // Garbage everywhere (wrong widths, gaps far past the part, NaN weights),
@@ -231,7 +225,7 @@ TEST(DatabaseMapped, DamagedDirectIndexNeverCrashesAndThenEveryCallThrows) {
   test::TempDir dir;
   const std::string path = dir.file("db.bbdb");
   std::vector<std::uint8_t> bytes = fixture.database.serialize();
-  const auto [offset, length] = section_of(bytes, kDirectDataSection);
+  const auto [offset, length] = bbdb_section(bytes, kDirectDataSection);
   std::mt19937_64 rng(4);
   for (std::size_t i = 0; i < length; ++i) bytes[offset + i] = static_cast<std::uint8_t>(rng());
   write_bytes(path, bytes);

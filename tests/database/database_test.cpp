@@ -13,11 +13,15 @@
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
 #include "core/database_impl.h"
+#include "support/query_results.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {
 namespace {
+
+using test::bits_of;
+using test::expect_same_results;
 
 constexpr Scoring kAllScorings[] = {
     Scoring::kL1,        Scoring::kL2, Scoring::kChiSquare, Scoring::kKL, Scoring::kBhattacharyya,
@@ -93,24 +97,6 @@ std::vector<QueryResult> brute_force(const Vocabulary& vocabulary,
   return brute_force(vocabulary.scoring(), bows, live, query, max_results, max_entry_id);
 }
 
-// Scores must agree to the last bit, the sign of zero included.
-std::uint64_t bits_of(double score) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &score, sizeof bits);
-  return bits;
-}
-
-void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
-                 const std::string& context) {
-  ASSERT_EQ(actual.size(), expected.size()) << context;
-  for (std::size_t i = 0; i < actual.size(); ++i) {
-    EXPECT_EQ(actual[i].entry, expected[i].entry) << context << " rank " << i;
-    EXPECT_EQ(bits_of(actual[i].score), bits_of(expected[i].score))
-        << context << " rank " << i << ": " << actual[i].score << " vs " << expected[i].score;
-    EXPECT_EQ(actual[i].shared_words, expected[i].shared_words) << context << " rank " << i;
-  }
-}
-
 class DatabaseScoringTest : public ::testing::TestWithParam<std::tuple<Scoring, Weighting>> {};
 
 TEST_P(DatabaseScoringTest, QueriesEqualBruteForce) {
@@ -128,12 +114,13 @@ TEST_P(DatabaseScoringTest, QueriesEqualBruteForce) {
     for (std::size_t max_results : {std::size_t{1}, std::size_t{7}, std::size_t{1000}}) {
       const auto expected = brute_force(vocabulary, corpus.bows, live, query, max_results);
       non_trivial += expected.size() > 1;
-      expect_same(database.query(query, max_results), expected,
-                  std::string(to_string(scoring)) + "/" + to_string(weighting));
+      expect_same_results(database.query(query, max_results), expected,
+                          std::string(to_string(scoring)) + "/" + to_string(weighting));
     }
     for (EntryId max_id : {EntryId{0}, EntryId{10}, EntryId{77}, EntryId{149}, EntryId{5000}})
-      expect_same(database.query(query, 10, max_id),
-                  brute_force(vocabulary, corpus.bows, live, query, 10, max_id), "max_entry_id");
+      expect_same_results(database.query(query, 10, max_id),
+                          brute_force(vocabulary, corpus.bows, live, query, 10, max_id),
+                          "max_entry_id");
   }
   EXPECT_GE(non_trivial, 40u) << "the corpus must produce real rankings";
 }
@@ -159,8 +146,8 @@ TEST(Database, TiesAreOrderedByEntryId) {
     std::vector<bool> live(bows.size(), true);
     for (std::size_t i = 0; i < corpus.bows.size(); i += 3) {
       const auto results = database.query(corpus.bows[i], 1000);
-      expect_same(results, brute_force(vocabulary, bows, live, corpus.bows[i], 1000),
-                  to_string(scoring));
+      expect_same_results(results, brute_force(vocabulary, bows, live, corpus.bows[i], 1000),
+                          to_string(scoring));
       // The query itself and its three copies score the same, in id order.
       std::vector<EntryId> copies;
       for (const auto& r : results)
@@ -180,8 +167,8 @@ TEST(Database, BinaryDotProductTiesEverywhere) {
   std::vector<bool> live(corpus.bows.size(), true);
   for (std::size_t q = 0; q < 20; ++q)
     for (std::size_t n : {std::size_t{3}, std::size_t{50}})
-      expect_same(database.query(corpus.bows[q], n),
-                  brute_force(vocabulary, corpus.bows, live, corpus.bows[q], n), "dot");
+      expect_same_results(database.query(corpus.bows[q], n),
+                          brute_force(vocabulary, corpus.bows, live, corpus.bows[q], n), "dot");
 }
 
 TEST(Database, RemovedEntriesNeverAppear) {
@@ -210,8 +197,9 @@ TEST(Database, RemovedEntriesNeverAppear) {
       for (std::size_t q = 0; q < 30; ++q) {
         const auto results = database.query(corpus.bows[q], 1000);
         for (const auto& r : results) EXPECT_TRUE(live[r.entry]) << r.entry;
-        expect_same(results, brute_force(vocabulary, corpus.bows, live, corpus.bows[q], 1000),
-                    "after removal");
+        expect_same_results(results,
+                            brute_force(vocabulary, corpus.bows, live, corpus.bows[q], 1000),
+                            "after removal");
       }
     }
     // Ids are never reused.
@@ -248,9 +236,9 @@ TEST(Database, QueriesAcrossSegmentsAndTail) {
         for (std::size_t q = 0; q < 5; ++q) {
           const BowVector& query = corpus.bows[rng() % corpus.bows.size()];
           for (EntryId max_id : {kAllEntries, static_cast<EntryId>(i / 2)})
-            expect_same(database.query(query, 20, max_id),
-                        brute_force(vocabulary, corpus.bows, live, query, 20, max_id),
-                        std::string("segments and tail ") + to_string(scoring));
+            expect_same_results(database.query(query, 20, max_id),
+                                brute_force(vocabulary, corpus.bows, live, query, 20, max_id),
+                                std::string("segments and tail ") + to_string(scoring));
           ++checks;
         }
       }
@@ -299,7 +287,7 @@ TEST(Database, ManySegmentsOfSparseAndDenseImages) {
       if (i % 211 == 0 || i + 1 == bows.size()) {
         const BowVector& query = bows[rng() % bows.size()];
         for (EntryId max_id : {kAllEntries, static_cast<EntryId>(i / 3)})
-          expect_same(
+          expect_same_results(
               database.query(query, 15, max_id),
               brute_force(vocabulary, bows, live, query, 15, max_id),
               std::string("many segments ") + to_string(scoring) + " after " + std::to_string(i));
@@ -311,8 +299,8 @@ TEST(Database, ManySegmentsOfSparseAndDenseImages) {
     const Database loaded = Database::deserialize(bytes.data(), bytes.size(), "memory", vocabulary);
     for (std::size_t q = 0; q < 10; ++q) {
       const BowVector& query = bows[rng() % bows.size()];
-      expect_same(loaded.query(query, 15), brute_force(vocabulary, bows, live, query, 15),
-                  "loaded");
+      expect_same_results(loaded.query(query, 15), brute_force(vocabulary, bows, live, query, 15),
+                          "loaded");
     }
   }
 }
@@ -359,11 +347,12 @@ TEST(Database, OverWordIdsGrowsItsRowsAndQueriesEqualBruteForce) {
         const BowVector query = random_bow(300, ids + 50'000, rng);
         const std::string context =
             std::string(to_string(scoring)) + " after image " + std::to_string(i);
-        expect_same(database.query(query, 25), brute_force(scoring, bows, live, query, 25),
-                    context);
-        expect_same(database.query(query, 25, static_cast<EntryId>(i / 3)),
-                    brute_force(scoring, bows, live, query, 25, static_cast<EntryId>(i / 3)),
-                    context + ", max_entry_id");
+        expect_same_results(database.query(query, 25), brute_force(scoring, bows, live, query, 25),
+                            context);
+        expect_same_results(
+            database.query(query, 25, static_cast<EntryId>(i / 3)),
+            brute_force(scoring, bows, live, query, 25, static_cast<EntryId>(i / 3)),
+            context + ", max_entry_id");
       }
     }
   }
@@ -391,9 +380,11 @@ TEST(Database, RowsOfOneAndTwoByteGaps) {
   }
   const BowVector query({{0, 0.5f}, {1, 0.25f}, {2, 0.125f}, {10, 0.125f}});
   const auto expect_brute_force = [&](const Database& d, const std::string& context) {
-    expect_same(d.query(query, 40), brute_force(Scoring::kL1, bows, live, query, 40), context);
-    expect_same(d.query(query, 40, 1700), brute_force(Scoring::kL1, bows, live, query, 40, 1700),
-                context + ", max_entry_id");
+    expect_same_results(d.query(query, 40), brute_force(Scoring::kL1, bows, live, query, 40),
+                        context);
+    expect_same_results(d.query(query, 40, 1700),
+                        brute_force(Scoring::kL1, bows, live, query, 40, 1700),
+                        context + ", max_entry_id");
   };
   expect_brute_force(database, "built");
   std::vector<std::uint8_t> bytes = database.serialize();
@@ -460,9 +451,9 @@ TEST(Database, CountRowsAndWeightRowsEqualBruteForce) {
       for (int q = 0; q < 4; ++q) {
         const BowVector& query = bows[(q * 611 + 5) % bows.size()];
         for (EntryId max_id : {kAllEntries, EntryId{1234}})
-          expect_same(d.query(query, 30, max_id),
-                      brute_force(vocabulary, bows, live, query, 30, max_id),
-                      context + " " + to_string(scoring));
+          expect_same_results(d.query(query, 30, max_id),
+                              brute_force(vocabulary, bows, live, query, 30, max_id),
+                              context + " " + to_string(scoring));
       }
     };
     for (const BowVector& bow : bows) database.add(bow);
@@ -568,8 +559,8 @@ TEST(Database, SegmentsOfAVocabularyOfMoreThan65536Words) {
     for (int q = 0; q < 3; ++q) {
       const BowVector& query = bows[rng() % bows.size()];
       for (EntryId max_id : {kAllEntries, static_cast<EntryId>(rng() % bows.size())})
-        expect_same(database.query(query, 12, max_id),
-                    brute_force(vocabulary, bows, live, query, 12, max_id), context);
+        expect_same_results(database.query(query, 12, max_id),
+                            brute_force(vocabulary, bows, live, query, 12, max_id), context);
     }
   };
   for (std::size_t i = 0; i < bows.size(); ++i) {
@@ -590,7 +581,8 @@ TEST(Database, SegmentsOfAVocabularyOfMoreThan65536Words) {
   const Database loaded = Database::deserialize(bytes.data(), bytes.size(), "memory", vocabulary);
   for (int q = 0; q < 3; ++q) {
     const BowVector& query = bows[rng() % bows.size()];
-    expect_same(loaded.query(query, 12), brute_force(vocabulary, bows, live, query, 12), "loaded");
+    expect_same_results(loaded.query(query, 12), brute_force(vocabulary, bows, live, query, 12),
+                        "loaded");
   }
 }
 
@@ -621,9 +613,9 @@ TEST(Database, SegmentsOfManySmallImages) {
     for (int q = 0; q < 4; ++q) {
       const BowVector& query = bows[61 * (rng() % (count / 61))];
       for (EntryId max_id : {kAllEntries, EntryId{600000}, EntryId{70000}})
-        expect_same(database.query(query, 30, max_id),
-                    brute_force(vocabulary, bows, live, query, 30, max_id),
-                    context + ", up to " + std::to_string(max_id));
+        expect_same_results(database.query(query, 30, max_id),
+                            brute_force(vocabulary, bows, live, query, 30, max_id),
+                            context + ", up to " + std::to_string(max_id));
     }
   };
   check("small images");
@@ -679,9 +671,9 @@ TEST(Database, LoadedDatabasesAreSegmentsOf16BitEntries) {
   for (int q = 0; q < 5; ++q) {
     const BowVector& query = bows[rng() % count];
     for (EntryId max_id : {kAllEntries, EntryId{150000}, EntryId{65535}, EntryId{65536}})
-      expect_same(loaded.query(query, 20, max_id),
-                  brute_force(vocabulary, bows, live, query, 20, max_id),
-                  "loaded, up to " + std::to_string(max_id));
+      expect_same_results(loaded.query(query, 20, max_id),
+                          brute_force(vocabulary, bows, live, query, 20, max_id),
+                          "loaded, up to " + std::to_string(max_id));
   }
 }
 
@@ -718,8 +710,8 @@ TEST(Database, LoadedDatabasesKeepChanging) {
     const BowVector& query = bows[rng() % bows.size()];
     for (EntryId max_id : {kAllEntries, EntryId{250}, EntryId{450}}) {
       const auto expected = brute_force(vocabulary, bows, live, query, 20, max_id);
-      expect_same(database.query(query, 20, max_id), expected, "loaded, then changed");
-      expect_same(reloaded.query(query, 20, max_id), expected, "saved again and loaded");
+      expect_same_results(database.query(query, 20, max_id), expected, "loaded, then changed");
+      expect_same_results(reloaded.query(query, 20, max_id), expected, "saved again and loaded");
     }
   }
 }
@@ -960,8 +952,8 @@ TEST(Database, L1ScoresAreExactWhateverTheValuesSpan) {
       if (q == 0) query = BowVector({{0, 0.5f}});
       ASSERT_EQ(detail::l1_terms_are_minimums(values, detail::value_range(query)), c.minimums)
           << c.name;
-      expect_same(database.query(query, 1000), brute_force(vocabulary, bows, live, query, 1000),
-                  c.name);
+      expect_same_results(database.query(query, 1000),
+                          brute_force(vocabulary, bows, live, query, 1000), c.name);
     }
     const auto zero = database.query(BowVector({{0, 0.5f}}), 1000);
     ASSERT_FALSE(zero.empty());
