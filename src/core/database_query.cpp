@@ -441,6 +441,8 @@ struct QueryContext {
   bool tail_visible;
   unsigned workers;
   QueryScratch& buffers;
+  std::size_t fast_candidates;      // QueryOptions'
+  std::uint64_t fast_min_postings;  // QueryOptions'
 
   std::size_t parts() const noexcept { return visible_segments + (tail_visible ? 1 : 0); }
   EntryId part_first(std::size_t part) const noexcept {
@@ -503,16 +505,15 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
 }
 
 // Fast mode: the share of the query's postings read to find candidates, at
-// least kFastMinPostings of them, and how many candidates are scored
-// exactly. Chosen at 200,000 real images (docs/benchmarks.md) on a tuning
-// set, four other noisy copies of each held-out photograph (296 queries,
-// other seeds than the 148 the benchmark reports): with at least 2^20
-// postings, 1000 candidates kept the exact top 10 for all of them (with
-// 2^18, 97.0%: a query of few postings read too few to tell near-copies
-// apart; 500 candidates: 96.3%; a share of 1/16: 98.6%).
+// least QueryOptions::fast_min_postings of them, and how many candidates
+// are scored exactly (QueryOptions::fast_candidates). The defaults were
+// chosen at 200,000 real images (docs/benchmarks.md) on a tuning set, four
+// other noisy copies of each held-out photograph (296 queries, other seeds
+// than the 148 the benchmark reports): with at least 2^20 postings, 1000
+// candidates kept the exact top 10 for all of them (with 2^18, 97.0%: a
+// query of few postings read too few to tell near-copies apart; 500
+// candidates: 96.3%; a share of 1/16: 98.6%).
 constexpr double kFastPostingShare = 1.0 / 8;
-constexpr std::size_t kFastCandidates = 1000;
-constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 20;
 // Small indexes are read whole (the candidates are then the exact best), and
 // so is any index where skipping the other words would save fewer postings
 // than kRescorePostings per word of the candidates (a query's size): a
@@ -587,7 +588,7 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
 // most to a score for the postings they cost (the query's value over the
 // word's postings in the visible segments: rare words, and among them the
 // heavy ones), up to kFastPostingShare of the query's postings or
-// kFastMinPostings (at least one word); all of them when fast mode would not
+// c.fast_min_postings (at least one word); all of them when fast mode would not
 // pay off.
 Span<BowEntry> rare_words(const QueryContext& c) {
   auto& postings = c.buffers.word_postings;
@@ -622,14 +623,16 @@ Span<BowEntry> rare_words(const QueryContext& c) {
     return a.second < b.second;
   });
   const auto budget = std::max<std::uint64_t>(
-      static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare), kFastMinPostings);
+      static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare),
+      c.fast_min_postings);
   std::size_t taken = 0;
   std::uint64_t read = 0;
   for (; taken < postings.size(); ++taken) {
     if (read + postings[taken].first > budget && taken > 0) break;
     read += postings[taken].first;
   }
-  if (total - read < kFastCandidates * kRescorePostings * c.words.size()) return c.words;
+  // (total - read) / words < candidates * kRescorePostings, without overflow.
+  if ((total - read) / c.words.size() / kRescorePostings < c.fast_candidates) return c.words;
   std::sort(postings.begin(), postings.begin() + static_cast<std::ptrdiff_t>(taken),
             [](const auto& a, const auto& b) { return a.second < b.second; });
   auto& rare = c.buffers.rare_words;
@@ -696,7 +699,7 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   if (rare.size() == c.words.size()) return exact_query<Term>(c);  // a small index, read whole
   // Candidates from the segments' rare words; the tail, small, is scored in full.
   std::vector<BestResults> tail_best = c.per_worker(c.keep, &WorkerScratch::best);
-  const std::size_t keep = std::max(kFastCandidates, c.keep);
+  const std::size_t keep = std::max(c.fast_candidates, c.keep);
   const float sign = better_sign(c.scoring, c.minimums);
   for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidate_heap.clear();
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
@@ -772,6 +775,8 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   if (options.mode != QueryMode::kExact && options.mode != QueryMode::kFast)
     throw InvalidArgument("Database::query: unknown query mode " +
                           std::to_string(static_cast<int>(options.mode)));
+  if (options.fast_candidates == 0)
+    throw InvalidArgument("Database::query: fast_candidates must be at least 1");
   if (!impl_->over_word_ids) detail::check_bow_words(bow, impl_->vocabulary, "Database::query");
   detail::check_bow_values(bow, "Database::query");
   if (bow.empty() || max_results == 0) return {};
@@ -829,10 +834,20 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const bool checked = impl_->index_values(index_values);
   const bool minimums = scoring == Scoring::kL1 && checked &&
                         detail::l1_terms_are_minimums(index_values, query_values);
-  const QueryContext context{
-      index,    searched,     last_entry, scoring,
-      minimums, !checked,     base,       std::min(max_results, impl_->live_entries),
-      visible,  tail_visible, workers,    buffers};
+  const QueryContext context{index,
+                             searched,
+                             last_entry,
+                             scoring,
+                             minimums,
+                             !checked,
+                             base,
+                             std::min(max_results, impl_->live_entries),
+                             visible,
+                             tail_visible,
+                             workers,
+                             buffers,
+                             options.fast_candidates,
+                             options.fast_min_postings};
   std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();
   return results;
