@@ -103,14 +103,21 @@ struct BetterCandidate {
   }
 };
 
+// A segment entry's sum over the rare words, beside its inverse divisor
+// (for count rows): a posting reads and writes one cache line, not two.
+struct CandidateSum {
+  float sum;
+  float inverse_divisor;
+};
+
 // What one thread of a query writes: its part sums, its best results and
 // (fast mode) its best candidates.
 struct WorkerScratch {
   std::vector<EntryScore> scores;
   std::vector<QueryResult> best;
-  std::vector<std::uint32_t> hits;        // ForwardIndex::for_each_shared's buffer
-  std::vector<float> candidate_sums;      // a segment's, over the rare words
-  std::vector<Candidate> candidate_heap;  // the best candidates of its segments
+  std::vector<std::uint32_t> hits;           // ForwardIndex::for_each_shared's buffer
+  std::vector<CandidateSum> candidate_sums;  // a segment's, over the rare words
+  std::vector<Candidate> candidate_heap;     // the best candidates of its segments
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -441,6 +448,8 @@ struct QueryContext {
   bool tail_visible;
   unsigned workers;
   QueryScratch& buffers;
+  std::size_t fast_candidates;      // QueryOptions'
+  std::uint64_t fast_min_postings;  // QueryOptions'
 
   std::size_t parts() const noexcept { return visible_segments + (tail_visible ? 1 : 0); }
   EntryId part_first(std::size_t part) const noexcept {
@@ -503,16 +512,20 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
 }
 
 // Fast mode: the share of the query's postings read to find candidates, at
-// least kFastMinPostings of them, and how many candidates are scored
-// exactly. Chosen at 200,000 real images (docs/benchmarks.md) on a tuning
-// set, four other noisy copies of each held-out photograph (296 queries,
-// other seeds than the 148 the benchmark reports): with at least 2^20
-// postings, 1000 candidates kept the exact top 10 for all of them (with
-// 2^18, 97.0%: a query of few postings read too few to tell near-copies
-// apart; 500 candidates: 96.3%; a share of 1/16: 98.6%).
+// least QueryOptions::fast_min_postings of them, and how many candidates
+// are scored exactly (QueryOptions::fast_candidates). The defaults were
+// chosen at 200,000 real images (docs/benchmarks.md) on a tuning set, four
+// other noisy copies of each held-out photograph (296 queries, other seeds
+// than the 148 the benchmark reports): with at least 2^20 postings, 1000
+// candidates kept the exact top 10 for all of them (with 2^18, 97.0%: a
+// query of few postings read too few to tell near-copies apart; 500
+// candidates: 96.3%; a share of 1/16: 98.6%). Measured again with the
+// candidates' float weights below: 1000 candidates 100%, 800 99.3%, 600
+// 98.0%; a share of 1/12 or 1/16 98.6%. Stopping the rescoring early (once
+// 128 or 256 candidates in a row have not entered the top 10) kept 87.5% /
+// 94.6%: the exact best are spread over the whole candidate order, so every
+// candidate is rescored.
 constexpr double kFastPostingShare = 1.0 / 8;
-constexpr std::size_t kFastCandidates = 1000;
-constexpr std::uint64_t kFastMinPostings = std::uint64_t{1} << 20;
 // Small indexes are read whole (the candidates are then the exact best), and
 // so is any index where skipping the other words would save fewer postings
 // than kRescorePostings per word of the candidates (a query's size): a
@@ -528,34 +541,76 @@ float better_sign(Scoring scoring, bool minimums) {
   return scoring == Scoring::kKL ? -1.0f : 1.0f;
 }
 
+// A row's terms added to a segment's candidate sums, as accumulate_row and
+// accumulate_count_row add them to exact sums (rows are checked: a fast
+// query waits for a loaded file's check).
+template <std::size_t kWidth, class Term>
+inline void candidate_row(const std::uint8_t* at, const std::uint8_t* end, const Term& term,
+                          float sign, CandidateSum* sums) {
+  std::uint32_t entry = detail::kRowStart;
+  for (; at < end; at += kWidth + detail::kWeightBytes) {
+    entry += detail::read_gap<kWidth>(at) + 1;
+    sums[entry].sum += sign * static_cast<float>(term(detail::read_weight(at + kWidth)));
+  }
+}
+template <std::size_t kWidth, class Term>
+inline void candidate_count_row(const std::uint8_t* at, const std::uint8_t* end, const Term& term,
+                                float sign, float word_weight, CandidateSum* sums) {
+  std::uint32_t entry = detail::kRowStart;
+  for (; at < end; at += kWidth + detail::kCountBytes) {
+    entry += detail::read_gap<kWidth>(at) + 1;
+    CandidateSum& sum = sums[entry];
+    const float weight = word_weight * static_cast<float>(at[kWidth]) * sum.inverse_divisor;
+    sum.sum += sign * static_cast<float>(term(weight));
+  }
+}
+
 // Sums the rare words' terms of a segment's entries in floats (a part's
-// sums, 256 KiB, stay in the core's cache), and keeps its best `keep` live
-// entries with a positive sum in the worker's candidate_heap.
+// sums and inverse divisors, 512 KiB, stay in the core's cache), and keeps
+// its best `keep` live entries with a positive sum in the worker's
+// candidate_heap.
 template <class Term>
 void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> words, float sign,
                      std::size_t keep, WorkerScratch& worker) {
   const detail::Segment& segment = *c.index.segments[part];
-  std::vector<float>& sums = worker.candidate_sums;
-  if (sums.size() < detail::kSegmentSpan) sums.assign(detail::kSegmentSpan, 0.0f);
+  std::vector<CandidateSum>& sums = worker.candidate_sums;
+  if (sums.size() < detail::kSegmentSpan) sums.assign(detail::kSegmentSpan, CandidateSum{});
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
   const detail::RowOrder order = c.index.row_order;
   const detail::SegmentWeights weights{c.index.word_weights,
                                        c.index.divisors + segment.first_entry};
   const std::size_t n = words.size();
-  float* const out = sums.data();
+  CandidateSum* const out = sums.data();
+  // Count rows' weights from each entry's inverse divisor, in floats: a
+  // candidate's sum need not be exact (its rescoring is), and a division
+  // per posting made finding candidates 30% slower.
+  const double* divisors = c.index.divisors + segment.first_entry;
+  const std::size_t entries = segment.end_entry - segment.first_entry;
+  for (std::size_t r = 0; r < entries; ++r)
+    out[r].inverse_divisor = static_cast<float>(1.0 / divisors[r]);
   for (std::size_t q = 0; q < n; ++q) {
     prefetch_rows_ahead(offsets, bytes, order, words.data(), n, q);
     const std::uint32_t row = order.row(words[q].word);
+    const std::uint32_t size = offsets[row + 1] - offsets[row];
+    if (size == 0) continue;
     const Term term{words[q].value};
-    const detail::RowWeights row_weights = weights.row(words[q].word);
-    detail::for_each_posting(bytes + offsets[row], bytes + offsets[row + 1],
-                             [&](std::uint32_t entry, detail::PostingValue value) {
-                               const float weight = value.count != 0
-                                                        ? row_weights.weight(entry, value.count)
-                                                        : value.weight;
-                               out[entry] += sign * static_cast<float>(term(weight));
-                             });
+    const std::uint8_t* const begin = bytes + offsets[row];
+    const std::uint8_t header = *begin;
+    const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
+    const std::uint8_t* const end = begin + size;
+    const bool narrow = detail::header_width(header) == 1;
+    if (detail::header_counts(header)) {
+      const auto word_weight = static_cast<float>(weights.row(words[q].word).word_weight);
+      if (narrow)
+        candidate_count_row<1>(first, end, term, sign, word_weight, out);
+      else
+        candidate_count_row<2>(first, end, term, sign, word_weight, out);
+    } else if (narrow) {
+      candidate_row<1>(first, end, term, sign, out);
+    } else {
+      candidate_row<2>(first, end, term, sign, out);
+    }
   }
   std::vector<Candidate>& heap = worker.candidate_heap;
   const EntryId first = segment.first_entry;
@@ -563,7 +618,7 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const BetterCandidate better;
   float threshold = heap.size() == keep ? heap.front().key : 0.0f;
   for (std::size_t r = 0; r < span; ++r) {
-    const float key = out[r];
+    const float key = out[r].sum;
     // Ties with the worst kept are left to `better` (entry order).
     if (!(key >= threshold) || !(key > 0.0f) || c.index.alive[first + r] == 0) continue;
     const Candidate candidate{key, static_cast<EntryId>(first + r)};
@@ -580,14 +635,14 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
       threshold = heap.front().key;
     }
   }
-  std::fill(out, out + (segment.end_entry - first), 0.0f);
+  std::fill(out, out + (segment.end_entry - first), CandidateSum{});
 }
 
 // The query's words that find candidates, in word order: those that can add
 // most to a score for the postings they cost (the query's value over the
 // word's postings in the visible segments: rare words, and among them the
 // heavy ones), up to kFastPostingShare of the query's postings or
-// kFastMinPostings (at least one word); all of them when fast mode would not
+// c.fast_min_postings (at least one word); all of them when fast mode would not
 // pay off.
 Span<BowEntry> rare_words(const QueryContext& c) {
   auto& postings = c.buffers.word_postings;
@@ -622,14 +677,16 @@ Span<BowEntry> rare_words(const QueryContext& c) {
     return a.second < b.second;
   });
   const auto budget = std::max<std::uint64_t>(
-      static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare), kFastMinPostings);
+      static_cast<std::uint64_t>(static_cast<double>(total) * kFastPostingShare),
+      c.fast_min_postings);
   std::size_t taken = 0;
   std::uint64_t read = 0;
   for (; taken < postings.size(); ++taken) {
     if (read + postings[taken].first > budget && taken > 0) break;
     read += postings[taken].first;
   }
-  if (total - read < kFastCandidates * kRescorePostings * c.words.size()) return c.words;
+  // (total - read) / words < candidates * kRescorePostings, without overflow.
+  if ((total - read) / c.words.size() / kRescorePostings < c.fast_candidates) return c.words;
   std::sort(postings.begin(), postings.begin() + static_cast<std::ptrdiff_t>(taken),
             [](const auto& a, const auto& b) { return a.second < b.second; });
   auto& rare = c.buffers.rare_words;
@@ -696,7 +753,7 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   if (rare.size() == c.words.size()) return exact_query<Term>(c);  // a small index, read whole
   // Candidates from the segments' rare words; the tail, small, is scored in full.
   std::vector<BestResults> tail_best = c.per_worker(c.keep, &WorkerScratch::best);
-  const std::size_t keep = std::max(kFastCandidates, c.keep);
+  const std::size_t keep = std::max(c.fast_candidates, c.keep);
   const float sign = better_sign(c.scoring, c.minimums);
   for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidate_heap.clear();
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
@@ -774,6 +831,8 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   if (options.mode != QueryMode::kExact && options.mode != QueryMode::kFast)
     throw InvalidArgument("Database::query: unknown query mode " +
                           std::to_string(static_cast<int>(options.mode)));
+  if (options.fast_candidates == 0)
+    throw InvalidArgument("Database::query: fast_candidates must be at least 1");
   if (!impl_->over_word_ids) detail::check_bow_words(bow, impl_->vocabulary, "Database::query");
   detail::check_bow_values(bow, "Database::query");
   if (bow.empty() || max_results == 0) return {};
@@ -832,10 +891,20 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const bool checked = impl_->index_values(index_values);
   const bool minimums = scoring == Scoring::kL1 && checked &&
                         detail::l1_terms_are_minimums(index_values, query_values);
-  const QueryContext context{
-      index,    searched,     last_entry, scoring,
-      minimums, !checked,     base,       std::min(max_results, impl_->live_entries),
-      visible,  tail_visible, workers,    buffers};
+  const QueryContext context{index,
+                             searched,
+                             last_entry,
+                             scoring,
+                             minimums,
+                             !checked,
+                             base,
+                             std::min(max_results, impl_->live_entries),
+                             visible,
+                             tail_visible,
+                             workers,
+                             buffers,
+                             options.fast_candidates,
+                             options.fast_min_postings};
   std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();
   return results;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -192,22 +193,29 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
 }
 
 TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
-  // Images of 400 places share most of their words (Zipf), as photographs
-  // of a few scenes do; queries are new images of known places. 24,000
-  // images (~2.5M postings per query): enough that fast mode scores
-  // candidates rather than reading every posting (it reads at least 2^20). The images are made once
-  // and indexed under each scoring.
+  // Images of 100 places share most of their words (Zipf), as photographs
+  // of a few scenes do; queries are new images of known places. 2,000
+  // images (~130k postings per query) with a small minimum of postings and
+  // 100 candidates, so that fast mode scores candidates rather than reading
+  // every posting. The images are made once and indexed under each scoring.
   ZipfWords zipf(80'000, 3);
   std::vector<std::map<WordId, float>> places;
-  for (int p = 0; p < 400; ++p) places.push_back(place_words(zipf, 700));
-  std::vector<BowVector> bows;
-  for (std::size_t i = 0; i < 24'000; ++i)
+  for (int p = 0; p < 100; ++p) places.push_back(place_words(zipf, 400));
+  // Entry 0 holds only a word no image has, which a query holds with a
+  // weight so small that it never finds candidates: fast mode leaves the
+  // entry out where an exact query of every result finds it.
+  constexpr WordId kLoneWord = 80'000;
+  std::vector<BowVector> bows{BowVector({{kLoneWord, 0.5f}})};
+  for (std::size_t i = 1; i < 2'000; ++i)
     bows.push_back(image_of(places[i % places.size()], zipf, 150));
   const std::vector<bool> live(bows.size(), true);
   constexpr int kQueries = 60;
   std::vector<BowVector> queries;
   for (int q = 0; q < kQueries; ++q)
     queries.push_back(image_of(places[(q * 53) % places.size()], zipf, 150));
+  QueryOptions fast = kFast;
+  fast.fast_candidates = 100;
+  fast.fast_min_postings = 1 << 12;
 
   for (Scoring scoring : {Scoring::kL1, Scoring::kL2, Scoring::kChiSquare, Scoring::kKL,
                           Scoring::kBhattacharyya, Scoring::kDotProduct}) {
@@ -216,20 +224,47 @@ TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
     Database database = Database::over_word_ids(scoring, options);
     for (const BowVector& bow : bows) database.add(bow);
     const std::string name = to_string(scoring);
-    int same_top10 = 0, same_place = 0;
+    int same_top10 = 0, same_place = 0, same_with_10_candidates = 0;
     for (const BowVector& query : queries) {
       const auto exact = database.query(query, 10, kAllEntries, kOneThread);
-      const auto fast = database.query(query, 10, kAllEntries, kFast);
-      ASSERT_EQ(fast.size(), 10u) << name;
-      expect_exact_scores(fast, scoring, bows, live, query, kAllEntries, name);
-      same_top10 += fast == exact;
-      same_place += fast[0].entry % places.size() == exact[0].entry % places.size();
-      expect_same(database.query(query, 10, kAllEntries, QueryOptions{QueryMode::kFast, 2}), fast,
+      const auto found = database.query(query, 10, kAllEntries, fast);
+      ASSERT_EQ(found.size(), 10u) << name;
+      expect_exact_scores(found, scoring, bows, live, query, kAllEntries, name);
+      same_top10 += found == exact;
+      same_place += found[0].entry % places.size() == exact[0].entry % places.size();
+      QueryOptions two_threads = fast;
+      two_threads.threads = 2;
+      expect_same(database.query(query, 10, kAllEntries, two_threads), found,
                   name + ", fast on 2 threads");
+      QueryOptions fewer = fast;
+      fewer.fast_candidates = 10;
+      same_with_10_candidates += database.query(query, 10, kAllEntries, fewer) == exact;
     }
     EXPECT_GE(same_top10, kQueries - 1) << name;
     EXPECT_EQ(same_place, kQueries) << name;
+    // The candidates' number and the rare words bound what fast mode reads.
+    EXPECT_LT(same_with_10_candidates, same_top10) << name;
+    std::vector<BowEntry> words(queries[0].begin(), queries[0].end());
+    words.push_back({kLoneWord, 1e-9f});
+    const BowVector lone(std::move(words));
+    const auto has_entry_0 = [](const std::vector<QueryResult>& results) {
+      return std::any_of(results.begin(), results.end(),
+                         [](const QueryResult& r) { return r.entry == 0; });
+    };
+    EXPECT_TRUE(has_entry_0(database.query(lone, bows.size(), kAllEntries, kOneThread))) << name;
+    EXPECT_FALSE(has_entry_0(database.query(lone, bows.size(), kAllEntries, fast))) << name;
   }
+}
+
+TEST(DatabaseQueryModes, FastQueryOptionsAreChecked) {
+  Database database = Database::over_word_ids(Scoring::kL1, DatabaseOptions{false, 0});
+  database.add(BowVector({{1, 0.5f}}));
+  QueryOptions options = kFast;
+  options.fast_candidates = 0;
+  EXPECT_THROW(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options), InvalidArgument);
+  options.fast_candidates = std::numeric_limits<std::size_t>::max();
+  options.fast_min_postings = 0;
+  EXPECT_EQ(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options).size(), 1u);
 }
 
 TEST(DatabaseQueryModes, FastQueriesFollowAddsRemovalsAndBounds) {
