@@ -183,8 +183,18 @@ BowVector bow_of(const Database& db, const py::handle& image) {
 
 std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
     const Database& db, const py::object& image, const py::object& max_results,
-    const py::object& max_entry_id, bool fast) {
+    const py::object& max_entry_id, bool fast, const py::object& fast_candidates,
+    const py::object& fast_min_postings) {
   const std::uint64_t count = count_argument(max_results, "max_results");
+  QueryOptions options;
+  if (fast) options.mode = QueryMode::kFast;
+  if (!fast && (!fast_candidates.is_none() || !fast_min_postings.is_none()))
+    throw InvalidArgument("fast_candidates and fast_min_postings apply to fast=True only");
+  if (!fast_candidates.is_none())
+    options.fast_candidates =
+        static_cast<std::size_t>(count_argument(fast_candidates, "fast_candidates"));
+  if (!fast_min_postings.is_none())
+    options.fast_min_postings = count_argument(fast_min_postings, "fast_min_postings");
   EntryId last = kAllEntries;
   if (!max_entry_id.is_none()) {
     const std::uint64_t id = count_argument(max_entry_id, "max_entry_id");
@@ -194,8 +204,6 @@ std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
   std::vector<QueryResult> results;
   {
     py::gil_scoped_release release;
-    QueryOptions options;
-    if (fast) options.mode = QueryMode::kFast;
     results = db.query(bow, static_cast<std::size_t>(count), last, options);
   }
   return results_list(results);
@@ -444,13 +452,16 @@ void bind_core(py::module_& m) {
           py::arg("bow"), py::arg("label") = py::none(),
           "Add an image already transformed with this database's vocabulary; returns its id.")
       .def("query", &query_database, py::arg("image"), py::arg("max_results") = 10,
-           py::arg("max_entry_id") = py::none(), py::arg("fast") = false,
+           py::arg("max_entry_id") = py::none(), py::arg("fast") = false, py::kw_only(),
+           py::arg("fast_candidates") = py::none(), py::arg("fast_min_postings") = py::none(),
            "Best matches of an image (a BowVector, or its descriptors: uint8 (n, code_size)\n"
            "array, or None) as a list of (entry, score, shared_words), best first; only\n"
            "entries with id <= max_entry_id when given. fast=True: candidates from the\n"
            "image's rarest words, each scored exactly (an entry can be missed, never\n"
            "misranked), for large databases; the first such query keeps a copy of every\n"
-           "entry's words. Runs without the GIL, on every core.")
+           "entry's words. fast_candidates (default 1000) and fast_min_postings (default\n"
+           "2**20) trade speed for agreement with exact queries, as QueryOptions' fields\n"
+           "of the same names. Runs without the GIL, on every core.")
       .def(
           "label",
           [](const Database& db, EntryId entry) -> std::optional<std::string> {

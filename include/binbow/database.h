@@ -84,18 +84,18 @@ enum class QueryMode {
   // Reads the postings of the query's rarest words only (an eighth of the
   // exact query's postings, at least ~1M, the words that tell images apart,
   // heavy ones first), keeps the 1000 entries that score best on them as
-  // candidates (QueryOptions tunes both numbers), then computes the exact score of every candidate
-  // from a copy
-  // of its BoW vector. An entry can only be missing, never ranked by a wrong score. The
-  // first fast query makes that copy of every entry, compact: about 2 bytes
-  // per word (~2 KiB per ORB-1000 image, 30% more memory_usage()) for vectors
-  // that Vocabulary::transform made, whose weights it computes again from
-  // word counts bit for bit, 6 bytes per word for others (over word ids);
-  // add, remove and clear keep it up to date. Indexes where skipping words
-  // would save fewer postings than the candidates hold words (under ~2M
-  // postings per query) are read whole, as kExact does. Worth it when a query
-  // reads millions of postings (large databases of images that share most
-  // words; docs/benchmarks.md has the speed and agreement).
+  // candidates (QueryOptions tunes both numbers), then computes the exact
+  // score of every candidate from a copy of its BoW vector. An entry can
+  // only be missing, never ranked by a wrong score. The first fast query
+  // makes that copy of every entry, compact: about 2 bytes per word (~2 KiB
+  // per ORB-1000 image, 30% more memory_usage()) for vectors that
+  // Vocabulary::transform made, whose weights it computes again from word
+  // counts bit for bit, 6 bytes per word for others (over word ids); add,
+  // remove and clear keep it up to date. Indexes where skipping words would
+  // save fewer postings than the candidates hold words (under ~2M postings
+  // per query) are read whole, as kExact does. Worth it when a query reads
+  // millions of postings (large databases of images that share most words;
+  // docs/benchmarks.md has the speed and agreement).
   kFast,
 };
 

@@ -102,6 +102,9 @@ class Database:
         max_results: int = 10,
         max_entry_id: Optional[int] = None,
         fast: bool = False,
+        *,
+        fast_candidates: Optional[int] = None,
+        fast_min_postings: Optional[int] = None,
     ) -> list[tuple[int, float, int]]: ...
     def label(self, entry: int) -> Optional[str]: ...
     def set_label(self, entry: int, label: str) -> None: ...

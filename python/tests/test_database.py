@@ -50,6 +50,16 @@ def test_fast_queries_report_exact_scores():
         assert db.query(bows[q], 10, 5, True) == db.query(bows[q], 10, max_entry_id=5, fast=True)
     with pytest.raises(TypeError):
         db.query(bows[0], 10, fast="yes")
+    # Fewer candidates and postings than the defaults: still exact scores only.
+    for q in (0, 17):
+        few = db.query(bows[q], 10, fast=True, fast_candidates=1, fast_min_postings=0)
+        assert few and all(score == voc.score(bows[q], bows[e]) for e, score, _ in few)
+    with pytest.raises(ValueError, match="fast_candidates"):
+        db.query(bows[0], 10, fast=True, fast_candidates=0)
+    with pytest.raises(ValueError, match="fast=True only"):
+        db.query(bows[0], 10, fast_candidates=100)
+    with pytest.raises(TypeError):
+        db.query(bows[0], 10, fast=True, fast_min_postings="1")
 
 
 def test_labels(vocabulary, images):

@@ -17,18 +17,16 @@
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
 #include "core/database_impl.h"
+#include "support/query_results.h"
 
 namespace binbow {
 namespace {
 
+using test::bits_of;
+using test::expect_same_results;
+
 constexpr QueryOptions kOneThread{QueryMode::kExact, 1};
 constexpr QueryOptions kFast{QueryMode::kFast, 1};
-
-std::uint64_t bits_of(double score) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &score, sizeof bits);
-  return bits;
-}
 
 std::uint32_t shared_words(const BowVector& a, const BowVector& b) {
   std::uint32_t shared = 0;
@@ -37,16 +35,6 @@ std::uint32_t shared_words(const BowVector& a, const BowVector& b) {
       return x.word < y.word;
     });
   return shared;
-}
-
-void expect_same(const std::vector<QueryResult>& actual, const std::vector<QueryResult>& expected,
-                 const std::string& context) {
-  ASSERT_EQ(actual.size(), expected.size()) << context;
-  for (std::size_t i = 0; i < actual.size(); ++i) {
-    EXPECT_EQ(actual[i].entry, expected[i].entry) << context << " rank " << i;
-    EXPECT_EQ(bits_of(actual[i].score), bits_of(expected[i].score)) << context << " rank " << i;
-    EXPECT_EQ(actual[i].shared_words, expected[i].shared_words) << context << " rank " << i;
-  }
 }
 
 // Every result of a fast query has the brute-force score of its entry, to
@@ -168,12 +156,13 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
       expect_exact_scores(one, scoring, bows, live, query, kAllEntries, context);
       for (unsigned threads : {0u, 2u, 3u, 8u}) {
         const QueryOptions split{QueryMode::kExact, threads};
-        expect_same(database.query(query, 30, kAllEntries, split), one,
-                    context + ", " + std::to_string(threads) + " threads");
-        expect_same(database.query(query, 30, 1'234, split),
-                    database.query(query, 30, 1'234, kOneThread), context + ", max_entry_id");
+        expect_same_results(database.query(query, 30, kAllEntries, split), one,
+                            context + ", " + std::to_string(threads) + " threads");
+        expect_same_results(database.query(query, 30, 1'234, split),
+                            database.query(query, 30, 1'234, kOneThread),
+                            context + ", max_entry_id");
       }
-      expect_same(database.query(query, 30), one, context + ", default options");
+      expect_same_results(database.query(query, 30), one, context + ", default options");
     }
     // The one-thread result itself is the brute force's top 30.
     std::vector<QueryResult> all;
@@ -186,7 +175,7 @@ TEST(DatabaseQueryModes, ThreadsGiveTheOneThreadResultAndBruteForce) {
       return scoring == Scoring::kKL ? a.score < b.score : a.score > b.score;
     });
     all.resize(30);
-    expect_same(
+    expect_same_results(
         database.query(brute_force_query, 30, kAllEntries, QueryOptions{QueryMode::kExact, 2}), all,
         std::string(to_string(scoring)) + " brute force");
   }
@@ -234,8 +223,8 @@ TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
       same_place += found[0].entry % places.size() == exact[0].entry % places.size();
       QueryOptions two_threads = fast;
       two_threads.threads = 2;
-      expect_same(database.query(query, 10, kAllEntries, two_threads), found,
-                  name + ", fast on 2 threads");
+      expect_same_results(database.query(query, 10, kAllEntries, two_threads), found,
+                          name + ", fast on 2 threads");
       QueryOptions fewer = fast;
       fewer.fast_candidates = 10;
       same_with_10_candidates += database.query(query, 10, kAllEntries, fewer) == exact;
@@ -297,7 +286,7 @@ TEST(DatabaseQueryModes, FastQueriesFollowAddsRemovalsAndBounds) {
       EXPECT_LE(fast.size(), exact.size()) << context;
       EXPECT_EQ(fast.empty(), exact.empty()) << context;
       const auto fast3 = database.query(query, 3, max_id, kFast);
-      expect_same(fast3, database.query(query, 3, max_id, kOneThread), context + ", top 3");
+      expect_same_results(fast3, database.query(query, 3, max_id, kOneThread), context + ", top 3");
     }
   };
   add(700);
