@@ -604,7 +604,12 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   try {
     alive.push_back(0);
     word_counts.push_back(static_cast<std::uint32_t>(n));
-    divisors.push_back(divisor_of(Span<BowEntry>(words, n)));
+    // The count form, found once: the divisor the count rows use, and the
+    // forward index's compact entry.
+    const bool counted =
+        !over_word_ids && count_form.find(vocabulary, scoring, Span<BowEntry>(words, n));
+    divisors.push_back(
+        counted && count_form.largest_count() <= detail::kMaxRowCount ? count_form.divisor() : 0);
     if (options.direct_index) direct.emplace_back(features);
     if (!labels.empty()) labels.emplace_back();
     // The lists' heads and the ends of their blocks stay in cache (see
@@ -619,7 +624,7 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
       arena.at(list.block)[list.size++] = {key_base | (row_order.row(word) - tail_list_start(l)),
                                            words[appended].value};
     }
-    if (forward_built) forward.append(Span<BowEntry>(words, n));
+    if (forward_built) forward.append(Span<BowEntry>(words, n), counted ? &count_form : nullptr);
   } catch (...) {
     // The lists that got this entry end with it; undo them.
     for (std::size_t i = 0; i < appended; ++i) --tail_lists[tail_list(words[i].word)].size;
@@ -636,11 +641,6 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   ++live_entries;
   tail_postings += n;
   return entry;
-}
-
-double Database::Impl::divisor_of(Span<BowEntry> words) {
-  if (over_word_ids || !count_form.find(vocabulary, scoring, words)) return 0;
-  return count_form.largest_count() <= detail::kMaxRowCount ? count_form.divisor() : 0;
 }
 
 void Database::Impl::build_forward_index() const {

@@ -678,8 +678,6 @@ struct Database::Impl {
   // queries (shared lock held), so that only databases queried in fast
   // mode pay its memory.
   void build_forward_index() const;
-  // The divisor an entry of these words gets (see divisors).
-  double divisor_of(Span<BowEntry> words);
   // What turns counts into weights in a segment from `first_entry`.
   detail::SegmentWeights segment_weights(EntryId first_entry) const noexcept {
     return {over_word_ids ? nullptr : detail::word_weights(vocabulary),
@@ -732,7 +730,7 @@ struct Database::Impl {
   detail::LoadedDirectIndex loaded_direct;
   std::vector<std::string> labels;  // empty until a label is set
 
-  detail::CountForm count_form;  // divisor_of's buffers
+  detail::CountForm count_form;  // of the entry being added
 
   // Each entry's BoW vector, for fast queries: built by the first one, then
   // kept up to date by add, remove and clear.
