@@ -473,11 +473,14 @@ inline float read_weight(const std::uint8_t* at) noexcept {
 // differences minus 1, in wrapping 32-bit arithmetic.
 constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
 
-// The count of a posting of an entry in count form, from its weight: the
-// weight is count_weight(word_weight, c, divisor) for a count c ≤ 255, within
-// 2^-24 relatively, so the quotient is within 2^-15 of c.
-inline std::uint32_t count_of(float weight, double word_weight, double divisor) noexcept {
-  return static_cast<std::uint32_t>(static_cast<double>(weight) * divisor / word_weight + 0.5);
+// The count of a posting of an entry in count form, from its weight and
+// 1 / its word's weight: the weight is count_weight(word_weight, c, divisor)
+// for a count c ≤ 255, within 2^-24 relatively, so the product is within
+// 2^-15 of c (multiplying by the inverse adds ~2^-52: no division per
+// posting as the tail is frozen).
+inline std::uint32_t count_of(float weight, double inverse_word_weight, double divisor) noexcept {
+  return static_cast<std::uint32_t>(static_cast<double>(weight) * divisor * inverse_word_weight +
+                                    0.5);
 }
 
 // What turns a row's counts into weights: its word's vocabulary weight, and
