@@ -541,12 +541,23 @@ class RowWriter {
     const std::size_t width = gap_width(gaps_);
     *begin_ = static_cast<std::uint8_t>(width | (counts_ ? kCountRow : 0));
     if (width == 2) return at_;
-    const std::size_t value_bytes = counts_ ? kCountBytes : kWeightBytes;
+    // In place, front to back (each posting moves down); the value is read
+    // whole before it is written, in sizes the compiler copies inline.
     std::uint8_t* out = begin_ + kRowHeaderBytes;
-    for (const std::uint8_t* in = postings; in != at_; in += 2 + value_bytes) {
+    if (counts_) {
+      for (const std::uint8_t* in = postings; in != at_;
+           in += 2 + kCountBytes, out += 1 + kCountBytes) {
+        out[0] = in[0];
+        out[1] = in[2];
+      }
+      return out;
+    }
+    for (const std::uint8_t* in = postings; in != at_; in += 2 + kWeightBytes) {
+      std::uint8_t weight[kWeightBytes];
+      std::memcpy(weight, in + 2, kWeightBytes);
       out[0] = in[0];
-      std::memmove(out + 1, in + 2, value_bytes);
-      out += 1 + value_bytes;
+      std::memcpy(out + 1, weight, kWeightBytes);
+      out += 1 + kWeightBytes;
     }
     return out;
   }
