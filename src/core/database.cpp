@@ -196,15 +196,16 @@ PackedFeatureVector::PackedFeatureVector(const FeatureVector& features)
   const auto& indices = features.feature_indices();
   bool partition = node_count_ <= 0x10000;
   if (partition) {
-    // Every index below the count and none twice: a branch-free pass.
-    std::vector<std::uint64_t> seen((std::size_t{feature_count_} + 63) / 64 + 1, 0);
-    const std::size_t beyond = seen.size() - 1;  // out-of-range indices land here
-    std::uint64_t repeated = 0;
+    // Every index below the count and none twice: a branch-free pass, a
+    // byte per index so that no store waits for the one before (neighbours
+    // would share a word of a bit set).
+    std::vector<std::uint8_t> seen(std::size_t{feature_count_} + 1, 0);
+    const std::size_t beyond = feature_count_;  // out-of-range indices land here
+    std::uint8_t repeated = 0;
     for (std::uint32_t index : indices) {
-      const std::size_t word = index < feature_count_ ? index / 64 : beyond;
-      const std::uint64_t bit = std::uint64_t{1} << (index % 64);
-      repeated |= seen[word] & bit;
-      seen[word] |= bit;
+      const std::size_t at = index < feature_count_ ? index : beyond;
+      repeated |= seen[at];
+      seen[at] = 1;
     }
     partition = repeated == 0 && seen[beyond] == 0;
   }
@@ -604,13 +605,21 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   try {
     alive.push_back(0);
     word_counts.push_back(static_cast<std::uint32_t>(n));
-    divisors.push_back(divisor_of(Span<BowEntry>(words, n)));
-    if (options.direct_index) direct.emplace_back(features);
-    if (!labels.empty()) labels.emplace_back();
-    // The lists' heads and the ends of their blocks stay in cache (see
-    // kTailListShift).
+    // The lists' heads and the ends of their blocks mostly stay in cache
+    // (see kTailListShift), but one store in eight starts a cache line: the
+    // line a later word writes is fetched kAhead words ahead, so that those
+    // misses overlap, and so is the word's vocabulary weight, which the count
+    // form reads next, in word order, one cache miss per word otherwise.
+    constexpr std::size_t kAhead = 16;
+    const float* const weights_ahead = over_word_ids ? nullptr : detail::word_weights(vocabulary);
     detail::TailList* lists = tail_lists.data();
     for (; appended < n; ++appended) {
+      if (appended + kAhead < n) {
+        const WordId ahead = words[appended + kAhead].word;
+        const detail::TailList next = lists[tail_list(ahead)];
+        if (next.size != 0) __builtin_prefetch(arena.at(next.block) + next.size, 1);
+        if (weights_ahead != nullptr) __builtin_prefetch(weights_ahead + ahead);
+      }
       const WordId word = words[appended].word;
       const std::uint32_t l = tail_list(word);
       detail::TailList& list = lists[l];
@@ -619,7 +628,15 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
       arena.at(list.block)[list.size++] = {key_base | (row_order.row(word) - tail_list_start(l)),
                                            words[appended].value};
     }
-    if (forward_built) forward.append(Span<BowEntry>(words, n));
+    // The count form, found once: the divisor the count rows use, and the
+    // forward index's compact entry.
+    const bool counted =
+        !over_word_ids && count_form.find(vocabulary, scoring, Span<BowEntry>(words, n));
+    divisors.push_back(
+        counted && count_form.largest_count() <= detail::kMaxRowCount ? count_form.divisor() : 0);
+    if (options.direct_index) direct.emplace_back(features);
+    if (!labels.empty()) labels.emplace_back();
+    if (forward_built) forward.append(Span<BowEntry>(words, n), counted ? &count_form : nullptr);
   } catch (...) {
     // The lists that got this entry end with it; undo them.
     for (std::size_t i = 0; i < appended; ++i) --tail_lists[tail_list(words[i].word)].size;
@@ -636,11 +653,6 @@ EntryId Database::Impl::append(const BowVector& bow, const FeatureVector& featur
   ++live_entries;
   tail_postings += n;
   return entry;
-}
-
-double Database::Impl::divisor_of(Span<BowEntry> words) {
-  if (over_word_ids || !count_form.find(vocabulary, scoring, words)) return 0;
-  return count_form.largest_count() <= detail::kMaxRowCount ? count_form.divisor() : 0;
 }
 
 void Database::Impl::build_forward_index() const {
@@ -858,11 +870,11 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
   const std::uint32_t row_mask = (1u << high_bits) - 1;
   // Per row of a list: its postings then next byte, its gaps ORed then gap
   // width, its last entry; whether every entry of the row is in count form
-  // (a count row), then its word's vocabulary weight if so.
+  // (a count row), then 1 / its word's vocabulary weight if so.
   const std::size_t list_rows = std::size_t{1} << high_bits;
   std::vector<std::uint32_t> next(list_rows), gaps(list_rows), last(list_rows);
   std::vector<std::uint8_t> counted(list_rows);
-  std::vector<double> word_weights(list_rows);
+  std::vector<double> inverse_weights(list_rows);
   constexpr std::size_t kAhead = 2;
   constexpr std::size_t kLinesAhead = 4;
   std::uint32_t row_end = 0;
@@ -911,7 +923,7 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
         gaps[r] = static_cast<std::uint32_t>(detail::gap_width(gaps[r]));
         bytes[begin] =
             static_cast<std::uint8_t>(gaps[r] | (counted[r] != 0 ? detail::kCountRow : 0));
-        if (counted[r] != 0) word_weights[r] = vocabulary_weights[word];
+        if (counted[r] != 0) inverse_weights[r] = 1 / static_cast<double>(vocabulary_weights[word]);
         next[r] = begin + static_cast<std::uint32_t>(detail::kRowHeaderBytes);
         last[r] = detail::kRowStart;
       }
@@ -924,11 +936,11 @@ std::unique_ptr<detail::Segment> Database::Impl::tail_as_segment() const {
       std::uint8_t* const at = bytes + next[row];
       const std::uint32_t gap = relative - last[row] - 1;
       next[row] = static_cast<std::uint32_t>(
-          (counted[row] != 0
-               ? detail::put_count_posting(
-                     at, gaps[row], gap,
-                     detail::count_of(postings[i].weight, word_weights[row], divisor_at[relative]))
-               : detail::put_posting(at, gaps[row], gap, postings[i].weight)) -
+          (counted[row] != 0 ? detail::put_count_posting(
+                                   at, gaps[row], gap,
+                                   detail::count_of(postings[i].weight, inverse_weights[row],
+                                                    divisor_at[relative]))
+                             : detail::put_posting(at, gaps[row], gap, postings[i].weight)) -
           bytes);
       last[row] = relative;
     }

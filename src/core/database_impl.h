@@ -479,11 +479,14 @@ inline float read_weight(const std::uint8_t* at) noexcept {
 // differences minus 1, in wrapping 32-bit arithmetic.
 constexpr std::uint32_t kRowStart = ~std::uint32_t{0};
 
-// The count of a posting of an entry in count form, from its weight: the
-// weight is count_weight(word_weight, c, divisor) for a count c ≤ 255, within
-// 2^-24 relatively, so the quotient is within 2^-15 of c.
-inline std::uint32_t count_of(float weight, double word_weight, double divisor) noexcept {
-  return static_cast<std::uint32_t>(static_cast<double>(weight) * divisor / word_weight + 0.5);
+// The count of a posting of an entry in count form, from its weight and
+// 1 / its word's weight: the weight is count_weight(word_weight, c, divisor)
+// for a count c ≤ 255, within 2^-24 relatively, so the product is within
+// 2^-15 of c (multiplying by the inverse adds ~2^-52: no division per
+// posting as the tail is frozen).
+inline std::uint32_t count_of(float weight, double inverse_word_weight, double divisor) noexcept {
+  return static_cast<std::uint32_t>(static_cast<double>(weight) * divisor * inverse_word_weight +
+                                    0.5);
 }
 
 // What turns a row's counts into weights: its word's vocabulary weight, and
@@ -544,12 +547,23 @@ class RowWriter {
     const std::size_t width = gap_width(gaps_);
     *begin_ = static_cast<std::uint8_t>(width | (counts_ ? kCountRow : 0));
     if (width == 2) return at_;
-    const std::size_t value_bytes = counts_ ? kCountBytes : kWeightBytes;
+    // In place, front to back (each posting moves down); the value is read
+    // whole before it is written, in sizes the compiler copies inline.
     std::uint8_t* out = begin_ + kRowHeaderBytes;
-    for (const std::uint8_t* in = postings; in != at_; in += 2 + value_bytes) {
+    if (counts_) {
+      for (const std::uint8_t* in = postings; in != at_;
+           in += 2 + kCountBytes, out += 1 + kCountBytes) {
+        out[0] = in[0];
+        out[1] = in[2];
+      }
+      return out;
+    }
+    for (const std::uint8_t* in = postings; in != at_; in += 2 + kWeightBytes) {
+      std::uint8_t weight[kWeightBytes];
+      std::memcpy(weight, in + 2, kWeightBytes);
       out[0] = in[0];
-      std::memmove(out + 1, in + 2, value_bytes);
-      out += 1 + value_bytes;
+      std::memcpy(out + 1, weight, kWeightBytes);
+      out += 1 + kWeightBytes;
     }
     return out;
   }
@@ -684,8 +698,6 @@ struct Database::Impl {
   // queries (shared lock held), so that only databases queried in fast
   // mode pay its memory.
   void build_forward_index() const;
-  // The divisor an entry of these words gets (see divisors).
-  double divisor_of(Span<BowEntry> words);
   // What turns counts into weights in a segment from `first_entry`.
   detail::SegmentWeights segment_weights(EntryId first_entry) const noexcept {
     return {over_word_ids ? nullptr : detail::word_weights(vocabulary),
@@ -738,7 +750,7 @@ struct Database::Impl {
   detail::LoadedDirectIndex loaded_direct;
   std::vector<std::string> labels;  // empty until a label is set
 
-  detail::CountForm count_form;  // divisor_of's buffers
+  detail::CountForm count_form;  // of the entry being added
 
   // Each entry's BoW vector, for fast queries: built by the first one, then
   // kept up to date by add, remove and clear.

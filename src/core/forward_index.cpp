@@ -6,25 +6,29 @@ namespace binbow::detail {
 
 namespace {
 
-// Appends a word's step code (with `flag`) after `previous`.
-void push_step(std::vector<std::uint16_t>& codes, std::uint32_t& previous, WordId word,
-               std::uint16_t flag) {
-  const std::uint32_t step = word - previous;
-  previous = word;
-  if (step <= 0x7FFF) {
-    codes.push_back(static_cast<std::uint16_t>(step | flag));
-  } else {
-    codes.push_back(flag);
-    codes.push_back(static_cast<std::uint16_t>(step & 0xFFFF));
-    codes.push_back(static_cast<std::uint16_t>(step >> 16));
+// A step of up to 15 bits takes one code, a larger one three.
+constexpr std::uint32_t kShortStep = 0x7FFF;
+
+std::size_t step_codes(std::uint32_t step) noexcept {
+  return step <= kShortStep ? 1 : 3;
+}
+
+// Writes a word's step code (with `flag`); returns the code after it.
+std::uint16_t* put_step(std::uint16_t* out, std::uint32_t step, std::uint16_t flag) noexcept {
+  if (step <= kShortStep) {
+    *out = static_cast<std::uint16_t>(step | flag);
+    return out + 1;
   }
+  out[0] = flag;
+  out[1] = static_cast<std::uint16_t>(step & 0xFFFF);
+  out[2] = static_cast<std::uint16_t>(step >> 16);
+  return out + 3;
 }
 
 template <typename T>
-void push_raw(std::vector<std::uint16_t>& codes, T value) {
-  std::uint16_t halves[sizeof(T) / 2];
-  std::memcpy(halves, &value, sizeof(T));
-  codes.insert(codes.end(), halves, halves + sizeof(T) / 2);
+std::uint16_t* put_raw(std::uint16_t* out, T value) noexcept {
+  std::memcpy(out, &value, sizeof(T));
+  return out + sizeof(T) / 2;
 }
 
 }  // namespace
@@ -35,15 +39,15 @@ ForwardIndex::ForwardIndex(const Vocabulary* vocabulary, Scoring scoring)
 }
 
 void ForwardIndex::append(Span<BowEntry> words) {
-  std::vector<std::uint16_t> codes;
-  encode(words, codes);
-  entries_.push_back(std::move(codes));
+  entries_.push_back(encode(words, find_count_form(words)));
+}
+
+void ForwardIndex::append(Span<BowEntry> words, const CountForm* form) {
+  entries_.push_back(encode(words, form));
 }
 
 void ForwardIndex::assign(EntryId entry, Span<BowEntry> words) {
-  std::vector<std::uint16_t> codes;
-  encode(words, codes);
-  entries_[entry] = std::move(codes);
+  entries_[entry] = encode(words, find_count_form(words));
 }
 
 std::size_t ForwardIndex::memory_usage() const noexcept {
@@ -52,39 +56,46 @@ std::size_t ForwardIndex::memory_usage() const noexcept {
   return bytes;
 }
 
-void ForwardIndex::encode(Span<BowEntry> words, std::vector<std::uint16_t>& codes) const {
-  if (words.empty()) return;
-  if (!encode_counts(words, codes)) encode_floats(words, codes);
-  codes.shrink_to_fit();
+const CountForm* ForwardIndex::find_count_form(Span<BowEntry> words) {
+  return has_vocabulary_ && form_.find(vocabulary_, scoring_, words) ? &form_ : nullptr;
 }
 
-void ForwardIndex::encode_floats(Span<BowEntry> words, std::vector<std::uint16_t>& codes) {
-  codes.clear();
-  codes.reserve(kFloatsHeader + 4 * words.size());
-  codes.push_back(kFloats);
-  push_raw(codes, static_cast<std::uint32_t>(words.size()));
-  std::uint32_t previous = ~std::uint32_t{0};
-  for (const BowEntry& e : words) push_step(codes, previous, e.word, 0);
-  for (const BowEntry& e : words) push_raw(codes, e.value);
-}
-
-// The compact form of CountForm: its divisor and the counts above 1.
-bool ForwardIndex::encode_counts(Span<BowEntry> words, std::vector<std::uint16_t>& codes) const {
-  if (!has_vocabulary_) return false;
-  CountForm form;
-  if (!form.find(vocabulary_, scoring_, words)) return false;
+// Sized first, then written once: an add's entry costs one allocation and
+// one pass over its words.
+std::vector<std::uint16_t> ForwardIndex::encode(Span<BowEntry> words, const CountForm* form) {
   const std::size_t n = words.size();
-  codes.clear();
-  codes.reserve(kCountsHeader + n + n / 8 + 8);
-  codes.push_back(kCounts);
-  push_raw(codes, form.divisor());
+  if (n == 0) return {};
+  const std::uint32_t* const counts = form != nullptr ? form->counts().data() : nullptr;
+  std::size_t size = form != nullptr ? kCountsHeader : kFloatsHeader + 2 * n;
   std::uint32_t previous = ~std::uint32_t{0};
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t count = form.counts()[i];
-    push_step(codes, previous, words[i].word, count > 1 ? kMany : 0);
-    if (count > 1) codes.push_back(static_cast<std::uint16_t>(count));
+    size += step_codes(words[i].word - previous);
+    previous = words[i].word;
+    if (counts != nullptr) size += counts[i] > 1 ? 1 : 0;
   }
-  return true;
+  std::vector<std::uint16_t> codes(size);
+  std::uint16_t* out = codes.data();
+  previous = ~std::uint32_t{0};
+  if (counts != nullptr) {
+    // The compact form: the divisor and the counts above 1.
+    *out++ = kCounts;
+    out = put_raw(out, form->divisor());
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t count = counts[i];
+      out = put_step(out, words[i].word - previous, count > 1 ? kMany : 0);
+      previous = words[i].word;
+      if (count > 1) *out++ = static_cast<std::uint16_t>(count);
+    }
+    return codes;
+  }
+  *out++ = kFloats;
+  out = put_raw(out, static_cast<std::uint32_t>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    out = put_step(out, words[i].word - previous, 0);
+    previous = words[i].word;
+  }
+  for (std::size_t i = 0; i < n; ++i) out = put_raw(out, words[i].value);
+  return codes;
 }
 
 }  // namespace binbow::detail

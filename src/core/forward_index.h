@@ -24,6 +24,7 @@
 #include "binbow/span.h"
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
+#include "core/count_form.h"
 
 namespace binbow::detail {
 
@@ -36,6 +37,11 @@ class ForwardIndex {
 
   // Appends the next entry's words (sorted by increasing word id).
   void append(Span<BowEntry> words);
+  // The same, with what the caller found already: `form` is the words'
+  // count form (CountForm::find was true for this index's vocabulary and
+  // scoring), or null when they have none, so that an add does not look up
+  // every word's weight a second time.
+  void append(Span<BowEntry> words, const CountForm* form);
   // Makes room for `entries` entries; new ones have no words.
   void resize(std::size_t entries) { entries_.resize(entries); }
   // Sets the words of an entry (below size()).
@@ -150,15 +156,17 @@ class ForwardIndex {
     return out;
   }
 
-  // The entry's codes in the compact form, if its weights are transform's.
-  bool encode_counts(Span<BowEntry> words, std::vector<std::uint16_t>& codes) const;
-  static void encode_floats(Span<BowEntry> words, std::vector<std::uint16_t>& codes);
-  void encode(Span<BowEntry> words, std::vector<std::uint16_t>& codes) const;
+  // An entry's codes, allocated at their exact size: in the compact form of
+  // `form` (the words' count form), or with their floats when it is null.
+  static std::vector<std::uint16_t> encode(Span<BowEntry> words, const CountForm* form);
+  // `words`' count form if they have one (in form_'s buffers), else null.
+  const CountForm* find_count_form(Span<BowEntry> words);
 
   Vocabulary vocabulary_;
   bool has_vocabulary_ = false;
   Scoring scoring_ = Scoring::kL1;
   std::vector<std::vector<std::uint16_t>> entries_;
+  CountForm form_;  // find_count_form's buffers
 };
 
 }  // namespace binbow::detail
