@@ -184,12 +184,21 @@ BowVector bow_of(const Database& db, const py::handle& image) {
 std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
     const Database& db, const py::object& image, const py::object& max_results,
     const py::object& max_entry_id, bool fast, const py::object& fast_candidates,
-    const py::object& fast_min_postings) {
+    const py::object& fast_candidate_share, const py::object& fast_min_postings) {
   const std::uint64_t count = count_argument(max_results, "max_results");
   QueryOptions options;
   if (fast) options.mode = QueryMode::kFast;
-  if (!fast && (!fast_candidates.is_none() || !fast_min_postings.is_none()))
-    throw InvalidArgument("fast_candidates and fast_min_postings apply to fast=True only");
+  if (!fast && (!fast_candidates.is_none() || !fast_candidate_share.is_none() ||
+                !fast_min_postings.is_none()))
+    throw InvalidArgument(
+        "fast_candidates, fast_candidate_share and fast_min_postings apply to fast=True only");
+  if (!fast_candidate_share.is_none()) {
+    if (py::isinstance<py::bool_>(fast_candidate_share) ||
+        (!py::isinstance<py::float_>(fast_candidate_share) &&
+         !py::isinstance<py::int_>(fast_candidate_share)))
+      throw py::type_error("fast_candidate_share must be a number");
+    options.fast_candidate_share = fast_candidate_share.cast<double>();
+  }
   if (!fast_candidates.is_none())
     options.fast_candidates =
         static_cast<std::size_t>(count_argument(fast_candidates, "fast_candidates"));
@@ -453,15 +462,17 @@ void bind_core(py::module_& m) {
           "Add an image already transformed with this database's vocabulary; returns its id.")
       .def("query", &query_database, py::arg("image"), py::arg("max_results") = 10,
            py::arg("max_entry_id") = py::none(), py::arg("fast") = false, py::kw_only(),
-           py::arg("fast_candidates") = py::none(), py::arg("fast_min_postings") = py::none(),
+           py::arg("fast_candidates") = py::none(), py::arg("fast_candidate_share") = py::none(),
+           py::arg("fast_min_postings") = py::none(),
            "Best matches of an image (a BowVector, or its descriptors: uint8 (n, code_size)\n"
            "array, or None) as a list of (entry, score, shared_words), best first; only\n"
            "entries with id <= max_entry_id when given. fast=True: candidates from the\n"
            "image's rarest words, each scored exactly (an entry can be missed, never\n"
            "misranked), for large databases; the first such query keeps a copy of every\n"
-           "entry's words. fast_candidates (default 1000) and fast_min_postings (default\n"
-           "2**20) trade speed for agreement with exact queries, as QueryOptions' fields\n"
-           "of the same names. Runs without the GIL, on every core.")
+           "entry's words. fast_candidates (default 1000), fast_candidate_share (default\n"
+           "1/125 of the entries, where more) and fast_min_postings (default 2**20) trade\n"
+           "speed for agreement with exact queries, as QueryOptions' fields of the same\n"
+           "names. Runs without the GIL, on every core.")
       .def(
           "label",
           [](const Database& db, EntryId entry) -> std::optional<std::string> {

@@ -110,16 +110,21 @@ struct QueryOptions {
   // kFast only, like an approximate index's probe count: speed for agreement
   // with kExact. A query reads the postings of its rarest words, an eighth
   // of its postings but at least fast_min_postings (at least one word), and
-  // the fast_candidates entries that score best on them (at least
-  // max_results) get their exact score; a query whose other words hold
-  // fewer postings than the candidates hold words reads every posting, as
-  // kExact does. More of either finds more of the exact best, slower: at
-  // 200,000 ORB-1000 images the defaults kept the exact top 10 of every
-  // query tried, 800 candidates of 99.3%, 600 of 98.0%, and a query's
-  // rescoring costs ~4 µs per candidate (docs/benchmarks.md). query()
-  // throws InvalidArgument for fast_candidates = 0; fast_min_postings = 0
-  // leaves the eighth alone.
+  // its best candidates on them get their exact score: fast_candidates, or
+  // fast_candidate_share of the entries searched where that is more (and
+  // at least max_results). A query whose other words hold fewer postings
+  // than the candidates hold words reads every posting, as kExact does.
+  // More of either finds more of the exact best, slower (a candidate's
+  // rescoring costs ~4 µs for an ORB-1000 image). With more entries, more of
+  // them are near-copies of the query's best, so the candidates grow with
+  // the database: on tuning queries of ORB-1000 images the defaults kept the
+  // exact top 10 of all at 200,000 (1000 candidates; 800 kept 99.3%) and of
+  // 99.7% at 1,000,000 (8000 candidates; 5000 kept 98.3%, 1000 81.4%;
+  // docs/benchmarks.md). query() throws InvalidArgument for
+  // fast_candidates = 0 and for a share outside [0, 1]; fast_min_postings
+  // = 0 leaves the eighth alone.
   std::size_t fast_candidates = 1000;
+  double fast_candidate_share = 1.0 / 125;
   std::uint64_t fast_min_postings = std::uint64_t{1} << 20;
 };
 

@@ -104,6 +104,7 @@ class Database:
         fast: bool = False,
         *,
         fast_candidates: Optional[int] = None,
+        fast_candidate_share: Optional[float] = None,
         fast_min_postings: Optional[int] = None,
     ) -> list[tuple[int, float, int]]: ...
     def label(self, entry: int) -> Optional[str]: ...

@@ -56,6 +56,12 @@ def test_fast_queries_report_exact_scores():
         assert few and all(score == voc.score(bows[q], bows[e]) for e, score, _ in few)
     with pytest.raises(ValueError, match="fast_candidates"):
         db.query(bows[0], 10, fast=True, fast_candidates=0)
+    assert db.query(bows[17], 10, fast=True, fast_candidates=1, fast_candidate_share=1.0) == \
+        db.query(bows[17], 10, fast=True, fast_candidates=len(images))
+    with pytest.raises(ValueError, match="fast_candidate_share"):
+        db.query(bows[0], 10, fast=True, fast_candidate_share=2.0)
+    with pytest.raises(TypeError):
+        db.query(bows[0], 10, fast=True, fast_candidate_share="0.1")
     with pytest.raises(ValueError, match="fast=True only"):
         db.query(bows[0], 10, fast_candidates=100)
     with pytest.raises(TypeError):

@@ -513,18 +513,19 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
 
 // Fast mode: the share of the query's postings read to find candidates, at
 // least QueryOptions::fast_min_postings of them, and how many candidates
-// are scored exactly (QueryOptions::fast_candidates). The defaults were
-// chosen at 200,000 real images (docs/benchmarks.md) on a tuning set, four
-// other noisy copies of each held-out photograph (296 queries, other seeds
-// than the 148 the benchmark reports): with at least 2^20 postings, 1000
-// candidates kept the exact top 10 for all of them (with 2^18, 97.0%: a
-// query of few postings read too few to tell near-copies apart; 500
-// candidates: 96.3%; a share of 1/16: 98.6%). Measured again with the
-// candidates' float weights below: 1000 candidates 100%, 800 99.3%, 600
-// 98.0%; a share of 1/12 or 1/16 98.6%. Stopping the rescoring early (once
-// 128 or 256 candidates in a row have not entered the top 10) kept 87.5% /
-// 94.6%: the exact best are spread over the whole candidate order, so every
-// candidate is rescored.
+// are scored exactly (QueryOptions::fast_candidates, or fast_candidate_share
+// of the entries). The defaults were chosen on a tuning set of real images
+// (docs/benchmarks.md): four other noisy copies of each held-out photograph
+// (296 queries, other seeds than the 148 the benchmark reports). At 200,000
+// images, with at least 2^20 postings, 1000 candidates kept the exact top 10
+// for all of them (with 2^18, 97.0%: a query of few postings read too few to
+// tell near-copies apart; 800 candidates 99.3%, 600 98.0%; a share of 1/12
+// or 1/16 of the postings 98.6%). At 1,000,000 each photograph has five
+// times the near-copies: 1000 candidates kept 81.4%, 5000 98.3%, 8000
+// 99.7%; hence 1/125 of the entries, and 1000 below 125,000. Stopping the
+// rescoring early (once 128 or 256 candidates in a row have not entered the
+// top 10) kept 87.5% / 94.6% at 200,000: the exact best are spread over the
+// whole candidate order, so every candidate is rescored.
 constexpr double kFastPostingShare = 1.0 / 8;
 // Small indexes are read whole (the candidates are then the exact best), and
 // so is any index where skipping the other words would save fewer postings
@@ -814,6 +815,12 @@ std::vector<QueryResult> run_query(const QueryContext& c, QueryMode mode) {
   return {};
 }
 
+// QueryOptions' candidates for a query of `entries` entries.
+std::size_t fast_candidates(const QueryOptions& options, std::size_t entries) {
+  const double share = std::ceil(options.fast_candidate_share * static_cast<double>(entries));
+  return std::max(options.fast_candidates, static_cast<std::size_t>(share));
+}
+
 }  // namespace
 
 std::atomic<std::size_t>& detail::postings_per_query_thread() {
@@ -833,6 +840,9 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
                           std::to_string(static_cast<int>(options.mode)));
   if (options.fast_candidates == 0)
     throw InvalidArgument("Database::query: fast_candidates must be at least 1");
+  if (!(options.fast_candidate_share >= 0.0 && options.fast_candidate_share <= 1.0))
+    throw InvalidArgument("Database::query: fast_candidate_share must be in [0, 1], not " +
+                          std::to_string(options.fast_candidate_share));
   if (!impl_->over_word_ids) detail::check_bow_words(bow, impl_->vocabulary, "Database::query");
   detail::check_bow_values(bow, "Database::query");
   if (bow.empty() || max_results == 0) return {};
@@ -891,6 +901,8 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   const bool checked = impl_->index_values(index_values);
   const bool minimums = scoring == Scoring::kL1 && checked &&
                         detail::l1_terms_are_minimums(index_values, query_values);
+  const std::size_t searched_entries =
+      std::min<std::size_t>(impl_->live_entries, std::size_t{last_entry} + 1);
   const QueryContext context{index,
                              searched,
                              last_entry,
@@ -903,7 +915,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
                              tail_visible,
                              workers,
                              buffers,
-                             options.fast_candidates,
+                             fast_candidates(options, searched_entries),
                              options.fast_min_postings};
   std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();

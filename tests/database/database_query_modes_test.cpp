@@ -204,6 +204,7 @@ TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
     queries.push_back(image_of(places[(q * 53) % places.size()], zipf, 150));
   QueryOptions fast = kFast;
   fast.fast_candidates = 100;
+  fast.fast_candidate_share = 0;
   fast.fast_min_postings = 1 << 12;
 
   for (Scoring scoring : {Scoring::kL1, Scoring::kL2, Scoring::kChiSquare, Scoring::kKL,
@@ -227,7 +228,14 @@ TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
                           name + ", fast on 2 threads");
       QueryOptions fewer = fast;
       fewer.fast_candidates = 10;
+      fewer.fast_candidate_share = 0;
       same_with_10_candidates += database.query(query, 10, kAllEntries, fewer) == exact;
+      // A share of the entries as many as fast_candidates: the same candidates.
+      QueryOptions by_share = fewer;
+      by_share.fast_candidates = 1;
+      by_share.fast_candidate_share = 100.0 / static_cast<double>(bows.size());
+      expect_same_results(database.query(query, 10, kAllEntries, by_share), found,
+                          name + ", candidates by share");
     }
     EXPECT_GE(same_top10, kQueries - 1) << name;
     EXPECT_EQ(same_place, kQueries) << name;
@@ -253,6 +261,13 @@ TEST(DatabaseQueryModes, FastQueryOptionsAreChecked) {
   EXPECT_THROW(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options), InvalidArgument);
   options.fast_candidates = std::numeric_limits<std::size_t>::max();
   options.fast_min_postings = 0;
+  EXPECT_EQ(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options).size(), 1u);
+  for (double share : {-0.5, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    QueryOptions bad = kFast;
+    bad.fast_candidate_share = share;
+    EXPECT_THROW(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, bad), InvalidArgument);
+  }
+  options.fast_candidate_share = 1.0;
   EXPECT_EQ(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options).size(), 1u);
 }
 
