@@ -14,7 +14,8 @@
 // The benchmarks run in order on one growing database: BM_Fill/N adds entries
 // until there are N (the time is the add calls alone: their mean is the
 // counter add_us), BM_Query/N answers the queries (top 10: exact on one
-// thread and on every core, and fast; see there), BM_QueryBounds/200000
+// thread and on every core, and fast; see there), BM_FastCandidates/N fast
+// mode's agreement against its candidates on other queries, BM_QueryBounds/200000
 // measures what pruned or stop-listed
 // queries would read (see there), BM_Save/N measures full and incremental
 // saves, the disk's write rate and opening (see there), and BM_SaveLoad saves the largest database
@@ -56,6 +57,7 @@ constexpr unsigned kLevelsUp = 4;
 constexpr int kFlippedBits = 8;  // of 256 per descriptor
 constexpr std::size_t kMaxResults = 10;
 constexpr std::size_t kNoisyCopiesPerQuery = 2;
+constexpr std::size_t kTuningCopiesPerQuery = 4;
 
 using Clock = std::chrono::steady_clock;
 
@@ -158,6 +160,9 @@ struct Scale {
   // weight in any of them (what a pruned query could bound a word's part by).
   std::vector<std::uint32_t> entries_with_word;
   std::vector<float> largest_weight;
+  // Other noisy copies of the held-out photographs, for choosing fast
+  // mode's defaults apart from the reported queries (BM_FastCandidates).
+  std::vector<BowVector> tuning_queries;
 };
 
 // Null (with the reason in `error`) when the vocabulary or the photographs
@@ -187,6 +192,13 @@ Scale* scale(std::string& error) {
       if (i % 10 != 9) {
         s->photographs.push_back(std::move(descriptors));
         continue;
+      }
+      for (std::size_t copy = 0; copy < kTuningCopiesPerQuery; ++copy) {
+        DescriptorMatrix query = descriptors;
+        flip_bits(query, 0xA000000000 + i * kTuningCopiesPerQuery + copy);
+        BowVector bow;
+        s->vocabulary.transform(query, bow);
+        s->tuning_queries.push_back(std::move(bow));
       }
       for (std::size_t copy = 0; copy < kNoisyCopiesPerQuery; ++copy) {
         DescriptorMatrix query = descriptors;
@@ -579,6 +591,47 @@ void BM_Save(benchmark::State& state) {
 }
 
 // Registered size by size: each size's queries run before the database grows on.
+// Fast mode's agreement and time against its number of candidates, on the
+// tuning queries (not the reported ones): top10_<c> and place_<c> as
+// fast_same_top10 and fast_same_place_top1, ms_<c> the median CPU time of
+// one query with c candidates; exact_ms the exact query's.
+void BM_FastCandidates(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s == nullptr) return;
+  if (s->database->size() != static_cast<std::size_t>(state.range(0))) {
+    state.SkipWithError("run after BM_Fill of the same size");
+    return;
+  }
+  const std::size_t places = s->photographs.size();
+  for (auto _ : state) {
+    std::vector<double> wall, cpu;
+    const auto exact = time_queries(*s->database, s->tuning_queries,
+                                    QueryOptions{QueryMode::kExact, 1}, wall, cpu);
+    state.counters["exact_ms"] = median(cpu);
+    for (std::size_t candidates : {1000, 2000, 3000, 5000, 8000}) {
+      QueryOptions fast{QueryMode::kFast, 1};
+      fast.fast_candidates = candidates;
+      fast.fast_candidate_share = 0;
+      std::vector<double> fast_wall, fast_cpu;
+      const auto found = time_queries(*s->database, s->tuning_queries, fast, fast_wall, fast_cpu);
+      double same_top10 = 0, same_place = 0;
+      for (std::size_t q = 0; q < exact.size(); ++q) {
+        same_top10 += found[q] == exact[q] ? 1 : 0;
+        same_place += !exact[q].empty() && !found[q].empty() &&
+                              found[q][0].entry % places == exact[q][0].entry % places
+                          ? 1
+                          : 0;
+      }
+      const std::string c = std::to_string(candidates);
+      const auto queries = static_cast<double>(exact.size());
+      state.counters["top10_" + c] = same_top10 / queries;
+      state.counters["place_" + c] = same_place / queries;
+      state.counters["ms_" + c] = median(fast_cpu);
+    }
+  }
+  label(state, *s);
+}
+
 BENCHMARK(BM_Fill)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(10000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Save)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
@@ -587,10 +640,12 @@ BENCHMARK(BM_Query)->Arg(100000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Save)->Arg(100000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(200000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(200000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FastCandidates)->Arg(200000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_QueryBounds)->Arg(200000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_Save)->Arg(200000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FastCandidates)->Arg(1000000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_Save)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
 void BM_SaveLoad(benchmark::State& state) {
