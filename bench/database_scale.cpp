@@ -193,20 +193,19 @@ Scale* scale(std::string& error) {
         s->photographs.push_back(std::move(descriptors));
         continue;
       }
-      for (std::size_t copy = 0; copy < kTuningCopiesPerQuery; ++copy) {
-        DescriptorMatrix query = descriptors;
-        flip_bits(query, 0xA000000000 + i * kTuningCopiesPerQuery + copy);
-        BowVector bow;
-        s->vocabulary.transform(query, bow);
-        s->tuning_queries.push_back(std::move(bow));
-      }
-      for (std::size_t copy = 0; copy < kNoisyCopiesPerQuery; ++copy) {
-        DescriptorMatrix query = descriptors;
-        flip_bits(query, 0x9000000000 + i * kNoisyCopiesPerQuery + copy);
-        BowVector bow;
-        s->vocabulary.transform(query, bow);
-        s->queries.push_back(std::move(bow));
-      }
+      // Noisy copies of the held-out photograph, seeded apart per set.
+      const auto add_copies = [&](std::uint64_t seed_base, std::size_t copies,
+                                  std::vector<BowVector>& out) {
+        for (std::size_t copy = 0; copy < copies; ++copy) {
+          DescriptorMatrix query = descriptors;
+          flip_bits(query, seed_base + i * copies + copy);
+          BowVector bow;
+          s->vocabulary.transform(query, bow);
+          out.push_back(std::move(bow));
+        }
+      };
+      add_copies(0xA000000000, kTuningCopiesPerQuery, s->tuning_queries);
+      add_copies(0x9000000000, kNoisyCopiesPerQuery, s->queries);
     }
     std::vector<std::uint32_t> photographs_with_word(s->vocabulary.word_count(), 0);
     for (const DescriptorMatrix& photograph : s->photographs) {
