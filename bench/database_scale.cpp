@@ -241,6 +241,39 @@ Scale* scale_or_skip(benchmark::State& state) {
   return s;
 }
 
+// The scale, when BM_Fill has made the database as large as the benchmark's
+// argument.
+Scale* filled_scale_or_skip(benchmark::State& state) {
+  Scale* s = scale_or_skip(state);
+  if (s != nullptr && s->database->size() != static_cast<std::size_t>(state.range(0))) {
+    state.SkipWithError("run after BM_Fill of the same size");
+    return nullptr;
+  }
+  return s;
+}
+
+// How often fast results agree with exact ones: the same top 10, and a copy
+// of the same photograph first (entry ids cycle through the photographs).
+struct Agreement {
+  double same_top10 = 0;
+  double same_place = 0;
+};
+
+Agreement agreement(const std::vector<std::vector<QueryResult>>& exact,
+                    const std::vector<std::vector<QueryResult>>& fast, std::size_t places) {
+  Agreement shares;
+  for (std::size_t q = 0; q < exact.size(); ++q) {
+    shares.same_top10 += fast[q] == exact[q] ? 1 : 0;
+    shares.same_place += !exact[q].empty() && !fast[q].empty() &&
+                                 fast[q][0].entry % places == exact[q][0].entry % places
+                             ? 1
+                             : 0;
+  }
+  shares.same_top10 /= static_cast<double>(exact.size());
+  shares.same_place /= static_cast<double>(exact.size());
+  return shares;
+}
+
 void label(benchmark::State& state, const Scale& s) {
   state.SetLabel(std::to_string(s.vocabulary.word_count()) + " words, " +
                  std::to_string(s.photographs.size()) + " photographs, " +
@@ -352,12 +385,8 @@ bool same_scores(const std::vector<QueryResult>& a, const std::vector<QueryResul
 // first fast query copies every entry's BoW vector (and add keeps copying),
 // so memory counters include that copy from the first BM_Query on.
 void BM_Query(benchmark::State& state) {
-  Scale* s = scale_or_skip(state);
+  Scale* s = filled_scale_or_skip(state);
   if (s == nullptr) return;
-  if (s->database->size() != static_cast<std::size_t>(state.range(0))) {
-    state.SkipWithError("run after BM_Fill of the same size");
-    return;
-  }
   for (auto _ : state) {
     std::vector<double> times, cpu_times, thread_times, thread_cpu, fast_times, fast_cpu;
     const QueryOptions one_thread{QueryMode::kExact, 1};
@@ -370,20 +399,12 @@ void BM_Query(benchmark::State& state) {
     }
     const QueryOptions fast{QueryMode::kFast, 1};
     const auto fast_results = time_queries(*s->database, s->queries, fast, fast_times, fast_cpu);
-    double same_top10 = 0, same_place = 0;
-    const std::size_t places = s->photographs.size();
-    for (std::size_t q = 0; q < exact.size(); ++q) {
+    for (std::size_t q = 0; q < exact.size(); ++q)
       if (!same_scores(exact[q], fast_results[q])) {
         state.SkipWithError("a fast query's score differs from the exact query's");
         return;
       }
-      same_top10 += fast_results[q] == exact[q] ? 1 : 0;
-      same_place += !exact[q].empty() && !fast_results[q].empty() &&
-                            fast_results[q][0].entry % places == exact[q][0].entry % places
-                        ? 1
-                        : 0;
-    }
-    const auto queries = static_cast<double>(exact.size());
+    const Agreement shares = agreement(exact, fast_results, s->photographs.size());
     state.counters["query_ms"] = median(times);
     state.counters["query_ms_cpu"] = median(cpu_times);
     state.counters["query_ms_p90"] = percentile90(times);
@@ -391,8 +412,8 @@ void BM_Query(benchmark::State& state) {
     state.counters["query_fast_ms"] = median(fast_times);
     state.counters["query_fast_ms_cpu"] = median(fast_cpu);
     state.counters["query_fast_ms_p90"] = percentile90(fast_times);
-    state.counters["fast_same_top10"] = same_top10 / queries;
-    state.counters["fast_same_place_top1"] = same_place / queries;
+    state.counters["fast_same_top10"] = shares.same_top10;
+    state.counters["fast_same_place_top1"] = shares.same_place;
     state.counters["threads"] = static_cast<double>(std::thread::hardware_concurrency());
     state.counters["postings/query"] =
         s->postings_per_entry * static_cast<double>(s->database->size());
@@ -518,12 +539,8 @@ double write_scratch_file(const std::string& path, std::size_t bytes) {
 // - loaded_bytes_per_entry: memory_usage() per entry of the loaded database,
 //   whose rows and direct index are the mapped file's pages.
 void BM_Save(benchmark::State& state) {
-  Scale* s = scale_or_skip(state);
+  Scale* s = filled_scale_or_skip(state);
   if (s == nullptr) return;
-  if (s->database->size() != static_cast<std::size_t>(state.range(0))) {
-    state.SkipWithError("run after BM_Fill of the same size");
-    return;
-  }
   const std::string path = s->folder + "/binbow-bench-save-" + std::to_string(getpid()) + ".bbdb";
   for (auto _ : state) {
     // The disk's rate before and after the save (other jobs share it): their mean.
@@ -595,13 +612,8 @@ void BM_Save(benchmark::State& state) {
 // fast_same_top10 and fast_same_place_top1, ms_<c> the median CPU time of
 // one query with c candidates; exact_ms the exact query's.
 void BM_FastCandidates(benchmark::State& state) {
-  Scale* s = scale_or_skip(state);
+  Scale* s = filled_scale_or_skip(state);
   if (s == nullptr) return;
-  if (s->database->size() != static_cast<std::size_t>(state.range(0))) {
-    state.SkipWithError("run after BM_Fill of the same size");
-    return;
-  }
-  const std::size_t places = s->photographs.size();
   for (auto _ : state) {
     std::vector<double> wall, cpu;
     const auto exact = time_queries(*s->database, s->tuning_queries,
@@ -613,18 +625,10 @@ void BM_FastCandidates(benchmark::State& state) {
       fast.fast_candidate_share = 0;
       std::vector<double> fast_wall, fast_cpu;
       const auto found = time_queries(*s->database, s->tuning_queries, fast, fast_wall, fast_cpu);
-      double same_top10 = 0, same_place = 0;
-      for (std::size_t q = 0; q < exact.size(); ++q) {
-        same_top10 += found[q] == exact[q] ? 1 : 0;
-        same_place += !exact[q].empty() && !found[q].empty() &&
-                              found[q][0].entry % places == exact[q][0].entry % places
-                          ? 1
-                          : 0;
-      }
+      const Agreement shares = agreement(exact, found, s->photographs.size());
       const std::string c = std::to_string(candidates);
-      const auto queries = static_cast<double>(exact.size());
-      state.counters["top10_" + c] = same_top10 / queries;
-      state.counters["place_" + c] = same_place / queries;
+      state.counters["top10_" + c] = shares.same_top10;
+      state.counters["place_" + c] = shares.same_place;
       state.counters["ms_" + c] = median(fast_cpu);
     }
   }
