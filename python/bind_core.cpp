@@ -192,13 +192,8 @@ std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
                 !fast_min_postings.is_none()))
     throw InvalidArgument(
         "fast_candidates, fast_candidate_share and fast_min_postings apply to fast=True only");
-  if (!fast_candidate_share.is_none()) {
-    if (py::isinstance<py::bool_>(fast_candidate_share) ||
-        (!py::isinstance<py::float_>(fast_candidate_share) &&
-         !py::isinstance<py::int_>(fast_candidate_share)))
-      throw py::type_error("fast_candidate_share must be a number");
-    options.fast_candidate_share = fast_candidate_share.cast<double>();
-  }
+  if (!fast_candidate_share.is_none())
+    options.fast_candidate_share = float_option(fast_candidate_share, "fast_candidate_share");
   if (!fast_candidates.is_none())
     options.fast_candidates =
         static_cast<std::size_t>(count_argument(fast_candidates, "fast_candidates"));

@@ -61,12 +61,6 @@ int int_option(const py::handle& value, const std::string& name, long long low, 
   return static_cast<int>(number);
 }
 
-double float_option(const py::handle& value, const std::string& name) {
-  if (PyBool_Check(value.ptr()) || !(PyFloat_Check(value.ptr()) || PyLong_Check(value.ptr())))
-    throw py::type_error(name + " must be a float, got " + type_name(value));
-  return value.cast<double>();
-}
-
 bool bool_option(const py::handle& value, const std::string& name) {
   if (!PyBool_Check(value.ptr()))
     throw py::type_error(name + " must be a bool, got " + type_name(value));

@@ -32,6 +32,8 @@ using Path = std::filesystem::path;
 
 // The Python type name of `object`, for error messages.
 std::string type_name(const py::handle& object);
+// A float argument (an int is taken too, a bool is not): TypeError otherwise.
+double float_option(const py::handle& value, const std::string& name);
 // "(3, 32)", "(5,)": an array's shape as Python writes it.
 std::string shape_of(const py::array& array);
 

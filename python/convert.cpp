@@ -8,6 +8,12 @@ std::string type_name(const py::handle& object) {
   return py::str(py::type::of(object).attr("__name__")).cast<std::string>();
 }
 
+double float_option(const py::handle& value, const std::string& name) {
+  if (PyBool_Check(value.ptr()) || !(PyFloat_Check(value.ptr()) || PyLong_Check(value.ptr())))
+    throw py::type_error(name + " must be a float, got " + type_name(value));
+  return value.cast<double>();
+}
+
 std::string shape_of(const py::array& array) {
   std::string shape = "(";
   for (py::ssize_t i = 0; i < array.ndim(); ++i)

@@ -579,8 +579,6 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
   const detail::RowOrder order = c.index.row_order;
-  const detail::SegmentWeights weights{c.index.word_weights,
-                                       c.index.divisors + segment.first_entry};
   const std::size_t n = words.size();
   CandidateSum* const out = sums.data();
   // Count rows' weights from each entry's inverse divisor, in floats: a
@@ -602,7 +600,7 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
     const std::uint8_t* const end = begin + size;
     const bool narrow = detail::header_width(header) == 1;
     if (detail::header_counts(header)) {
-      const auto word_weight = static_cast<float>(weights.row(words[q].word).word_weight);
+      const float word_weight = c.index.word_weights[words[q].word];
       if (narrow)
         candidate_count_row<1>(first, end, term, sign, word_weight, out);
       else
