@@ -15,9 +15,9 @@
 // until there are N (the time is the add calls alone: their mean is the
 // counter add_us), BM_Query/N answers the queries (top 10: exact on one
 // thread and on every core, and fast; see there), BM_FastCandidates/N fast
-// mode's agreement against its candidates on other queries, BM_QueryBounds/200000
-// measures what pruned or stop-listed
-// queries would read (see there), BM_Save/N measures full and incremental
+// mode's agreement against its candidates on other queries,
+// BM_QueryBounds/200000 measures what pruned or stop-listed queries would
+// read (see there), BM_Save/N measures full and incremental
 // saves, the disk's write rate and opening (see there), and BM_SaveLoad saves the largest database
 // to a .bbdb file (in BINBOW_BENCH_DIR, default /tmp; deleted afterwards), frees it, loads it back
 // and checks that the loaded database answers every query identically, with the peak resident
