@@ -19,6 +19,7 @@
 #include "image_source_options.h"
 #include "output_options.h"
 #include "progress.h"
+#include "query_options.h"
 #include "threads_options.h"
 
 namespace binbow::cli {
@@ -51,7 +52,7 @@ struct DbArguments {
 
 struct DbQueryArguments : DbArguments {
   std::size_t top = 10;
-  bool fast = false;
+  QueryOptions query;  // --fast and its tuning
 };
 
 std::shared_ptr<const vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
@@ -150,9 +151,7 @@ void run_db_query(const DbQueryArguments& arguments) {
       continue;
     }
     database.vocabulary().transform(extracted.features.descriptors.view(), bow);
-    QueryOptions options;
-    if (arguments.fast) options.mode = QueryMode::kFast;
-    const auto results = database.query(bow, arguments.top, kAllEntries, options);
+    const auto results = database.query(bow, arguments.top, kAllEntries, arguments.query);
     std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",
                 frame.name.c_str());
     for (std::size_t rank = 0; rank < results.size(); ++rank) {
@@ -232,10 +231,7 @@ void add_db_image_commands(CLI::App& db) {
   query_command->add_option("--top", query->top, "Number of results per query")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  query_command->add_flag(
-      "--fast", query->fast,
-      "Fast mode for large databases: candidates from each query's rarest words, every score "
-      "exact (an entry can be missed, never misranked; keeps a copy of each entry's words)");
+  add_fast_query_options(query_command, query->query);
   query_command->callback([query] { run_db_query(*query); });
 
   auto add = std::make_shared<DbArguments>();

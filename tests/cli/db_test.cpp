@@ -114,6 +114,68 @@ TEST(CliDb, FastQueriesGiveTheExactTablesOnTheCorridor) {
   EXPECT_TRUE(fast == exact) << "fast:\n" << fast.substr(0, 2000);
 }
 
+// Each query's result rows ("entry\tfile\tscore") of a db query output.
+std::vector<std::vector<std::string>> result_rows(const std::string& output) {
+  std::vector<std::vector<std::string>> tables;
+  std::size_t start = 0;
+  for (std::size_t end; (end = output.find('\n', start)) != std::string::npos; start = end + 1) {
+    const std::string line = output.substr(start, end - start);
+    if (line.rfind("query: ", 0) == 0) {
+      tables.emplace_back();
+    } else if (!tables.empty() && !line.empty() && line.rfind("rank\t", 0) != 0) {
+      tables.back().push_back(line.substr(line.find('\t') + 1));
+    }
+  }
+  return tables;
+}
+
+// The fast-mode tuning reaches the query: as many candidates as entries give
+// the exact tables; one candidate from few postings gives other tables on the
+// corridor, each row with its exact score.
+TEST(CliDb, FastTuningOptionsReachTheQuery) {
+  TempDir dir;
+  const std::string folder = samples_folder();
+  const std::string database = dir.file("corridor.bbdb");
+  std::string output;
+  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
+                        "' -o '" + database + "' '" + folder + "'",
+                    &output),
+            0)
+      << output;
+  const std::string query = "db query '" + database + "' '" + folder + "' ";
+  std::string exact, every_entry, whole_share, few, all_results;
+  ASSERT_EQ(run_cli(query + "--top 5", &exact), 0) << exact;
+  ASSERT_EQ(
+      run_cli(query + "--top 5 --fast --fast-candidates 84 --fast-min-postings 0", &every_entry), 0)
+      << every_entry;
+  ASSERT_EQ(run_cli(query + "--top 5 --fast --fast-candidates 1 --fast-candidate-share 1 "
+                            "--fast-min-postings 0",
+                    &whole_share),
+            0)
+      << whole_share;
+  EXPECT_TRUE(every_entry == exact) << every_entry.substr(0, 2000);
+  EXPECT_TRUE(whole_share == exact) << whole_share.substr(0, 2000);
+
+  ASSERT_EQ(run_cli(query + "--top 5 --fast --fast-candidates 1 --fast-min-postings 0", &few), 0)
+      << few;
+  ASSERT_EQ(run_cli(query + "--top 84", &all_results), 0) << all_results;
+  const auto few_tables = result_rows(few);
+  const auto exact_tables = result_rows(exact);
+  const auto all_tables = result_rows(all_results);
+  ASSERT_EQ(few_tables.size(), 84u);
+  ASSERT_EQ(exact_tables.size(), 84u);
+  ASSERT_EQ(all_tables.size(), 84u);
+  std::size_t differing = 0;
+  for (std::size_t q = 0; q < few_tables.size(); ++q) {
+    EXPECT_EQ(few_tables[q].size(), exact_tables[q].size()) << q;  // 0 for a featureless frame
+    if (few_tables[q] != exact_tables[q]) ++differing;
+    for (const std::string& row : few_tables[q])
+      EXPECT_NE(std::find(all_tables[q].begin(), all_tables[q].end(), row), all_tables[q].end())
+          << "query " << q << ": " << row;
+  }
+  EXPECT_GT(differing, 0u) << few.substr(0, 2000);
+}
+
 // Without --vocab, db build uses the bundled vocabulary of --descriptor, as
 // detect-loops does.
 TEST(CliDb, BuildDefaultsToTheBundledVocabulary) {

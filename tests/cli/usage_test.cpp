@@ -93,6 +93,21 @@ TEST(CliUsage, EveryUsageErrorExitsOneAndSaysWhereTheUsageIs) {
   expect_usage_error("info " + image + " extra", "binbow info", "extra");
   expect_usage_error("db", "binbow db", "A subcommand is required");
   expect_usage_error("db query --top 0 x.bbdb " + image, "binbow db query", "--top");
+  // The fast-mode tuning needs --fast, and takes what Database::query takes.
+  for (const std::string option :
+       {"--fast-candidates 10", "--fast-candidate-share 0.5", "--fast-min-postings 0"})
+    expect_usage_error("db query " + option + " x.bbdb " + image, "binbow db query",
+                       option.substr(0, option.find(' ')) + " requires --fast");
+  expect_usage_error("db query --fast --fast-candidates 0 x.bbdb " + image, "binbow db query",
+                     "--fast-candidates: must be at least 1, not 0");
+  expect_usage_error("db query --fast --fast-candidates -1 x.bbdb " + image, "binbow db query",
+                     "--fast-candidates: must be at least 1, not -1");
+  expect_usage_error("db query --fast --fast-candidate-share 1.5 x.bbdb " + image,
+                     "binbow db query", "--fast-candidate-share: must be in [0, 1], not 1.5");
+  expect_usage_error("db query --fast --fast-candidate-share nan x.bbdb " + image,
+                     "binbow db query", "--fast-candidate-share: must be in [0, 1], not nan");
+  expect_usage_error("db query --fast --fast-min-postings -1 x.bbdb " + image, "binbow db query",
+                     "--fast-min-postings: must be at least 0, not -1");
   // A database file holds at most 255: more used to write a file no one could load.
   expect_usage_error("db build --direct-index-levels-up 300 --vocab " +
                          quoted(test::source_path("data/vocab/orb_default.bbw")) + " -o " +
