@@ -181,24 +181,42 @@ BowVector bow_of(const Database& db, const py::handle& image) {
   return bow;
 }
 
-std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
-    const Database& db, const py::object& image, const py::object& max_results,
-    const py::object& max_entry_id, bool fast, const py::object& fast_candidates,
-    const py::object& fast_candidate_share, const py::object& fast_min_postings) {
-  const std::uint64_t count = count_argument(max_results, "max_results");
+// Database.query's fast-mode keywords (None: QueryOptions' default) as
+// QueryOptions, refused as Database::query refuses them (the same errors), so
+// that ShardedDatabase can check them before any shard is called.
+QueryOptions query_options(bool fast, const py::object& fast_candidates,
+                           const py::object& fast_candidate_share,
+                           const py::object& fast_min_postings) {
   QueryOptions options;
   if (fast) options.mode = QueryMode::kFast;
   if (!fast && (!fast_candidates.is_none() || !fast_candidate_share.is_none() ||
                 !fast_min_postings.is_none()))
     throw InvalidArgument(
         "fast_candidates, fast_candidate_share and fast_min_postings apply to fast=True only");
-  if (!fast_candidate_share.is_none())
+  if (!fast_candidate_share.is_none()) {
     options.fast_candidate_share = float_option(fast_candidate_share, "fast_candidate_share");
-  if (!fast_candidates.is_none())
+    if (!(options.fast_candidate_share >= 0.0 && options.fast_candidate_share <= 1.0))
+      throw InvalidArgument("Database::query: fast_candidate_share must be in [0, 1], not " +
+                            std::to_string(options.fast_candidate_share));
+  }
+  if (!fast_candidates.is_none()) {
     options.fast_candidates =
         static_cast<std::size_t>(count_argument(fast_candidates, "fast_candidates"));
+    if (options.fast_candidates == 0)
+      throw InvalidArgument("Database::query: fast_candidates must be at least 1");
+  }
   if (!fast_min_postings.is_none())
     options.fast_min_postings = count_argument(fast_min_postings, "fast_min_postings");
+  return options;
+}
+
+std::vector<std::tuple<EntryId, double, std::uint32_t>> query_database(
+    const Database& db, const py::object& image, const py::object& max_results,
+    const py::object& max_entry_id, bool fast, const py::object& fast_candidates,
+    const py::object& fast_candidate_share, const py::object& fast_min_postings) {
+  const std::uint64_t count = count_argument(max_results, "max_results");
+  const QueryOptions options =
+      query_options(fast, fast_candidates, fast_candidate_share, fast_min_postings);
   EntryId last = kAllEntries;
   if (!max_entry_id.is_none()) {
     const std::uint64_t id = count_argument(max_entry_id, "max_entry_id");
@@ -267,6 +285,14 @@ void bind_core(py::module_& m) {
         detail::check_bow_values(bow, "Database::add");
       },
       py::arg("bow"), py::arg("vocabulary"));
+  m.def(
+      "_check_query_options",
+      [](bool fast, const py::object& fast_candidates, const py::object& fast_candidate_share,
+         const py::object& fast_min_postings) {
+        query_options(fast, fast_candidates, fast_candidate_share, fast_min_postings);
+      },
+      py::arg("fast"), py::arg("fast_candidates"), py::arg("fast_candidate_share"),
+      py::arg("fast_min_postings"));
   m.def("_count_argument", &count_argument, py::arg("value"), py::arg("name"));
   m.def("_label_argument", &label_argument, py::arg("label"));
 

@@ -19,7 +19,8 @@ import tempfile
 import numpy as _np
 
 from . import BowVector, Database, Error, Vocabulary
-from ._binbow import _check_bow, _checked_descriptors, _count_argument, _label_argument
+from ._binbow import (_check_bow, _check_query_options, _checked_descriptors, _count_argument,
+                      _label_argument)
 
 __all__ = ["ShardedDatabase"]
 
@@ -87,6 +88,9 @@ class _Shard:
                 return self.database.save(arguments[0], include_vocabulary=False), None
             if method == "save_incremental":
                 return self.database.save_incremental(arguments[0], include_vocabulary=False), None
+            if method == "query":  # (image, max_results, max_entry_id, fast, fast keywords)
+                *positional, keywords = arguments
+                return self.database.query(*positional, **keywords), None
             return getattr(self.database, method)(*arguments), None
         except Exception as error:
             return None, error
@@ -349,7 +353,8 @@ class ShardedDatabase:
                             f"got {type(image).__name__}")
         return self._vocabulary.transform(image)
 
-    def query(self, image, max_results=10, max_entry_id=None, fast=False):
+    def query(self, image, max_results=10, max_entry_id=None, fast=False, *,
+              fast_candidates=None, fast_candidate_share=None, fast_min_postings=None):
         """Best matches as (entry, score, shared_words), best first, as Database.query.
 
         The image (descriptors or BowVector) is transformed once here; every shard
@@ -358,9 +363,22 @@ class ShardedDatabase:
         shard, so the result equals one Database's, ties (by increasing id) included.
         With fast=True every shard answers in Database's fast mode (exact scores,
         candidates from the rarest words); the merge is the same.
+        fast_candidates, fast_candidate_share and fast_min_postings (fast=True only)
+        go to every shard's Database.query, which would refuse the same values:
+        they are refused here with its errors, before any shard is called. Each
+        shard applies them to its own entries, as a Database of those entries
+        would: fast_candidate_share is a share of the shard's entries, so the
+        candidates of all shards are that share of the whole database, while
+        fast_candidates and fast_min_postings count per shard (shards times as
+        many in all).
         """
         if not isinstance(fast, bool):
             raise TypeError(f"fast must be a bool, got {type(fast).__name__}")
+        _check_query_options(fast, fast_candidates, fast_candidate_share, fast_min_postings)
+        tuning = {name: value for name, value in (("fast_candidates", fast_candidates),
+                                                  ("fast_candidate_share", fast_candidate_share),
+                                                  ("fast_min_postings", fast_min_postings))
+                  if value is not None}
         self._check_usable("query")
         max_results = _count_argument(max_results, "max_results")
         if max_entry_id is not None:
@@ -372,9 +390,10 @@ class ShardedDatabase:
         arguments = []
         for shard in range(n):
             if max_entry_id is None:
-                arguments.append((bow, max_results, None, fast))
+                arguments.append((bow, max_results, None, fast, tuning))
             elif max_entry_id >= shard:
-                arguments.append((bow, max_results, (int(max_entry_id) - shard) // n, fast))
+                arguments.append((bow, max_results, (int(max_entry_id) - shard) // n, fast,
+                                  tuning))
             else:
                 arguments.append(None)
         answers = self._call_all("query", "query", arguments)

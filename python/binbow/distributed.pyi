@@ -34,6 +34,10 @@ class ShardedDatabase:
         max_results: int = 10,
         max_entry_id: Optional[int] = None,
         fast: bool = False,
+        *,
+        fast_candidates: Optional[int] = None,
+        fast_candidate_share: Optional[float] = None,
+        fast_min_postings: Optional[int] = None,
     ) -> list[tuple[int, float, int]]: ...
     def remove(self, entry: int) -> None: ...
     def label(self, entry: int) -> Optional[str]: ...

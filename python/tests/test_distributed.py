@@ -94,6 +94,39 @@ def test_real_descriptors(client):
         assert all(exact[entry] == (score, shared) for entry, score, shared in fast)
 
 
+def test_fast_query_options_reach_every_shard(client, tmp_path):
+    """Each shard answers as a Database loaded from its file with the same options."""
+    vocabulary = binbow.Vocabulary.default("orb")
+    extractor = binbow.FeatureExtractor("orb", max_features=500)
+    images = [extractor.extract(str(frame))[1] for frame in sample_frames()]
+    module = sharded_module()
+    # Loaded from files, as a large database is: its queries then read only
+    # some words when the options let them.
+    sharded = module.ShardedDatabase(client, vocabulary, shards=2)
+    sharded.add_many(images)
+    sharded.save(tmp_path)
+    loaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
+    files = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))["files"]
+    shards = [binbow.Database.load(str(tmp_path / name), vocabulary) for name in files]
+
+    def merged(bow, **options):  # the shards' answers, merged as one Database's
+        found = [(shard + local * 2, score, shared) for shard, db in enumerate(shards)
+                 for local, score, shared in db.query(bow, 5, fast=True, **options)]
+        return sorted(found, key=lambda result: (-result[1], result[0]))[:5]
+
+    few = {"fast_candidates": 1, "fast_min_postings": 0}
+    every = {"fast_candidates": 1, "fast_candidate_share": 1.0, "fast_min_postings": 0}
+    changed = 0
+    for image in images:
+        bow = vocabulary.transform(image)
+        exact = loaded.query(bow, 5)
+        assert loaded.query(bow, 5, fast=True, **every) == exact
+        tuned = loaded.query(bow, 5, fast=True, **few)
+        assert tuned == merged(bow, **few)
+        changed += tuned != exact
+    assert changed > 0, "one candidate from few postings should change some top 5"
+
+
 def test_remove_and_labels(client, vocabulary):
     images = random_images(7, 9)
     labels = [f"place {i}" if i % 3 else None for i in range(9)]
@@ -297,6 +330,29 @@ def test_the_same_mistakes_give_database_s_errors(client, vocabulary):
     for name, mistake in mistakes.items():
         assert raised(lambda: mistake(sharded)) == raised(lambda: mistake(single)), name
     assert len(sharded) == len(single) == 3 and sharded.next_entry_id == 4
+    # The fast-mode options are refused before any shard is called.
+    fast_mistakes = {
+        "fast_candidates without fast": lambda db: db.query(good, fast_candidates=5),
+        "fast_min_postings with fast=False": lambda db: db.query(good, 3, None, False,
+                                                                 fast_min_postings=0),
+        "no candidates": lambda db: db.query(good, fast=True, fast_candidates=0),
+        "float candidates": lambda db: db.query(good, fast=True, fast_candidates=2.0),
+        "bool candidates": lambda db: db.query(good, fast=True, fast_candidates=True),
+        "share above 1": lambda db: db.query(good, fast=True, fast_candidate_share=1.5),
+        "negative share": lambda db: db.query(good, fast=True, fast_candidate_share=-0.1),
+        "NaN share": lambda db: db.query(good, fast=True, fast_candidate_share=float("nan")),
+        "text share": lambda db: db.query(good, fast=True, fast_candidate_share="0.1"),
+        "negative min postings": lambda db: db.query(good, fast=True, fast_min_postings=-1),
+        "float min postings": lambda db: db.query(good, fast=True, fast_min_postings=1.0),
+    }
+
+    def no_shard_call(*arguments, **keywords):
+        raise AssertionError("a shard was called")
+    sharded._call_all = no_shard_call
+    for name, mistake in fast_mistakes.items():
+        expected = raised(lambda: mistake(single))
+        assert expected[0] in (TypeError, ValueError), name
+        assert raised(lambda: mistake(sharded)) == expected, name
 
 
 def test_a_lost_worker_is_a_binbow_error_and_the_last_save_stays(vocabulary, tmp_path):
