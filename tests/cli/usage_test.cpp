@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "binbow/database.h"
 #include "binbow/vocabulary.h"
 #include "support/test_support.h"
 
@@ -153,6 +155,20 @@ TEST(CliUsage, HelpAndVersionStillExitZero) {
   std::string output;
   EXPECT_EQ(run_cli("--version", &output), 0) << output;
   EXPECT_EQ(output.rfind("binbow ", 0), 0u) << output;
+}
+
+// The fast-mode options' help shows QueryOptions' defaults, whatever they become.
+TEST(CliUsage, FastQueryOptionsShowTheLibraryDefaults) {
+  const QueryOptions defaults;
+  std::ostringstream share;
+  share << defaults.fast_candidate_share;
+  std::string output;
+  ASSERT_EQ(run_cli("db query --help", &output), 0) << output;
+  for (const std::string& shown :
+       {"--fast-candidates UINT=" + std::to_string(defaults.fast_candidates),
+        "--fast-candidate-share FLOAT=" + share.str(),
+        "--fast-min-postings UINT=" + std::to_string(defaults.fast_min_postings)})
+    EXPECT_NE(output.find(shown + " Needs: --fast"), std::string::npos) << shown << "\n" << output;
 }
 
 TEST(CliOutputs, MissingFoldersOfEveryOutputAreCreated) {
