@@ -182,8 +182,9 @@ BowVector bow_of(const Database& db, const py::handle& image) {
 }
 
 // Database.query's fast-mode keywords (None: QueryOptions' default) as
-// QueryOptions, refused as Database::query refuses them (the same errors), so
-// that ShardedDatabase can check them before any shard is called.
+// QueryOptions. The range checks repeat Database::query's, word for word, so
+// that ShardedDatabase refuses the same values with the same errors before
+// any shard is called.
 QueryOptions query_options(bool fast, const py::object& fast_candidates,
                            const py::object& fast_candidate_share,
                            const py::object& fast_min_postings) {
