@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "binbow/bow_vector.h"
@@ -22,6 +23,43 @@ namespace binbow::detail {
 // The weight a count form gives back: what transform computes.
 inline float count_weight(double word_weight, std::uint32_t count, double divisor) noexcept {
   return static_cast<float>(word_weight * static_cast<double>(count) / divisor);
+}
+
+// 1 / divisor, for the count_weight below; 0 for a vector without a count
+// form (divisor 0).
+inline double inverse_divisor(double divisor) noexcept {
+  return divisor > 0 ? 1.0 / divisor : 0.0;
+}
+
+// count_weight(word_weight, count, *divisor), out of line: a query reads
+// the divisor only in the rare case that needs it.
+[[gnu::cold, gnu::noinline]] inline float divided_count_weight(double word_weight,
+                                                               std::uint32_t count,
+                                                               const double* divisor) noexcept {
+  return count_weight(word_weight, count, *divisor);
+}
+
+// count_weight(word_weight, count, *divisor) to the last bit, with a
+// multiplication by `inverse` (inverse_divisor(*divisor)) in place of the
+// division, which made a query's pass over count rows 1.4-1.7x slower.
+// word_weight × count is exact (24 by 16 bits), so the product with the
+// inverse is within 3 units in the last place (ulps) of the quotient that
+// transform rounds to a double. Rounding to a float drops 29 bits, and gives
+// the quotient's float unless a midpoint between two floats (29 dropped bits
+// of 1000...0) lies within those 3 ulps: then, and below the normal floats,
+// the weight is divided as transform does (about one in 2^25 postings).
+inline float count_weight(double word_weight, std::uint32_t count, double inverse,
+                          const double* divisor) noexcept {
+  const double estimate = word_weight * static_cast<double>(count) * inverse;
+  std::uint64_t bits;
+  std::memcpy(&bits, &estimate, sizeof bits);
+  constexpr std::uint64_t kDropped = (std::uint64_t{1} << 29) - 1;
+  constexpr std::uint64_t kMidpoint = std::uint64_t{1} << 28;
+  constexpr std::uint64_t kGuard = 8;  // ulps, above the 3 the error can reach
+  const std::uint64_t from_midpoint = (bits & kDropped) - kMidpoint + kGuard;
+  if (__builtin_expect(from_midpoint <= 2 * kGuard || !(estimate >= 0x1p-126), 0))
+    return divided_count_weight(word_weight, count, divisor);
+  return static_cast<float>(estimate);
 }
 
 // Finds a vector's count form, reusing its buffers from call to call.

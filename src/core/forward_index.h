@@ -88,11 +88,11 @@ class ForwardIndex {
     if (codes[0] == kCounts) {
       double divisor;
       std::memcpy(&divisor, codes.data() + 1, sizeof divisor);
+      const double inverse = inverse_divisor(divisor);
       const std::uint32_t* end = look_up<true>(
           codes.data() + kCountsHeader, codes.data() + codes.size(), position, absent, found);
       for (const std::uint32_t* hit = found; hit < end; hit += 2)
-        take(hit[0],
-             static_cast<float>(query_weights[hit[0]] * static_cast<double>(hit[1]) / divisor));
+        take(hit[0], count_weight(query_weights[hit[0]], hit[1], inverse, &divisor));
     } else {
       std::uint32_t words;
       std::memcpy(&words, codes.data() + 1, sizeof words);
