@@ -182,9 +182,9 @@ BowVector bow_of(const Database& db, const py::handle& image) {
 }
 
 // Database.query's fast-mode keywords (None: QueryOptions' default) as
-// QueryOptions. The range checks repeat Database::query's, word for word, so
-// that ShardedDatabase refuses the same values with the same errors before
-// any shard is called.
+// QueryOptions, checked as Database::query checks them, so that
+// ShardedDatabase refuses the same values with the same errors before any
+// shard is called.
 QueryOptions query_options(bool fast, const py::object& fast_candidates,
                            const py::object& fast_candidate_share,
                            const py::object& fast_min_postings) {
@@ -194,20 +194,14 @@ QueryOptions query_options(bool fast, const py::object& fast_candidates,
                 !fast_min_postings.is_none()))
     throw InvalidArgument(
         "fast_candidates, fast_candidate_share and fast_min_postings apply to fast=True only");
-  if (!fast_candidate_share.is_none()) {
+  if (!fast_candidate_share.is_none())
     options.fast_candidate_share = float_option(fast_candidate_share, "fast_candidate_share");
-    if (!(options.fast_candidate_share >= 0.0 && options.fast_candidate_share <= 1.0))
-      throw InvalidArgument("Database::query: fast_candidate_share must be in [0, 1], not " +
-                            std::to_string(options.fast_candidate_share));
-  }
-  if (!fast_candidates.is_none()) {
+  if (!fast_candidates.is_none())
     options.fast_candidates =
         static_cast<std::size_t>(count_argument(fast_candidates, "fast_candidates"));
-    if (options.fast_candidates == 0)
-      throw InvalidArgument("Database::query: fast_candidates must be at least 1");
-  }
   if (!fast_min_postings.is_none())
     options.fast_min_postings = count_argument(fast_min_postings, "fast_min_postings");
+  options.check();
   return options;
 }
 

@@ -120,12 +120,15 @@ struct QueryOptions {
   // the database: on tuning queries of ORB-1000 images the defaults kept the
   // exact top 10 of all at 200,000 (1000 candidates; 800 kept 99.3%) and of
   // 99.7% at 1,000,000 (8000 candidates; 5000 kept 98.3%, 1000 81.4%;
-  // docs/benchmarks.md). query() throws InvalidArgument for
-  // fast_candidates = 0 and for a share outside [0, 1]; fast_min_postings
-  // = 0 leaves the eighth alone.
+  // docs/benchmarks.md). fast_min_postings = 0 leaves the eighth alone.
   std::size_t fast_candidates = 1000;
   double fast_candidate_share = 1.0 / 125;
   std::uint64_t fast_min_postings = std::uint64_t{1} << 20;
+
+  // Throws InvalidArgument for what query() refuses, with its message: an
+  // unknown mode, fast_candidates = 0, a share outside [0, 1]. For callers
+  // that check options before any work (the CLI, ShardedDatabase).
+  void check() const;
 };
 
 // How Database::load checks a file (docs/database-files.md).

@@ -831,16 +831,20 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   return query(bow, max_results, max_entry_id, QueryOptions{});
 }
 
+void QueryOptions::check() const {
+  if (mode != QueryMode::kExact && mode != QueryMode::kFast)
+    throw InvalidArgument("Database::query: unknown query mode " +
+                          std::to_string(static_cast<int>(mode)));
+  if (fast_candidates == 0)
+    throw InvalidArgument("Database::query: fast_candidates must be at least 1");
+  if (!(fast_candidate_share >= 0.0 && fast_candidate_share <= 1.0))
+    throw InvalidArgument("Database::query: fast_candidate_share must be in [0, 1], not " +
+                          std::to_string(fast_candidate_share));
+}
+
 std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
                                          EntryId max_entry_id, const QueryOptions& options) const {
-  if (options.mode != QueryMode::kExact && options.mode != QueryMode::kFast)
-    throw InvalidArgument("Database::query: unknown query mode " +
-                          std::to_string(static_cast<int>(options.mode)));
-  if (options.fast_candidates == 0)
-    throw InvalidArgument("Database::query: fast_candidates must be at least 1");
-  if (!(options.fast_candidate_share >= 0.0 && options.fast_candidate_share <= 1.0))
-    throw InvalidArgument("Database::query: fast_candidate_share must be in [0, 1], not " +
-                          std::to_string(options.fast_candidate_share));
+  options.check();
   if (!impl_->over_word_ids) detail::check_bow_words(bow, impl_->vocabulary, "Database::query");
   detail::check_bow_values(bow, "Database::query");
   if (bow.empty() || max_results == 0) return {};

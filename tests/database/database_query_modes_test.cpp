@@ -259,13 +259,16 @@ TEST(DatabaseQueryModes, FastQueryOptionsAreChecked) {
   QueryOptions options = kFast;
   options.fast_candidates = 0;
   EXPECT_THROW(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options), InvalidArgument);
+  EXPECT_THROW(options.check(), InvalidArgument);
   options.fast_candidates = std::numeric_limits<std::size_t>::max();
+  EXPECT_NO_THROW(options.check());
   options.fast_min_postings = 0;
   EXPECT_EQ(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options).size(), 1u);
   for (double share : {-0.5, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
     QueryOptions bad = kFast;
     bad.fast_candidate_share = share;
     EXPECT_THROW(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, bad), InvalidArgument);
+    EXPECT_THROW(bad.check(), InvalidArgument);
   }
   options.fast_candidate_share = 1.0;
   EXPECT_EQ(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options).size(), 1u);
