@@ -31,8 +31,8 @@ inline double inverse_divisor(double divisor) noexcept {
   return divisor > 0 ? 1.0 / divisor : 0.0;
 }
 
-// count_weight(word_weight, count, *divisor), out of line: a query reads
-// the divisor only in the rare case that needs it.
+// count_weight(word_weight, count, *divisor), out of line: the divisor is
+// read only in the rare case that needs it.
 [[gnu::cold, gnu::noinline]] inline float divided_count_weight(double word_weight,
                                                                std::uint32_t count,
                                                                const double* divisor) noexcept {
@@ -41,13 +41,14 @@ inline double inverse_divisor(double divisor) noexcept {
 
 // count_weight(word_weight, count, *divisor) to the last bit, with a
 // multiplication by `inverse` (inverse_divisor(*divisor)) in place of the
-// division, which made a query's pass over count rows 1.4-1.7x slower.
-// word_weight × count is exact (24 by 16 bits), so the product with the
-// inverse is within 3 units in the last place (ulps) of the quotient that
-// transform rounds to a double. Rounding to a float drops 29 bits, and gives
-// the quotient's float unless a midpoint between two floats (29 dropped bits
-// of 1000...0) lies within those 3 ulps: then, and below the normal floats,
-// the weight is divided as transform does (about one in 2^25 postings).
+// division: where many weights share a divisor (an entry's words), one
+// division serves them all. word_weight × count is exact (24 by 16 bits),
+// so the product with the inverse is within 3 units in the last place
+// (ulps) of the quotient that transform rounds to a double. Rounding to a
+// float drops 29 bits, and gives the quotient's float unless a midpoint
+// between two floats (29 dropped bits of 1000...0) lies within those 3
+// ulps: then, and below the normal floats, the weight is divided as
+// transform does (about one weight in 2^25).
 inline float count_weight(double word_weight, std::uint32_t count, double inverse,
                           const double* divisor) noexcept {
   const double estimate = word_weight * static_cast<double>(count) * inverse;

@@ -402,12 +402,8 @@ TEST(Database, RowsOfOneAndTwoByteGaps) {
 // A vector in the form transform gives: float(word_weight(w) * count /
 // divisor), the divisor the norm of the weight(w) * count that the scoring
 // normalises by (L1 for the others, 1 for the dot product).
-BowVector counted_bow(const Vocabulary& vocabulary, std::size_t words, std::uint32_t most,
-                      std::mt19937_64& rng) {
-  std::vector<WordId> ids;
-  while (ids.size() < words) ids.push_back(static_cast<WordId>(rng() % vocabulary.word_count()));
-  std::sort(ids.begin(), ids.end());
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+BowVector counted_bow_of(const Vocabulary& vocabulary, const std::vector<WordId>& ids,
+                         std::uint32_t most, std::mt19937_64& rng) {
   std::vector<double> raw;
   double norm = 0;
   for (WordId w : ids) {
@@ -421,6 +417,15 @@ BowVector counted_bow(const Vocabulary& vocabulary, std::size_t words, std::uint
   for (std::size_t i = 0; i < ids.size(); ++i)
     entries.push_back({ids[i], static_cast<float>(raw[i] / norm)});
   return BowVector(std::move(entries));
+}
+// The same of about `words` random words.
+BowVector counted_bow(const Vocabulary& vocabulary, std::size_t words, std::uint32_t most,
+                      std::mt19937_64& rng) {
+  std::vector<WordId> ids;
+  while (ids.size() < words) ids.push_back(static_cast<WordId>(rng() % vocabulary.word_count()));
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return counted_bow_of(vocabulary, ids, most, rng);
 }
 
 TEST(Database, CountRowsAndWeightRowsEqualBruteForce) {
@@ -475,6 +480,36 @@ TEST(Database, CountRowsAndWeightRowsEqualBruteForce) {
     bytes = loaded.serialize(false);
     expect_brute_force(Database::deserialize(bytes.data(), bytes.size(), "counts.bbdb", vocabulary),
                        "reloaded");
+  }
+}
+
+TEST(Database, CountRowsOfWholeSegmentsCutAnywhere) {
+  // 70,000 images of 8 words out of 300 merge into segments of 65,536 ids
+  // whose count rows run through all of them; queries are cut at entries
+  // throughout the first segment and past it.
+  for (Scoring scoring : {Scoring::kL1, Scoring::kL2}) {
+    const Vocabulary vocabulary = wide_vocabulary(10, 4, scoring);
+    std::mt19937_64 rng(23);
+    std::vector<BowVector> bows;
+    for (int i = 0; i < 70'000; ++i) {
+      std::vector<WordId> ids;
+      while (ids.size() < 8) ids.push_back(static_cast<WordId>(rng() % 300 * 31));
+      std::sort(ids.begin(), ids.end());
+      ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+      bows.push_back(counted_bow_of(vocabulary, ids, 5, rng));
+    }
+    Database database(vocabulary, {false, 0});
+    for (const BowVector& bow : bows) database.add(bow);
+    const std::vector<bool> live(bows.size(), true);
+    for (int q = 0; q < 3; ++q) {
+      const BowVector& query = bows[rng() % bows.size()];
+      for (EntryId max_id : {EntryId{9000}, EntryId{16383}, EntryId{16384}, EntryId{30000},
+                             EntryId{50000}, EntryId{65535}, EntryId{65536}, kAllEntries})
+        expect_same_results(database.query(query, 20, max_id),
+                            brute_force(vocabulary, bows, live, query, 20, max_id),
+                            std::string("whole segments ") + to_string(scoring) + ", up to " +
+                                std::to_string(max_id));
+    }
   }
 }
 
