@@ -118,6 +118,7 @@ struct WorkerScratch {
   std::vector<std::uint32_t> hits;           // ForwardIndex::for_each_shared's buffer
   std::vector<CandidateSum> candidate_sums;  // a segment's, over the rare words
   std::vector<Candidate> candidate_heap;     // the best candidates of its segments
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;  // find_candidates
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -588,13 +589,23 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const std::size_t entries = segment.end_entry - segment.first_entry;
   for (std::size_t r = 0; r < entries; ++r)
     out[r].inverse_divisor = static_cast<float>(1.0 / divisors[r]);
+  // The rows first, their starts fetched: rare words' rows are short, so
+  // finding each where it is read left its cache misses unhidden.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>>& rows = worker.rows;  // (start, size)
+  rows.resize(n);
   for (std::size_t q = 0; q < n; ++q) {
-    prefetch_rows_ahead(offsets, bytes, order, words.data(), n, q);
+    if (q + kPrefetchAhead < n)
+      __builtin_prefetch(offsets + order.row(words[q + kPrefetchAhead].word));
     const std::uint32_t row = order.row(words[q].word);
-    const std::uint32_t size = offsets[row + 1] - offsets[row];
+    rows[q] = {offsets[row], offsets[row + 1] - offsets[row]};
+    __builtin_prefetch(bytes + rows[q].first);
+    if (c.index.word_weights != nullptr) __builtin_prefetch(c.index.word_weights + words[q].word);
+  }
+  for (std::size_t q = 0; q < n; ++q) {
+    const std::uint32_t size = rows[q].second;
     if (size == 0) continue;
     const Term term{words[q].value};
-    const std::uint8_t* const begin = bytes + offsets[row];
+    const std::uint8_t* const begin = bytes + rows[q].first;
     const std::uint8_t header = *begin;
     const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
     const std::uint8_t* const end = begin + size;
