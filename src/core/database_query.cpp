@@ -110,6 +110,12 @@ struct CandidateSum {
   float inverse_divisor;
 };
 
+// Where a query word's row is in a segment's bytes.
+struct RowSpan {
+  std::uint32_t start;
+  std::uint32_t size;  // 0: the word has no postings there
+};
+
 // What one thread of a query writes: its part sums, its best results and
 // (fast mode) its best candidates.
 struct WorkerScratch {
@@ -118,7 +124,7 @@ struct WorkerScratch {
   std::vector<std::uint32_t> hits;           // ForwardIndex::for_each_shared's buffer
   std::vector<CandidateSum> candidate_sums;  // a segment's, over the rare words
   std::vector<Candidate> candidate_heap;     // the best candidates of its segments
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;  // find_candidates
+  std::vector<RowSpan> rows;                 // find_rows' of a segment
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -165,16 +171,25 @@ struct MinimumTerm {
 // ahead are prefetched so that their cache misses overlap.
 constexpr std::size_t kPrefetchAhead = 8;
 
-// Before the query word q is read from a segment: the row offset of the word
-// 2 * kPrefetchAhead ahead, and the row of the word kPrefetchAhead ahead
-// (whose offset the previous steps brought in).
-inline void prefetch_rows_ahead(const std::uint32_t* offsets, const std::uint8_t* bytes,
-                                detail::RowOrder order, const BowEntry* words, std::size_t n,
-                                std::size_t q) {
-  if (q + 2 * kPrefetchAhead < n)
-    __builtin_prefetch(offsets + order.row(words[q + 2 * kPrefetchAhead].word));
-  if (q + kPrefetchAhead < n)
-    __builtin_prefetch(bytes + offsets[order.row(words[q + kPrefetchAhead].word)]);
+// The rows of `words` in a segment, found before any is read, each row's
+// start (and its word's weight, for count rows) fetched: most of a query's
+// words are rare, with short rows, and looking each row up only when it is
+// read left its cache misses unhidden (a third of a fast query's candidate
+// search).
+inline void find_rows(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> words,
+                      const float* word_weights, std::vector<RowSpan>& rows) {
+  const std::uint32_t* offsets = segment.offsets.data();
+  const std::uint8_t* bytes = segment.bytes.data();
+  const std::size_t n = words.size();
+  rows.resize(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    if (q + kPrefetchAhead < n)
+      __builtin_prefetch(offsets + order.row(words[q + kPrefetchAhead].word));
+    const std::uint32_t row = order.row(words[q].word);
+    rows[q] = {offsets[row], offsets[row + 1] - offsets[row]};
+    __builtin_prefetch(bytes + rows[q].start);
+    if (word_weights != nullptr) __builtin_prefetch(word_weights + words[q].word);
+  }
 }
 
 // A row's postings at their fixed stride: the entries are a running sum of
@@ -211,19 +226,17 @@ inline void accumulate_count_row(const std::uint8_t* at, const std::uint8_t* end
 template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
                         EntryId last_entry, const detail::SegmentWeights& weights,
-                        PartScores scores) {
-  const std::uint32_t* offsets = segment.offsets.data();
+                        PartScores scores, std::vector<RowSpan>& rows) {
   const std::uint8_t* bytes = segment.bytes.data();
   const bool cut = last_entry < segment.end_entry - 1;
   const std::uint32_t last = cut ? last_entry - segment.first_entry : detail::kRowStart;
   const std::uint32_t entry_bound = segment.end_entry - segment.first_entry - 1;
   const std::size_t n = bow.size();
   const BowEntry* query = bow.data();
+  find_rows(segment, order, bow, weights.word_weights, rows);
   for (std::size_t q = 0; q < n; ++q) {
-    prefetch_rows_ahead(offsets, bytes, order, query, n, q);
-    const std::uint32_t row = order.row(query[q].word);
-    const std::uint8_t* const begin = bytes + offsets[row];
-    const std::size_t size = offsets[row + 1] - offsets[row];
+    const std::uint8_t* const begin = bytes + rows[q].start;
+    const std::size_t size = rows[q].size;
     if (size == 0) continue;
     const Term term{query[q].value};
     // The rows of a loaded file may be read before its check ends: a row is
@@ -478,21 +491,22 @@ struct QueryContext {
   }
 };
 
-// Sums the terms of `words` for the entries of a part and offers the part's
+// Sums the terms of the query's words for the entries of a part and offers the part's
 // live entries to `best`. Every term is computed and summed exactly as
 // Vocabulary::score does (or, for MinimumTerm, as its exact equal), in the
 // same order (increasing word id), so that with all the query's words the
 // scores agree to the last bit: each entry lives in one segment or in the
 // tail, whose pass visits the words in order.
 template <class Term>
-void score_part(const QueryContext& c, std::size_t part, Span<BowEntry> words, PartScores scores,
-                BestResults& best) {
+void score_part(const QueryContext& c, std::size_t part, unsigned worker, BestResults& best) {
+  const PartScores scores = c.scores(worker);
   if (part < c.visible_segments)
     accumulate_segment<Term>(
-        *c.index.segments[part], c.index.row_order, words, c.last_entry,
-        {c.index.word_weights, c.index.divisors + c.index.segments[part]->first_entry}, scores);
+        *c.index.segments[part], c.index.row_order, c.words, c.last_entry,
+        {c.index.word_weights, c.index.divisors + c.index.segments[part]->first_entry}, scores,
+        c.buffers.workers[worker].rows);
   else
-    accumulate_tail<Term>(c.index, words, c.last_entry, scores);
+    accumulate_tail<Term>(c.index, c.words, c.last_entry, scores);
   best.take_part(c.part_first(part), c.part_span(part), scores, c.index.alive, c.unchecked);
 }
 
@@ -507,7 +521,7 @@ template <class Term>
 std::vector<QueryResult> exact_query(const QueryContext& c) {
   std::vector<BestResults> best = c.per_worker(c.keep, &WorkerScratch::best);
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
-    score_part<Term>(c, part, c.words, c.scores(worker), best[worker]);
+    score_part<Term>(c, part, worker, best[worker]);
   });
   return merged(best);
 }
@@ -577,9 +591,7 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const detail::Segment& segment = *c.index.segments[part];
   std::vector<CandidateSum>& sums = worker.candidate_sums;
   if (sums.size() < detail::kSegmentSpan) sums.assign(detail::kSegmentSpan, CandidateSum{});
-  const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
-  const detail::RowOrder order = c.index.row_order;
   const std::size_t n = words.size();
   CandidateSum* const out = sums.data();
   // Count rows' weights from each entry's inverse divisor, in floats: a
@@ -589,23 +601,13 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const std::size_t entries = segment.end_entry - segment.first_entry;
   for (std::size_t r = 0; r < entries; ++r)
     out[r].inverse_divisor = static_cast<float>(1.0 / divisors[r]);
-  // The rows first, their starts fetched: rare words' rows are short, so
-  // finding each where it is read left its cache misses unhidden.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>>& rows = worker.rows;  // (start, size)
-  rows.resize(n);
+  std::vector<RowSpan>& rows = worker.rows;
+  find_rows(segment, c.index.row_order, words, c.index.word_weights, rows);
   for (std::size_t q = 0; q < n; ++q) {
-    if (q + kPrefetchAhead < n)
-      __builtin_prefetch(offsets + order.row(words[q + kPrefetchAhead].word));
-    const std::uint32_t row = order.row(words[q].word);
-    rows[q] = {offsets[row], offsets[row + 1] - offsets[row]};
-    __builtin_prefetch(bytes + rows[q].first);
-    if (c.index.word_weights != nullptr) __builtin_prefetch(c.index.word_weights + words[q].word);
-  }
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::uint32_t size = rows[q].second;
+    const std::uint32_t size = rows[q].size;
     if (size == 0) continue;
     const Term term{words[q].value};
-    const std::uint8_t* const begin = bytes + rows[q].first;
+    const std::uint8_t* const begin = bytes + rows[q].start;
     const std::uint8_t header = *begin;
     const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
     const std::uint8_t* const end = begin + size;
@@ -768,7 +770,7 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidate_heap.clear();
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
     if (part == c.visible_segments)
-      score_part<Term>(c, part, c.words, c.scores(worker), tail_best[worker]);
+      score_part<Term>(c, part, worker, tail_best[worker]);
     else
       find_candidates<Term>(c, part, rare, sign, keep, c.buffers.workers[worker]);
   });
