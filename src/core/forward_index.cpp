@@ -35,8 +35,9 @@ struct LookUpState {
   std::size_t found;
 };
 
-// Looks words [first, last) up one by one.
-template <bool kCompact, bool kPopcnt>
+// Looks words [first, last) up one by one; with kWords, writes the ids of
+// the words found in place of their positions.
+template <bool kCompact, bool kPopcnt, bool kWords = false>
 [[gnu::always_inline]] inline void look_up_words(const std::uint16_t* steps, std::size_t first,
                                                  std::size_t last, const QueryWordSet& query,
                                                  LookUpState& state, std::uint32_t* positions,
@@ -61,7 +62,7 @@ template <bool kCompact, bool kPopcnt>
       detail = many & (0u - flag);
     }
     const std::uint32_t q = query.position<kPopcnt>(word);
-    positions[found] = q;
+    positions[found] = kWords ? word : q;
     details[found] = detail;
     found += q != absent ? 1 : 0;
   }
@@ -112,10 +113,12 @@ constexpr std::array<std::uint32_t, 256> compress_permutations() {
 constexpr std::array<std::uint32_t, 256> kCompress = compress_permutations();
 
 // 8 words at a time: their steps' prefix sum gives their ids (and, in the
-// top byte, compact entries' running count of words with kMany), their
-// records are gathered from the query's bitmap, and the positions of the
-// ones present are written in order. Blocks with a long step, and the last
-// words, go one by one.
+// top byte, compact entries' running count of words with kMany), their bits
+// are read from the query's bitmap, and the ids of the ones present are
+// written in order; blocks with a long step, and the last words, go one by
+// one. Then the ids found (a fifth to a half) become positions. Gather
+// instructions were slower than 8 loads, and a rank counted in vector
+// registers for every word slower than one counted for the words found.
 template <bool kCompact>
 [[gnu::target("avx2,popcnt")]] std::size_t look_up_avx2(const std::uint16_t* steps,
                                                         std::size_t words,
@@ -124,15 +127,11 @@ template <bool kCompact>
                                                         std::uint32_t* details) {
   LookUpState state{~std::uint32_t{0}, 0, steps + words, 0};
   const __m256i last_block = _mm256_set1_epi32(static_cast<int>(query.blocks() - 1));
-  const auto* records = reinterpret_cast<const long long*>(query.records());
+  // The low halves of the records: the bits (x86-64 is little-endian).
+  const auto* bit_words = reinterpret_cast<const std::int32_t*>(query.records());
   const __m256i step_mask = _mm256_set1_epi32(kStepMask);
   const __m256i low_bits = _mm256_set1_epi32(31);
   const __m256i lane_7 = _mm256_set1_epi32(7);
-  const __m256i even_odd = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-  const __m256i nibbles = _mm256_set1_epi8(0x0F);
-  const __m256i byte_mask = _mm256_set1_epi32(0xFF);
-  const __m256i nibble_bits = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1,
-                                               1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
   const __m256i lane_shifts = _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28);
   __m256i base_word = _mm256_set1_epi32(-1);
   __m256i base_many = _mm256_setzero_si256();
@@ -145,7 +144,7 @@ template <bool kCompact>
     if (_mm256_movemask_epi8(_mm256_cmpeq_epi32(step, _mm256_setzero_si256())) != 0) {
       state.word = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_word));
       state.many = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_many));
-      look_up_words<kCompact, true>(steps, i, i + 8, query, state, positions, details);
+      look_up_words<kCompact, true, true>(steps, i, i + 8, query, state, positions, details);
       base_word = _mm256_set1_epi32(static_cast<int>(state.word));
       base_many = _mm256_set1_epi32(static_cast<int>(state.many));
       index = _mm256_add_epi32(index, _mm256_set1_epi32(8));
@@ -174,44 +173,36 @@ template <bool kCompact>
       index = _mm256_add_epi32(index, _mm256_set1_epi32(8));
     }
     base_word = _mm256_permutevar8x32_epi32(word, lane_7);
-    // Each word's record (bits and rank); none beyond the bitmap.
+    // Each word's bits; none beyond the bitmap.
     const __m256i block = _mm256_srli_epi32(word, 5);
     const __m256i clamped = _mm256_min_epu32(block, last_block);
     alignas(32) std::uint32_t at[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(at), clamped);
-    const __m256i low_records =
-        _mm256_setr_epi64x(records[at[0]], records[at[1]], records[at[2]], records[at[3]]);
-    const __m256i high_records =
-        _mm256_setr_epi64x(records[at[4]], records[at[5]], records[at[6]], records[at[7]]);
-    const __m256i low_split = _mm256_permutevar8x32_epi32(low_records, even_odd);
-    const __m256i high_split = _mm256_permutevar8x32_epi32(high_records, even_odd);
-    const __m256i bits = _mm256_and_si256(_mm256_permute2x128_si256(low_split, high_split, 0x20),
-                                          _mm256_cmpeq_epi32(clamped, block));
-    const __m256i ranks = _mm256_permute2x128_si256(low_split, high_split, 0x31);
-    const __m256i bit = _mm256_and_si256(word, low_bits);
-    const __m256i present = _mm256_slli_epi32(_mm256_srlv_epi32(bits, bit), 31);
+    const __m256i loaded = _mm256_setr_epi32(
+        bit_words[2 * at[0]], bit_words[2 * at[1]], bit_words[2 * at[2]], bit_words[2 * at[3]],
+        bit_words[2 * at[4]], bit_words[2 * at[5]], bit_words[2 * at[6]], bit_words[2 * at[7]]);
+    const __m256i bits = _mm256_and_si256(loaded, _mm256_cmpeq_epi32(clamped, block));
+    const __m256i present =
+        _mm256_slli_epi32(_mm256_srlv_epi32(bits, _mm256_and_si256(word, low_bits)), 31);
     const auto mask = static_cast<std::uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(present)));
-    // The position: the rank plus the bits below the word's.
-    const __m256i all = _mm256_cmpeq_epi32(bit, bit);
-    const __m256i below = _mm256_andnot_si256(_mm256_sllv_epi32(all, bit), bits);
-    const __m256i byte_counts = _mm256_add_epi8(
-        _mm256_shuffle_epi8(nibble_bits, _mm256_and_si256(below, nibbles)),
-        _mm256_shuffle_epi8(nibble_bits, _mm256_and_si256(_mm256_srli_epi16(below, 4), nibbles)));
-    const __m256i pairs = _mm256_add_epi8(byte_counts, _mm256_srli_epi32(byte_counts, 16));
-    const __m256i counts =
-        _mm256_and_si256(_mm256_add_epi8(pairs, _mm256_srli_epi32(pairs, 8)), byte_mask);
-    const __m256i position = _mm256_add_epi32(ranks, counts);
     const __m256i order =
         _mm256_srlv_epi32(_mm256_set1_epi32(static_cast<int>(kCompress[mask])), lane_shifts);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(positions + state.found),
-                        _mm256_permutevar8x32_epi32(position, order));
+                        _mm256_permutevar8x32_epi32(word, order));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(details + state.found),
                         _mm256_permutevar8x32_epi32(detail, order));
     state.found += static_cast<std::size_t>(__builtin_popcount(mask));
   }
   state.word = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_word));
   state.many = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_many));
-  look_up_words<kCompact, true>(steps, i, words, query, state, positions, details);
+  look_up_words<kCompact, true, true>(steps, i, words, query, state, positions, details);
+  const std::uint64_t* const records = query.records();
+  for (std::size_t k = 0; k < state.found; ++k) {
+    const std::uint32_t word = positions[k];
+    const std::uint64_t record = records[word / 32];
+    const auto below = static_cast<std::uint32_t>(record) & ((std::uint32_t{1} << (word % 32)) - 1);
+    positions[k] = static_cast<std::uint32_t>(record >> 32) + QueryWordSet::popcount<true>(below);
+  }
   return state.found;
 }
 
