@@ -112,6 +112,13 @@ constexpr std::array<std::uint32_t, 256> compress_permutations() {
 }
 constexpr std::array<std::uint32_t, 256> kCompress = compress_permutations();
 
+// A record's bits, its low half (x86-64 is little-endian): one 32-bit load.
+[[gnu::always_inline]] inline int bits_of(const std::uint64_t* record) {
+  std::int32_t bits;
+  std::memcpy(&bits, record, sizeof bits);
+  return bits;
+}
+
 // 8 words at a time: their steps' prefix sum gives their ids (and, in the
 // top byte, compact entries' running count of words with kMany), their bits
 // are read from the query's bitmap, and the ids of the ones present are
@@ -127,8 +134,7 @@ template <bool kCompact>
                                                         std::uint32_t* details) {
   LookUpState state{~std::uint32_t{0}, 0, steps + words, 0};
   const __m256i last_block = _mm256_set1_epi32(static_cast<int>(query.blocks() - 1));
-  // The low halves of the records: the bits (x86-64 is little-endian).
-  const auto* bit_words = reinterpret_cast<const std::int32_t*>(query.records());
+  const std::uint64_t* const records = query.records();
   const __m256i step_mask = _mm256_set1_epi32(kStepMask);
   const __m256i low_bits = _mm256_set1_epi32(31);
   const __m256i lane_7 = _mm256_set1_epi32(7);
@@ -178,9 +184,10 @@ template <bool kCompact>
     const __m256i clamped = _mm256_min_epu32(block, last_block);
     alignas(32) std::uint32_t at[8];
     _mm256_store_si256(reinterpret_cast<__m256i*>(at), clamped);
-    const __m256i loaded = _mm256_setr_epi32(
-        bit_words[2 * at[0]], bit_words[2 * at[1]], bit_words[2 * at[2]], bit_words[2 * at[3]],
-        bit_words[2 * at[4]], bit_words[2 * at[5]], bit_words[2 * at[6]], bit_words[2 * at[7]]);
+    const __m256i loaded = _mm256_setr_epi32(bits_of(records + at[0]), bits_of(records + at[1]),
+                                             bits_of(records + at[2]), bits_of(records + at[3]),
+                                             bits_of(records + at[4]), bits_of(records + at[5]),
+                                             bits_of(records + at[6]), bits_of(records + at[7]));
     const __m256i bits = _mm256_and_si256(loaded, _mm256_cmpeq_epi32(clamped, block));
     const __m256i present =
         _mm256_slli_epi32(_mm256_srlv_epi32(bits, _mm256_and_si256(word, low_bits)), 31);
@@ -196,7 +203,6 @@ template <bool kCompact>
   state.word = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_word));
   state.many = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_many));
   look_up_words<kCompact, true, true>(steps, i, words, query, state, positions, details);
-  const std::uint64_t* const records = query.records();
   for (std::size_t k = 0; k < state.found; ++k) {
     const std::uint32_t word = positions[k];
     const std::uint64_t record = records[word / 32];
