@@ -81,8 +81,8 @@ std::size_t look_up_scalar(bool compact, const std::uint16_t* steps, std::size_t
   return state.found;
 }
 
-std::size_t look_up_portable(bool compact, const std::uint16_t* steps, std::size_t words,
-                             const QueryWordSet& query, std::uint32_t* positions,
+std::size_t look_up_portable(bool compact, bool /*long_steps*/, const std::uint16_t* steps,
+                             std::size_t words, const QueryWordSet& query, std::uint32_t* positions,
                              std::uint32_t* details) {
   return look_up_scalar<false>(compact, steps, words, query, positions, details);
 }
@@ -91,8 +91,9 @@ std::size_t look_up_portable(bool compact, const std::uint16_t* steps, std::size
 // The same with the popcnt instruction (the build targets any x86-64): a
 // word's position costs one instruction instead of the portable bit count's
 // ten.
-[[gnu::target("popcnt")]] std::size_t look_up_popcnt(bool compact, const std::uint16_t* steps,
-                                                     std::size_t words, const QueryWordSet& query,
+[[gnu::target("popcnt")]] std::size_t look_up_popcnt(bool compact, bool /*long_steps*/,
+                                                     const std::uint16_t* steps, std::size_t words,
+                                                     const QueryWordSet& query,
                                                      std::uint32_t* positions,
                                                      std::uint32_t* details) {
   return look_up_scalar<true>(compact, steps, words, query, positions, details);
@@ -126,7 +127,7 @@ constexpr std::array<std::uint32_t, 256> kCompress = compress_permutations();
 // one. Then the ids found (a fifth to a half) become positions. Gather
 // instructions were slower than 8 loads, and a rank counted in vector
 // registers for every word slower than one counted for the words found.
-template <bool kCompact>
+template <bool kCompact, bool kLongSteps>
 [[gnu::target("avx2,popcnt")]] std::size_t look_up_avx2(const std::uint16_t* steps,
                                                         std::size_t words,
                                                         const QueryWordSet& query,
@@ -147,7 +148,7 @@ template <bool kCompact>
     const __m256i code =
         _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(steps + i)));
     const __m256i step = _mm256_and_si256(code, step_mask);
-    if (_mm256_movemask_epi8(_mm256_cmpeq_epi32(step, _mm256_setzero_si256())) != 0) {
+    if (kLongSteps && _mm256_movemask_epi8(_mm256_cmpeq_epi32(step, _mm256_setzero_si256())) != 0) {
       state.word = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_word));
       state.many = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_many));
       look_up_words<kCompact, true, true>(steps, i, i + 8, query, state, positions, details);
@@ -212,17 +213,19 @@ template <bool kCompact>
   return state.found;
 }
 
-[[gnu::target("avx2,popcnt")]] std::size_t look_up_avx2(bool compact, const std::uint16_t* steps,
-                                                        std::size_t words,
-                                                        const QueryWordSet& query,
-                                                        std::uint32_t* positions,
-                                                        std::uint32_t* details) {
-  return compact ? look_up_avx2<true>(steps, words, query, positions, details)
-                 : look_up_avx2<false>(steps, words, query, positions, details);
+[[gnu::target("avx2,popcnt")]] std::size_t look_up_avx2(
+    bool compact, bool long_steps, const std::uint16_t* steps, std::size_t words,
+    const QueryWordSet& query, std::uint32_t* positions, std::uint32_t* details) {
+  // Most entries have no long step: their blocks need no check.
+  if (compact)
+    return long_steps ? look_up_avx2<true, true>(steps, words, query, positions, details)
+                      : look_up_avx2<true, false>(steps, words, query, positions, details);
+  return long_steps ? look_up_avx2<false, true>(steps, words, query, positions, details)
+                    : look_up_avx2<false, false>(steps, words, query, positions, details);
 }
 #endif
 
-using LookUp = std::size_t (*)(bool, const std::uint16_t*, std::size_t, const QueryWordSet&,
+using LookUp = std::size_t (*)(bool, bool, const std::uint16_t*, std::size_t, const QueryWordSet&,
                                std::uint32_t*, std::uint32_t*);
 
 LookUp fastest_look_up() {
@@ -248,7 +251,8 @@ std::size_t ForwardIndex::look_up(const std::uint16_t* codes, const QueryWordSet
   const std::uint32_t words = read<std::uint32_t>(codes + kWordsAt);
   const LookUp chosen =
       portable_forward_lookups().load(std::memory_order_relaxed) ? look_up_portable : fastest;
-  return chosen(compact, steps, words, query, positions, details);
+  const bool long_steps = read<std::uint32_t>(codes + kLongStepsAt) != 0;
+  return chosen(compact, long_steps, steps, words, query, positions, details);
 }
 
 ForwardIndex::ForwardIndex(const Vocabulary* vocabulary, Scoring scoring)
