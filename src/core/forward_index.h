@@ -69,8 +69,8 @@ class ForwardIndex {
                : 0.0;
   }
 
-  // Starts fetching an entry's codes, all of them: the look-up reads them
-  // faster than the memory streams them in.
+  // Starts fetching all of an entry's codes (about 30 cache lines for an
+  // ORB-1000 image), so that its look-up does not wait for them.
   void prefetch(EntryId entry) const noexcept {
     const std::vector<std::uint16_t>& codes = entries_[entry];
     const auto* bytes = reinterpret_cast<const char*>(codes.data());

@@ -3,7 +3,8 @@
 // instructions. One 64-bit record per 32 word ids holds their bits (low
 // half) and the number of the query's words below them (high half), so that
 // a lookup reads one cache line (8 bytes per 32 ids: 135 KiB for 540k words,
-// in the core's cache), and vector code gathers 8 words' records at once.
+// in the core's cache); vector code reads the bits of 8 words, then the
+// ranks of the words found only.
 #pragma once
 
 #include <algorithm>
