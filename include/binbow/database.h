@@ -115,7 +115,7 @@ struct QueryOptions {
   // at least max_results). A query whose other words hold fewer postings
   // than the candidates hold words reads every posting, as kExact does.
   // More of either finds more of the exact best, slower (a candidate's
-  // rescoring costs ~4 µs for an ORB-1000 image). With more entries, more of
+  // rescoring costs ~2.5 µs for an ORB-1000 image). With more entries, more of
   // them are near-copies of the query's best, so the candidates grow with
   // the database: on tuning queries of ORB-1000 images the defaults kept the
   // exact top 10 of all at 200,000 (1000 candidates; 800 kept 99.3%) and of

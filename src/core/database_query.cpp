@@ -19,6 +19,7 @@
 #include "binbow/database.h"
 #include "core/database_impl.h"
 #include "core/parallel_for.h"
+#include "core/query_word_set.h"
 #include "core/scoring.h"
 
 namespace binbow {
@@ -39,57 +40,7 @@ struct EntryScore {
 #pragma pack(pop)
 static_assert(sizeof(EntryScore) == 12);
 
-// The query's words as a bitmap over word ids, with the count of set bits
-// before each 64-bit block: a word's position in the query in a few
-// instructions, from 1 bit per word id (68 KiB for 540k words, in cache).
-class QueryWordSet {
- public:
-  // Inline: without -mpopcnt, __builtin_popcountll is a library call. With
-  // kInstruction, the caller is compiled for the popcnt instruction
-  // (rescore_popcnt), where the builtin is that instruction.
-  template <bool kInstruction = false>
-  [[gnu::always_inline]] static std::uint32_t popcount(std::uint64_t x) noexcept {
-#if !defined(__POPCNT__)
-    if constexpr (!kInstruction) {
-      x -= (x >> 1) & 0x5555555555555555ull;
-      x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
-      x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
-      return static_cast<std::uint32_t>((x * 0x0101010101010101ull) >> 56);
-    }
-#endif
-    return static_cast<std::uint32_t>(__builtin_popcountll(x));
-  }
-
-  void assign(Span<BowEntry> words) {
-    const std::size_t blocks = words.empty() ? 1 : words[words.size() - 1].word / 64 + 1;
-    bits_.assign(blocks, 0);
-    ranks_.resize(blocks);
-    for (const BowEntry& e : words) bits_[e.word / 64] |= std::uint64_t{1} << (e.word % 64);
-    std::uint32_t rank = 0;
-    for (std::size_t b = 0; b < blocks; ++b) {
-      ranks_[b] = rank;
-      rank += popcount(bits_[b]);
-    }
-    absent_ = rank;
-  }
-  // The word's position in the query, or the query's size if it lacks it.
-  // Without branches (a mask, not a conditional, which compilers turn into
-  // a branch): about half the words looked up are the query's.
-  template <bool kPopcnt = false>
-  [[gnu::always_inline]] std::uint32_t position(WordId word) const noexcept {
-    const std::size_t block = std::min<std::size_t>(word / 64, bits_.size() - 1);
-    const std::uint64_t bits = word / 64 < bits_.size() ? bits_[block] : 0;
-    const std::uint64_t below = (std::uint64_t{1} << (word % 64)) - 1;
-    const std::uint32_t rank = ranks_[block] + popcount<kPopcnt>(bits & below);
-    const auto present = static_cast<std::uint32_t>((bits >> (word % 64)) & 1);
-    return absent_ + ((rank - absent_) & (0u - present));
-  }
-
- private:
-  std::vector<std::uint64_t> bits_;
-  std::vector<std::uint32_t> ranks_;
-  std::uint32_t absent_ = 0;
-};
+using detail::QueryWordSet;
 
 // A fast query's candidate: its sum over the rare words, signed so that
 // larger is better.
@@ -709,54 +660,23 @@ Span<BowEntry> rare_words(const QueryContext& c) {
 
 // The exact scores of candidates from their BoW vectors: the same terms,
 // summed in the same order (increasing word id), as a pass over the index
-// gives them. Inlined whole into rescore_popcnt, so that the query's word
-// positions count bits with the popcnt instruction there.
-template <class Term, bool kPopcnt>
-[[gnu::always_inline]] inline void rescore(const QueryContext& c, const Candidate* first,
-                                           const Candidate* last, QueryResult* out,
-                                           WorkerScratch& worker, const BestResults& best) {
+// gives them.
+template <class Term>
+void rescore_candidates(const QueryContext& c, const Candidate* first, const Candidate* last,
+                        QueryResult* out, WorkerScratch& worker, const BestResults& best) {
   const QueryWordSet& query = c.buffers.query_words;
   const detail::ForwardIndex& forward = *c.index.forward;
   for (const Candidate* candidate = first; candidate != last; ++candidate) {
     if (candidate + 1 != last) forward.prefetch(candidate[1].entry);
     double sum = 0;
     std::uint32_t shared = 0;
-    forward.for_each_shared(
-        candidate->entry, [&](WordId word) { return query.position<kPopcnt>(word); },
-        static_cast<std::uint32_t>(c.words.size()), c.buffers.query_weights.data(), worker.hits,
-        [&](std::uint32_t q, float weight) {
-          sum += Term{c.words[q].value}(weight);
-          ++shared;
-        });
+    forward.for_each_shared(candidate->entry, query, c.buffers.query_weights.data(), worker.hits,
+                            [&](std::uint32_t q, float weight) {
+                              sum += Term{c.words[q].value}(weight);
+                              ++shared;
+                            });
     *out++ = best.result(candidate->entry, sum, shared);
   }
-}
-
-template <class Term>
-void rescore_portable(const QueryContext& c, const Candidate* first, const Candidate* last,
-                      QueryResult* out, WorkerScratch& worker, const BestResults& best) {
-  rescore<Term, false>(c, first, last, out, worker, best);
-}
-
-#if defined(BINBOW_X86_DISPATCH)
-// The same, for CPUs with popcnt (the build targets any x86-64): a word's
-// position costs one instruction instead of the portable bit count's ten.
-template <class Term>
-[[gnu::target("popcnt")]] void rescore_popcnt(const QueryContext& c, const Candidate* first,
-                                              const Candidate* last, QueryResult* out,
-                                              WorkerScratch& worker, const BestResults& best) {
-  rescore<Term, true>(c, first, last, out, worker, best);
-}
-#endif
-
-template <class Term>
-void rescore_candidates(const QueryContext& c, const Candidate* first, const Candidate* last,
-                        QueryResult* out, WorkerScratch& worker, const BestResults& best) {
-#if defined(BINBOW_X86_DISPATCH)
-  static const bool has_popcnt = __builtin_cpu_supports("popcnt") != 0;
-  if (has_popcnt) return rescore_popcnt<Term>(c, first, last, out, worker, best);
-#endif
-  rescore_portable<Term>(c, first, last, out, worker, best);
 }
 
 template <class Term>

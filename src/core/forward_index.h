@@ -15,6 +15,7 @@
 // not made by transform) keep their floats (about 6 bytes per word).
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -25,8 +26,13 @@
 #include "binbow/types.h"
 #include "binbow/vocabulary.h"
 #include "core/count_form.h"
+#include "core/query_word_set.h"
 
 namespace binbow::detail {
+
+// For tests: while set, ForwardIndex looks words up with its portable code,
+// as on CPUs without AVX2, so that tests compare it with the vector code.
+std::atomic<bool>& portable_forward_lookups();
 
 class ForwardIndex {
  public:
@@ -63,98 +69,87 @@ class ForwardIndex {
                : 0.0;
   }
 
-  // Starts fetching an entry's first codes (the rest follow in order).
+  // Starts fetching all of an entry's codes (about 30 cache lines for an
+  // ORB-1000 image), so that its look-up does not wait for them.
   void prefetch(EntryId entry) const noexcept {
-    const auto* codes = reinterpret_cast<const char*>(entries_[entry].data());
-    for (int line = 0; line < 4; ++line) __builtin_prefetch(codes + 64 * line);
+    const std::vector<std::uint16_t>& codes = entries_[entry];
+    const auto* bytes = reinterpret_cast<const char*>(codes.data());
+    const std::size_t size = codes.size() * sizeof(std::uint16_t);
+    for (std::size_t line = 0; line < size; line += 64) __builtin_prefetch(bytes + line);
   }
 
   // Calls take(q, weight) for every word of `entry` that the query holds,
   // in increasing word order, with its weight in the entry: q is
-  // position(word), which is `absent` for the words the query lacks, and
-  // `query_weights[q]` is word_weight() of the query's word q. `hits` is
-  // the caller's buffer. The words are looked up first, without branches,
-  // then the weights of the shared ones computed: about half of a
+  // query.position(word), and `query_weights[q]` is word_weight() of the
+  // query's word q. `hits` is the caller's buffer. The words are looked up
+  // first, out of line (8 at a time with AVX2 where the CPU has it), then
+  // the weights of the shared ones computed: about a fifth to a half of a
   // candidate's words are shared, so a branch per word would mispredict
   // often.
-  template <class Position, class Take>
-  [[gnu::always_inline]] void for_each_shared(EntryId entry, const Position& position,
-                                              std::uint32_t absent, const double* query_weights,
+  template <class Take>
+  [[gnu::always_inline]] void for_each_shared(EntryId entry, const QueryWordSet& query,
+                                              const double* query_weights,
                                               std::vector<std::uint32_t>& hits, Take&& take) const {
-    const std::vector<std::uint16_t>& codes = entries_[entry];
-    if (codes.empty()) return;
-    if (hits.size() < 2 * codes.size()) hits.resize(2 * codes.size());
-    std::uint32_t* const found = hits.data();
+    const std::uint16_t* const codes = entries_[entry].data();
+    if (entries_[entry].empty()) return;
+    const std::uint32_t words = read<std::uint32_t>(codes + kWordsAt);
+    const std::uint32_t long_steps = read<std::uint32_t>(codes + kLongStepsAt);
+    const std::size_t room = std::size_t{words} + kLookUpSlack;
+    if (hits.size() < 2 * room) hits.resize(2 * room);
+    std::uint32_t* const positions = hits.data();
+    std::uint32_t* const details = positions + room;
+    const std::size_t found = look_up(codes, query, positions, details);
     if (codes[0] == kCounts) {
-      double divisor;
-      std::memcpy(&divisor, codes.data() + 1, sizeof divisor);
+      double divisor = read<double>(codes + kDivisorAt);
       const double inverse = inverse_divisor(divisor);
-      const std::uint32_t* end = look_up<true>(
-          codes.data() + kCountsHeader, codes.data() + codes.size(), position, absent, found);
-      for (const std::uint32_t* hit = found; hit < end; hit += 2)
-        take(hit[0], count_weight(query_weights[hit[0]], hit[1], inverse, &divisor));
-    } else {
-      std::uint32_t words;
-      std::memcpy(&words, codes.data() + 1, sizeof words);
-      const std::uint16_t* floats = codes.data() + codes.size() - 2 * std::size_t{words};
-      const std::uint32_t* end =
-          look_up<false>(codes.data() + kFloatsHeader, floats, position, absent, found);
-      for (const std::uint32_t* hit = found; hit < end; hit += 2) {
-        float weight;
-        std::memcpy(&weight, floats + 2 * std::size_t{hit[1]}, sizeof weight);
-        take(hit[0], weight);
+      const std::uint16_t* const counts =
+          codes + kCountsHeader + words + 2 * std::size_t{long_steps};
+      for (std::size_t k = 0; k < found; ++k) {
+        const std::uint32_t q = positions[k];
+        take(q, count_weight(query_weights[q], counts[details[k]], inverse, &divisor));
       }
+    } else {
+      const std::uint16_t* const floats =
+          codes + kFloatsHeader + words + 2 * std::size_t{long_steps};
+      for (std::size_t k = 0; k < found; ++k)
+        take(positions[k], read<float>(floats + 2 * std::size_t{details[k]}));
     }
   }
 
  private:
-  // An entry's codes: kCounts, the divisor (a double, 4 codes), then per
-  // word its step and, when the step code has kMany, its count; or kFloats,
-  // the word count (32 bits, 2 codes), per word its step, then the weights
-  // (2 codes each). A step is the word's id minus the previous word's (the
-  // first word's id plus one) in the low 15 bits, or 0 there and the step in
-  // the next two codes (low half first) when it does not fit.
+  // An entry's codes: its form (kCounts or kFloats), its word count and its
+  // count of long steps (32 bits each, 2 codes), for kCounts the divisor (a
+  // double, 4 codes); then one code per word: its step (the word's id minus
+  // the previous word's, the first word's id plus one) in the low 15 bits,
+  // or 0 there for a step beyond them, and kMany in a compact entry when the
+  // word's count is above 1; then the long steps in order (32 bits each);
+  // then a compact entry's counts (1 first, then the count of each word with
+  // kMany, in order) or the other's weights (floats, 2 codes each). One
+  // code per word, with no count or long step between them, lets vector code
+  // decode 8 words at once with a prefix sum.
   static constexpr std::uint16_t kCounts = 1;
   static constexpr std::uint16_t kFloats = 2;
-  static constexpr std::size_t kCountsHeader = 5;
-  static constexpr std::size_t kFloatsHeader = 3;
+  static constexpr std::size_t kWordsAt = 1;
+  static constexpr std::size_t kLongStepsAt = 3;
+  static constexpr std::size_t kDivisorAt = 5;
+  static constexpr std::size_t kCountsHeader = 9;
+  static constexpr std::size_t kFloatsHeader = 5;
   static constexpr std::uint16_t kMany = 0x8000;
-  static constexpr std::uint32_t kStepMask = 0x7FFF;
+  // What look_up may write past the words it finds.
+  static constexpr std::size_t kLookUpSlack = 8;
 
-  // Writes (q, count) with kCounts, or (q, word index) without, for each
-  // word between `code` and `end` that the query holds; returns the end of
-  // what it wrote.
-  template <bool kWithCounts, class Position>
-  [[gnu::always_inline]] static std::uint32_t* look_up(const std::uint16_t* code,
-                                                       const std::uint16_t* end,
-                                                       const Position& position,
-                                                       std::uint32_t absent, std::uint32_t* out) {
-    std::uint32_t word = ~std::uint32_t{0};
-    std::uint32_t index = 0;
-    while (code < end) {
-      const std::uint32_t step_code = *code++;
-      std::uint32_t step = step_code & kStepMask;
-      if (step == 0) {
-        step = code[0] | std::uint32_t{code[1]} << 16;
-        code += 2;
-      }
-      word += step;
-      std::uint32_t aux = index++;
-      if constexpr (kWithCounts) {
-        // Without a branch (few words have a count): the next code, or the
-        // step's own code when it was the last, masked out unless kMany.
-        const std::uint32_t many = step_code >> 15;
-        const std::uint32_t next = *(code - (code == end ? 1 : 0));
-        aux = 1 + ((next - 1) & (0u - many));
-        code += many;
-      }
-      const std::uint32_t q = position(word);
-      out[0] = q;
-      out[1] = aux;
-      out += q != absent ? 2 : 0;
-    }
-    return out;
+  template <typename T>
+  static T read(const std::uint16_t* codes) noexcept {
+    T value;
+    std::memcpy(&value, codes, sizeof value);
+    return value;
   }
+
+  // For each word of the entry that the query holds, in order, writes its
+  // position in the query and (compact entries) the index of its count, 0
+  // for a count of 1, or (others) the word's index; returns how many.
+  static std::size_t look_up(const std::uint16_t* codes, const QueryWordSet& query,
+                             std::uint32_t* positions, std::uint32_t* details);
 
   // An entry's codes, allocated at their exact size: in the compact form of
   // `form` (the words' count form), or with their floats when it is null.

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,7 @@
 #include "binbow/vocabulary.h"
 #include "core/count_form.h"
 #include "core/forward_index.h"
+#include "support/random_tree.h"
 #include "support/test_support.h"
 
 namespace binbow {
@@ -42,21 +44,46 @@ std::uint32_t bits_of(float value) {
   return bits;
 }
 
+// Runs `body` with the forward index's portable look-up and with the
+// fastest the CPU has (the same where it has no vector code).
+template <class Body>
+void with_each_look_up(Body&& body) {
+  for (const bool portable : {true, false}) {
+    detail::portable_forward_lookups() = portable;
+    body(std::string(portable ? "portable" : "fastest"));
+  }
+  detail::portable_forward_lookups() = false;
+}
+
+// A query word set over `words`, with the weights for_each_shared needs.
+struct Query {
+  detail::QueryWordSet set;
+  std::vector<double> weights;
+  Query(const detail::ForwardIndex& index, const std::vector<BowEntry>& words) {
+    set.assign(Span<BowEntry>(words.data(), words.size()));
+    for (const BowEntry& e : words) weights.push_back(index.word_weight(e.word));
+  }
+};
+
+// What for_each_shared gives: (q, weight) in order.
+std::vector<BowEntry> shared_words(const detail::ForwardIndex& index, EntryId entry,
+                                   const Query& query) {
+  std::vector<std::uint32_t> hits;
+  std::vector<BowEntry> result;
+  index.for_each_shared(entry, query.set, query.weights.data(), hits,
+                        [&](std::uint32_t q, float weight) {
+                          result.push_back({q, weight});
+                        });
+  return result;
+}
+
 // What for_each_shared gives for a query that holds every word id below
 // `words`: the entry's (word, weight) in order.
 std::vector<BowEntry> read_back(const detail::ForwardIndex& index, EntryId entry,
                                 std::size_t words) {
-  std::vector<double> weights(words);
-  for (WordId w = 0; w < words; ++w) weights[w] = index.word_weight(w);
-  std::vector<std::uint32_t> hits;
-  std::vector<BowEntry> result;
-  index.for_each_shared(
-      entry, [](WordId word) { return word; }, static_cast<std::uint32_t>(words), weights.data(),
-      hits,
-      [&](std::uint32_t q, float weight) {
-        result.push_back({q, weight});
-      });
-  return result;
+  std::vector<BowEntry> all;
+  for (WordId w = 0; w < words; ++w) all.push_back({w, 1.0f});
+  return shared_words(index, entry, Query(index, all));
 }
 
 void expect_same(const std::vector<BowEntry>& actual, const BowVector& expected,
@@ -92,9 +119,11 @@ TEST(ForwardIndex, TransformedVectorsAreKeptExactlyInTwoBytesPerWord) {
         index.append(Span<BowEntry>(bow.begin(), bow.size()));
         bows.push_back(std::move(bow));
       }
-      for (EntryId e = 0; e < bows.size(); ++e)
-        expect_same(read_back(index, e, vocabulary.word_count()), bows[e],
-                    context + " entry " + std::to_string(e));
+      with_each_look_up([&](const std::string& look_up) {
+        for (EntryId e = 0; e < bows.size(); ++e)
+          expect_same(read_back(index, e, vocabulary.word_count()), bows[e],
+                      context + " " + look_up + " entry " + std::to_string(e));
+      });
       const double bytes_per_word =
           static_cast<double>(index.memory_usage()) / static_cast<double>(words);
       EXPECT_LT(bytes_per_word, 2.6) << context;
@@ -107,7 +136,7 @@ TEST(ForwardIndex, OtherVectorsKeepTheirFloats) {
   // bits), over word ids and with a vocabulary.
   const Vocabulary vocabulary = trained_vocabulary(Weighting::kTfIdf);
   const std::vector<BowVector> bows = {
-      BowVector({{0, 0.25f}, {1, 0.5f}, {70'000, -1.5f}, {4'000'000'000u, 3e-30f}}),
+      BowVector({{0, 0.25f}, {1, 0.5f}, {70'000, -1.5f}, {40'000'000u, 3e-30f}}),
       BowVector({{5, 1.0f}}),
       BowVector(),
       BowVector({{32'767, 0.125f}, {65'535, 0.75f}, {65'536, 0.0f}}),
@@ -116,32 +145,19 @@ TEST(ForwardIndex, OtherVectorsKeepTheirFloats) {
     detail::ForwardIndex index(over_word_ids ? nullptr : &vocabulary, Scoring::kL1);
     for (const BowVector& bow : bows) index.append(Span<BowEntry>(bow.begin(), bow.size()));
     index.append(Span<BowEntry>(bows[1].begin(), bows[1].size()));
-    for (EntryId e = 0; e < bows.size(); ++e) {
-      std::vector<BowEntry> all;
-      std::vector<std::uint32_t> hits;
-      // Position: the word's index in the entry itself, so that any word id works.
-      const BowVector& bow = bows[e];
-      std::vector<double> weights;
-      for (const BowEntry& word : bow) weights.push_back(index.word_weight(word.word));
-      index.for_each_shared(
-          e,
-          [&](WordId word) {
-            for (std::uint32_t i = 0; i < bow.size(); ++i)
-              if (bow[i].word == word) return i;
-            return static_cast<std::uint32_t>(bow.size());
-          },
-          static_cast<std::uint32_t>(bow.size()), weights.data(), hits,
-          [&](std::uint32_t q, float weight) {
-            all.push_back({bow[q].word, weight});
-          });
-      expect_same(all, bow, "entry " + std::to_string(e));
-    }
+    with_each_look_up([&](const std::string& look_up) {
+      for (EntryId e = 0; e < bows.size(); ++e) {
+        // The query is the entry itself: q is the word's index in it.
+        const BowVector& bow = bows[e];
+        std::vector<BowEntry> all =
+            shared_words(index, e, Query(index, std::vector<BowEntry>(bow.begin(), bow.end())));
+        for (BowEntry& word : all) word.word = bow[word.word].word;
+        expect_same(all, bow, look_up + " entry " + std::to_string(e));
+      }
+    });
     index.drop(1);
-    std::vector<std::uint32_t> hits;
-    int calls = 0;
-    index.for_each_shared(
-        1, [](WordId) { return 0u; }, 1, nullptr, hits, [&](std::uint32_t, float) { ++calls; });
-    EXPECT_EQ(calls, 0) << "a dropped entry has no words";
+    EXPECT_TRUE(shared_words(index, 1, Query(index, {{5, 1.0f}})).empty())
+        << "a dropped entry has no words";
     index.truncate(2);
     EXPECT_EQ(index.size(), 2u);
   }
@@ -203,6 +219,65 @@ BowVector counted_vector(const Vocabulary& vocabulary,
     entries.push_back({word, static_cast<float>(static_cast<double>(vocabulary.word_weight(word)) *
                                                 count / divisor)});
   return BowVector(std::move(entries));
+}
+
+// The vector look-up (8 words at a time) against the portable one and a
+// brute-force search: entries of every length (blocks of 8 and a tail),
+// steps both sides of the 15-bit limit anywhere in a block, counts above 1,
+// entries with floats; queries that hold about half of their words, some
+// stopping below the entries' last words (a bitmap they run beyond).
+TEST(ForwardIndex, VectorAndPortableLookUpsFindTheSameWords) {
+  const Vocabulary vocabulary =
+      Vocabulary::from_tree(test::complete_random_tree(10, 5, 32, 3));  // 100,000 words
+  ASSERT_EQ(vocabulary.scoring(), Scoring::kL1);
+  detail::ForwardIndex index(&vocabulary, Scoring::kL1);
+  std::mt19937_64 rng(21);
+  std::vector<BowVector> bows;
+  std::size_t long_steps = 0;
+  for (int i = 0; i < 80; ++i) {
+    std::map<WordId, std::uint32_t> counts;
+    const std::size_t words = rng() % 300;
+    WordId word = static_cast<WordId>(rng() % 40'000);
+    for (std::size_t k = 0; k < words && word < vocabulary.word_count(); ++k) {
+      counts[word] = rng() % 4 == 0 ? 2 + static_cast<std::uint32_t>(rng() % 400) : 1;
+      const bool long_step = rng() % 24 == 0;
+      long_steps += long_step ? 1 : 0;
+      word += long_step ? 32'766 + static_cast<WordId>(rng() % 4) : 1 + rng() % 40;
+    }
+    BowVector bow = counted_vector(vocabulary, counts);
+    if (i % 4 == 3) {  // weights no vocabulary gives
+      std::vector<BowEntry> floats(bow.begin(), bow.end());
+      for (BowEntry& e : floats) e.value = std::uniform_real_distribution<float>(0.1f, 1.0f)(rng);
+      bow = BowVector(std::move(floats));
+    }
+    index.append(Span<BowEntry>(bow.begin(), bow.size()));
+    bows.push_back(std::move(bow));
+  }
+  ASSERT_GT(long_steps, 100u);
+  for (int q = 0; q < 12; ++q) {
+    const WordId end = q % 3 == 0 ? 60'000 : vocabulary.word_count();
+    std::set<WordId> chosen;
+    for (const BowVector& bow : bows)
+      for (const BowEntry& e : bow)
+        if (e.word < end && rng() % 2 == 0) chosen.insert(e.word);
+    for (int extra = 0; extra < 500; ++extra) chosen.insert(static_cast<WordId>(rng() % end));
+    std::vector<BowEntry> words;
+    for (const WordId w : chosen) words.push_back({w, 1.0f});
+    const Query query(index, words);
+    for (EntryId e = 0; e < bows.size(); ++e) {
+      std::vector<BowEntry> expected;
+      for (const BowEntry& word : bows[e]) {
+        const auto at = std::lower_bound(words.begin(), words.end(), word.word,
+                                         [](const BowEntry& a, WordId w) { return a.word < w; });
+        if (at != words.end() && at->word == word.word)
+          expected.push_back({static_cast<WordId>(at - words.begin()), word.value});
+      }
+      with_each_look_up([&](const std::string& look_up) {
+        expect_same(shared_words(index, e, query), BowVector(expected),
+                    look_up + " query " + std::to_string(q) + " entry " + std::to_string(e));
+      });
+    }
+  }
 }
 
 TEST(ForwardIndex, AddsAfterTheFirstFastQueryAnswerAsADatabaseBuiltAtOnce) {
