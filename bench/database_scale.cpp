@@ -39,7 +39,6 @@
 #include <cstdlib>
 #include <fstream>
 #include <memory>
-#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <thread>
@@ -47,7 +46,7 @@
 
 #include "binbow/database.h"
 #include "binbow/vision/features.h"
-#include "binbow/vision/image_source.h"
+#include "orb_photographs.h"
 
 namespace binbow::bench {
 namespace {
@@ -99,48 +98,6 @@ bool reset_peak_rss() {
   return static_cast<bool>(clear_refs);
 }
 
-std::vector<std::string> training_photographs() {
-  const std::string command = std::string(BINBOW_SOURCE_DIR) + "/scripts/training_images.sh --all";
-  std::vector<std::string> paths;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return paths;
-  char line[4096];
-  while (std::fgets(line, sizeof line, pipe) != nullptr) {
-    std::string path(line);
-    while (!path.empty() && (path.back() == '\n' || path.back() == '\r')) path.pop_back();
-    if (!path.empty()) paths.push_back(path);
-  }
-  pclose(pipe);
-  return paths;
-}
-
-// 1000 ORB descriptors of a photograph; small photographs are enlarged until
-// they give 1000 (empty if they never do).
-DescriptorMatrix thousand_descriptors(const vision::FeatureExtractor& extractor,
-                                      const std::string& path) {
-  cv::Mat image = vision::read_grey_image(path);
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    DescriptorMatrix descriptors = extractor.extract(image).descriptors;
-    if (descriptors.rows() >= kFeatures) {
-      descriptors.resize(kFeatures);
-      return descriptors;
-    }
-    cv::resize(image, image, cv::Size(), 2.0, 2.0);
-  }
-  return DescriptorMatrix(32);
-}
-
-void flip_bits(DescriptorMatrix& image, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  for (std::size_t r = 0; r < image.rows(); ++r) {
-    std::uint8_t* row = image.row(r);
-    for (int flip = 0; flip < kFlippedBits; ++flip) {
-      const auto bit = rng() % 256;
-      row[bit / 8] ^= static_cast<std::uint8_t>(1u << (bit % 8));
-    }
-  }
-}
-
 struct Scale {
   Vocabulary vocabulary;
   bool direct_index = true;
@@ -184,10 +141,10 @@ Scale* scale(std::string& error) {
     if (const char* max = std::getenv("BINBOW_BENCH_SCALE_MAX_ENTRIES"))
       s->max_entries = std::stoul(max);
     if (const char* folder = std::getenv("BINBOW_BENCH_DIR")) s->folder = folder;
-    const std::vector<std::string> paths = training_photographs();
+    const std::vector<std::string> paths = training_photographs(true);
     const auto extractor = vision::make_extractor("orb", static_cast<int>(kFeatures));
     for (std::size_t i = 0; i < paths.size(); ++i) {
-      DescriptorMatrix descriptors = thousand_descriptors(*extractor, paths[i]);
+      DescriptorMatrix descriptors = orb_descriptors(*extractor, paths[i], kFeatures);
       if (descriptors.rows() != kFeatures) continue;
       if (i % 10 != 9) {
         s->photographs.push_back(std::move(descriptors));
@@ -198,7 +155,7 @@ Scale* scale(std::string& error) {
                                   std::vector<BowVector>& out) {
         for (std::size_t copy = 0; copy < copies; ++copy) {
           DescriptorMatrix query = descriptors;
-          flip_bits(query, seed_base + i * copies + copy);
+          flip_bits(query, kFlippedBits, seed_base + i * copies + copy);
           BowVector bow;
           s->vocabulary.transform(query, bow);
           out.push_back(std::move(bow));
@@ -300,7 +257,7 @@ void add_entries(Scale& s, std::size_t target, double& add_seconds, double& add_
   FeatureVector features;
   for (std::size_t entry = s.database->next_entry_id(); entry < target; ++entry) {
     image = s.photographs[entry % s.photographs.size()];
-    flip_bits(image, entry);
+    flip_bits(image, kFlippedBits, entry);
     if (s.direct_index) {
       s.vocabulary.transform(image, bow, features, kLevelsUp);
     } else {
