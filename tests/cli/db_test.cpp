@@ -23,6 +23,17 @@ using test::samples_folder;
 using test::shared_data;
 using test::TempDir;
 
+// The corridor's 84 frames in a database at `database`, on the small
+// vocabulary.
+void build_corridor_database(const std::string& database) {
+  std::string output;
+  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
+                        "' -o '" + database + "' '" + samples_folder() + "'",
+                    &output),
+            0)
+      << output;
+}
+
 TEST(CliDb, BuildQueryInfo) {
   TempDir dir;
   const std::string vocabulary = shared_data("kimera-small-voc/small_voc.yml.gz");
@@ -55,12 +66,8 @@ TEST(CliDb, QueriesSeveralImagesOneTableEach) {
   TempDir dir;
   const std::string folder = samples_folder();
   const std::string database = dir.file("corridor.bbdb");
+  ASSERT_NO_FATAL_FAILURE(build_corridor_database(database));
   std::string output;
-  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
-                        "' -o '" + database + "' '" + folder + "'",
-                    &output),
-            0)
-      << output;
   ASSERT_EQ(
       run_cli("db query '" + database + "' '" + folder + "/54.jpg' '" + folder + "/14.jpg' --top 2",
               &output),
@@ -96,12 +103,7 @@ TEST(CliDb, FastQueriesGiveTheExactTablesOnTheCorridor) {
   TempDir dir;
   const std::string folder = samples_folder();
   const std::string database = dir.file("corridor.bbdb");
-  std::string output;
-  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
-                        "' -o '" + database + "' '" + folder + "'",
-                    &output),
-            0)
-      << output;
+  ASSERT_NO_FATAL_FAILURE(build_corridor_database(database));
   std::string exact, fast;
   ASSERT_EQ(run_cli("db query '" + database + "' '" + folder + "' --top 5", &exact), 0) << exact;
   ASSERT_EQ(run_cli("db query --fast '" + database + "' '" + folder + "' --top 5", &fast), 0)
@@ -136,12 +138,7 @@ TEST(CliDb, FastTuningOptionsReachTheQuery) {
   TempDir dir;
   const std::string folder = samples_folder();
   const std::string database = dir.file("corridor.bbdb");
-  std::string output;
-  ASSERT_EQ(run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") +
-                        "' -o '" + database + "' '" + folder + "'",
-                    &output),
-            0)
-      << output;
+  ASSERT_NO_FATAL_FAILURE(build_corridor_database(database));
   const std::string query = "db query '" + database + "' '" + folder + "' ";
   std::string exact, every_entry, whole_share, few, all_results;
   ASSERT_EQ(run_cli(query + "--top 5", &exact), 0) << exact;
