@@ -61,10 +61,14 @@ struct CandidateSum {
   float inverse_divisor;
 };
 
-// Where a query word's row is in a segment's bytes.
-struct RowSpan {
-  std::uint32_t start;
-  std::uint32_t size;  // 0: the word has no postings there
+// A query word's row in a segment, read a stripe of entries at a time.
+struct RowCursor {
+  const std::uint8_t* at;   // the next posting
+  const std::uint8_t* end;  // after the row's last whole posting
+  std::uint32_t entry;      // of the posting before `at` (kRowStart: none)
+  std::uint32_t q;          // the query word
+  bool narrow;              // 1-byte gaps
+  bool counts;              // a count row
 };
 
 // What one thread of a query writes: its part sums, its best results and
@@ -75,7 +79,7 @@ struct WorkerScratch {
   std::vector<std::uint32_t> hits;           // ForwardIndex::for_each_shared's buffer
   std::vector<CandidateSum> candidate_sums;  // a segment's, over the rare words
   std::vector<Candidate> candidate_heap;     // the best candidates of its segments
-  std::vector<RowSpan> rows;                 // find_rows' of a segment
+  std::vector<RowCursor> rows;               // find_rows' of a segment
 };
 
 // Owned by the thread that calls query(); the threads it starts for that
@@ -125,96 +129,142 @@ constexpr std::size_t kPrefetchAhead = 8;
 // The rows of `words` in a segment, found before any is read, each row's
 // start (and its word's weight, for count rows) fetched: most of a query's
 // words are rare, with short rows, and looking each row up only when it is
-// read left its cache misses unhidden (a third of a fast query's candidate
-// search).
+// read left its cache misses unhidden. The rows of a loaded file may be read
+// before its check ends: a row is read as whole postings of its header's
+// width (any width but 1 is 2) and kind, never past its end.
 inline void find_rows(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> words,
-                      const float* word_weights, std::vector<RowSpan>& rows) {
+                      const float* word_weights, std::vector<RowCursor>& rows) {
   const std::uint32_t* offsets = segment.offsets.data();
   const std::uint8_t* bytes = segment.bytes.data();
   const std::size_t n = words.size();
-  rows.resize(n);
+  rows.clear();
   for (std::size_t q = 0; q < n; ++q) {
     if (q + kPrefetchAhead < n)
       __builtin_prefetch(offsets + order.row(words[q + kPrefetchAhead].word));
     const std::uint32_t row = order.row(words[q].word);
-    rows[q] = {offsets[row], offsets[row + 1] - offsets[row]};
-    __builtin_prefetch(bytes + rows[q].start);
+    const std::uint32_t size = offsets[row + 1] - offsets[row];
+    if (size == 0) continue;
+    const std::uint8_t* const begin = bytes + offsets[row];
+    __builtin_prefetch(begin);
     if (word_weights != nullptr) __builtin_prefetch(word_weights + words[q].word);
+    rows.push_back(
+        {begin, begin + size, detail::kRowStart, static_cast<std::uint32_t>(q), false, false});
+  }
+  for (RowCursor& row : rows) {
+    const std::uint8_t header = *row.at;
+    const std::uint8_t* const first = row.at + detail::kRowHeaderBytes;
+    row.narrow = detail::header_width(header) == 1;
+    row.counts = detail::header_counts(header);
+    const std::size_t stride =
+        (row.narrow ? 1 : 2) + (row.counts ? detail::kCountBytes : detail::kWeightBytes);
+    row.end = first + static_cast<std::size_t>(row.end - first) / stride * stride;
+    row.at = first;
   }
 }
 
-// A row's postings at their fixed stride: the entries are a running sum of
-// the gaps, with no branch per posting but the (predicted) cut.
-template <std::size_t kWidth, class Term>
-inline void accumulate_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
-                           std::uint32_t last, const Term& term, PartScores scores) {
-  std::uint32_t entry = detail::kRowStart;
-  for (; at != end; at += kWidth + detail::kWeightBytes) {
-    entry += detail::read_gap<kWidth>(at) + 1;
-    if (cut && entry > last) return;
-    scores.add(entry, term(detail::read_weight(at + kWidth)));
+// A segment's entries are scored a stripe at a time, each row read up to
+// the stripe's last entry, so that the stripe's sums and divisors (20 bytes
+// per entry; fast mode's candidate sums 8) stay in the core's L2 cache
+// (512 KiB on this machine's EPYC), as a whole segment's (1.25 MiB) would
+// not.
+constexpr std::uint32_t kStripeEntries = 8192;
+
+// Calls read(cursor, until) for every unfinished row, stripe after stripe,
+// `until` being the stripe's last entry (relative to the segment; `last`
+// for the final stripe), then done(first, end) with the stripe's entries.
+// read() leaves the cursor after the postings it read.
+template <class Read, class Done>
+void read_in_stripes(std::vector<RowCursor>& rows, std::uint32_t entry_bound, std::uint32_t last,
+                     Read&& read, Done&& done) {
+  for (std::uint32_t first = 0;; first += kStripeEntries) {
+    const std::uint32_t stripe_last = first + (kStripeEntries - 1);
+    const bool final_stripe = stripe_last >= entry_bound || stripe_last >= last;
+    const std::uint32_t until = final_stripe ? last : stripe_last;
+    std::size_t unfinished = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      if (i + kPrefetchAhead < rows.size()) __builtin_prefetch(rows[i + kPrefetchAhead].at);
+      RowCursor row = rows[i];
+      read(row, until);
+      if (row.at != row.end) rows[unfinished++] = row;
+    }
+    rows.resize(unfinished);
+    done(first, final_stripe ? entry_bound + 1 : stripe_last + 1);
+    if (final_stripe) return;
   }
 }
 
-// The same for a count row: each weight computed from the count, as the
-// entry's was when it was added. Entries are at most `entry_bound` (the
-// segment's last) where the divisors are looked up: a row of an unchecked
-// file may reach past them.
-template <std::size_t kWidth, class Term>
-inline void accumulate_count_row(const std::uint8_t* at, const std::uint8_t* end, bool cut,
-                                 std::uint32_t last, const Term& term,
-                                 const detail::RowWeights& weights, std::uint32_t entry_bound,
-                                 PartScores scores) {
-  std::uint32_t entry = detail::kRowStart;
-  for (; at != end; at += kWidth + detail::kCountBytes) {
-    entry += detail::read_gap<kWidth>(at) + 1;
-    if (cut && entry > last) return;
-    scores.add(entry, term(weights.weight(std::min(entry, entry_bound), at[kWidth])));
+// A row's postings at their fixed stride, from the cursor until an entry
+// passes `until`: the entries are a running sum of the gaps.
+template <std::size_t kWidth, class Add>
+inline void read_row(RowCursor& row, std::uint32_t until, const Add& add) {
+  const std::uint8_t* at = row.at;
+  std::uint32_t entry = row.entry;
+  for (; at != row.end; at += kWidth + detail::kWeightBytes) {
+    const std::uint32_t next = entry + detail::read_gap<kWidth>(at) + 1;
+    if (next > until) break;
+    entry = next;
+    add(entry, detail::read_weight(at + kWidth));
+  }
+  row.at = at;
+  row.entry = entry;
+}
+// The same for a count row: add(entry, count).
+template <std::size_t kWidth, class Add>
+inline void read_count_row(RowCursor& row, std::uint32_t until, const Add& add) {
+  const std::uint8_t* at = row.at;
+  std::uint32_t entry = row.entry;
+  for (; at != row.end; at += kWidth + detail::kCountBytes) {
+    const std::uint32_t next = entry + detail::read_gap<kWidth>(at) + 1;
+    if (next > until) break;
+    entry = next;
+    add(entry, at[kWidth]);
+  }
+  row.at = at;
+  row.entry = entry;
+}
+
+// Reads a row with add_weight(entry, weight) or add_count(entry, count).
+template <class AddWeight, class AddCount>
+inline void read_any_row(RowCursor& row, std::uint32_t until, const AddWeight& add_weight,
+                         const AddCount& add_count) {
+  if (row.counts) {
+    if (row.narrow)
+      read_count_row<1>(row, until, add_count);
+    else
+      read_count_row<2>(row, until, add_count);
+  } else if (row.narrow) {
+    read_row<1>(row, until, add_weight);
+  } else {
+    read_row<2>(row, until, add_weight);
   }
 }
 
-// Entries are increasing within a row, so `last_entry` cuts it short.
+// Every term of the query's words for a segment's entries, in word order for
+// each entry. A count row's weight is computed from the count, as the
+// entry's was when it was added; its divisor is looked up at most at
+// `entry_bound` (the segment's last entry): a row of an unchecked file may
+// reach past it. Entries are increasing within a row, so `last_entry` cuts
+// it short.
 template <class Term>
 void accumulate_segment(const detail::Segment& segment, detail::RowOrder order, Span<BowEntry> bow,
                         EntryId last_entry, const detail::SegmentWeights& weights,
-                        PartScores scores, std::vector<RowSpan>& rows) {
-  const std::uint8_t* bytes = segment.bytes.data();
+                        PartScores scores, std::vector<RowCursor>& rows) {
   const bool cut = last_entry < segment.end_entry - 1;
   const std::uint32_t last = cut ? last_entry - segment.first_entry : detail::kRowStart;
   const std::uint32_t entry_bound = segment.end_entry - segment.first_entry - 1;
-  const std::size_t n = bow.size();
-  const BowEntry* query = bow.data();
   find_rows(segment, order, bow, weights.word_weights, rows);
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::uint8_t* const begin = bytes + rows[q].start;
-    const std::size_t size = rows[q].size;
-    if (size == 0) continue;
-    const Term term{query[q].value};
-    // The rows of a loaded file may be read before its check ends: a row is
-    // read as whole postings of its header's width (any width but 1 is 2)
-    // and kind, never past its end, and a count row's divisors are looked up
-    // within the segment's entries.
-    const std::uint8_t header = *begin;
-    const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
-    const std::size_t postings = size - detail::kRowHeaderBytes;
-    const bool narrow = detail::header_width(header) == 1;
-    if (detail::header_counts(header)) {
-      const detail::RowWeights row_weights = weights.row(query[q].word);
-      const std::size_t stride = (narrow ? 1 : 2) + detail::kCountBytes;
-      const std::uint8_t* const end = first + postings / stride * stride;
-      if (narrow)
-        accumulate_count_row<1>(first, end, cut, last, term, row_weights, entry_bound, scores);
-      else
-        accumulate_count_row<2>(first, end, cut, last, term, row_weights, entry_bound, scores);
-    } else {
-      const std::size_t stride = (narrow ? 1 : 2) + detail::kWeightBytes;
-      const std::uint8_t* const end = first + postings / stride * stride;
-      if (narrow)
-        accumulate_row<1>(first, end, cut, last, term, scores);
-      else
-        accumulate_row<2>(first, end, cut, last, term, scores);
-    }
-  }
+  read_in_stripes(
+      rows, entry_bound, last,
+      [&](RowCursor& row, std::uint32_t until) {
+        const Term term{bow[row.q].value};
+        const detail::RowWeights row_weights = weights.row(bow[row.q].word);
+        read_any_row(
+            row, until, [&](std::uint32_t entry, float weight) { scores.add(entry, term(weight)); },
+            [&](std::uint32_t entry, std::uint32_t count) {
+              scores.add(entry, term(row_weights.weight(std::min(entry, entry_bound), count)));
+            });
+      },
+      [](std::uint32_t, std::uint32_t) {});
 }
 
 // What a query reads of the index (Database::Impl is private).
@@ -508,97 +558,75 @@ float better_sign(Scoring scoring, bool minimums) {
   return scoring == Scoring::kKL ? -1.0f : 1.0f;
 }
 
-// A row's terms added to a segment's candidate sums, as accumulate_row and
-// accumulate_count_row add them to exact sums (rows are checked: a fast
-// query waits for a loaded file's check).
-template <std::size_t kWidth, class Term>
-inline void candidate_row(const std::uint8_t* at, const std::uint8_t* end, const Term& term,
-                          float sign, CandidateSum* sums) {
-  std::uint32_t entry = detail::kRowStart;
-  for (; at < end; at += kWidth + detail::kWeightBytes) {
-    entry += detail::read_gap<kWidth>(at) + 1;
-    sums[entry].sum += sign * static_cast<float>(term(detail::read_weight(at + kWidth)));
-  }
-}
-template <std::size_t kWidth, class Term>
-inline void candidate_count_row(const std::uint8_t* at, const std::uint8_t* end, const Term& term,
-                                float sign, float word_weight, CandidateSum* sums) {
-  std::uint32_t entry = detail::kRowStart;
-  for (; at < end; at += kWidth + detail::kCountBytes) {
-    entry += detail::read_gap<kWidth>(at) + 1;
-    CandidateSum& sum = sums[entry];
-    const float weight = word_weight * static_cast<float>(at[kWidth]) * sum.inverse_divisor;
-    sum.sum += sign * static_cast<float>(term(weight));
-  }
-}
-
-// Sums the rare words' terms of a segment's entries in floats (a part's
-// sums and inverse divisors, 512 KiB, stay in the core's cache), and keeps
-// its best `keep` live entries with a positive sum in the worker's
-// candidate_heap.
+// Sums the rare words' terms of a segment's entries in floats, a stripe at
+// a time (with the stripe's inverse divisors beside its sums: a posting
+// reads one cache line), and keeps its best `keep` live entries with a
+// positive sum in the worker's candidate_heap. Rows are checked: a fast
+// query waits for a loaded file's check.
 template <class Term>
 void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> words, float sign,
                      std::size_t keep, WorkerScratch& worker) {
   const detail::Segment& segment = *c.index.segments[part];
   std::vector<CandidateSum>& sums = worker.candidate_sums;
   if (sums.size() < detail::kSegmentSpan) sums.assign(detail::kSegmentSpan, CandidateSum{});
-  const std::uint8_t* bytes = segment.bytes.data();
-  const std::size_t n = words.size();
   CandidateSum* const out = sums.data();
-  // Count rows' weights from each entry's inverse divisor, in floats: a
-  // candidate's sum need not be exact (its rescoring is), and a division
-  // per posting made finding candidates 30% slower.
   const double* divisors = c.index.divisors + segment.first_entry;
-  const std::size_t entries = segment.end_entry - segment.first_entry;
-  for (std::size_t r = 0; r < entries; ++r)
-    out[r].inverse_divisor = static_cast<float>(1.0 / divisors[r]);
-  std::vector<RowSpan>& rows = worker.rows;
-  find_rows(segment, c.index.row_order, words, c.index.word_weights, rows);
-  for (std::size_t q = 0; q < n; ++q) {
-    const std::uint32_t size = rows[q].size;
-    if (size == 0) continue;
-    const Term term{words[q].value};
-    const std::uint8_t* const begin = bytes + rows[q].start;
-    const std::uint8_t header = *begin;
-    const std::uint8_t* const first = begin + detail::kRowHeaderBytes;
-    const std::uint8_t* const end = begin + size;
-    const bool narrow = detail::header_width(header) == 1;
-    if (detail::header_counts(header)) {
-      const float word_weight = c.index.word_weights[words[q].word];
-      if (narrow)
-        candidate_count_row<1>(first, end, term, sign, word_weight, out);
-      else
-        candidate_count_row<2>(first, end, term, sign, word_weight, out);
-    } else if (narrow) {
-      candidate_row<1>(first, end, term, sign, out);
-    } else {
-      candidate_row<2>(first, end, term, sign, out);
-    }
-  }
-  std::vector<Candidate>& heap = worker.candidate_heap;
-  const EntryId first = segment.first_entry;
+  const std::uint32_t entry_bound = segment.end_entry - segment.first_entry - 1;
+  const EntryId first_entry = segment.first_entry;
   const std::size_t span = c.part_span(part);
+  std::vector<Candidate>& heap = worker.candidate_heap;
   const BetterCandidate better;
   float threshold = heap.size() == keep ? heap.front().key : 0.0f;
-  for (std::size_t r = 0; r < span; ++r) {
-    const float key = out[r].sum;
-    // Ties with the worst kept are left to `better` (entry order).
-    if (!(key >= threshold) || !(key > 0.0f) || c.index.alive[first + r] == 0) continue;
-    const Candidate candidate{key, static_cast<EntryId>(first + r)};
-    if (heap.size() < keep) {
-      heap.push_back(candidate);
-      if (heap.size() == keep) {
-        std::make_heap(heap.begin(), heap.end(), better);
-        threshold = heap.front().key;
-      }
-    } else if (better(candidate, heap.front())) {
-      std::pop_heap(heap.begin(), heap.end(), better);
-      heap.back() = candidate;
-      std::push_heap(heap.begin(), heap.end(), better);
-      threshold = heap.front().key;
-    }
-  }
-  std::fill(out, out + (segment.end_entry - first), CandidateSum{});
+  // The first stripe's inverse divisors; each later one's as the previous
+  // stripe ends.
+  const auto set_inverse_divisors = [&](std::uint32_t first, std::uint32_t end) {
+    // Count rows' weights from each entry's inverse divisor, in floats: a
+    // candidate's sum need not be exact (its rescoring is), and a division
+    // per posting made finding candidates 30% slower.
+    for (std::uint32_t r = first; r < end; ++r)
+      out[r].inverse_divisor = static_cast<float>(1.0 / divisors[r]);
+  };
+  set_inverse_divisors(0, std::min(kStripeEntries, entry_bound + 1));
+  std::vector<RowCursor>& rows = worker.rows;
+  find_rows(segment, c.index.row_order, words, c.index.word_weights, rows);
+  read_in_stripes(
+      rows, entry_bound, detail::kRowStart,
+      [&](RowCursor& row, std::uint32_t until) {
+        const Term term{words[row.q].value};
+        const float word_weight = row.counts ? c.index.word_weights[words[row.q].word] : 0.0f;
+        read_any_row(
+            row, until,
+            [&](std::uint32_t entry, float weight) {
+              out[entry].sum += sign * static_cast<float>(term(weight));
+            },
+            [&](std::uint32_t entry, std::uint32_t count) {
+              CandidateSum& sum = out[entry];
+              const float weight = word_weight * static_cast<float>(count) * sum.inverse_divisor;
+              sum.sum += sign * static_cast<float>(term(weight));
+            });
+      },
+      [&](std::uint32_t first, std::uint32_t end) {
+        for (std::size_t r = first; r < std::min<std::size_t>(end, span); ++r) {
+          const float key = out[r].sum;
+          // Ties with the worst kept are left to `better` (entry order).
+          if (!(key >= threshold) || !(key > 0.0f) || c.index.alive[first_entry + r] == 0) continue;
+          const Candidate candidate{key, static_cast<EntryId>(first_entry + r)};
+          if (heap.size() < keep) {
+            heap.push_back(candidate);
+            if (heap.size() == keep) {
+              std::make_heap(heap.begin(), heap.end(), better);
+              threshold = heap.front().key;
+            }
+          } else if (better(candidate, heap.front())) {
+            std::pop_heap(heap.begin(), heap.end(), better);
+            heap.back() = candidate;
+            std::push_heap(heap.begin(), heap.end(), better);
+            threshold = heap.front().key;
+          }
+        }
+        std::fill(out + first, out + end, CandidateSum{});
+        set_inverse_divisors(end, std::min(end + kStripeEntries, entry_bound + 1));
+      });
 }
 
 // The query's words that find candidates, in word order: those that can add
