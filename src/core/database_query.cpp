@@ -165,8 +165,7 @@ inline void find_rows(const detail::Segment& segment, detail::RowOrder order, Sp
 // A segment's entries are scored a stripe at a time, each row read up to
 // the stripe's last entry, so that the stripe's sums and divisors (20 bytes
 // per entry; fast mode's candidate sums 8) stay in the core's L2 cache
-// (512 KiB on this machine's EPYC), as a whole segment's (1.25 MiB) would
-// not.
+// (512 KiB on AMD Zen 2 and 3), as a whole segment's (1.25 MiB) would not.
 constexpr std::uint32_t kStripeEntries = 8192;
 
 // Calls read(cursor, until) for every unfinished row, stripe after stripe,
