@@ -193,30 +193,21 @@ void read_in_stripes(std::vector<RowCursor>& rows, std::uint32_t entry_bound, st
 }
 
 // A row's postings at their fixed stride, from the cursor until an entry
-// passes `until`: the entries are a running sum of the gaps.
-template <std::size_t kWidth, class Add>
+// passes `until`: the entries are a running sum of the gaps. Calls
+// add(entry, count) for a count row, add(entry, weight) for the others.
+template <std::size_t kWidth, bool kCounts, class Add>
 inline void read_row(RowCursor& row, std::uint32_t until, const Add& add) {
+  constexpr std::size_t kStride = kWidth + (kCounts ? detail::kCountBytes : detail::kWeightBytes);
   const std::uint8_t* at = row.at;
   std::uint32_t entry = row.entry;
-  for (; at != row.end; at += kWidth + detail::kWeightBytes) {
+  for (; at != row.end; at += kStride) {
     const std::uint32_t next = entry + detail::read_gap<kWidth>(at) + 1;
     if (next > until) break;
     entry = next;
-    add(entry, detail::read_weight(at + kWidth));
-  }
-  row.at = at;
-  row.entry = entry;
-}
-// The same for a count row: add(entry, count).
-template <std::size_t kWidth, class Add>
-inline void read_count_row(RowCursor& row, std::uint32_t until, const Add& add) {
-  const std::uint8_t* at = row.at;
-  std::uint32_t entry = row.entry;
-  for (; at != row.end; at += kWidth + detail::kCountBytes) {
-    const std::uint32_t next = entry + detail::read_gap<kWidth>(at) + 1;
-    if (next > until) break;
-    entry = next;
-    add(entry, at[kWidth]);
+    if constexpr (kCounts)
+      add(entry, std::uint32_t{at[kWidth]});
+    else
+      add(entry, detail::read_weight(at + kWidth));
   }
   row.at = at;
   row.entry = entry;
@@ -228,13 +219,13 @@ inline void read_any_row(RowCursor& row, std::uint32_t until, const AddWeight& a
                          const AddCount& add_count) {
   if (row.counts) {
     if (row.narrow)
-      read_count_row<1>(row, until, add_count);
+      read_row<1, true>(row, until, add_count);
     else
-      read_count_row<2>(row, until, add_count);
+      read_row<2, true>(row, until, add_count);
   } else if (row.narrow) {
-    read_row<1>(row, until, add_weight);
+    read_row<1, false>(row, until, add_weight);
   } else {
-    read_row<2>(row, until, add_weight);
+    read_row<2, false>(row, until, add_weight);
   }
 }
 
