@@ -31,16 +31,8 @@ inline double inverse_divisor(double divisor) noexcept {
   return divisor > 0 ? 1.0 / divisor : 0.0;
 }
 
-// count_weight(word_weight, count, *divisor), out of line: the divisor is
-// read only in the rare case that needs it.
-[[gnu::cold, gnu::noinline]] inline float divided_count_weight(double word_weight,
-                                                               std::uint32_t count,
-                                                               const double* divisor) noexcept {
-  return count_weight(word_weight, count, *divisor);
-}
-
-// count_weight(word_weight, count, *divisor) to the last bit, with a
-// multiplication by `inverse` (inverse_divisor(*divisor)) in place of the
+// count_weight(word_weight, count, divisor) to the last bit, with a
+// multiplication by `inverse` (inverse_divisor(divisor)) in place of the
 // division: where many weights share a divisor (an entry's words), one
 // division serves them all. word_weight × count is exact (24 by 16 bits),
 // so the product with the inverse is within 3 units in the last place
@@ -49,8 +41,8 @@ inline double inverse_divisor(double divisor) noexcept {
 // between two floats (29 dropped bits of 1000...0) lies within those 3
 // ulps: then, and below the normal floats, the weight is divided as
 // transform does (about one weight in 2^25).
-inline float count_weight(double word_weight, std::uint32_t count, double inverse,
-                          const double* divisor) noexcept {
+inline float count_weight(double word_weight, std::uint32_t count, double divisor,
+                          double inverse) noexcept {
   const double estimate = word_weight * static_cast<double>(count) * inverse;
   std::uint64_t bits;
   std::memcpy(&bits, &estimate, sizeof bits);
@@ -59,7 +51,7 @@ inline float count_weight(double word_weight, std::uint32_t count, double invers
   constexpr std::uint64_t kGuard = 8;  // ulps, above the 3 the error can reach
   const std::uint64_t from_midpoint = (bits & kDropped) - kMidpoint + kGuard;
   if (__builtin_expect(from_midpoint <= 2 * kGuard || !(estimate >= 0x1p-126), 0))
-    return divided_count_weight(word_weight, count, divisor);
+    return count_weight(word_weight, count, divisor);
   return static_cast<float>(estimate);
 }
 

@@ -100,13 +100,13 @@ class ForwardIndex {
     std::uint32_t* const details = positions + room;
     const std::size_t found = look_up(codes, query, positions, details);
     if (codes[0] == kCounts) {
-      double divisor = read<double>(codes + kDivisorAt);
+      const double divisor = read<double>(codes + kDivisorAt);
       const double inverse = inverse_divisor(divisor);
       const std::uint16_t* const counts =
           codes + kCountsHeader + words + 2 * std::size_t{long_steps};
       for (std::size_t k = 0; k < found; ++k) {
         const std::uint32_t q = positions[k];
-        take(q, count_weight(query_weights[q], counts[details[k]], inverse, &divisor));
+        take(q, count_weight(query_weights[q], counts[details[k]], divisor, inverse));
       }
     } else {
       const std::uint16_t* const floats =

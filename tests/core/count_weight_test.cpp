@@ -23,7 +23,7 @@ std::uint32_t bits_of(float value) {
 ::testing::AssertionResult same_as_division(double word_weight, std::uint32_t count,
                                             double divisor) {
   const float divided = count_weight(word_weight, count, divisor);
-  const float multiplied = count_weight(word_weight, count, inverse_divisor(divisor), &divisor);
+  const float multiplied = count_weight(word_weight, count, divisor, inverse_divisor(divisor));
   if (bits_of(divided) == bits_of(multiplied)) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure()
          << std::hexfloat << "word weight " << word_weight << ", count " << count << ", divisor "
@@ -82,7 +82,7 @@ TEST(CountWeight, TinyAndMissingDivisorsFallBackToTheDivision) {
   EXPECT_TRUE(same_as_division(0.0, 1, 3.0));
   EXPECT_EQ(inverse_divisor(0.0), 0.0);
   const double zero = 0.0;
-  EXPECT_EQ(count_weight(1.0, 1, inverse_divisor(zero), &zero), count_weight(1.0, 1, zero));
+  EXPECT_EQ(count_weight(1.0, 1, zero, inverse_divisor(zero)), count_weight(1.0, 1, zero));
 }
 
 }  // namespace
