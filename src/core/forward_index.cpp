@@ -204,12 +204,8 @@ template <bool kCompact, bool kLongSteps>
   state.word = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_word));
   state.many = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(base_many));
   look_up_words<kCompact, true, true>(steps, i, words, query, state, positions, details);
-  for (std::size_t k = 0; k < state.found; ++k) {
-    const std::uint32_t word = positions[k];
-    const std::uint64_t record = records[word / 32];
-    const auto below = static_cast<std::uint32_t>(record) & ((std::uint32_t{1} << (word % 32)) - 1);
-    positions[k] = static_cast<std::uint32_t>(record >> 32) + QueryWordSet::popcount<true>(below);
-  }
+  for (std::size_t k = 0; k < state.found; ++k)
+    positions[k] = query.position_of_held<true>(positions[k]);
   return state.found;
 }
 

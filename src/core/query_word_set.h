@@ -64,6 +64,16 @@ class QueryWordSet {
     return absent_ + ((rank - absent_) & (0u - present));
   }
 
+  // The position of a word the query holds (a word it lacks gets a wrong
+  // one): for vector code that tested the word's bit already.
+  template <bool kPopcnt = false>
+  [[gnu::always_inline]] std::uint32_t position_of_held(WordId word) const noexcept {
+    const std::uint64_t record = records_[word / 32];
+    const std::uint32_t below = (std::uint32_t{1} << (word % 32)) - 1;
+    return static_cast<std::uint32_t>(record >> 32) +
+           popcount<kPopcnt>(static_cast<std::uint32_t>(record) & below);
+  }
+
   // The query's size: the position of the words it lacks.
   std::uint32_t absent() const noexcept {
     return absent_;
