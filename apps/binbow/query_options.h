@@ -3,28 +3,12 @@
 // Database::query refuses before any work.
 #pragma once
 
-#include <string>
-
 #include <CLI/CLI.hpp>
 
 #include "binbow/database.h"
+#include "validators.h"
 
 namespace binbow::cli {
-
-// The error for a value that parses as T and fails `accepted` (as
-// "must be ..., not <value>"); a value that does not parse is left to CLI11,
-// which names the option and the value. Counts are checked as signed: CLI11
-// reads "-1" into an unsigned field as its largest value.
-template <typename T, typename Accepted>
-CLI::Validator checked_number(Accepted accepted, const std::string& requirement) {
-  return CLI::Validator(
-      [accepted, requirement](std::string& input) -> std::string {
-        T value{};
-        if (!CLI::detail::lexical_cast(input, value) || accepted(value)) return {};
-        return "must be " + requirement + ", not " + input;
-      },
-      "");
-}
 
 // `options` (default-constructed by the caller) gets mode kFast from --fast
 // and the fast_* fields from the options of the same names, which need --fast.

@@ -26,4 +26,19 @@ CLI::Validator parsed_by(Parser parse) {
       "");
 }
 
+// The error for a value that parses as T and fails `accepted` (as
+// "must be ..., not <value>"); a value that does not parse is left to CLI11,
+// which names the option and the value. Counts are checked as signed: CLI11
+// reads "-1" into an unsigned field as its largest value.
+template <typename T, typename Accepted>
+CLI::Validator checked_number(Accepted accepted, const std::string& requirement) {
+  return CLI::Validator(
+      [accepted, requirement](std::string& input) -> std::string {
+        T value{};
+        if (!CLI::detail::lexical_cast(input, value) || accepted(value)) return {};
+        return "must be " + requirement + ", not " + input;
+      },
+      "");
+}
+
 }  // namespace binbow::cli
