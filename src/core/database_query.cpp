@@ -54,6 +54,47 @@ struct BetterCandidate {
   }
 };
 
+// A worker's best candidates of the parts it searched: offers above the
+// threshold are appended, and when there are twice `keep` the best `keep`
+// are selected and the threshold raised to the worst of them, so that an
+// offer costs O(1) on average and most cost one comparison.
+class BestCandidates {
+ public:
+  void reset(std::size_t keep) {
+    kept_.clear();
+    keep_ = keep;
+    threshold_ = 0.0f;
+  }
+
+  // Whether a candidate with this key may be kept: a positive sum at least
+  // the threshold (ties are left to BetterCandidate: entry order).
+  bool may_keep(float key) const { return key >= threshold_ && key > 0.0f; }
+
+  void offer(const Candidate& candidate) {
+    kept_.push_back(candidate);
+    if (kept_.size() == 2 * keep_) select();
+  }
+
+  // The best `keep` of those offered (all, if fewer), in no order.
+  std::vector<Candidate>& best() {
+    select();
+    return kept_;
+  }
+
+ private:
+  void select() {
+    if (kept_.size() <= keep_) return;
+    const auto worst_kept = kept_.begin() + static_cast<std::ptrdiff_t>(keep_ - 1);
+    std::nth_element(kept_.begin(), worst_kept, kept_.end(), BetterCandidate{});
+    threshold_ = worst_kept->key;
+    kept_.resize(keep_);
+  }
+
+  std::vector<Candidate> kept_;
+  std::size_t keep_ = 1;
+  float threshold_ = 0.0f;
+};
+
 // A segment entry's sum over the rare words, beside its inverse divisor
 // (for count rows): a posting reads and writes one cache line, not two.
 struct CandidateSum {
@@ -78,7 +119,7 @@ struct WorkerScratch {
   std::vector<QueryResult> best;
   std::vector<std::uint32_t> hits;           // ForwardIndex::for_each_shared's buffer
   std::vector<CandidateSum> candidate_sums;  // a segment's, over the rare words
-  std::vector<Candidate> candidate_heap;     // the best candidates of its segments
+  BestCandidates candidates;                 // of the parts it searched
   std::vector<RowCursor> rows;               // find_rows' of a segment
 };
 
@@ -91,6 +132,7 @@ struct QueryScratch {
   std::vector<QueryResult> rescored;  // fast mode's candidates' exact results
   std::vector<std::pair<std::uint64_t, std::uint32_t>> word_postings;  // (postings, position)
   std::vector<std::uint32_t> rows;                                     // of the query's words
+  std::vector<std::uint32_t> counted_segments;                         // rare_words'
   QueryWordSet query_words;
   std::vector<double> query_weights;  // ForwardIndex::word_weight of each query word
 };
@@ -550,12 +592,12 @@ float better_sign(Scoring scoring, bool minimums) {
 
 // Sums the rare words' terms of a segment's entries in floats, a stripe at
 // a time (with the stripe's inverse divisors beside its sums: a posting
-// reads one cache line), and keeps its best `keep` live entries with a
-// positive sum in the worker's candidate_heap. Rows are checked: a fast
+// reads one cache line), and offers its live entries with a positive sum
+// to the worker's candidates. Rows are checked: a fast
 // query waits for a loaded file's check.
 template <class Term>
 void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> words, float sign,
-                     std::size_t keep, WorkerScratch& worker) {
+                     WorkerScratch& worker) {
   const detail::Segment& segment = *c.index.segments[part];
   std::vector<CandidateSum>& sums = worker.candidate_sums;
   if (sums.size() < detail::kSegmentSpan) sums.assign(detail::kSegmentSpan, CandidateSum{});
@@ -564,9 +606,7 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
   const std::uint32_t entry_bound = segment.end_entry - segment.first_entry - 1;
   const EntryId first_entry = segment.first_entry;
   const std::size_t span = c.part_span(part);
-  std::vector<Candidate>& heap = worker.candidate_heap;
-  const BetterCandidate better;
-  float threshold = heap.size() == keep ? heap.front().key : 0.0f;
+  BestCandidates& best = worker.candidates;
   // The first stripe's inverse divisors; each later one's as the previous
   // stripe ends.
   const auto set_inverse_divisors = [&](std::uint32_t first, std::uint32_t end) {
@@ -598,25 +638,33 @@ void find_candidates(const QueryContext& c, std::size_t part, Span<BowEntry> wor
       [&](std::uint32_t first, std::uint32_t end) {
         for (std::size_t r = first; r < std::min<std::size_t>(end, span); ++r) {
           const float key = out[r].sum;
-          // Ties with the worst kept are left to `better` (entry order).
-          if (!(key >= threshold) || !(key > 0.0f) || c.index.alive[first_entry + r] == 0) continue;
-          const Candidate candidate{key, static_cast<EntryId>(first_entry + r)};
-          if (heap.size() < keep) {
-            heap.push_back(candidate);
-            if (heap.size() == keep) {
-              std::make_heap(heap.begin(), heap.end(), better);
-              threshold = heap.front().key;
-            }
-          } else if (better(candidate, heap.front())) {
-            std::pop_heap(heap.begin(), heap.end(), better);
-            heap.back() = candidate;
-            std::push_heap(heap.begin(), heap.end(), better);
-            threshold = heap.front().key;
-          }
+          if (best.may_keep(key) && c.index.alive[first_entry + r] != 0)
+            best.offer({key, static_cast<EntryId>(first_entry + r)});
         }
         std::fill(out + first, out + end, CandidateSum{});
         set_inverse_divisors(end, std::min(end + kStripeEntries, entry_bound + 1));
       });
+}
+
+// The tail's entries' sums over the rare words (exact terms, as a pass over
+// the tail gives them: it is small), offered as find_candidates offers a
+// segment's, so that its entries are rescored only where they compete.
+template <class Term>
+void find_tail_candidates(const QueryContext& c, Span<BowEntry> words, float sign,
+                          unsigned worker) {
+  const PartScores scores = c.scores(worker);
+  accumulate_tail<Term>(c.index, words, c.last_entry, scores);
+  BestCandidates& best = c.buffers.workers[worker].candidates;
+  const EntryId first = c.index.tail_first_entry;
+  const std::size_t span = c.part_span(c.visible_segments);
+  for (std::size_t r = 0; r < span; ++r) {
+    EntryScore& score = scores.entries[r];
+    if (score.shared == 0) continue;
+    const float key = sign * static_cast<float>(score.sum);
+    if (best.may_keep(key) && c.index.alive[first + r] != 0)
+      best.offer({key, static_cast<EntryId>(first + r)});
+    score = {};
+  }
 }
 
 // The query's words that find candidates, in word order: those that can add
@@ -632,11 +680,30 @@ Span<BowEntry> rare_words(const QueryContext& c) {
   for (std::size_t q = 0; q < n; ++q) postings.emplace_back(0, static_cast<std::uint32_t>(q));
   // A segment at a time, its rows' offsets and headers fetched ahead: each
   // is a cache miss, about as many as the query's rare postings otherwise.
+  // The largest segments that hold 15/16 of the postings are counted, and
+  // their counts scaled to all: the smaller ones (up to kSegmentFanIn - 1
+  // per level) would cost most of the look-ups for little of the postings.
   std::vector<std::uint32_t>& rows = c.buffers.rows;
   rows.clear();
   for (const BowEntry& e : c.words) rows.push_back(c.index.row_order.row(e.word));
-  for (std::size_t s = 0; s < c.visible_segments; ++s) {
-    const detail::Segment& segment = *c.index.segments[s];
+  std::vector<std::uint32_t>& counted = c.buffers.counted_segments;
+  counted.clear();
+  std::uint64_t visible_postings = 0;
+  for (std::uint32_t s = 0; s < c.visible_segments; ++s) {
+    counted.push_back(s);
+    visible_postings += c.index.segments[s]->postings();
+  }
+  std::sort(counted.begin(), counted.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const std::size_t pa = c.index.segments[a]->postings();
+    const std::size_t pb = c.index.segments[b]->postings();
+    return pa != pb ? pa > pb : a < b;
+  });
+  std::uint64_t counted_postings = 0;
+  std::size_t counting = 0;
+  while (counting < counted.size() && counted_postings < visible_postings / 16 * 15)
+    counted_postings += c.index.segments[counted[counting++]]->postings();
+  for (std::size_t k = 0; k < counting; ++k) {
+    const detail::Segment& segment = *c.index.segments[counted[k]];
     const std::uint32_t* offsets = segment.offsets.data();
     for (std::size_t q = 0; q < n; ++q) {
       if (q + 2 * kPrefetchAhead < n) __builtin_prefetch(offsets + rows[q + 2 * kPrefetchAhead]);
@@ -644,6 +711,12 @@ Span<BowEntry> rare_words(const QueryContext& c) {
         __builtin_prefetch(segment.bytes.data() + offsets[rows[q + kPrefetchAhead]]);
       postings[q].first += segment.row_postings(rows[q]);
     }
+  }
+  if (counted_postings < visible_postings) {
+    const double scale = static_cast<double>(visible_postings) /
+                         static_cast<double>(std::max<std::uint64_t>(1, counted_postings));
+    for (auto& [count, q] : postings)
+      count = static_cast<std::uint64_t>(static_cast<double>(count) * scale);
   }
   std::uint64_t total = 0;
   for (const auto& [count, q] : postings) total += count;
@@ -685,6 +758,8 @@ void rescore_candidates(const QueryContext& c, const Candidate* first, const Can
   const QueryWordSet& query = c.buffers.query_words;
   const detail::ForwardIndex& forward = *c.index.forward;
   for (const Candidate* candidate = first; candidate != last; ++candidate) {
+    // Where the next-but-one's codes are, then the next one's codes.
+    if (last - candidate > 2) forward.prefetch_location(candidate[2].entry);
     if (candidate + 1 != last) forward.prefetch(candidate[1].entry);
     double sum = 0;
     std::uint32_t shared = 0;
@@ -701,29 +776,36 @@ template <class Term>
 std::vector<QueryResult> fast_query(const QueryContext& c) {
   const Span<BowEntry> rare = rare_words(c);
   if (rare.size() == c.words.size()) return exact_query<Term>(c);  // a small index, read whole
-  // Candidates from the segments' rare words; the tail, small, is scored in full.
-  std::vector<BestResults> tail_best = c.per_worker(c.keep, &WorkerScratch::best);
+  // Candidates from every part's rare words.
   const std::size_t keep = std::max(c.fast_candidates, c.keep);
   const float sign = better_sign(c.scoring, c.minimums);
-  for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidate_heap.clear();
+  for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidates.reset(keep);
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
     if (part == c.visible_segments)
-      score_part<Term>(c, part, worker, tail_best[worker]);
+      find_tail_candidates<Term>(c, rare, sign, worker);
     else
-      find_candidates<Term>(c, part, rare, sign, keep, c.buffers.workers[worker]);
+      find_candidates<Term>(c, part, rare, sign, c.buffers.workers[worker]);
   });
-  std::vector<Candidate>& chosen = c.buffers.workers[0].candidate_heap;
-  for (unsigned w = 1; w < c.workers; ++w)
-    chosen.insert(chosen.end(), c.buffers.workers[w].candidate_heap.begin(),
-                  c.buffers.workers[w].candidate_heap.end());
-  std::sort(chosen.begin(), chosen.end(), BetterCandidate{});
-  if (chosen.size() > keep) chosen.resize(keep);
+  std::vector<Candidate>& chosen = c.buffers.workers[0].candidates.best();
+  for (unsigned w = 1; w < c.workers; ++w) {
+    const std::vector<Candidate>& more = c.buffers.workers[w].candidates.best();
+    chosen.insert(chosen.end(), more.begin(), more.end());
+  }
+  if (chosen.size() > keep) {
+    std::nth_element(chosen.begin(), chosen.begin() + static_cast<std::ptrdiff_t>(keep),
+                     chosen.end(), BetterCandidate{});
+    chosen.resize(keep);
+  }
+  // Rescored in entry order: their BoW vectors are then read in the order
+  // they were stored.
+  std::sort(chosen.begin(), chosen.end(),
+            [](const Candidate& a, const Candidate& b) { return a.entry < b.entry; });
   c.buffers.query_words.assign(c.words);
   std::vector<double>& weights = c.buffers.query_weights;
   weights.clear();
   for (const BowEntry& e : c.words) weights.push_back(c.index.forward->word_weight(e.word));
-  // Each candidate's exact score; then every result is offered in
-  // candidate order, so that the results do not depend on the threads.
+  // Each candidate's exact score; then every result is offered in entry
+  // order, so that the results do not depend on the threads.
   BestResults best(c.scoring, c.minimums, c.base, c.keep, c.buffers.best);
   std::vector<QueryResult>& rescored = c.buffers.rescored;
   rescored.resize(chosen.size());
@@ -736,7 +818,6 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
                                  rescored.data() + first, c.buffers.workers[worker], best);
       });
   for (const QueryResult& result : rescored) best.offer(result);
-  for (const BestResults& tail : tail_best) best.take_results(tail);
   return best.sorted();
 }
 

@@ -69,6 +69,8 @@ class ForwardIndex {
                : 0.0;
   }
 
+  // Starts fetching where an entry's codes are, for prefetch() a step later.
+  void prefetch_location(EntryId entry) const noexcept { __builtin_prefetch(&entries_[entry]); }
   // Starts fetching all of an entry's codes (about 30 cache lines for an
   // ORB-1000 image), so that its look-up does not wait for them.
   void prefetch(EntryId entry) const noexcept {
