@@ -112,7 +112,9 @@ struct QueryOptions {
   // of its postings but at least fast_min_postings (at least one word), and
   // its best candidates on them get their exact score: fast_candidates, or
   // fast_candidate_share of the entries searched where that is more (and
-  // at least max_results). A query whose other words hold fewer postings
+  // at least max_results), leaving out those whose sum on the rare words is
+  // below 0.6 of the max_results-th best's, unless the candidates cover
+  // every entry searched. A query whose other words hold fewer postings
   // than the candidates hold words reads every posting, as kExact does.
   // More of either finds more of the exact best, slower (a candidate's
   // rescoring costs ~2.5 µs for an ORB-1000 image). With more entries, more of

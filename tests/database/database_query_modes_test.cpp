@@ -253,6 +253,39 @@ TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
   }
 }
 
+TEST(DatabaseQueryModes, FastFindsTheNewestEntriesAndRescoresEveryEntryAskedFor) {
+  // 2,000 images of 40 places: the first ~1,000 become a segment, the rest
+  // stay in the tail, whose entries fast mode finds as candidates too. An
+  // image added last, and queried, is its own best match.
+  ZipfWords zipf(80'000, 11);
+  std::vector<std::map<WordId, float>> places;
+  for (int p = 0; p < 40; ++p) places.push_back(place_words(zipf, 400));
+  Database database = Database::over_word_ids(Scoring::kL1, DatabaseOptions{false, 0});
+  std::vector<BowVector> bows;
+  for (std::size_t i = 0; i < 2'000; ++i) {
+    bows.push_back(image_of(places[i % places.size()], zipf, 150));
+    database.add(bows.back());
+  }
+  const std::vector<bool> live(bows.size(), true);
+  QueryOptions few = kFast;
+  few.fast_candidates = 20;
+  few.fast_candidate_share = 0;
+  few.fast_min_postings = 1 << 10;
+  QueryOptions every = few;
+  every.fast_candidate_share = 1.0;
+  for (std::size_t newest = bows.size() - 5; newest < bows.size(); ++newest) {
+    const BowVector& query = bows[newest];
+    const auto found = database.query(query, 10, kAllEntries, few);
+    ASSERT_FALSE(found.empty());
+    EXPECT_EQ(found[0].entry, newest);
+    expect_exact_scores(found, Scoring::kL1, bows, live, query, kAllEntries, "few candidates");
+    // Every entry a candidate: no candidate is left out, so the results
+    // are the exact ones.
+    expect_same_results(database.query(query, 50, kAllEntries, every),
+                        database.query(query, 50, kAllEntries, kOneThread), "every entry");
+  }
+}
+
 TEST(DatabaseQueryModes, FastQueryOptionsAreChecked) {
   Database database = Database::over_word_ids(Scoring::kL1, DatabaseOptions{false, 0});
   database.add(BowVector({{1, 0.5f}}));
