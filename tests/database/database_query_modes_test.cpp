@@ -256,13 +256,17 @@ TEST(DatabaseQueryModes, FastScoresAreExactAndItsBestAreTheExactBest) {
 TEST(DatabaseQueryModes, FastFindsTheNewestEntriesAndRescoresEveryEntryAskedFor) {
   // 2,000 images of 40 places: the first ~1,000 become a segment, the rest
   // stay in the tail, whose entries fast mode finds as candidates too. An
-  // image added last, and queried, is its own best match.
+  // image added last, and queried, is its own best match. Entry 0 holds
+  // only a word no image has, as in the test above: a query that holds it
+  // with a tiny weight finds entry 0 only when it reads every posting.
   ZipfWords zipf(80'000, 11);
   std::vector<std::map<WordId, float>> places;
   for (int p = 0; p < 40; ++p) places.push_back(place_words(zipf, 400));
   Database database = Database::over_word_ids(Scoring::kL1, DatabaseOptions{false, 0});
-  std::vector<BowVector> bows;
-  for (std::size_t i = 0; i < 2'000; ++i) {
+  constexpr WordId kLoneWord = 80'000;
+  std::vector<BowVector> bows{BowVector({{kLoneWord, 0.5f}})};
+  database.add(bows.back());
+  for (std::size_t i = 1; i < 2'000; ++i) {
     bows.push_back(image_of(places[i % places.size()], zipf, 150));
     database.add(bows.back());
   }
@@ -279,6 +283,15 @@ TEST(DatabaseQueryModes, FastFindsTheNewestEntriesAndRescoresEveryEntryAskedFor)
     ASSERT_FALSE(found.empty());
     EXPECT_EQ(found[0].entry, newest);
     expect_exact_scores(found, Scoring::kL1, bows, live, query, kAllEntries, "few candidates");
+    std::vector<BowEntry> words(query.begin(), query.end());
+    words.push_back({kLoneWord, 1e-9f});
+    const auto with_lone =
+        database.query(BowVector(std::move(words)), bows.size(), kAllEntries, few);
+    ASSERT_FALSE(with_lone.empty());
+    EXPECT_EQ(with_lone[0].entry, newest);
+    EXPECT_TRUE(std::none_of(with_lone.begin(), with_lone.end(), [](const QueryResult& r) {
+      return r.entry == 0;
+    })) << "fast mode read every posting: no candidates were searched";
     // Every entry a candidate: no candidate is left out, so the results
     // are the exact ones.
     expect_same_results(database.query(query, 50, kAllEntries, every),
