@@ -962,6 +962,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
                         detail::l1_terms_are_minimums(index_values, query_values);
   const std::size_t searched_entries =
       std::min<std::size_t>(impl_->live_entries, std::size_t{last_entry} + 1);
+  const std::size_t candidates = fast_candidates(options, searched_entries);
   const QueryContext context{index,
                              searched,
                              last_entry,
@@ -974,9 +975,9 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
                              tail_visible,
                              workers,
                              buffers,
-                             fast_candidates(options, searched_entries),
+                             candidates,
                              options.fast_min_postings,
-                             fast_candidates(options, searched_entries) >= searched_entries};
+                             candidates >= searched_entries};
   std::vector<QueryResult> results = run_query(context, options.mode);
   lock.unlock();
   return results;
