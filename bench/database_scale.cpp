@@ -38,6 +38,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <random>
 #include <string>
@@ -297,21 +298,18 @@ void BM_Fill(benchmark::State& state) {
 }
 
 // Wall and CPU milliseconds of each query, and its results.
-std::vector<std::vector<QueryResult>> time_queries(const Database& database,
-                                                   const std::vector<BowVector>& queries,
-                                                   const QueryOptions& options,
-                                                   std::vector<double>& wall,
-                                                   std::vector<double>& cpu) {
-  std::vector<std::vector<QueryResult>> all;
-  for (const BowVector& query : queries) {
-    const Clock::time_point start = Clock::now();
-    const double cpu_start = thread_seconds();
-    auto results = database.query(query, kMaxResults, kAllEntries, options);
-    cpu.push_back((thread_seconds() - cpu_start) * 1e3);
-    wall.push_back(seconds_since(start) * 1e3);
-    all.push_back(std::move(results));
-  }
-  return all;
+struct TimedQueries {
+  std::vector<double> wall, cpu;
+  std::vector<std::vector<QueryResult>> results;
+};
+
+void time_query(const Database& database, const BowVector& query, const QueryOptions& options,
+                TimedQueries& timed) {
+  const Clock::time_point start = Clock::now();
+  const double cpu_start = thread_seconds();
+  timed.results.push_back(database.query(query, kMaxResults, kAllEntries, options));
+  timed.cpu.push_back((thread_seconds() - cpu_start) * 1e3);
+  timed.wall.push_back(seconds_since(start) * 1e3);
 }
 
 double median(std::vector<double> values) {
@@ -338,37 +336,41 @@ bool same_scores(const std::vector<QueryResult>& a, const std::vector<QueryResul
 // (query_fast_ms) and what it loses: the share of queries whose top 10 is
 // the exact top 10 (fast_same_top10), and whose first result is a copy of
 // the same photograph as the exact first (fast_same_place_top1). Times are
-// wall-clock medians of the 148 queries (_cpu: this thread's CPU time). The
-// first fast query copies every entry's BoW vector (and add keeps copying),
-// so memory counters include that copy from the first BM_Query on.
+// wall-clock medians of the 148 queries (_cpu: this thread's CPU time). Each
+// query runs in the three ways in turn before the next one, so that the
+// three medians see the same load on a shared machine (blocks of 148 queries
+// each saw a different one). The first fast query copies every entry's BoW
+// vector (and add keeps copying), so memory counters include that copy from
+// the first BM_Query on.
 void BM_Query(benchmark::State& state) {
   Scale* s = filled_scale_or_skip(state);
   if (s == nullptr) return;
   for (auto _ : state) {
-    std::vector<double> times, cpu_times, thread_times, thread_cpu, fast_times, fast_cpu;
-    const QueryOptions one_thread{QueryMode::kExact, 1};
-    const auto exact = time_queries(*s->database, s->queries, one_thread, times, cpu_times);
-    const auto threaded =
-        time_queries(*s->database, s->queries, QueryOptions{}, thread_times, thread_cpu);
-    if (threaded != exact) {
+    TimedQueries exact_timed, threaded, fast_timed;
+    for (const BowVector& query : s->queries) {
+      time_query(*s->database, query, QueryOptions{QueryMode::kExact, 1}, exact_timed);
+      time_query(*s->database, query, QueryOptions{}, threaded);
+      time_query(*s->database, query, QueryOptions{QueryMode::kFast, 1}, fast_timed);
+    }
+    const auto& exact = exact_timed.results;
+    const auto& fast_results = fast_timed.results;
+    if (threaded.results != exact) {
       state.SkipWithError("queries on several threads answer differently");
       return;
     }
-    const QueryOptions fast{QueryMode::kFast, 1};
-    const auto fast_results = time_queries(*s->database, s->queries, fast, fast_times, fast_cpu);
     for (std::size_t q = 0; q < exact.size(); ++q)
       if (!same_scores(exact[q], fast_results[q])) {
         state.SkipWithError("a fast query's score differs from the exact query's");
         return;
       }
     const Agreement shares = agreement(exact, fast_results, s->photographs.size());
-    state.counters["query_ms"] = median(times);
-    state.counters["query_ms_cpu"] = median(cpu_times);
-    state.counters["query_ms_p90"] = percentile90(times);
-    state.counters["query_threads_ms"] = median(thread_times);
-    state.counters["query_fast_ms"] = median(fast_times);
-    state.counters["query_fast_ms_cpu"] = median(fast_cpu);
-    state.counters["query_fast_ms_p90"] = percentile90(fast_times);
+    state.counters["query_ms"] = median(exact_timed.wall);
+    state.counters["query_ms_cpu"] = median(exact_timed.cpu);
+    state.counters["query_ms_p90"] = percentile90(exact_timed.wall);
+    state.counters["query_threads_ms"] = median(threaded.wall);
+    state.counters["query_fast_ms"] = median(fast_timed.wall);
+    state.counters["query_fast_ms_cpu"] = median(fast_timed.cpu);
+    state.counters["query_fast_ms_p90"] = percentile90(fast_timed.wall);
     state.counters["fast_same_top10"] = shares.same_top10;
     state.counters["fast_same_place_top1"] = shares.same_place;
     state.counters["threads"] = static_cast<double>(std::thread::hardware_concurrency());
@@ -572,21 +574,26 @@ void BM_FastCandidates(benchmark::State& state) {
   Scale* s = filled_scale_or_skip(state);
   if (s == nullptr) return;
   for (auto _ : state) {
-    std::vector<double> wall, cpu;
-    const auto exact = time_queries(*s->database, s->tuning_queries,
-                                    QueryOptions{QueryMode::kExact, 1}, wall, cpu);
-    state.counters["exact_ms"] = median(cpu);
-    for (std::size_t candidates : {1000, 2000, 3000, 5000, 8000}) {
-      QueryOptions fast{QueryMode::kFast, 1};
-      fast.fast_candidates = candidates;
-      fast.fast_candidate_share = 0;
-      std::vector<double> fast_wall, fast_cpu;
-      const auto found = time_queries(*s->database, s->tuning_queries, fast, fast_wall, fast_cpu);
-      const Agreement shares = agreement(exact, found, s->photographs.size());
-      const std::string c = std::to_string(candidates);
+    // Query by query, as BM_Query: every count sees the same load.
+    const std::size_t counts[] = {1000, 2000, 3000, 5000, 8000};
+    TimedQueries exact;
+    std::vector<TimedQueries> found(std::size(counts));
+    for (const BowVector& query : s->tuning_queries) {
+      time_query(*s->database, query, QueryOptions{QueryMode::kExact, 1}, exact);
+      for (std::size_t k = 0; k < std::size(counts); ++k) {
+        QueryOptions fast{QueryMode::kFast, 1};
+        fast.fast_candidates = counts[k];
+        fast.fast_candidate_share = 0;
+        time_query(*s->database, query, fast, found[k]);
+      }
+    }
+    state.counters["exact_ms"] = median(exact.cpu);
+    for (std::size_t k = 0; k < std::size(counts); ++k) {
+      const Agreement shares = agreement(exact.results, found[k].results, s->photographs.size());
+      const std::string c = std::to_string(counts[k]);
       state.counters["top10_" + c] = shares.same_top10;
       state.counters["place_" + c] = shares.same_place;
-      state.counters["ms_" + c] = median(fast_cpu);
+      state.counters["ms_" + c] = median(found[k].cpu);
     }
   }
   label(state, *s);
