@@ -88,7 +88,7 @@ std::vector<QueryResult> best(const std::vector<QueryResult>& all, std::size_t m
 void expect_fast(const std::vector<QueryResult>& results, const Vocabulary& vocabulary,
                  const std::vector<BowVector>& bows, const std::vector<bool>& live,
                  const BowVector& query, EntryId self, EntryId max_entry_id,
-                 const std::string& context) {
+                 const std::string& context, bool self_first = true) {
   ASSERT_FALSE(results.empty()) << context;
   for (std::size_t i = 0; i < results.size(); ++i) {
     const QueryResult& r = results[i];
@@ -103,7 +103,7 @@ void expect_fast(const std::vector<QueryResult>& results, const Vocabulary& voca
     }
   }
   const Scoring scoring = vocabulary.scoring();
-  if (self <= max_entry_id && (scoring == Scoring::kL1 || scoring == Scoring::kL2)) {
+  if (self_first && self <= max_entry_id && (scoring == Scoring::kL1 || scoring == Scoring::kL2)) {
     EXPECT_EQ(results[0].entry, self) << context;
   }
 }
@@ -173,6 +173,25 @@ struct Corpus {
   }
 };
 
+// Fast queries that search candidates in these small databases, rather
+// than reading every posting.
+const QueryOptions kFewCandidates = [] {
+  QueryOptions options{QueryMode::kFast, 1};
+  options.fast_candidates = 20;
+  options.fast_candidate_share = 0;
+  options.fast_min_postings = 1 << 10;
+  return options;
+}();
+
+// Every value times 2^-100: a query whose divisor, taken from its values,
+// is not its entries' (and 2^-130 for one, below the normal floats).
+BowVector scaled_down(const BowVector& bow) {
+  std::vector<BowEntry> entries(bow.begin(), bow.end());
+  for (BowEntry& e : entries) e.value = std::ldexp(e.value, -100);
+  entries.front().value = std::ldexp(bow.begin()->value, -130);
+  return BowVector(std::move(entries));
+}
+
 // A weight one ulp off: not what transform gives, so kept as weights.
 BowVector nudged(const BowVector& bow) {
   std::vector<BowEntry> entries(bow.begin(), bow.end());
@@ -222,6 +241,14 @@ TEST(DatabaseCountRows, TransformMadeEntriesOfAVocabularyOfMoreThan65536Words) {
           expect_same_results(db.query(bows[self], 12, max_id), best(all, 12, max_id), where);
           expect_fast(db.query(bows[self], 12, max_id, {QueryMode::kFast, 1}), vocabulary, bows,
                       live, bows[self], self, max_id, where + " fast");
+          // Candidates from the count rows' rare words, whose weights take
+          // the query's divisor for the entries'; and from a query scaled
+          // down, not made by transform: its divisor is not the entries'.
+          expect_fast(db.query(bows[self], 12, max_id, kFewCandidates), vocabulary, bows, live,
+                      bows[self], self, max_id, where + " fast, 20 candidates");
+          const BowVector scaled = scaled_down(bows[self]);
+          expect_fast(db.query(scaled, 12, max_id, kFewCandidates), vocabulary, bows, live, scaled,
+                      self, max_id, where + " fast, 20 candidates, scaled query", false);
         }
       }
     };
