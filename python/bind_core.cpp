@@ -486,7 +486,8 @@ void bind_core(py::module_& m) {
            "image's rarest words, each scored exactly (an entry can be missed, never\n"
            "misranked), for large databases; the first such query keeps a copy of every\n"
            "entry's words. fast_candidates (default 1000), fast_candidate_share (default\n"
-           "1/125 of the entries, where more) and fast_min_postings (default 2**20) trade\n"
+           "a share that grows with the N entries, N/125 * (N/10**6)**0.3 candidates, where\n"
+           "more) and fast_min_postings (default 2**20) trade\n"
            "speed for agreement with exact queries, as QueryOptions' fields of the same\n"
            "names. Runs without the GIL, on every core.")
       .def(

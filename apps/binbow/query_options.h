@@ -25,12 +25,14 @@ inline void add_fast_query_options(CLI::App* command, QueryOptions& options) {
       ->needs(fast)
       ->capture_default_str();
   command
-      ->add_option("--fast-candidate-share", options.fast_candidate_share,
-                   "The candidates as a share of the entries searched, where that is more than "
-                   "--fast-candidates")
+      ->add_option_function<double>(
+          "--fast-candidate-share",
+          [&options](double share) { options.fast_candidate_share = share; },
+          "The candidates as a share of the entries searched, where that is more than "
+          "--fast-candidates (default: a share that grows with the N entries searched, "
+          "N/125 * (N/10^6)^0.3 candidates)")
       ->check(checked_number<double>([](double x) { return x >= 0.0 && x <= 1.0; }, "in [0, 1]"))
-      ->needs(fast)
-      ->capture_default_str();
+      ->needs(fast);
   command
       ->add_option("--fast-min-postings", options.fast_min_postings,
                    "Postings of its rarest words each query reads at least to find its "

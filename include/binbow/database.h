@@ -41,6 +41,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,21 +112,32 @@ struct QueryOptions {
   // with kExact. A query reads the postings of its rarest words, an eighth
   // of its postings but at least fast_min_postings (at least one word), and
   // its best candidates on them get their exact score: fast_candidates, or
-  // fast_candidate_share of the entries searched where that is more (and
-  // at least max_results), leaving out those whose sum on the rare words is
-  // below 0.6 of the max_results-th best's, unless the candidates cover
-  // every entry searched. A query whose other words hold fewer postings
-  // than the candidates hold words reads every posting, as kExact does.
-  // More of either finds more of the exact best, slower (a candidate's
-  // rescoring costs ~2.5 µs for an ORB-1000 image). With more entries, more of
-  // them are near-copies of the query's best, so the candidates grow with
-  // the database: on tuning queries of ORB-1000 images the defaults kept the
-  // exact top 10 of all at 200,000 (1000 candidates; 800 kept 99.3%) and of
-  // 99.7% at 1,000,000 (8000 candidates; 5000 kept 98.3%, 1000 81.4%;
-  // docs/benchmarks.md). fast_min_postings = 0 leaves the eighth alone.
+  // more for a large database (and at least max_results), leaving out those
+  // whose sum on the rare words is below 0.6 of the max_results-th best's,
+  // unless the candidates cover every entry searched. A query whose other
+  // words hold fewer postings than the candidates hold words reads every
+  // posting, as kExact does. More of either finds more of the exact best,
+  // slower (a candidate's rescoring costs ~2.5 µs for an ORB-1000 image).
+  //
+  // With more entries, more of them are near-copies of the query's best,
+  // and more candidates are needed: fast_candidate_share of the entries
+  // searched where that is more than fast_candidates, or by default (unset)
+  // a share that grows with the entries searched, N / 125 * (N / 10^6)^0.3
+  // candidates (1000 at 200,000, 3250 at 500,000, 8000 at 1,000,000). On
+  // tuning queries of ORB-1000 images the candidates that kept the exact top
+  // 10 for 99% of them grew about so, as N^1.3: 800-1000 at 200,000 (800
+  // kept 98.99%, 1000 all), 2500-3000 at 500,000 (98.99%, 99.7%; 3249 all),
+  // 6000-8000 at 1,000,000 (98.3%, 99.7%; docs/benchmarks.md). A share set
+  // here applies as it is: fast_candidate_share = 1 makes every entry a
+  // candidate. fast_min_postings = 0 leaves the eighth alone.
   std::size_t fast_candidates = 1000;
-  double fast_candidate_share = 1.0 / 125;
+  std::optional<double> fast_candidate_share = std::nullopt;
   std::uint64_t fast_min_postings = std::uint64_t{1} << 20;
+
+  // The candidates a fast query rescores at most when it searches
+  // `entries` entries (fewer are rescored when some are far behind), as
+  // set above: candidates_for(200'000) is 1000 with the defaults.
+  std::size_t candidates_for(std::size_t entries) const;
 
   // Throws InvalidArgument for what query() refuses, with its message: an
   // unknown mode, fast_candidates = 0, a share outside [0, 1]. For callers

@@ -367,10 +367,11 @@ class ShardedDatabase:
         go to every shard's Database.query, which would refuse the same values:
         they are refused here with its errors, before any shard is called. Each
         shard applies them to its own entries, as a Database of those entries
-        would: fast_candidate_share is a share of the shard's entries, so the
-        candidates of all shards are that share of the whole database, while
-        fast_candidates and fast_min_postings count per shard (shards times as
-        many in all).
+        would: a fast_candidate_share that is set is a share of the shard's
+        entries, so the candidates of all shards are that share of the whole
+        database (the default share grows with each shard's own entries, as a
+        Database's does), while fast_candidates and fast_min_postings count per
+        shard (shards times as many in all).
         """
         if not isinstance(fast, bool):
             raise TypeError(f"fast must be a bool, got {type(fast).__name__}")

@@ -574,8 +574,10 @@ std::vector<QueryResult> exact_query(const QueryContext& c) {
 // for all of them (with 2^18, 97.0%: a query of few postings read too few to
 // tell near-copies apart; 800 candidates 99.3%, 600 98.0%; a share of 1/12
 // or 1/16 of the postings 98.6%). At 1,000,000 each photograph has five
-// times the near-copies: 1000 candidates kept 81.4%, 5000 98.3%, 8000
-// 99.7%; hence 1/125 of the entries, and 1000 below 125,000. Stopping the
+// times the near-copies: 1000 candidates kept 81.4%, 6000 98.3%, 8000
+// 99.7%; at 500,000 2500 kept 98.99%, 3000 99.7%, 3249 all: the candidates
+// needed grow as about N^1.3, and so does the default share
+// (QueryOptions::candidates_for). Stopping the
 // rescoring early (once 128 or 256 candidates in a row have not entered the
 // top 10) kept 87.5% / 94.6% at 200,000: the exact best are spread over the
 // whole candidate order, so every candidate is rescored.
@@ -877,12 +879,6 @@ std::vector<QueryResult> run_query(const QueryContext& c, QueryMode mode) {
   return {};
 }
 
-// QueryOptions' candidates for a query of `entries` entries.
-std::size_t fast_candidates(const QueryOptions& options, std::size_t entries) {
-  const double share = std::ceil(options.fast_candidate_share * static_cast<double>(entries));
-  return std::max(options.fast_candidates, static_cast<std::size_t>(share));
-}
-
 }  // namespace
 
 std::atomic<std::size_t>& detail::postings_per_query_thread() {
@@ -895,15 +891,32 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
   return query(bow, max_results, max_entry_id, QueryOptions{});
 }
 
+// By default N / kGrowingShareDivisor * (N / kGrowingShareEntries)^kGrowingShareExponent
+// candidates for N entries (see QueryOptions::fast_candidate_share).
+constexpr double kGrowingShareDivisor = 125;
+constexpr double kGrowingShareEntries = 1e6;
+constexpr double kGrowingShareExponent = 0.3;
+
+std::size_t QueryOptions::candidates_for(std::size_t entries) const {
+  const auto n = static_cast<double>(entries);
+  const double candidates =
+      fast_candidate_share
+          ? *fast_candidate_share * n
+          : n / kGrowingShareDivisor * std::pow(n / kGrowingShareEntries, kGrowingShareExponent);
+  // At most every entry; none for a NaN share (check() refuses it).
+  const double bounded = candidates > 0 ? std::min(std::ceil(candidates), n) : 0.0;
+  return std::max(fast_candidates, static_cast<std::size_t>(bounded));
+}
+
 void QueryOptions::check() const {
   if (mode != QueryMode::kExact && mode != QueryMode::kFast)
     throw InvalidArgument("Database::query: unknown query mode " +
                           std::to_string(static_cast<int>(mode)));
   if (fast_candidates == 0)
     throw InvalidArgument("Database::query: fast_candidates must be at least 1");
-  if (!(fast_candidate_share >= 0.0 && fast_candidate_share <= 1.0))
+  if (fast_candidate_share && !(*fast_candidate_share >= 0.0 && *fast_candidate_share <= 1.0))
     throw InvalidArgument("Database::query: fast_candidate_share must be in [0, 1], not " +
-                          std::to_string(fast_candidate_share));
+                          std::to_string(*fast_candidate_share));
 }
 
 std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_results,
@@ -969,7 +982,7 @@ std::vector<QueryResult> Database::query(const BowVector& bow, std::size_t max_r
                         detail::l1_terms_are_minimums(index_values, query_values);
   const std::size_t searched_entries =
       std::min<std::size_t>(impl_->live_entries, std::size_t{last_entry} + 1);
-  const std::size_t candidates = fast_candidates(options, searched_entries);
+  const std::size_t candidates = options.candidates_for(searched_entries);
   const QueryContext context{index,
                              searched,
                              last_entry,

@@ -320,6 +320,33 @@ TEST(DatabaseQueryModes, FastQueryOptionsAreChecked) {
   EXPECT_EQ(database.query(BowVector({{1, 0.5f}}), 1, kAllEntries, options).size(), 1u);
 }
 
+TEST(DatabaseQueryModes, CandidatesGrowWithTheEntriesAsTunedOrAsTheShareSet) {
+  // By default N / 125 * (N / 10^6)^0.3 for N entries, and at least
+  // fast_candidates: the counts docs/benchmarks.md measured at each size.
+  const QueryOptions defaults;
+  EXPECT_EQ(defaults.candidates_for(0), 1000u);
+  EXPECT_EQ(defaults.candidates_for(10'000), 1000u);
+  EXPECT_EQ(defaults.candidates_for(200'000), 1000u);
+  EXPECT_EQ(defaults.candidates_for(500'000), 3250u);
+  EXPECT_EQ(defaults.candidates_for(1'000'000), 8000u);
+  EXPECT_EQ(defaults.candidates_for(2'000'000), 19'699u);
+  QueryOptions linear = defaults;
+  linear.fast_candidate_share = 1.0 / 125;
+  EXPECT_EQ(linear.candidates_for(200'000), 1600u);
+  EXPECT_EQ(linear.candidates_for(1'000'000), 8000u);
+  linear.fast_candidate_share = 1.0;
+  EXPECT_EQ(linear.candidates_for(123'456), 123'456u);
+  linear.fast_candidate_share = 0.0;
+  EXPECT_EQ(linear.candidates_for(1'000'000), 1000u);
+  linear.fast_candidates = 5;
+  EXPECT_EQ(linear.candidates_for(1'000'000), 5u);
+  // Unchecked options give a count, never undefined behaviour.
+  linear.fast_candidate_share = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(linear.candidates_for(1'000), 5u);
+  linear.fast_candidate_share = 1e300;
+  EXPECT_EQ(linear.candidates_for(1'000), 1'000u);
+}
+
 TEST(DatabaseQueryModes, FastQueriesFollowAddsRemovalsAndBounds) {
   // Fast queries keep each entry's BoW vector from the first one on: entries
   // added or removed later, and the bounds of max_entry_id, count as in
