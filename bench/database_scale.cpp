@@ -1,4 +1,4 @@
-// The image database at scale: 10k → 100k → 200k → 1M entries of real images on the
+// The image database at scale: 10k → 100k → 200k → 500k → 1M entries of real images on the
 // trained k=10 L=6 ORB vocabulary (scripts/make_benchmark_vocabulary.sh; its
 // path in BINBOW_BENCH_VOCABULARY, as for bench_transform).
 //
@@ -15,7 +15,8 @@
 // until there are N (the time is the add calls alone: their mean is the
 // counter add_us), BM_Query/N answers the queries (top 10: exact on one
 // thread and on every core, and fast; see there), BM_FastCandidates/N fast
-// mode's agreement against its candidates on other queries,
+// mode's agreement against its candidates on other queries (also at
+// 500,000, between the sizes the others measure),
 // BM_QueryBounds/200000 measures what pruned or stop-listed queries would
 // read (see there), BM_Save/N measures full and incremental
 // saves, the disk's write rate and opening (see there), and BM_SaveLoad saves the largest database
@@ -575,7 +576,7 @@ void BM_FastCandidates(benchmark::State& state) {
   if (s == nullptr) return;
   for (auto _ : state) {
     // Query by query, as BM_Query: every count sees the same load.
-    const std::size_t counts[] = {1000, 2000, 3000, 5000, 8000};
+    const std::size_t counts[] = {800, 1000, 2000, 2500, 3000, 5000, 6000, 8000};
     TimedQueries exact;
     std::vector<TimedQueries> found(std::size(counts));
     for (const BowVector& query : s->tuning_queries) {
@@ -610,6 +611,9 @@ BENCHMARK(BM_Query)->Arg(200000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FastCandidates)->Arg(200000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_QueryBounds)->Arg(200000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_Save)->Arg(200000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+// The candidates fast mode needs at a size between (QueryOptions::candidates_for).
+BENCHMARK(BM_Fill)->Arg(500000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+BENCHMARK(BM_FastCandidates)->Arg(500000)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_Fill)->Arg(1000000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 BENCHMARK(BM_Query)->Arg(1000000)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FastCandidates)->Arg(1000000)->Iterations(1)->Unit(benchmark::kSecond);
