@@ -613,14 +613,15 @@ float better_sign(Scoring scoring, bool minimums) {
 // 2-6% faster, as no divisor is read per entry. The query's divisor is
 // word_weight / value of a word it counts once: the largest of those ratios
 // (a word counted c times gives divisor / c). 1 for a query whose values
-// give no usable divisor (not made by transform): its candidates are still
-// ranked by the weighted counts of the words they share.
-float inverse_query_divisor(const QueryContext& c) {
-  if (c.index.word_weights == nullptr) return 1.0f;
+// give no usable divisor (not made by transform, or over word ids, where
+// every word weight is 0): its candidates are still ranked by the weighted
+// counts of the words they share. `word_weights`: of each query word, as
+// ForwardIndex::word_weight gives them.
+float inverse_query_divisor(Span<BowEntry> words, const std::vector<double>& word_weights) {
   double divisor = 0;
-  for (const BowEntry& e : c.words)
-    if (e.value >= std::numeric_limits<float>::min())
-      divisor = std::max(divisor, static_cast<double>(c.index.word_weights[e.word]) / e.value);
+  for (std::size_t q = 0; q < words.size(); ++q)
+    if (words[q].value >= std::numeric_limits<float>::min())
+      divisor = std::max(divisor, word_weights[q] / words[q].value);
   const auto inverse = static_cast<float>(1.0 / divisor);
   return inverse >= std::numeric_limits<float>::min() && std::isfinite(inverse) ? inverse : 1.0f;
 }
@@ -802,7 +803,12 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   // Candidates from every part's rare words.
   const std::size_t keep = std::max(c.fast_candidates, c.keep);
   const float sign = better_sign(c.scoring, c.minimums);
-  const float inverse_divisor = inverse_query_divisor(c);
+  // The query words' vocabulary weights: the candidates' divisor, then
+  // their rescoring.
+  std::vector<double>& weights = c.buffers.query_weights;
+  weights.clear();
+  for (const BowEntry& e : c.words) weights.push_back(c.index.forward->word_weight(e.word));
+  const float inverse_divisor = inverse_query_divisor(c.words, weights);
   for (unsigned w = 0; w < c.workers; ++w) c.buffers.workers[w].candidates.reset(keep);
   detail::parallel_for(c.workers, c.parts(), [&](std::size_t part, unsigned worker) {
     if (part == c.visible_segments)
@@ -835,9 +841,6 @@ std::vector<QueryResult> fast_query(const QueryContext& c) {
   std::sort(chosen.begin(), chosen.end(),
             [](const Candidate& a, const Candidate& b) { return a.entry < b.entry; });
   c.buffers.query_words.assign(c.words);
-  std::vector<double>& weights = c.buffers.query_weights;
-  weights.clear();
-  for (const BowEntry& e : c.words) weights.push_back(c.index.forward->word_weight(e.word));
   // Each candidate's exact score; then every result is offered in entry
   // order, so that the results do not depend on the threads.
   BestResults best(c.scoring, c.minimums, c.base, c.keep, c.buffers.best);
