@@ -229,15 +229,20 @@ inline void fix_journal_checksums(std::vector<std::uint8_t>& bytes,
     detail::store_le<std::uint32_t>(bytes.data() + 24, base->checksum);
   }
   detail::store_le<std::uint32_t>(bytes.data() + 28, detail::crc32c(bytes.data(), 28));
+  const detail::BaseId extended{detail::load_le<std::uint64_t>(bytes.data() + 16),
+                                detail::load_le<std::uint32_t>(bytes.data() + 24)};
   std::size_t at = detail::kJournalHeaderSize;
   while (bytes.size() - at >= detail::kJournalRecordHeaderSize) {
     std::uint8_t* head = bytes.data() + at;
     const auto length = detail::load_le<std::uint64_t>(head);
     const std::size_t body = at + detail::kJournalRecordHeaderSize;
-    if (length > bytes.size() - body) return;
+    if (length > bytes.size() - body) {  // a torn append: its header stays valid
+      detail::store_le<std::uint32_t>(head + 12, detail::record_header_crc(head, extended));
+      return;
+    }
     detail::store_le<std::uint32_t>(
         head + 8, detail::crc32c(bytes.data() + body, static_cast<std::size_t>(length)));
-    detail::store_le<std::uint32_t>(head + 12, detail::crc32c(head, 12));
+    detail::store_le<std::uint32_t>(head + 12, detail::record_header_crc(head, extended));
     at = body + static_cast<std::size_t>(length);
   }
 }

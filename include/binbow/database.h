@@ -145,6 +145,37 @@ struct QueryOptions {
   void check() const;
 };
 
+// One writer at a time for a database file (docs/database-files.md): an
+// advisory lock (flock) on "<path>.lock", a file made beside the database
+// (links followed) and left there. Every save takes it for its duration,
+// without waiting: a save while another writer holds it throws
+// WriteConflict. A program that loads a database shared with other
+// processes, changes it and saves it holds one from before load() until
+// after the save, so that no other writer changes the file in between
+// (binbow db add and db remove do); without it, a save that would
+// overwrite a change made since the load throws WriteConflict too.
+// Readers (load) take no lock: saves never show them a half-written file.
+// Within a process the lock belongs to the thread that took it, which may
+// take it again (its saves do); another thread waits like another process.
+class DatabaseLock {
+ public:
+  // Waits up to `wait_seconds` (0: not at all) for the other writer to
+  // finish. Throws WriteConflict naming `path` and the holder's process id
+  // when it does not, FileError when the lock file cannot be made.
+  explicit DatabaseLock(const std::string& path, double wait_seconds = 0);
+  DatabaseLock(DatabaseLock&& other) noexcept;
+  DatabaseLock(const DatabaseLock&) = delete;
+  DatabaseLock& operator=(const DatabaseLock&) = delete;
+  DatabaseLock& operator=(DatabaseLock&&) = delete;
+  ~DatabaseLock();
+
+  // "<path>.lock".
+  static std::string lock_path(const std::string& path);
+
+ private:
+  std::string key_;
+};
+
 // How Database::load checks a file (docs/database-files.md).
 enum class Verification {
   // load() checks the header, the section table and the small sections, and
@@ -347,6 +378,7 @@ class Database {
  private:
   struct Impl;
   explicit Database(std::unique_ptr<Impl> impl);
+  friend struct DatabaseLoading;
   // Applies the journal beside `path` to the database just read from the
   // base `base`, and ties the database to that file.
   void replay_journal(const std::string& path, const std::uint8_t* base, std::size_t base_size);

@@ -2,6 +2,7 @@
 // catch clause is enough; the subclasses let callers react to the cause.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -35,5 +36,23 @@ class FileError : public Error {
   std::string path_;
   std::string problem_;
 };
+
+// A save that would overwrite another writer's work was refused, and
+// nothing was written: another process (or thread) holds the database's
+// DatabaseLock, or saved the file since this database was loaded from it
+// or saved to it. Load the database again and redo the change (or wait for
+// the other writer: DatabaseLock's wait).
+class WriteConflict : public FileError {
+ public:
+  using FileError::FileError;
+};
+
+// Problems that do not make an operation fail: a save that is committed
+// (it will load) but whose directory could not be flushed to disk, say.
+// By default each is written to stderr as "binbow: warning: <message>";
+// a handler set here receives them instead (an empty one restores the
+// default). Called on the thread that met the problem; thread-safe.
+using WarningHandler = std::function<void(const std::string& message)>;
+void set_warning_handler(WarningHandler handler);
 
 }  // namespace binbow

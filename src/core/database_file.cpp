@@ -39,6 +39,8 @@
 // A database over word ids (flag 4, Database::over_word_ids) has no
 // vocabulary: its checksum (32) is 0, section 1 and 2 are empty, the scoring
 // is at 36 (u32) and the word-id capacity of its index at 52 (u64).
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -48,6 +50,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <shared_mutex>
 #include <string>
 #include <vector>
@@ -56,8 +59,11 @@
 #include "binbow/error.h"
 #include "core/crc32c.h"
 #include "core/database_impl.h"
+#include "core/database_journal.h"
+#include "core/database_lock.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
+#include "core/output_path.h"
 #include "core/sectioned_file.h"
 
 namespace binbow {
@@ -1243,7 +1249,14 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size,
 }
 
 // Streams the file: the memory a save needs does not grow with the database.
-void Database::save(const std::string& path, bool include_vocabulary) const {
+void Database::save(const std::string& given_path, bool include_vocabulary) const {
+  const bool in_place = detail::is_written_in_place(given_path);
+  const std::string path = in_place ? given_path : detail::resolve_database_path(given_path);
+  std::optional<DatabaseLock> writer;
+  if (!in_place) {
+    detail::prepare_output_file(given_path);  // the lock file needs the folder
+    writer.emplace(path);
+  }
   std::shared_lock lock(impl_->mutex);
   std::lock_guard<std::mutex> saving(impl_->journal.mutex);
   impl_->journal.save_base(path, [&](std::FILE* file) {
@@ -1267,23 +1280,71 @@ void Database::save(const std::string& path, bool include_vocabulary) const {
   });
 }
 
-// load() maps the file, then replays the journal beside it.
+// load() maps the file, then replays the journal beside it. A save that
+// replaces the file meanwhile may have removed or replaced the journal that
+// extends the mapped base: the load starts again on the new file, so that it
+// gives a committed state, never a base with another's journal.
+struct DatabaseLoading {
+  template <class Read>
+  static Database load(const std::string& path, const Read& read);
+};
+
+namespace {
+
+// What names the journal beside `path`: a save that removes or replaces it
+// changes this.
+struct JournalIdentity {
+  bool exists = false;
+  dev_t device = 0;
+  ino_t inode = 0;
+  off_t size = 0;
+  bool operator==(const JournalIdentity& other) const {
+    return exists == other.exists && device == other.device && inode == other.inode &&
+           size == other.size;
+  }
+};
+
+JournalIdentity journal_identity(const std::string& path) {
+  struct stat st {};
+  JournalIdentity identity;
+  const std::string journal = detail::journal_path_of(detail::resolve_database_path(path));
+  if (::stat(journal.c_str(), &st) == 0) identity = {true, st.st_dev, st.st_ino, st.st_size};
+  return identity;
+}
+
+}  // namespace
+
+template <class Read>
+Database DatabaseLoading::load(const std::string& path, const Read& read) {
+  constexpr int kAttempts = 8;
+  for (int attempt = 1;; ++attempt) {
+    const auto file = std::make_shared<const detail::MappedFile>(path);
+    Database database = read(file);
+    const JournalIdentity journal = journal_identity(path);
+    try {
+      database.replay_journal(path, file->data(), file->size());
+    } catch (const FileError&) {
+      const bool saved_meanwhile = !file->still_at(path) || !(journal_identity(path) == journal);
+      if (attempt < kAttempts && saved_meanwhile) continue;
+      throw;
+    }
+    if (attempt == kAttempts || file->still_at(path)) return database;
+  }
+}
+
 Database Database::load(const std::string& path, const DatabaseLoadOptions& options) {
-  const auto file = std::make_shared<const detail::MappedFile>(path);
-  const Layout layout(file->data(), file->size(), path, false);
-  Database database(read_self_contained_database<Impl>(layout, path, file_source(file, options)));
-  database.replay_journal(path, file->data(), file->size());
-  return database;
+  return DatabaseLoading::load(path, [&](const std::shared_ptr<const detail::MappedFile>& file) {
+    const Layout layout(file->data(), file->size(), path, false);
+    return Database(read_self_contained_database<Impl>(layout, path, file_source(file, options)));
+  });
 }
 
 Database Database::load(const std::string& path, Vocabulary vocabulary,
                         const DatabaseLoadOptions& options) {
-  const auto file = std::make_shared<const detail::MappedFile>(path);
-  const Layout layout(file->data(), file->size(), path, false);
-  Database database(
-      read_vocabulary_database<Impl>(layout, std::move(vocabulary), file_source(file, options)));
-  database.replay_journal(path, file->data(), file->size());
-  return database;
+  return DatabaseLoading::load(path, [&](const std::shared_ptr<const detail::MappedFile>& file) {
+    const Layout layout(file->data(), file->size(), path, false);
+    return Database(read_vocabulary_database<Impl>(layout, vocabulary, file_source(file, options)));
+  });
 }
 
 void Database::wait_until_verified() const {

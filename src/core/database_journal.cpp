@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <shared_mutex>
 #include <utility>
 
@@ -18,10 +19,12 @@
 #include "binbow/error.h"
 #include "core/crc32c.h"
 #include "core/database_impl.h"
+#include "core/database_lock.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
 #include "core/output_path.h"
 #include "core/sectioned_file.h"
+#include "core/warnings.h"
 
 namespace binbow {
 namespace detail {
@@ -29,9 +32,10 @@ namespace detail {
 namespace {
 
 constexpr char kJournalMagic[8] = {'B', 'B', 'D', 'B', 'J', 'R', 'N', 'L'};
-constexpr std::uint32_t kJournalVersion = 1;
+constexpr std::uint32_t kJournalVersion = 2;
 constexpr std::uint8_t kChangesRecord = 1;
 constexpr std::uint8_t kSealedRecord = 2;
+constexpr std::size_t kSealingRecordSize = kJournalRecordHeaderSize + 13;
 // A sectioned file's header says how many sections its table has; binbow's
 // formats have a dozen, so more than this is no base.
 constexpr std::uint32_t kMaxSections = 1024;
@@ -53,8 +57,12 @@ bool base_id(std::uint64_t size, const Read& read, BaseId& id) {
   if (size < head_size) return false;
   std::vector<std::uint8_t> head(head_size);
   if (!read(head.data(), head_size)) return false;
+  // The header and the table without their own CRCs: a block followed by
+  // its CRC32C has the same CRC whatever it holds. The table holds every
+  // section's CRC, so the id follows the whole content.
   id.size = size;
-  id.checksum = crc32c(head.data(), head.size());
+  id.checksum = crc32c(head.data(), kSectionedHeaderSize - 4);
+  id.checksum = crc32c(head.data() + kSectionedHeaderSize, count * kSectionEntrySize, id.checksum);
   return true;
 }
 
@@ -93,20 +101,21 @@ std::vector<std::uint8_t> journal_header(const BaseId& base) {
   return header;
 }
 
-std::vector<std::uint8_t> framed(const std::vector<std::uint8_t>& payload) {
+std::vector<std::uint8_t> framed(const std::vector<std::uint8_t>& payload, const BaseId& base) {
   std::vector<std::uint8_t> record(kJournalRecordHeaderSize);
   store_le<std::uint64_t>(record.data(), payload.size());
   store_le<std::uint32_t>(record.data() + 8, crc32c(payload.data(), payload.size()));
-  store_le<std::uint32_t>(record.data() + 12, crc32c(record.data(), 12));
+  store_le<std::uint32_t>(record.data() + 12, record_header_crc(record.data(), base));
   put_bytes(record, payload.data(), payload.size());
   return record;
 }
 
-std::vector<std::uint8_t> sealing_record(const BaseId& base) {
+// A record of the journal of `base` naming `sealed`, the new base.
+std::vector<std::uint8_t> sealing_record(const BaseId& base, const BaseId& sealed) {
   std::vector<std::uint8_t> payload{kSealedRecord};
-  put_le<std::uint64_t>(payload, base.size);
-  put_le<std::uint32_t>(payload, base.checksum);
-  return framed(payload);
+  put_le<std::uint64_t>(payload, sealed.size);
+  put_le<std::uint32_t>(payload, sealed.checksum);
+  return framed(payload, base);
 }
 
 std::string hex(std::uint32_t value) {
@@ -300,6 +309,13 @@ std::string key_of(const std::string& path) {
 
 }  // namespace
 
+std::uint32_t record_header_crc(const std::uint8_t* head, const BaseId& base) {
+  std::uint8_t id[12];
+  store_le<std::uint64_t>(id, base.size);
+  store_le<std::uint32_t>(id + 8, base.checksum);
+  return crc32c(id, sizeof id, crc32c(head, 12));
+}
+
 bool base_id_of(const std::uint8_t* data, std::size_t size, BaseId& id) {
   return base_id(
       size,
@@ -336,7 +352,13 @@ JournalScan scan_journal(const std::uint8_t* data, std::size_t size, const std::
   const auto version = load_le<std::uint32_t>(data + 8);
   if (version != kJournalVersion)
     throw FileError(name, "unsupported journal version " + std::to_string(version) +
-                              " (this binbow reads version 1): written by a newer binbow?");
+                              " (this binbow reads version 2)" +
+                              (version < kJournalVersion
+                                   ? ": written by a development build of binbow before 0.2.0, "
+                                     "whose journals could not tell their base from another "
+                                     "save of the same size; compact it with that binbow "
+                                     "(binbow db add --compact, or Database::save), or remove it"
+                                   : ": written by a newer binbow?"));
   if (load_le<std::uint32_t>(data + 28) != crc32c(data, 28))
     throw FileError(name, "header checksum mismatch: the journal is corrupted");
   if (load_le<std::uint32_t>(data + 12) != kJournalHeaderSize)
@@ -344,6 +366,16 @@ JournalScan scan_journal(const std::uint8_t* data, std::size_t size, const std::
   JournalScan scan;
   scan.base.size = load_le<std::uint64_t>(data + 16);
   scan.base.checksum = load_le<std::uint32_t>(data + 24);
+  // Saves never let a journal grow past its limit (then a sealing record);
+  // a longer one, whatever its tail holds, is damage, refused before its
+  // bytes are read.
+  const std::uint64_t most = journal_limit(scan.base.size) + kSealingRecordSize;
+  if (size > most)
+    throw FileError(name, "the journal is " + std::to_string(size) + " bytes, more than the " +
+                              std::to_string(most) + " a journal of its " +
+                              std::to_string(scan.base.size) +
+                              "-byte base can hold: it is damaged (remove it to load the "
+                              "database as its last full save, or restore both from a backup)");
   std::size_t at = kJournalHeaderSize;
   const auto torn_from = [&](std::size_t offset) {
     scan.valid_end = offset;
@@ -355,7 +387,7 @@ JournalScan scan_journal(const std::uint8_t* data, std::size_t size, const std::
     // record is torn if nothing but zeros follows where it went wrong.
     if (size - at < kJournalRecordHeaderSize) return torn_from(at);
     const std::uint8_t* head = data + at;
-    if (load_le<std::uint32_t>(head + 12) != crc32c(head, 12)) {
+    if (load_le<std::uint32_t>(head + 12) != record_header_crc(head, scan.base)) {
       if (all_zero(head + kJournalRecordHeaderSize, data + size)) return torn_from(at);
       throw FileError(name, "damaged record header at offset " + std::to_string(at));
     }
@@ -536,8 +568,58 @@ bool DatabaseJournal::seal(const std::string& path, const std::string& key, cons
   }
   OpenJournal open(journal, journal_header(current), end);
   if (!open.valid()) throw FileError(journal, "cannot open the journal to seal it");
-  open.append(end, sealing_record(id));
+  const std::vector<std::uint8_t> record = sealing_record(current, id);
+  open.append(end, record);
+  // This database's own record, not another writer's.
+  if (key == key_ && current == base_) journal_end_ = end + record.size();
   return true;
+}
+
+bool DatabaseJournal::changed_on_disk(const std::string& path) const {
+  BaseId current;
+  if (!read_base_id(path, current)) return false;  // gone: a save makes it again
+  if (current != base_) return true;
+  const int fd =
+      ::open(journal_path_of(path).c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+  if (fd < 0) return false;  // removed: what this database holds is saved whole
+  struct stat st {};
+  std::vector<std::uint8_t> header(kJournalHeaderSize);
+  bool changed = false;
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+      ::pread(fd, header.data(), header.size(), 0) == static_cast<ssize_t>(header.size()) &&
+      header == journal_header(base_)) {
+    // Another writer's commit is an intact record where this database's
+    // journal ends; anything else there is an append that never completed.
+    const std::uint64_t end = journal_end_ == 0 ? kJournalHeaderSize : journal_end_;
+    const auto size = static_cast<std::uint64_t>(st.st_size);
+    std::uint8_t head[kJournalRecordHeaderSize];
+    if (size < end) {
+      changed = true;
+    } else if (size - end >= kJournalRecordHeaderSize &&
+               ::pread(fd, head, sizeof head, static_cast<off_t>(end)) ==
+                   static_cast<ssize_t>(sizeof head) &&
+               load_le<std::uint32_t>(head + 12) == record_header_crc(head, base_)) {
+      const auto length = load_le<std::uint64_t>(head);
+      std::vector<std::uint8_t> payload;
+      if (length <= size - end - kJournalRecordHeaderSize) {
+        payload.resize(static_cast<std::size_t>(length));
+        changed = ::pread(fd, payload.data(), payload.size(),
+                          static_cast<off_t>(end + kJournalRecordHeaderSize)) ==
+                      static_cast<ssize_t>(payload.size()) &&
+                  load_le<std::uint32_t>(head + 8) == crc32c(payload.data(), payload.size());
+      }
+    }
+  }
+  ::close(fd);
+  return changed;
+}
+
+void DatabaseJournal::refuse_if_changed(const std::string& path) const {
+  if (key_ == key_of(path) && changed_on_disk(path))
+    throw WriteConflict(path,
+                        "another writer saved the database since it was loaded or saved here: "
+                        "nothing was written (load it again and redo the changes, or hold a "
+                        "DatabaseLock from before the load until after the save)");
 }
 
 void DatabaseJournal::save_base(const std::string& path,
@@ -548,6 +630,7 @@ void DatabaseJournal::save_base(const std::string& path,
     std::vector<std::uint8_t>().swap(pending_);
     return;
   }
+  refuse_if_changed(path);
   const std::string key = key_of(path);
   StagedFiles staged;
   std::FILE* file = staged.stage(path);
@@ -565,17 +648,28 @@ void DatabaseJournal::save_base(const std::string& path,
     if (sealed) needs_full_save_ = true;
     throw;
   }
-  if (sealed) remove_durably(journal_path_of(path));
+  // Committed: the journal is sealed for the new base, which loads alone,
+  // and the next save replaces a journal that could not be removed.
   attach(path, id, 0, 0, false);
+  if (sealed) {
+    try {
+      remove_durably(journal_path_of(path));
+    } catch (const FileError& e) {
+      warn(path + ": saved; its superseded journal stays until the next save (" + e.problem() +
+           ")");
+    }
+  }
 }
 
 bool DatabaseJournal::append(const std::string& path) {
   if (key_.empty() || needs_full_save_ || key_of(path) != key_ || is_written_in_place(path))
     return false;
   BaseId current;
-  if (!read_base_id(path, current) || current != base_) return false;
+  if (!read_base_id(path, current)) return false;
+  refuse_if_changed(path);
+  sweep_leftovers(path);
   if (pending_.empty()) return true;
-  const std::vector<std::uint8_t> record = framed(pending_);
+  const std::vector<std::uint8_t> record = framed(pending_, base_);
   const std::uint64_t start = journal_end_ == 0 ? kJournalHeaderSize : journal_end_;
   if (start + record.size() > journal_limit(base_.size)) return false;
   const std::string journal = journal_path_of(path);
@@ -603,12 +697,20 @@ std::string Database::journal_path(const std::string& path) {
 }
 
 void Database::save_incremental(const std::string& path, bool include_vocabulary) const {
+  const bool in_place = detail::is_written_in_place(path);
+  const std::string file = in_place ? path : detail::resolve_database_path(path);
+  // Held across the fallback to a full save, so no writer comes between.
+  std::optional<DatabaseLock> writer;
+  if (!in_place) {
+    detail::prepare_output_file(path);  // the lock file needs the folder
+    writer.emplace(file);
+  }
   {
     std::shared_lock lock(impl_->mutex);
     std::lock_guard<std::mutex> saving(impl_->journal.mutex);
-    if (impl_->journal.append(path)) return;
+    if (impl_->journal.append(file)) return;
   }
-  save(path, include_vocabulary);
+  save(file, include_vocabulary);
 }
 
 namespace detail {
@@ -675,10 +777,12 @@ void Database::replay_journal(const std::string& path, const std::uint8_t* base,
   detail::BaseId id;
   if (!detail::base_id_of(base, base_size, id))
     throw FileError(path, "not a sectioned file");  // load() has checked it already
-  const std::string journal = detail::journal_path_of(path);
+  // The journal is beside the file, wherever a link to it is.
+  const std::string file_path = detail::resolve_database_path(path);
+  const std::string journal = detail::journal_path_of(file_path);
   struct stat st {};
   if (::stat(journal.c_str(), &st) != 0 && errno == ENOENT) {
-    impl_->journal.attach(path, id, 0, 0, false);
+    impl_->journal.attach(file_path, id, 0, 0, false);
     return;
   }
   const detail::MappedFile file(journal);
@@ -686,7 +790,7 @@ void Database::replay_journal(const std::string& path, const std::uint8_t* base,
   const detail::JournalReplay replay =
       detail::replay_journal(*this, scan, id, journal, std::uint64_t{base_size} + file.size());
   // A superseded journal is left to the next save, which replaces it.
-  impl_->journal.attach(path, id, replay.superseded ? 0 : scan.valid_end, replay.records,
+  impl_->journal.attach(file_path, id, replay.superseded ? 0 : scan.valid_end, replay.records,
                         replay.sealed);
 }
 
@@ -695,7 +799,7 @@ DatabaseJournalInfo Database::inspect_journal(const std::string& path) {
   const DatabaseFileInfo base = inspect(path, false);
   info.entries = base.entries;
   info.next_entry_id = base.next_entry_id;
-  const std::string journal = detail::journal_path_of(path);
+  const std::string journal = detail::journal_path_of(detail::resolve_database_path(path));
   struct stat st {};
   if (::stat(journal.c_str(), &st) != 0 && errno == ENOENT) return info;
   const detail::MappedFile file(journal);

@@ -4,11 +4,13 @@
 // labels set, clear) as one record and flushes it with fdatasync: that is its
 // commit. Loading replays the journal over the base file; a full save writes a
 // new base and removes the journal. Layout, little-endian:
-//   header (32 bytes): magic "BBDBJRNL", u32 version (1), u32 header size
+//   header (32 bytes): magic "BBDBJRNL", u32 version (2), u32 header size
 //     (32), the base it extends (u64 file size, u32 checksum: see BaseId), u32
 //     CRC32C of bytes 0..27
 //   records, back to back: u64 payload length, u32 CRC32C of the payload,
-//     u32 CRC32C of these 12 bytes, then the payload: u8 kind, then
+//     u32 CRC32C of these 12 bytes continued over the base id (u64 size,
+//     u32 checksum), so that a record is valid only in a journal of its
+//     base; then the payload: u8 kind, then
 //     kind 1 (changes): changes until the payload's end, each a u8 type:
 //       1 add: entry id, label length, label bytes, word count, the words
 //         as steps from the previous one (the first from 0), their weights
@@ -39,8 +41,9 @@ inline constexpr std::size_t kJournalHeaderSize = 32;
 inline constexpr std::size_t kJournalRecordHeaderSize = 16;
 
 // Which base file a journal extends: the base's size and the CRC32C of its
-// header and section table (which hold every section's CRC): a different
-// save has a different id, unless the two saves hold the same bytes.
+// header and section table without their own CRCs (the table holds every
+// section's CRC): a different save has a different id, unless the two saves
+// hold the same bytes, over which the journal's changes replay alike.
 struct BaseId {
   std::uint64_t size = 0;
   std::uint32_t checksum = 0;
@@ -49,6 +52,10 @@ struct BaseId {
   }
   friend bool operator!=(const BaseId& a, const BaseId& b) { return !(a == b); }
 };
+
+// The CRC32C a record header `head` (12 bytes: length, payload CRC) has in
+// a journal of `base`.
+std::uint32_t record_header_crc(const std::uint8_t* head, const BaseId& base);
 
 // The id of a sectioned file image (false if too short to hold its header
 // and table).
@@ -121,6 +128,10 @@ class DatabaseJournal {
   void record_clear() noexcept;
   std::size_t memory_usage() const noexcept { return pending_.capacity(); }
 
+  // Saves take `path` with links followed (resolve_output_path) and run
+  // under the database's DatabaseLock; both throw WriteConflict when
+  // another writer saved `path` since this database was tied to it.
+  //
   // A full save: `write` writes the base into a temporary file; then the
   // journal beside `path`, if it extends the base now there, is sealed
   // (truncated to its last intact record, then a sealing record naming the
@@ -129,8 +140,9 @@ class DatabaseJournal {
   // first (no load would replay it).
   void save_base(const std::string& path, const std::function<void(std::FILE*)>& write);
   // Appends the changes since the last save as one record (or does nothing
-  // when there are none); false, with nothing written, when a full save is
-  // needed instead (see Database::save_incremental).
+  // when there are none), after removing what dead saves left beside
+  // `path`; false, with nothing written, when a full save is needed instead
+  // (see Database::save_incremental).
   bool append(const std::string& path);
   // Ties the database to `path`, whose base is `base` and whose journal
   // holds `records` intact records ending at `journal_end` (0: no journal);
@@ -144,6 +156,12 @@ class DatabaseJournal {
  private:
   void start_change(Change type) noexcept;
   void give_up() noexcept;
+  // Whether another writer saved `path` since this database was tied to
+  // it: its base is another, or its journal has a record past this one's.
+  bool changed_on_disk(const std::string& path) const;
+  // Throws WriteConflict when the database is tied to `path` and another
+  // writer saved there since.
+  void refuse_if_changed(const std::string& path) const;
   // Seals the journal of `path` for the new base `id` (see save_base); true
   // if there is one to remove once the base is replaced.
   bool seal(const std::string& path, const std::string& key, const BaseId& id);

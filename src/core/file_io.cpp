@@ -19,6 +19,7 @@
 
 #include "binbow/error.h"
 #include "core/output_path.h"
+#include "core/warnings.h"
 
 namespace binbow::detail {
 
@@ -36,6 +37,23 @@ const char* file_kind(unsigned mode) {
   if (S_ISBLK(mode)) return "a block device";
   if (S_ISREG(mode)) return "a regular file";
   return "a special file";
+}
+
+std::string resolve_symlinks(const std::string& path) {
+  constexpr int kMaxSymlinkHops = 40;  // as the kernel's ELOOP limit
+  std::string current = path;
+  for (int hop = 0; hop < kMaxSymlinkHops; ++hop) {
+    struct stat st {};
+    if (::lstat(current.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return current;
+    std::error_code error;
+    const std::filesystem::path target = std::filesystem::read_symlink(current, error);
+    if (error)
+      throw FileError(path, "cannot read the symbolic link " + current + ": " + error.message());
+    current = target.is_absolute()
+                  ? target.string()
+                  : (std::filesystem::path(current).parent_path() / target).string();
+  }
+  throw FileError(path, "too many levels of symbolic links");
 }
 
 std::atomic<bool>& refuse_mappings() {
@@ -66,6 +84,8 @@ MappedFile::MappedFile(const std::string& path, bool populate) : path_(path) {
     throw FileError(path, "file is empty");
   }
   size_ = static_cast<std::size_t>(st.st_size);
+  device_ = st.st_dev;
+  inode_ = st.st_ino;
   void* map = MAP_FAILED;
   if (refuse_mappings().load(std::memory_order_relaxed))
     errno = ENODEV;  // what a file system without mmap answers
@@ -117,8 +137,17 @@ void MappedFile::release(const std::uint8_t* begin, std::size_t size) const noex
   if (end > first) (void)::madvise(reinterpret_cast<void*>(first), end - first, MADV_DONTNEED);
 }
 
+bool MappedFile::still_at(const std::string& path) const noexcept {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && st.st_dev == device_ && st.st_ino == inode_;
+}
 MappedFile::MappedFile(MappedFile&& other) noexcept
-    : path_(std::move(other.path_)), data_(other.data_), size_(other.size_), read_(other.read_) {
+    : path_(std::move(other.path_)),
+      device_(other.device_),
+      inode_(other.inode_),
+      data_(other.data_),
+      size_(other.size_),
+      read_(other.read_) {
   other.data_ = nullptr;
   other.size_ = 0;
 }
@@ -127,6 +156,8 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
   if (this != &other) {
     unmap();
     path_ = std::move(other.path_);
+    device_ = other.device_;
+    inode_ = other.inode_;
     data_ = other.data_;
     size_ = other.size_;
     read_ = other.read_;
@@ -161,7 +192,6 @@ namespace {
 constexpr char kTemporaryInfix[] = ".tmp-";
 constexpr char kBackupInfix[] = ".old-";
 constexpr std::size_t kRandomSuffixLength = 6;  // mkstemp's XXXXXX
-constexpr int kMaxSymlinkHops = 40;             // as the kernel's ELOOP limit
 constexpr int kAttempts = 10;
 
 // An open file descriptor, closed (and its flock released) when it dies.
@@ -192,24 +222,6 @@ class Descriptor {
 std::string directory_of(const std::string& path) {
   const std::string parent = std::filesystem::path(path).parent_path().string();
   return parent.empty() ? "." : parent;
-}
-
-// The file `path` finally names, following symbolic links (the last may
-// dangle: the file is then created where it points).
-std::string resolve_symlinks(const std::string& path) {
-  std::string current = path;
-  for (int hop = 0; hop < kMaxSymlinkHops; ++hop) {
-    struct stat st {};
-    if (::lstat(current.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return current;
-    std::error_code error;
-    const std::filesystem::path target = std::filesystem::read_symlink(current, error);
-    if (error)
-      throw FileError(path, "cannot read the symbolic link " + current + ": " + error.message());
-    current = target.is_absolute()
-                  ? target.string()
-                  : (std::filesystem::path(current).parent_path() / target).string();
-  }
-  throw FileError(path, "too many levels of symbolic links");
 }
 
 bool has_random_suffix(const std::string& name, const std::string& prefix) {
@@ -359,7 +371,8 @@ class TemporaryFile {
   void flush(mode_t mode) const {
     if (std::fflush(file_) != 0 || ::fsync(::fileno(file_)) != 0)
       throw FileError(path_, "cannot write: " + errno_text());
-    ::fchmod(::fileno(file_), mode);
+    if (::fchmod(::fileno(file_), mode) != 0)
+      throw FileError(path_, "cannot give the new file its permissions: " + errno_text());
   }
   // Renamed while still open, so the lock covers the file until it is closed.
   void rename_to(const std::string& target) {
@@ -553,13 +566,28 @@ void StagedFiles::commit() {
     replaced.push_back(file.get());
     backups.push_back(std::move(backup));
   }
-  for (const Backup& backup : backups)
-    if (!backup.path.empty()) replace_calls().unlink(backup.path.c_str());
+  // Committed: from here on a failure leaves the new files in place, so it
+  // is reported as a warning, not as an error that a retry would repeat.
+  for (std::size_t i = 0; i < backups.size(); ++i)
+    if (!backups[i].path.empty() && replace_calls().unlink(backups[i].path.c_str()) != 0)
+      warn(replaced[i]->path() + ": saved, but its previous version stays as " + backups[i].path +
+           " (" + errno_text() + "); the next save of it removes it");
   backups.clear();
   // The renames reach the disk with their directories.
-  for (const StagedFile* file : replaced)
-    sync_directory(directory_of(file->destination()), file->path());
+  for (const StagedFile* file : replaced) {
+    try {
+      sync_directory(directory_of(file->destination()), file->path());
+    } catch (const FileError& e) {
+      warn(e.path() + ": saved, but " + e.problem() + ": a power loss may still undo the save");
+    }
+  }
   files_.clear();
+}
+
+void sweep_leftovers(const std::string& path) {
+  const std::string destination = resolve_symlinks(path);
+  remove_stale_temporaries(destination);
+  sweep_backups(destination);
 }
 
 void write_files_atomically(const std::vector<FileToWrite>& files) {

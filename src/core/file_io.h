@@ -47,11 +47,16 @@ class MappedFile {
   // cache, usually). A large file read once in order then never occupies
   // memory as a whole.
   void release(const std::uint8_t* begin, std::size_t size) const noexcept;
+  // Whether `path` (links followed) still names the file mapped: false once
+  // a save has renamed another file over it.
+  bool still_at(const std::string& path) const noexcept;
 
  private:
   void unmap() noexcept;
 
   std::string path_;
+  std::uint64_t device_ = 0;
+  std::uint64_t inode_ = 0;
   const std::uint8_t* data_ = nullptr;
   std::size_t size_ = 0;
   bool read_ = false;  // malloc'd copy, not a mapping
@@ -125,6 +130,15 @@ class StagedFiles {
  private:
   std::vector<std::unique_ptr<StagedFile>> files_;
 };
+
+// What dead saves of `path` left beside it (temporaries, backups), dealt
+// with as a save of `path` does before it writes.
+void sweep_leftovers(const std::string& path);
+
+// The file `path` finally names, following symbolic links (the last may
+// dangle: the file is then created where it points). Throws FileError for a
+// link that cannot be read or a loop.
+std::string resolve_symlinks(const std::string& path);
 
 // StagedFiles for contents written at once.
 void write_files_atomically(const std::vector<FileToWrite>& files);

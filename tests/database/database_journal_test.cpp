@@ -187,11 +187,16 @@ TEST(DatabaseJournal, FallsBackToAFullSaveWithoutItsBase) {
   EXPECT_FALSE(exists(Database::journal_path(path)));
   expect_same(database, Database::load(path));
 
-  // The file was replaced behind the database's back: a full save.
+  // The file was replaced behind the database's back: a save would
+  // overwrite that change, and is refused.
   Database elsewhere = Database::load(path);
   add_image(elsewhere, rng);
   elsewhere.save(path);
   add_image(database, rng);
+  EXPECT_THROW(database.save_incremental(path), WriteConflict);
+  expect_same(elsewhere, Database::load(path));
+  // Saved elsewhere since, the database replaces it as any new file.
+  database.save(other);
   database.save_incremental(path);
   EXPECT_FALSE(exists(Database::journal_path(path)));
   expect_same(database, Database::load(path));
@@ -482,9 +487,14 @@ TEST(DatabaseJournal, DamagedJournalsAreRefusedNamingTheOffset) {
   journaled.write({journaled.bytes.begin(), journaled.bytes.begin() + 20});
   expect_refused(path, journal, "truncated");
   std::vector<std::uint8_t> newer = journaled.bytes;
-  detail::store_le<std::uint32_t>(newer.data() + 8, 2);
+  detail::store_le<std::uint32_t>(newer.data() + 8, 3);
   journaled.write(Journaled::fixed(newer));
-  expect_refused(path, journal, "unsupported journal version 2");
+  expect_refused(path, journal, "unsupported journal version 3");
+  // Version 1 could not tell its base from another save of the same size.
+  std::vector<std::uint8_t> older = journaled.bytes;
+  detail::store_le<std::uint32_t>(older.data() + 8, 1);
+  journaled.write(Journaled::fixed(older));
+  expect_refused(path, journal, "compact it with that binbow");
   journaled.write({});
   EXPECT_THROW(Database::load(path), FileError);
 }
