@@ -2,9 +2,13 @@
 // module (db query, db add) alike.
 #pragma once
 
+#include <cstdio>
 #include <string>
 
+#include <CLI/CLI.hpp>
+
 #include "binbow/database.h"
+#include "binbow/error.h"
 #include "binbow/formats.h"
 
 namespace binbow::cli {
@@ -18,6 +22,14 @@ inline Database load_database(const std::string& path, const std::string& vocabu
                             : Database::load(path, load_vocabulary(vocabulary), options);
 }
 
+inline std::string wait_hint(double wait_seconds) {
+  if (wait_seconds <= 0) return " (--wait SECONDS waits for it)";
+  char text[64];
+  std::snprintf(text, sizeof text, " (after waiting %g s: a longer --wait waits longer)",
+                wait_seconds);
+  return text;
+}
+
 // db add and db remove append their changes to the database's journal, or
 // with --compact write the whole file (folding the journal into it).
 inline void save_changes(const Database& database, const std::string& path,
@@ -26,6 +38,26 @@ inline void save_changes(const Database& database, const std::string& path,
     database.save(path, vocabulary_included);
   else
     database.save_incremental(path, vocabulary_included);
+}
+
+// The database's writer lock, held by a command from before it reads the
+// database until after it saves it, so that no other writer comes between.
+inline DatabaseLock lock_database(const std::string& path, double wait_seconds) {
+  try {
+    return DatabaseLock(path, wait_seconds);
+  } catch (const WriteConflict& e) {
+    throw WriteConflict(e.path(), e.problem() + wait_hint(wait_seconds));
+  }
+}
+
+// --wait SECONDS of the commands that change a database.
+inline void add_wait_option(CLI::App* command, double& wait_seconds) {
+  command
+      ->add_option("--wait", wait_seconds,
+                   "Seconds to wait while another process changes the database (one writer at "
+                   "a time); 0 fails at once, changing nothing")
+      ->check(CLI::Range(0.0, 1e9))
+      ->capture_default_str();
 }
 
 constexpr const char* kCompactHelp =

@@ -23,9 +23,11 @@ struct DbRemoveArguments {
   std::vector<EntryId> entries;
   std::string vocabulary;
   bool compact = false;
+  double wait_seconds = 0;
 };
 
 void run_db_remove(const DbRemoveArguments& arguments) {
+  const DatabaseLock writer = lock_database(arguments.database, arguments.wait_seconds);
   const bool vocabulary_included = Database::inspect(arguments.database, false).vocabulary_included;
   Database database = load_database(arguments.database, arguments.vocabulary);
   std::vector<std::pair<EntryId, std::string>> removed;
@@ -45,16 +47,33 @@ void run_db_remove(const DbRemoveArguments& arguments) {
 
 }  // namespace
 
-bool print_database_info(const std::string& path, bool verify) {
+bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary) {
   detail::require_regular_file(path);  // a FIFO would block the read below
   char magic[8] = {};
   std::ifstream file(path, std::ios::binary);
   if (!file.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWDB", 8) != 0) return false;
-  const DatabaseFileInfo info = Database::inspect(path, verify);
+  const DatabaseFileInfo info = Database::inspect(path, false);
   const DatabaseJournalInfo journal = Database::inspect_journal(path);
+  std::size_t entries = journal.entries;
+  EntryId next_entry_id = journal.next_entry_id;
+  // Checked as db query loads it, so that info never describes a database
+  // that does not load. Without its vocabulary (--external-vocab) the words
+  // cannot be checked: the file's sections and the journal's records are.
+  if (verify &&
+      (info.vocabulary_included || info.vocabulary_checksum == 0 || !vocabulary.empty())) {
+    const Database database = load_database(path, vocabulary);
+    entries = database.size();
+    next_entry_id = database.next_entry_id();
+  } else if (verify) {
+    Database::inspect(path, true);
+    std::fprintf(stderr,
+                 "%s: its vocabulary is external: the entries' words are checked with "
+                 "--vocab VOCABULARY\n",
+                 path.c_str());
+  }
   std::printf("kind: database\n");
-  std::printf("entries: %zu\n", journal.entries);
-  std::printf("next_entry_id: %u\n", journal.next_entry_id);
+  std::printf("entries: %zu\n", entries);
+  std::printf("next_entry_id: %u\n", next_entry_id);
   if (info.direct_index)
     std::printf("direct_index: %u levels up\n", info.direct_index_levels_up);
   else
@@ -96,6 +115,7 @@ void add_db_command(CLI::App& app, void (*add_image_commands)(CLI::App& db)) {
   remove_command->add_option("--vocab", remove->vocabulary,
                              "Vocabulary, for databases built with --external-vocab");
   remove_command->add_flag("--compact", remove->compact, kCompactHelp);
+  add_wait_option(remove_command, remove->wait_seconds);
   remove_command->callback([remove] { run_db_remove(*remove); });
 }
 

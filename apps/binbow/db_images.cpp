@@ -2,6 +2,7 @@
 // disk (.bbdb). `db remove` and the `db` command itself are in db.cpp.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "binbow/vision/frame_pipeline.h"
 #include "binbow/vision/image_source.h"
 #include "commands.h"
+#include "core/output_path.h"
 #include "database_loading.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
@@ -36,6 +38,7 @@ struct DbBuildArguments {
   bool external_vocabulary = false;
   vision::ImageSourceOptions source;
   unsigned threads = 0;
+  double wait_seconds = 0;
 };
 
 // What db query and db add need to read a database and describe images for it.
@@ -47,7 +50,8 @@ struct DbArguments {
   std::vector<std::string> inputs;
   vision::ImageSourceOptions source;
   unsigned threads = 0;
-  bool compact = false;  // db add: a full save
+  bool compact = false;     // db add: a full save
+  double wait_seconds = 0;  // db add: for another writer
 };
 
 struct DbQueryArguments : DbArguments {
@@ -131,6 +135,9 @@ void run_db_build(DbBuildArguments arguments) {
   std::size_t features = 0;
   add_images(database, extractor, arguments.inputs, arguments.source, arguments.threads, &features);
   if (database.size() == 0) throw InvalidArgument("db build: no images found in the inputs");
+  std::optional<DatabaseLock> writer;
+  if (!detail::is_written_in_place(arguments.output))
+    writer.emplace(lock_database(arguments.output, arguments.wait_seconds));
   database.save(arguments.output, !arguments.external_vocabulary);
   std::printf("%s: %zu entries, %zu features, vocabulary %s (%s)\n", arguments.output.c_str(),
               database.size(), features, vocabulary.description().c_str(), vocabulary_path.c_str());
@@ -166,6 +173,7 @@ void run_db_query(const DbQueryArguments& arguments) {
 }
 
 void run_db_add(const DbArguments& arguments) {
+  const DatabaseLock writer = lock_database(arguments.database, arguments.wait_seconds);
   // load() checks the whole file: the header is enough here.
   const bool vocabulary_included = Database::inspect(arguments.database, false).vocabulary_included;
   Database database = load_database(arguments.database, arguments.vocabulary);
@@ -221,6 +229,7 @@ void add_db_image_commands(CLI::App& db) {
   add_image_source_options(build_command, build->source);
   add_skip_unreadable_option(build_command, build->source);
   add_threads_option(build_command, build->threads);
+  add_wait_option(build_command, build->wait_seconds);
   build_command->callback([build] { run_db_build(*build); });
 
   auto query = std::make_shared<DbQueryArguments>();
@@ -243,6 +252,7 @@ void add_db_image_commands(CLI::App& db) {
                        "Image files, directories, videos or text lists of images; entries are "
                        "labelled with the frame names");
   add_command->add_flag("--compact", add->compact, kCompactHelp);
+  add_wait_option(add_command, add->wait_seconds);
   add_command->callback([add] { run_db_add(*add); });
 }
 

@@ -73,7 +73,8 @@ void add_info_command(CLI::App& app) {
   cmd->add_option("--vocab", *vocab,
                   "Loop detector state of a fixed vocabulary: that vocabulary, to check the whole "
                   "state as --resume-state does (default: the descriptor's bundled one, when it "
-                  "is the state's)");
+                  "is the state's). Database built with --external-vocab: its vocabulary, to "
+                  "load it whole as db query does");
   cmd->add_flag("--system", *system,
                 "Print the CPU features binbow uses and the Hamming kernel set in use")
       ->excludes(file)
@@ -82,7 +83,7 @@ void add_info_command(CLI::App& app) {
     if (*system) return print_system_info();
     if (path->empty()) throw CLI::RequiredError("FILE");
     if (print_if_loop_state(*path, *vocab)) return;
-    if (print_database_info(*path, !*header_only)) return;
+    if (print_database_info(*path, !*header_only, *vocab)) return;
     // The format the loader settled on: inside a .gz it is known only after
     // decompressing (ORB-SLAM and VINS binary files are told apart by size).
     const detail::LoadedVocabulary loaded =

@@ -2,6 +2,7 @@
 // the real rtabmap-samples corridor; and database queries on real ORB
 // features against brute force for every scoring.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -314,7 +315,7 @@ TEST(CliDb, AddsAndRemovesEntriesInPlace) {
     (void)entry;
     ++files;
   }
-  EXPECT_EQ(files, 3u);  // d.bbdb, more.txt, 54.jpg
+  EXPECT_EQ(files, 4u);  // d.bbdb, its writers' d.bbdb.lock, more.txt, 54.jpg
 }
 
 TEST(CliDb, ClearErrors) {
@@ -341,6 +342,93 @@ TEST(CliDb, ClearErrors) {
 
 // Real ORB features of the corridor, a real DBoW2 ORB vocabulary, every
 // scoring: the database answers exactly what brute force answers.
+// A database of the corridor's first frames, for the writer tests.
+std::string small_corridor_database(const TempDir& dir) {
+  const std::string database = dir.file("writers.bbdb");
+  std::string output;
+  EXPECT_EQ(
+      run_cli("db build --vocab '" + shared_data("kimera-small-voc/small_voc.yml.gz") + "' -o '" +
+                  database + "' '" + samples_folder() + "/1.jpg' '" + samples_folder() + "/2.jpg'",
+              &output),
+      0)
+      << output;
+  return database;
+}
+
+double entries_of(const std::string& database) {
+  std::string output;
+  EXPECT_EQ(run_cli("info '" + database + "'", &output), 0) << output;
+  return test::printed_number(output, "entries");
+}
+
+// One writer at a time: a second `db add` started while the first runs
+// waits for it (--wait), and no acknowledged add is lost.
+TEST(CliDb, ConcurrentAddsWaitForEachOtherAndLoseNothing) {
+  TempDir dir;
+  const std::string database = small_corridor_database(dir);
+  constexpr int kPairs = 8, kImages = 3;
+  for (int pair = 0; pair < kPairs; ++pair) {
+    std::string command;
+    for (int writer = 0; writer < 2; ++writer) {
+      command += "'" BINBOW_CLI "' db add --wait 60 '" + database + "'";
+      for (int image = 0; image < kImages; ++image)
+        command += " '" + samples_folder() + "/" +
+                   std::to_string(10 + kImages * (2 * pair + writer) + image) + ".jpg'";
+      command += " > '" + dir.file("out" + std::to_string(writer)) + "' 2>&1 & ";
+    }
+    std::string output;
+    ASSERT_EQ(test::run_command(command + "wait", &output), 0) << output;
+    for (int writer = 0; writer < 2; ++writer) {
+      const std::vector<std::uint8_t> printed =
+          test::read_file(dir.file("out" + std::to_string(writer)));
+      const std::string text(printed.begin(), printed.end());
+      EXPECT_NE(text.find(std::to_string(kImages) + " entries added"), std::string::npos) << text;
+    }
+  }
+  EXPECT_EQ(entries_of(database), 2 + 2 * kPairs * kImages);
+}
+
+TEST(CliDb, ASecondWriterIsToldWhoHoldsTheDatabase) {
+  TempDir dir;
+  const std::string database = small_corridor_database(dir);
+  const std::string image = "'" + samples_folder() + "/30.jpg'";
+  const DatabaseLock held(database);
+  std::string output;
+  for (const std::string& wait : {std::string(), std::string(" --wait 0.2")}) {
+    EXPECT_EQ(run_cli("db add '" + database + "' " + image + wait, &output), 1) << output;
+    EXPECT_EQ(output.find("binbow: error: "), 0u) << output;
+    EXPECT_NE(output.find("another writer is changing the database (process " +
+                          std::to_string(::getpid())),
+              std::string::npos)
+        << output;
+    EXPECT_NE(output.find(wait.empty() ? "--wait SECONDS waits for it" : "after waiting 0.2 s"),
+              std::string::npos)
+        << output;
+    EXPECT_EQ(run_cli("db remove '" + database + "' 0" + wait, &output), 1) << output;
+  }
+  EXPECT_EQ(entries_of(database), 2);
+}
+
+// info answers what a load would: a journal whose change cannot apply (an
+// entry removed twice) makes info fail as db query does.
+TEST(CliDb, InfoRefusesADatabaseThatDoesNotLoad) {
+  TempDir dir;
+  const std::string database = small_corridor_database(dir);
+  Database loaded = Database::load(database);
+  loaded.remove(1);
+  loaded.save_incremental(database);
+  std::vector<std::uint8_t> journal = test::read_file(Database::journal_path(database));
+  const std::size_t record = 32;  // the first record follows the journal's header
+  journal.insert(journal.end(), journal.begin() + record, journal.end());
+  test::write_file(Database::journal_path(database), journal);
+  std::string output;
+  EXPECT_EQ(run_cli("db query '" + database + "' '" + samples_folder() + "/1.jpg'", &output), 1)
+      << output;
+  EXPECT_EQ(run_cli("info '" + database + "'", &output), 1) << output;
+  EXPECT_NE(output.find("binbow: error: "), std::string::npos) << output;
+  EXPECT_EQ(output.find("entries:"), std::string::npos) << output;
+}
+
 TEST(DatabaseRealData, QueriesEqualBruteForce) {
   const Vocabulary base = load_vocabulary(shared_data("kimera-small-voc/small_voc.yml.gz"));
   vision::ImageSource source({samples_folder()});
