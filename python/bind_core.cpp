@@ -574,6 +574,39 @@ void bind_core(py::module_& m) {
                         py::gil_scoped_release release;
                         return Database::deserialize(data, size, "<pickled binbow.Database>");
                       }));
+
+  // The lock is the thread's that took it: release() and __exit__ must run
+  // on that thread, as a with block does.
+  struct HeldLock {
+    std::optional<DatabaseLock> lock;
+  };
+  py::class_<HeldLock>(m, "DatabaseLock",
+                       "One writer at a time for the database file at path: holds path +\n"
+                       "\".lock\" (made beside the file) from construction until release()\n"
+                       "or the end of a with block. Hold it from before Database.load until\n"
+                       "after the save when other processes change the same database. Waits\n"
+                       "up to `wait` seconds for another writer (0: not at all), then raises\n"
+                       "binbow.WriteConflict naming it.")
+      .def(py::init([](const Path& path, double wait) {
+             py::gil_scoped_release release;
+             auto held = std::make_unique<HeldLock>();
+             held->lock.emplace(path.string(), wait);
+             return held;
+           }),
+           py::arg("path"), py::arg("wait") = 0.0,
+           "Take the writer lock of the database at path, waiting up to `wait` seconds.")
+      .def(
+          "release", [](HeldLock& held) { held.lock.reset(); }, "Let other writers in.")
+      .def(
+          "__enter__", [](HeldLock& lock) -> HeldLock& { return lock; },
+          py::return_value_policy::reference)
+      .def(
+          "__exit__",
+          [](HeldLock& held, const py::object&, const py::object&, const py::object&) {
+            held.lock.reset();
+            return false;
+          },
+          py::arg("type"), py::arg("value"), py::arg("traceback"));
 }
 
 }  // namespace binbow::python

@@ -29,9 +29,16 @@ PYBIND11_MODULE(_binbow, m) {
   error.attr("__module__") = "binbow";
   error.doc() =
       "A binbow error that is neither a bad argument (ValueError) nor a file problem (OSError).";
+  static py::exception<binbow::WriteConflict> conflict(m, "WriteConflict", PyExc_OSError);
+  conflict.attr("__module__") = "binbow";
+  conflict.doc() =
+      "A save refused because another writer holds the database or saved it since it was\n"
+      "loaded (an OSError): nothing was written; load again and redo the change.";
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const binbow::WriteConflict& e) {
+      conflict(e.what());
     } catch (const binbow::InvalidArgument& e) {
       PyErr_SetString(PyExc_ValueError, e.what());
     } catch (const binbow::FileError& e) {

@@ -233,6 +233,8 @@ class ShardedDatabase:
         is one that timed out while changing: its entries are unknown.
         """
         try:
+            if isinstance(future, BaseException):  # the call could not even be sent
+                raise future
             return future.result(timeout=self._timeout)
         except (TimeoutError, _distributed().TimeoutError) as error:
             failure = error
@@ -262,8 +264,13 @@ class ShardedDatabase:
         Every answer is awaited before any error is raised, so that every lost
         shard is known; a shard's own error (ValueError, OSError, ...) is raised as is.
         """
-        futures = {shard: self._shards[shard].call(method, *argument)
-                   for shard, argument in enumerate(arguments) if argument is not None}
+        futures = {}
+        for shard, argument in enumerate(arguments):
+            if argument is not None:
+                try:
+                    futures[shard] = self._shards[shard].call(method, *argument)
+                except Exception as error:  # Dask knows the actor's worker is gone
+                    futures[shard] = error
         answers, failure = {}, None
         for shard, future in futures.items():
             try:

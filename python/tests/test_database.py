@@ -1,4 +1,8 @@
 """Database: queries against brute force, labels, files, memory usage."""
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -133,6 +137,33 @@ def test_incremental_saves_append_to_a_journal(tmp_path, database, vocabulary, i
     database.save(path)  # a full save folds the journal into the file
     assert not journal.exists()
     assert binbow.Database.load(path).query(query, 10) == database.query(query, 10)
+
+
+def test_one_writer_at_a_time(tmp_path, database, images):
+    path = tmp_path / "db.bbdb"
+    database.save(path)
+    first, second = binbow.Database.load(path), binbow.Database.load(path)
+    first.add(images[0])
+    with binbow.DatabaseLock(path):
+        first.save_incremental(path)  # the holder's own save
+    second.add(images[1])
+    with pytest.raises(binbow.WriteConflict, match="another writer saved the database"):
+        second.save_incremental(path)
+    assert isinstance(binbow.WriteConflict("x"), OSError)
+    held = binbow.DatabaseLock(path)
+    try:
+        child = subprocess.run(
+            [sys.executable, "-c",
+             "import binbow, sys\n"
+             "try:\n"
+             "    binbow.DatabaseLock(sys.argv[1], wait=0.1)\n"
+             "except binbow.WriteConflict as e:\n"
+             "    print(e)\n", str(path)],
+            capture_output=True, text=True, check=True)
+        assert f"process {os.getpid()} holds" in child.stdout
+    finally:
+        held.release()
+    assert len(binbow.Database.load(path)) == len(first)
 
 
 def damaged_postings(path):

@@ -11,6 +11,11 @@ import binbow
 from conftest import SOURCE_DIR, clustered, require_module, sample_frames
 
 
+def saved_files(folder):
+    """The files of a save; each shard's writer lock (.lock, a pid) stays beside it too."""
+    return [p for p in folder.iterdir() if not p.name.endswith(".lock")]
+
+
 @pytest.fixture(scope="module")
 def client():
     distributed = require_module("distributed", "python3-distributed")
@@ -155,7 +160,7 @@ def test_save_and_load_round_trip(client, vocabulary, tmp_path):
     manifest = json.loads((tmp_path / "manifest.json").read_text(encoding="utf-8"))
     assert manifest["shards"] == 3 and manifest["next_entry_id"] == 11
     assert manifest["vocabulary_checksum"] == vocabulary.checksum
-    assert sorted(p.name for p in tmp_path.iterdir()) == [
+    assert sorted(p.name for p in saved_files(tmp_path)) == [
         "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb", "shard-2.gen1.bbdb"]
     loaded = sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary)
     assert loaded.shards == 3 and len(loaded) == 10 and loaded.label(4) == "l4"
@@ -163,7 +168,7 @@ def test_save_and_load_round_trip(client, vocabulary, tmp_path):
     assert loaded.add(images[1]) == 11
     # The next save is a new generation; the previous one is removed once committed.
     loaded.save(tmp_path)
-    assert sorted(p.name for p in tmp_path.iterdir()) == [
+    assert sorted(p.name for p in saved_files(tmp_path)) == [
         "manifest.json", "shard-0.gen2.bbdb", "shard-1.gen2.bbdb", "shard-2.gen2.bbdb"]
     assert sharded_module().ShardedDatabase.load(client, tmp_path, vocabulary).label(4) == "l4"
 
@@ -369,7 +374,7 @@ def test_a_lost_worker_is_a_binbow_error_and_the_last_save_stays(vocabulary, tmp
         sharded = module.ShardedDatabase(dask_client, vocabulary, shards=2, timeout=20)
         sharded.add_many(images[:4], [f"l{i}" for i in range(4)])
         sharded.save(tmp_path)
-        saved = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+        saved = {p.name: p.read_bytes() for p in saved_files(tmp_path)}
         sharded.add_many(images[4:])  # a newer generation, on both shards
         worker = sharded.workers[1]
         os.kill(dask_client.run(os.getpid, workers=[worker])[worker], signal.SIGKILL)
@@ -379,7 +384,7 @@ def test_a_lost_worker_is_a_binbow_error_and_the_last_save_stays(vocabulary, tmp
                      lambda: sharded.query(images[0]), lambda: sharded.label(0), lambda: len(sharded)):
             with pytest.raises(binbow.Error, match="shard 1 was lost.*load the last save"):
                 call()
-        assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == saved
+        assert {p.name: p.read_bytes() for p in saved_files(tmp_path)} == saved
         dask_client.wait_for_workers(2, timeout=60)  # the nanny restarts the dead worker
         loaded = module.ShardedDatabase.load(dask_client, tmp_path, vocabulary, timeout=20)
         assert len(loaded) == 4 and loaded.label(3) == "l3" and loaded.next_entry_id == 4
@@ -390,7 +395,7 @@ def test_a_shard_lost_during_a_save_leaves_the_previous_save(client, vocabulary,
     sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=2)
     sharded.add_many(random_images(14, 4))
     sharded.save(tmp_path)
-    saved = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    saved = {p.name: p.read_bytes() for p in saved_files(tmp_path)}
     sharded.add_many(random_images(15, 2))
     # Shard 1 cannot write its file (a folder holds the name of its next
     # generation): shard 0 has written its own by then, which must not replace
@@ -399,7 +404,7 @@ def test_a_shard_lost_during_a_save_leaves_the_previous_save(client, vocabulary,
     with pytest.raises(OSError):
         sharded.save(tmp_path)
     (tmp_path / "shard-1.gen2.bbdb").rmdir()
-    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == saved
+    assert {p.name: p.read_bytes() for p in saved_files(tmp_path)} == saved
     # The shards' files changed: the next incremental save is a full one.
     sharded.save_incremental(tmp_path)
     assert not list(tmp_path.glob("*.journal"))
@@ -429,7 +434,7 @@ def test_saves_named_without_generation_still_load_and_append(client, vocabulary
     reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
     assert_same_answers(single, reloaded, queries)
     loaded.save(tmp_path)
-    assert sorted(p.name for p in tmp_path.iterdir()) == [
+    assert sorted(p.name for p in saved_files(tmp_path)) == [
         "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb"]
     reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
     assert_same_answers(single, reloaded, queries)
