@@ -13,7 +13,7 @@ packages=(
   pybind11-dev python3-dev python3-numpy
   python3-pytest python3-opencv python3-matplotlib python3-pip python3-setuptools python3-wheel
   python3-distributed
-  clang libclang-rt-14-dev clang-format
+  clang libclang-rt-14-dev clang-format strace
   chromium
   lomiri-wallpapers-16.04 lomiri-wallpapers-20.04 plasma-workspace-wallpapers
   colcon python3-colcon-cmake python3-colcon-ros python3-colcon-bash python3-colcon-recursive-crawl
