@@ -188,8 +188,13 @@ void DatabaseCore::save(const std::string& filename) const {
 
 void DatabaseCore::load(const std::string& filename, VocabularyCore& vocabulary) {
   try {
+    // DBoW2's load either fails or leaves a usable database: the whole file
+    // is checked before it returns, rather than in the background, where
+    // damage would surface as an exception from a later query, add or erase.
+    binbow::DatabaseLoadOptions options;
+    options.verification = binbow::Verification::kBeforeReturn;
     std::unique_ptr<binbow::Database> database(
-        new binbow::Database(binbow::Database::load(filename)));
+        new binbow::Database(binbow::Database::load(filename, options)));
     VocabularyCore loaded(10, 5, TF_IDF, L1_NORM);
     loaded.impl_->assign(database->vocabulary());
     loaded.impl_->scoring = static_cast<ScoringType>(database->scoring());

@@ -4,16 +4,19 @@
 
 #include <algorithm>
 #include <bitset>
+#include <cstdint>
 #include <fstream>
 #include <initializer_list>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "binbow/compat/DBoW2.h"
 #include "binbow/formats.h"
 #include "compat/dbow2_golden.h"
+#include "support/query_results.h"
 #include "support/test_support.h"
 
 namespace {
@@ -215,6 +218,27 @@ TEST(Dbow2Database, FileErrorsNameTheFile) {
   EXPECT_EQ(vocabulary().size(), db.getVocabulary()->size());  // unchanged by the failures
   const std::string blocked = dir.file("damaged.bbdb/db.bbdb");
   expect_error_naming(blocked, [&] { db.save(blocked); });
+}
+
+// binbow's own load checks a database's postings in the background and
+// reports damage at a later call; DBoW2 code expects load to fail instead.
+TEST(Dbow2Database, LoadFailsOnDamagedPostings) {
+  TempDir dir;
+  OrbDatabase db(vocabulary(), true, 1);
+  for (const auto& image : golden().images) db.add(image);
+  const std::string path = dir.file("db.bbdb");
+  db.save(path);
+  std::vector<std::uint8_t> bytes = binbow::test::read_file(path);
+  constexpr std::uint32_t kPostingsSection = 5;
+  const auto section = binbow::test::bbdb_section(bytes, kPostingsSection);
+  ASSERT_GT(section.second, 16u);
+  bytes[section.first + section.second / 2] ^= 0x10;
+  binbow::test::write_file(path, bytes);
+
+  OrbDatabase loaded(vocabulary());
+  expect_error_naming(path, [&] { loaded.load(path); });
+  EXPECT_EQ(0u, loaded.size());  // unchanged by the failure
+  expect_error_naming(path, [&] { OrbDatabase constructed(path); });
 }
 
 TEST(Dbow2Vocabulary, SaveLoadRoundTripsInEveryFormat) {

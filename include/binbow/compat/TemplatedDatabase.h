@@ -163,7 +163,9 @@ class TemplatedDatabase {
     core_.save(filename);
   }
   /// Reads a file written by save() (or by binbow's own tools with the
-  /// vocabulary included). Throws std::runtime_error naming the file.
+  /// vocabulary included). Every section's checksum is checked before it
+  /// returns, so a damaged file fails here rather than at a later call.
+  /// Throws std::runtime_error naming the file; the database is then unchanged.
   void load(const std::string& filename) {
     Vocabulary* voc = new Vocabulary();
     try {
