@@ -469,6 +469,30 @@ TEST(Dbow2Descriptors, ForbAndFbriefFunctions) {
   EXPECT_THROW(DBoW2::FBrief::distance(x, cv::Mat::zeros(1, 16, CV_8U)), std::invalid_argument);
 }
 
+// A type outside DBoW2's enums is refused where it is set: kept, it would
+// index past the names operator<< prints and reach transform() and score().
+TEST(Dbow2Vocabulary, WeightingAndScoringOutsideTheirEnumsAreRefused) {
+  OrbVocabulary voc = vocabulary();
+  EXPECT_THROW(voc.setWeightingType(static_cast<DBoW2::WeightingType>(4)), std::invalid_argument);
+  EXPECT_THROW(voc.setWeightingType(static_cast<DBoW2::WeightingType>(-1)), std::invalid_argument);
+  EXPECT_THROW(voc.setScoringType(static_cast<DBoW2::ScoringType>(6)), std::invalid_argument);
+  EXPECT_THROW(voc.setScoringType(static_cast<DBoW2::ScoringType>(1000)), std::invalid_argument);
+  ASSERT_EQ(DBoW2::TF_IDF, voc.getWeightingType());  // unchanged
+  ASSERT_EQ(DBoW2::L1_NORM, voc.getScoringType());
+  std::ostringstream out;
+  out << voc;
+  EXPECT_NE(out.str().find("Weighting = tf-idf, Scoring = L1-norm"), std::string::npos)
+      << out.str();
+  EXPECT_THROW(OrbVocabulary(10, 5, static_cast<DBoW2::WeightingType>(9)), std::invalid_argument);
+  EXPECT_THROW(OrbVocabulary(10, 5, DBoW2::TF, static_cast<DBoW2::ScoringType>(7)),
+               std::invalid_argument);
+  const std::vector<std::vector<cv::Mat> > training(2, golden().images[0]);
+  OrbVocabulary built;
+  EXPECT_THROW(built.create(training, 3, 2, static_cast<DBoW2::WeightingType>(5), DBoW2::L1_NORM),
+               std::invalid_argument);
+  EXPECT_TRUE(built.empty());
+}
+
 TEST(Dbow2Vectors, PrintingAndNormalisationAsDbow2) {
   DBoW2::BowVector v;
   v.addWeight(3, 1.0);
