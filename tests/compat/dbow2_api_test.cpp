@@ -390,6 +390,35 @@ TEST(Dbow2Vocabulary, WordsNodesAndDescriptors) {
   EXPECT_THROW(voc.transform(golden().images[0], v, fv, -1), std::invalid_argument);
 }
 
+// Word and node ids outside the vocabulary are std::out_of_range wherever
+// they are given, the database's add and query included.
+TEST(Dbow2Database, IdsOutsideTheVocabularyAreOutOfRange) {
+  OrbDatabase db(vocabulary(), true, 1);
+  DBoW2::BowVector outside;
+  outside.addWeight(0, 0.5);
+  outside.addWeight(vocabulary().size(), 0.5);
+  DBoW2::BowVector inside;
+  inside.addWeight(0, 1.0);
+  DBoW2::FeatureVector far_node;
+  far_node.addFeature(100000000, 0);
+  EXPECT_THROW(db.add(outside), std::out_of_range);
+  EXPECT_THROW(db.add(inside, far_node), std::out_of_range);
+  DBoW2::QueryResults ret;
+  EXPECT_THROW(db.query(outside, ret), std::out_of_range);
+  EXPECT_EQ(0u, db.size());  // nothing added
+  EXPECT_EQ(0u, db.add(inside));
+  db.query(inside, ret);
+  ASSERT_EQ(1u, ret.size());
+  try {
+    db.add(outside);
+    ADD_FAILURE() << "no error";
+  } catch (const std::out_of_range& e) {
+    EXPECT_NE(std::string(e.what()).find("word " + std::to_string(vocabulary().size())),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A BRIEF descriptor with exactly the tests in `tests` set (test i is bit
 // i % 8 of byte i / 8).
 cv::Mat brief_with_tests(std::initializer_list<int> tests) {
