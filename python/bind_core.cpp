@@ -110,11 +110,12 @@ std::function<void(const BuildProgress&)> progress_callback(const py::object& pr
   };
 }
 
-Vocabulary build_vocabulary(const py::iterable& images, std::uint32_t branching,
-                            std::uint32_t levels, const std::string& weighting,
-                            const std::string& scoring, std::uint64_t seed, unsigned threads,
-                            const std::string& descriptor, double stop_word_fraction,
-                            unsigned max_iterations, const py::object& progress) {
+Vocabulary build_vocabulary(const py::iterable& images, const py::object& branching,
+                            const py::object& levels, const std::string& weighting,
+                            const std::string& scoring, const py::object& seed,
+                            const py::object& threads, const std::string& descriptor,
+                            double stop_word_fraction, const py::object& max_iterations,
+                            const py::object& progress) {
   if (py::isinstance<py::array>(images))
     throw py::type_error(
         "images must be a list of descriptor arrays, one per training image; got one array "
@@ -127,15 +128,15 @@ Vocabulary build_vocabulary(const py::iterable& images, std::uint32_t branching,
   views.reserve(arrays.size());
   for (const Descriptors& d : arrays) views.push_back(d.view);
   BuildOptions options;
-  options.branching = branching;
-  options.levels = levels;
+  options.branching = int_argument<std::uint32_t>(branching, "branching");
+  options.levels = int_argument<std::uint32_t>(levels, "levels");
   options.weighting = parse_weighting(weighting);
   options.scoring = parse_scoring(scoring);
-  options.seed = seed;
-  options.threads = threads;
+  options.seed = int_argument<std::uint64_t>(seed, "seed");
+  options.threads = int_argument<unsigned>(threads, "threads");
   options.descriptor = descriptor;
   options.stop_word_fraction = stop_word_fraction;
-  options.max_iterations = max_iterations;
+  options.max_iterations = int_argument<unsigned>(max_iterations, "max_iterations");
   options.progress = progress_callback(progress);
   py::gil_scoped_release release;
   return Vocabulary::build(views, options);
@@ -157,15 +158,29 @@ EntryId add_descriptors(Database& db, const py::object& descriptors, const py::o
   return db.add(d.view, std::move(text));
 }
 
-// A non-negative int (not bool): arguments are checked here rather than by
-// pybind11's overload resolution, whose error message prints every argument,
-// a whole descriptor array included.
+// A non-negative int (not bool) of up to 64 bits (int_argument).
 std::uint64_t count_argument(const py::handle& value, const std::string& name) {
-  if (!PyLong_Check(value.ptr()) || PyBool_Check(value.ptr()))
-    throw py::type_error(name + " must be an int, got " + type_name(value));
-  const auto number = value.cast<long long>();
-  if (number < 0) throw py::value_error(name + " must be >= 0, got " + std::to_string(number));
-  return static_cast<std::uint64_t>(number);
+  return int_argument<std::uint64_t>(value, name);
+}
+
+// The id of an entry given to Database.<method>, if it can be one: an int
+// (TypeError otherwise) that an EntryId holds.
+std::optional<EntryId> entry_id(const py::handle& value, const char* method) {
+  const py::int_ number = int_of(value, std::string("Database.") + method + ": entry");
+  if (!int_in_range(number, py::int_(0), py::int_(std::numeric_limits<EntryId>::max())))
+    return std::nullopt;
+  return number.cast<EntryId>();
+}
+
+// entry_id, or for an int no entry id can be (negative, or past 2^32 - 1)
+// the library's ValueError for an entry that does not exist, as
+// ShardedDatabase reports it.
+EntryId existing_entry_id(const Database& db, const py::handle& value, const char* method) {
+  if (const std::optional<EntryId> id = entry_id(value, method)) return *id;
+  throw py::value_error(std::string("Database::") + method + ": entry " +
+                        int_text(py::reinterpret_borrow<py::int_>(value)) +
+                        " does not exist (the database has ids below " +
+                        std::to_string(db.next_entry_id()) + ")");
 }
 
 // The BowVector of `image`: itself, or the transform of its descriptors.
@@ -397,7 +412,8 @@ void bind_core(py::module_& m) {
           py::arg("descriptors"), "Descriptors (uint8 (n, code_size) array, or None) -> BowVector.")
       .def(
           "transform_with_features",
-          [](const Vocabulary& v, const py::object& descriptors, unsigned levels_up) {
+          [](const Vocabulary& v, const py::object& descriptors, const py::object& levels) {
+            const auto levels_up = int_argument<unsigned>(levels, "levels_up");
             const Descriptors d = to_descriptors(descriptors, "descriptors", v.code_size());
             BowVector bow;
             FeatureVector fv;
@@ -455,10 +471,10 @@ void bind_core(py::module_& m) {
 
   py::class_<Database>(m, "Database",
                        "Inverted + direct index of images over a vocabulary. Thread-safe.")
-      .def(py::init([](Vocabulary vocabulary, bool direct_index, unsigned levels_up) {
+      .def(py::init([](Vocabulary vocabulary, bool direct_index, const py::object& levels_up) {
              DatabaseOptions options;
              options.direct_index = direct_index;
-             options.direct_index_levels_up = levels_up;
+             options.direct_index_levels_up = int_argument<unsigned>(levels_up, "levels_up");
              return Database(std::move(vocabulary), options);
            }),
            py::arg("vocabulary"), py::arg("direct_index") = true, py::arg("levels_up") = 4,
@@ -492,25 +508,43 @@ void bind_core(py::module_& m) {
            "names. Runs without the GIL, on every core.")
       .def(
           "label",
-          [](const Database& db, EntryId entry) -> std::optional<std::string> {
-            std::string label = db.label(entry);
+          [](const Database& db, const py::object& entry) -> std::optional<std::string> {
+            std::string label = db.label(existing_entry_id(db, entry, "label"));
             if (label.empty()) return std::nullopt;
             return label;
           },
           py::arg("entry"), "The entry's label, None if it has none (\"\" is no label).")
-      .def("set_label", &Database::set_label, py::arg("entry"), py::arg("label"),
-           "Set (or with \"\", remove) an entry's label.")
-      .def("remove", &Database::remove, py::arg("entry"), py::call_guard<py::gil_scoped_release>(),
-           "Remove an entry; its id is never reused. ValueError if it does not exist.")
-      .def("__contains__", &Database::contains, py::arg("entry"), "Whether the entry exists.")
+      .def(
+          "set_label",
+          [](Database& db, const py::object& entry, const std::string& label) {
+            db.set_label(existing_entry_id(db, entry, "set_label"), label);
+          },
+          py::arg("entry"), py::arg("label"), "Set (or with \"\", remove) an entry's label.")
+      .def(
+          "remove",
+          [](Database& db, const py::object& entry) {
+            const EntryId id = existing_entry_id(db, entry, "remove");
+            py::gil_scoped_release release;
+            db.remove(id);
+          },
+          py::arg("entry"),
+          "Remove an entry; its id is never reused. ValueError if it does not exist.")
+      .def(
+          "__contains__",
+          [](const Database& db, const py::object& entry) {
+            const std::optional<EntryId> id = entry_id(entry, "__contains__");
+            return id && db.contains(*id);
+          },
+          py::arg("entry"), "Whether the entry exists.")
       .def("__len__", &Database::size, "Number of entries.")
       .def("__repr__", &database_repr, "Size and vocabulary as text.")
       .def("clear", &Database::clear, py::call_guard<py::gil_scoped_release>(),
            "Remove every entry; ids restart at 0.")
       .def(
           "feature_vector",
-          [](const Database& db, EntryId entry) {
-            return feature_vector_dict(db.feature_vector(entry));
+          [](const Database& db, const py::object& entry) {
+            return feature_vector_dict(
+                db.feature_vector(existing_entry_id(db, entry, "feature_vector")));
           },
           py::arg("entry"), "The entry's {node id: feature indices} (needs the direct index).")
       .def_property_readonly("next_entry_id", &Database::next_entry_id,

@@ -71,19 +71,32 @@ void bind_evaluation(py::module_& m) {
       m, "GroundTruth",
       "Which images of a sequence show the same place (symmetric; a query i has a loop\n"
       "when it shares a place with an earlier image). Stored sparsely.")
-      .def(py::init<std::size_t, const std::vector<std::pair<std::size_t, std::size_t>>&>(),
+      .def(py::init([](const py::object& frames, const py::iterable& pairs) {
+             std::vector<std::pair<std::size_t, std::size_t>> indices;
+             for (const py::handle pair : pairs) {
+               const std::string name = "pairs[" + std::to_string(indices.size()) + "]";
+               if (!py::isinstance<py::sequence>(pair) || py::len(pair) != 2)
+                 throw py::type_error(name + " must be a pair of ints (i, j), got " +
+                                      type_name(pair));
+               const auto both = py::reinterpret_borrow<py::sequence>(pair);
+               indices.emplace_back(int_argument<std::size_t>(both[0], name + "[0]"),
+                                    int_argument<std::size_t>(both[1], name + "[1]"));
+             }
+             return loop::GroundTruth(int_argument<std::size_t>(frames, "frames"), indices);
+           }),
            py::arg("frames"), py::arg("pairs"),
            "From 0-based (i, j) pairs of the same place among frames images.")
       .def_static(
           "load",
-          [](const Path& path, std::optional<int> base, std::optional<std::size_t> frames) {
+          [](const Path& path, const py::object& base, const py::object& frames) {
             loop::GroundTruthOptions options;
-            if (base) {
-              if (*base != 0 && *base != 1)
-                throw py::value_error("base must be 0, 1 or None, got " + std::to_string(*base));
-              options.pairs_index_base = *base;
+            if (!base.is_none()) {
+              const py::int_ number = int_of(base, "base");
+              if (!int_in_range(number, py::int_(0), py::int_(1)))
+                throw py::value_error("base must be 0, 1 or None, got " + int_text(number));
+              options.pairs_index_base = number.cast<int>();
             }
-            options.frames = frames.value_or(0);
+            if (!frames.is_none()) options.frames = int_argument<std::size_t>(frames, "frames");
             py::gil_scoped_release release;
             return loop::GroundTruth::load(path.string(), options);
           },
@@ -93,17 +106,31 @@ void bind_evaluation(py::module_& m) {
           "base: index base of text pairs, 0 or 1 (None: from a \"0-based\"/\"1-based\" comment,\n"
           "or 0 when an index 0 appears). frames: cut the ground truth to that many frames.")
       .def_property_readonly("frames", &loop::GroundTruth::frames, "Number of images.")
-      .def("is_loop", &loop::GroundTruth::is_loop, py::arg("query"), py::arg("match"),
-           "Whether the two images show the same place.")
-      .def("has_loop", &loop::GroundTruth::has_loop, py::arg("query"),
-           "Whether the image shares a place with an earlier one.")
-      .def("earlier_matches", &loop::GroundTruth::earlier_matches, py::arg("query"),
-           "Earlier images sharing a place with the query, increasing.")
+      .def(
+          "is_loop",
+          [](const loop::GroundTruth& t, const py::object& query, const py::object& match) {
+            return t.is_loop(int_argument<std::size_t>(query, "query"),
+                             int_argument<std::size_t>(match, "match"));
+          },
+          py::arg("query"), py::arg("match"), "Whether the two images show the same place.")
+      .def(
+          "has_loop",
+          [](const loop::GroundTruth& t, const py::object& query) {
+            return t.has_loop(int_argument<std::size_t>(query, "query"));
+          },
+          py::arg("query"), "Whether the image shares a place with an earlier one.")
+      .def(
+          "earlier_matches",
+          [](const loop::GroundTruth& t, const py::object& query) {
+            return t.earlier_matches(int_argument<std::size_t>(query, "query"));
+          },
+          py::arg("query"), "Earlier images sharing a place with the query, increasing.")
       .def(
           "earlier_match_ranges",
-          [](const loop::GroundTruth& t, std::size_t query) {
+          [](const loop::GroundTruth& t, const py::object& query) {
             std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
-            for (const loop::FrameRange& r : t.earlier_match_ranges(query))
+            for (const loop::FrameRange& r :
+                 t.earlier_match_ranges(int_argument<std::size_t>(query, "query")))
               ranges.emplace_back(r.first, r.end);
             return ranges;
           },

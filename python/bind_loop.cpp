@@ -271,19 +271,19 @@ OnlineVocabularyOptions online_options(const py::kwargs& options) {
     if (name == "new_word_distance")
       o.new_word_distance = value.cast<double>();
     else if (name == "purge_after_images")
-      o.purge_after_images = value.cast<std::uint32_t>();
+      o.purge_after_images = int_argument<std::uint32_t>(value, name);
     else if (name == "trees")
-      o.trees = value.cast<std::uint32_t>();
+      o.trees = int_argument<std::uint32_t>(value, name);
     else if (name == "branching")
-      o.branching = value.cast<std::uint32_t>();
+      o.branching = int_argument<std::uint32_t>(value, name);
     else if (name == "leaf_size")
-      o.leaf_size = value.cast<std::uint32_t>();
+      o.leaf_size = int_argument<std::uint32_t>(value, name);
     else if (name == "max_checks")
-      o.max_checks = value.cast<std::uint32_t>();
+      o.max_checks = int_argument<std::uint32_t>(value, name);
     else if (name == "exact")
       o.exact = value.cast<bool>();
     else if (name == "seed")
-      o.seed = value.cast<std::uint64_t>();
+      o.seed = int_argument<std::uint64_t>(value, name);
     else
       throw py::type_error(
           "LoopDetector.online: unknown vocabulary option '" + name +
@@ -302,7 +302,7 @@ std::unique_ptr<PythonLoopDetector> online_detector(const py::object& descriptor
     o.descriptor = descriptor.cast<std::string>();
     code_size = vision::make_extractor(o.descriptor, 0)->code_size();
   } else if (PyLong_Check(descriptor.ptr()) && !PyBool_Check(descriptor.ptr())) {
-    code_size = descriptor.cast<std::size_t>();
+    code_size = int_argument<std::size_t>(descriptor, "LoopDetector.online: descriptor size");
   } else {
     throw py::type_error(
         "LoopDetector.online: descriptor must be an extractor name (\"orb\", ...) or a "
@@ -576,22 +576,15 @@ void bind_detection(py::module_& m) {
 
 // The bounds ImageSource checks, as ValueErrors naming the keyword and
 // before the narrowing casts.
-vision::ImageSourceOptions source_options(long long stride, long long max_width, double video_fps,
-                                          bool skip_unreadable) {
-  const auto stride_limit = static_cast<long long>(vision::kMaxStride);
-  if (stride < 1 || stride > stride_limit)
-    throw py::value_error("stride must be in [1, " + std::to_string(stride_limit) + "], got " +
-                          std::to_string(stride));
-  if (max_width < 0 || max_width > vision::kMaxFrameWidth)
-    throw py::value_error("max_width must be in [0, " + std::to_string(vision::kMaxFrameWidth) +
-                          "], got " + std::to_string(max_width));
+vision::ImageSourceOptions source_options(const py::object& stride, const py::object& max_width,
+                                          double video_fps, bool skip_unreadable) {
+  vision::ImageSourceOptions source;
+  source.stride = int_argument<std::size_t>(stride, "stride", 1, vision::kMaxStride);
+  source.max_width = int_argument<int>(max_width, "max_width", 0, vision::kMaxFrameWidth);
   if (!(video_fps >= 0 && video_fps <= vision::kMaxVideoFps))
     throw py::value_error("video_fps must be in [0, " +
                           std::to_string(static_cast<int>(vision::kMaxVideoFps)) + "], got " +
                           std::to_string(video_fps));
-  vision::ImageSourceOptions source;
-  source.stride = static_cast<std::size_t>(stride);
-  source.max_width = static_cast<int>(max_width);
   source.video_fps = video_fps;
   source.skip_unreadable = skip_unreadable;
   return source;
@@ -603,15 +596,12 @@ vision::ImageSourceOptions source_options(long long stride, long long max_width,
 std::tuple<std::vector<loop::SequenceFrame>, LoopDetectorParams, loop::SimilarityMatrix>
 detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> vocabulary,
              const py::object& descriptor, const py::object& max_features, const py::object& params,
-             long long stride, long long max_width, double video_fps, const py::object& progress,
-             bool online, const std::string& resume_state, const std::string& save_state,
-             bool skip_unreadable, long long threads) {
+             const py::object& stride, const py::object& max_width, double video_fps,
+             const py::object& progress, bool online, const std::string& resume_state,
+             const std::string& save_state, bool skip_unreadable, const py::object& threads) {
   loop::SequenceOptions options;
   options.source = source_options(stride, max_width, video_fps, skip_unreadable);
-  if (threads < 0 || threads > vision::kMaxPipelineThreads)
-    throw py::value_error("threads must be in [0, " + std::to_string(vision::kMaxPipelineThreads) +
-                          "], got " + std::to_string(threads));
-  options.threads = static_cast<unsigned>(threads);
+  options.threads = int_argument<unsigned>(threads, "threads", 0, vision::kMaxPipelineThreads);
   if (const auto extractor = extractor_of(descriptor)) {
     if (!max_features.is_none())
       throw py::value_error(
@@ -619,14 +609,8 @@ detect_loops(const std::vector<std::string>& inputs, std::optional<Vocabulary> v
     options.extractor = extractor;
   } else if (py::isinstance<py::str>(descriptor)) {
     options.descriptor = descriptor.cast<std::string>();
-    if (!max_features.is_none()) {
-      if (!PyLong_Check(max_features.ptr()) || PyBool_Check(max_features.ptr()))
-        throw py::type_error("max_features must be an int, got " + type_name(max_features));
-      const auto count = max_features.cast<long long>();
-      if (count < 1 || count > 1000000)
-        throw py::value_error("max_features must be in [1, 1000000], got " + std::to_string(count));
-      options.max_features = static_cast<int>(count);
-    }
+    if (!max_features.is_none())
+      options.max_features = int_argument<int>(max_features, "max_features", 1, 1000000);
   } else {
     throw py::type_error("descriptor must be a name (\"orb\", ...) or a FeatureExtractor, got " +
                          type_name(descriptor));

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <climits>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,7 +26,7 @@ namespace {
 
 // As the CLI's --features: far above any useful count, it only keeps absurd
 // values away from OpenCV.
-constexpr long long kMaxFeatures = 1000000;
+constexpr int kMaxFeatures = 1000000;
 
 // The options each extractor takes besides max_features, as keywords.
 const std::vector<std::string>& option_names(const std::string& descriptor) {
@@ -46,19 +47,9 @@ std::string joined(const std::vector<std::string>& names) {
 }
 
 // Python's int, not bool (a subclass of int) nor float: a count given as 2.5
-// or True is a mistake, not something to round.
-long long integer_option(const py::handle& value, const std::string& name) {
-  if (!PyLong_Check(value.ptr()) || PyBool_Check(value.ptr()))
-    throw py::type_error(name + " must be an int, got " + type_name(value));
-  return value.cast<long long>();
-}
-
-int int_option(const py::handle& value, const std::string& name, long long low, long long high) {
-  const long long number = integer_option(value, name);
-  if (number < low || number > high)
-    throw py::value_error(name + " must be in [" + std::to_string(low) + ", " +
-                          std::to_string(high) + "], got " + std::to_string(number));
-  return static_cast<int>(number);
+// or True is a mistake, not something to round (int_argument).
+int int_option(const py::handle& value, const std::string& name, int low, int high) {
+  return int_argument<int>(value, name, low, high);
 }
 
 bool bool_option(const py::handle& value, const std::string& name) {
@@ -91,12 +82,9 @@ class PythonExtractor {
       : descriptor_(lower_case(std::move(descriptor))), options_(std::move(options)) {
     if (!max_features.is_none())
       max_features_ = int_option(max_features, "max_features", 1, kMaxFeatures);
-    if (!max_image_pixels.is_none()) {
-      const long long pixels = integer_option(max_image_pixels, "max_image_pixels");
-      if (pixels < 1)
-        throw py::value_error("max_image_pixels must be >= 1, got " + std::to_string(pixels));
-      max_image_pixels_ = static_cast<std::uint64_t>(pixels);
-    }
+    if (!max_image_pixels.is_none())
+      max_image_pixels_ = int_argument<std::uint64_t>(max_image_pixels, "max_image_pixels", 1,
+                                                      std::numeric_limits<std::uint64_t>::max());
     const std::vector<std::string> names = vision::extractor_names();
     if (std::find(names.begin(), names.end(), descriptor_) == names.end())
       throw py::value_error("unknown descriptor '" + descriptor_ + "'; expected one of " +

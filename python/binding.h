@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -34,6 +35,29 @@ using Path = std::filesystem::path;
 std::string type_name(const py::handle& object);
 // A float argument (an int is taken too, a bool is not): TypeError otherwise.
 double float_option(const py::handle& value, const std::string& name);
+
+// An integer argument, taken here rather than by pybind11, whose conversion
+// of an int past its C++ type raises RuntimeError "Unable to cast" (or, for
+// a parameter of that type, a TypeError listing every argument, descriptor
+// arrays included): an int or a numpy integer, not a bool or a float
+// (TypeError naming `name`).
+py::int_ int_of(const py::handle& value, const std::string& name);
+// The int as Python writes it, or its size when too long to write out.
+std::string int_text(const py::int_& number);
+// Whether low <= number <= high, whatever the number's size.
+bool int_in_range(const py::int_& number, const py::int_& low, const py::int_& high);
+
+// int_of within [low, high], as T: ValueError naming `name` and the range
+// otherwise, however large the int.
+template <typename T>
+T int_argument(const py::handle& value, const std::string& name,
+               T low = std::numeric_limits<T>::min(), T high = std::numeric_limits<T>::max()) {
+  const py::int_ number = int_of(value, name);
+  if (!int_in_range(number, py::int_(low), py::int_(high)))
+    throw py::value_error(name + " must be in [" + std::to_string(low) + ", " +
+                          std::to_string(high) + "], got " + int_text(number));
+  return number.cast<T>();
+}
 // "(3, 32)", "(5,)": an array's shape as Python writes it.
 std::string shape_of(const py::array& array);
 

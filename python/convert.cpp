@@ -14,6 +14,31 @@ double float_option(const py::handle& value, const std::string& name) {
   return value.cast<double>();
 }
 
+py::int_ int_of(const py::handle& value, const std::string& name) {
+  if (PyBool_Check(value.ptr()) || !PyIndex_Check(value.ptr()))
+    throw py::type_error(name + " must be an int, got " + type_name(value));
+  const auto number = py::reinterpret_steal<py::int_>(PyNumber_Index(value.ptr()));
+  if (!number) throw py::error_already_set();
+  return number;
+}
+
+std::string int_text(const py::int_& number) {
+  // Python refuses to write out ints of more than 4300 digits.
+  const auto bits = number.attr("bit_length")().cast<std::size_t>();
+  if (bits <= 256) return py::str(py::handle(number)).cast<std::string>();
+  return std::string(PyObject_RichCompareBool(number.ptr(), py::int_(0).ptr(), Py_LT) == 1
+                         ? "a negative"
+                         : "an") +
+         " int of " + std::to_string(bits) + " bits";
+}
+
+bool int_in_range(const py::int_& number, const py::int_& low, const py::int_& high) {
+  const int above_low = PyObject_RichCompareBool(number.ptr(), low.ptr(), Py_GE);
+  const int below_high = PyObject_RichCompareBool(number.ptr(), high.ptr(), Py_LE);
+  if (above_low < 0 || below_high < 0) throw py::error_already_set();
+  return above_low == 1 && below_high == 1;
+}
+
 std::string shape_of(const py::array& array) {
   std::string shape = "(";
   for (py::ssize_t i = 0; i < array.ndim(); ++i)

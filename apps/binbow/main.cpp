@@ -6,6 +6,7 @@
 
 #include "binbow/error.h"
 #include "commands.h"
+#include "unsigned_options.h"
 #include "vision_commands.h"
 
 namespace {
@@ -57,12 +58,14 @@ int main(int argc, char** argv) {
   } catch (const binbow::Error& e) {
     return fail(e.what());
   }
+  binbow::cli::UnsignedOptions unsigned_options(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    const std::string unknown = binbow::cli::unknown_command_message(app, argc, argv);
-    fail(unknown.empty() ? e.what() : unknown);
+    std::string message = binbow::cli::unknown_command_message(app, argc, argv);
+    if (message.empty()) message = unsigned_options.message(e);
+    fail(message.empty() ? e.what() : message);
     std::fprintf(stderr, "Run '%s --help' for usage.\n", command_path(app).c_str());
     return 1;
   } catch (const binbow::Error& e) {

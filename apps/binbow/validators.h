@@ -28,7 +28,8 @@ CLI::Validator parsed_by(Parser parse) {
 
 // The error for a value that parses as T and fails `accepted` (as
 // "must be ..., not <value>"); a value that does not parse is left to CLI11,
-// which names the option and the value. Counts are checked as signed: CLI11
+// which names the option and the value, and for unsigned options to
+// UnsignedOptions (unsigned_options.h). Counts are checked as signed: CLI11
 // reads "-1" into an unsigned field as its largest value.
 template <typename T, typename Accepted>
 CLI::Validator checked_number(Accepted accepted, const std::string& requirement) {

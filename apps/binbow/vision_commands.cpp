@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -25,19 +26,23 @@ std::string load_error(const std::string& path, const std::string& reason) {
          "; reinstall binbow or set BINBOW_CLI_VISION_MODULE to the path of " + kModuleFile;
 }
 
-const VisionCommands& load(const std::string& path) {
+static_assert(offsetof(VisionCommands, version) == offsetof(detail::ModuleTableHeader, version) &&
+                  offsetof(VisionCommands, binbow_version) ==
+                      offsetof(detail::ModuleTableHeader, binbow_version),
+              "VisionCommands begins as every module table does");
+
+const VisionCommands& load(const std::string& given) {
+  const std::string path = detail::module_file(given);
   std::string reason;
   using Entry = const VisionCommands* (*)();
   const auto entry =
       reinterpret_cast<Entry>(detail::module_entry(path, kBinbowCliVisionSymbol, reason));
   if (entry == nullptr) throw Error(load_error(path, reason));
   const VisionCommands* commands = entry();
-  if (commands == nullptr)
-    throw Error(load_error(path, std::string("no ") + kBinbowCliVisionSymbol + " entry point"));
-  if (commands->version != kVisionCommandsVersion ||
-      std::strcmp(commands->binbow_version, BINBOW_VERSION) != 0)
-    throw Error(load_error(path, std::string("built for binbow ") + commands->binbow_version +
-                                     ", not for this binbow " + BINBOW_VERSION));
+  reason =
+      detail::check_module_table(reinterpret_cast<const void*>(entry), commands,
+                                 sizeof(VisionCommands), kVisionCommandsVersion, BINBOW_VERSION);
+  if (!reason.empty()) throw Error(load_error(path, reason));
   return *commands;
 }
 

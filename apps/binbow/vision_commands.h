@@ -9,8 +9,10 @@
 //
 // Both sides are built by the same build with the same CLI11 and standard
 // library, so the interface passes C++ types (CLI::App, std::string); the
-// version check refuses a module of another build. Exceptions thrown by the
-// module's commands reach the executable's main() as they are.
+// version check refuses a module of another build, and a file that is not
+// binbow's module is an error naming it, never a crash (core/module_entry.h).
+// Exceptions thrown by the module's commands reach the executable's main()
+// as they are.
 #pragma once
 
 #include <cstddef>
@@ -53,12 +55,14 @@ struct VisionCommands {
 bool needs_vision_commands(int argc, const char* const* argv);
 
 // The module's functions, loading it on the first call. It is looked for at
-// $BINBOW_CLI_VISION_MODULE (a file path, when set), then beside binbow_media
-// relative to the executable: <bindir>/../<libdir>/binbow (installed, and the
-// build tree's layout), <package>/lib/binbow (the Python package's bin/binbow);
-// then in the install prefix's <libdir>/binbow. Throws binbow::Error naming
-// the file, why it did not load and what to do when none loads. Inside the
-// module (its `demo` runs `evaluate`), the module's own functions.
+// $BINBOW_CLI_VISION_MODULE (a file path, when set: a name without a slash
+// is in the working directory, never searched for on the library path), then
+// beside binbow_media relative to the executable: <bindir>/../<libdir>/binbow
+// (installed, and the build tree's layout), <package>/lib/binbow (the Python
+// package's bin/binbow); then in the install prefix's <libdir>/binbow.
+// Throws binbow::Error naming the file, why it did not load and what to do
+// when none loads. Inside the module (its `demo` runs `evaluate`), the
+// module's own functions.
 const VisionCommands& vision_commands();
 
 }  // namespace binbow::cli

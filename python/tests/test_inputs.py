@@ -138,3 +138,68 @@ def test_bow_vector_words_must_be_word_ids():
         binbow.BowVector(np.array([1, 2]), np.array([1.0]))
     with pytest.raises(ValueError, match="increasing"):
         binbow.BowVector(np.array([5, 1]), np.array([0.5, 0.5]))
+
+
+# Past 2**63 pybind11's own conversion raised RuntimeError "Unable to cast", and
+# for a parameter of a C++ integer type a TypeError listing every argument.
+@pytest.mark.parametrize("value", [2**63, 2**64, -(2**63) - 1, 10**5000],
+                         ids=["2**63", "2**64", "-2**63-1", "10**5000"])
+def test_ints_of_any_size_are_value_errors_naming_the_argument(vocabulary, images, database,
+                                                                value):
+    image = images[0]
+    calls = {
+        "levels_up": lambda: vocabulary.transform_with_features(image, value),
+        "threads": lambda: binbow.Vocabulary.build([image, image], threads=value),
+        "branching": lambda: binbow.Vocabulary.build([image, image], branching=value),
+        "max_iterations": lambda: binbow.Vocabulary.build([image, image], max_iterations=value),
+        "max_features": lambda: binbow.FeatureExtractor("orb", value),
+        "fast_threshold": lambda: binbow.FeatureExtractor("brief", fast_threshold=value),
+        "trees": lambda: binbow.LoopDetector.online("orb", trees=value),
+        "stride": lambda: binbow.detect_loops([], stride=value),
+    }
+    if value != 2**63:  # 64-bit arguments hold 2**63
+        calls.update({
+            "max_results": lambda: database.query(image, value),
+            "max_entry_id": lambda: database.query(image, 10, value),
+            "fast_candidates": lambda: database.query(image, 10, fast=True,
+                                                      fast_candidates=value),
+            "fast_min_postings": lambda: database.query(image, 10, fast=True,
+                                                        fast_min_postings=value),
+            "seed": lambda: binbow.Vocabulary.build([image, image], seed=value),
+            "max_image_pixels": lambda: binbow.FeatureExtractor("orb", max_image_pixels=value),
+            "query": lambda: binbow.GroundTruth(5, [(3, 1)]).has_loop(value),
+            "frames": lambda: binbow.GroundTruth(value, []),
+        })
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match=rf"^{name} must be in \[") as error:
+            call()
+        assert "Unable to cast" not in str(error.value), name
+    # Entry ids: an id no entry can have is an entry that does not exist.
+    for method, call in {
+        "label": lambda: database.label(value),
+        "set_label": lambda: database.set_label(value, "x"),
+        "remove": lambda: database.remove(value),
+        "feature_vector": lambda: database.feature_vector(value),
+    }.items():
+        with pytest.raises(ValueError, match=rf"Database::{method}: entry .* does not exist"):
+            call()
+    assert value not in database
+    assert len(database) == len(images)
+
+
+def test_64_bit_arguments_take_every_64_bit_int(database, images):
+    everything = database.query(images[0], len(images))
+    assert database.query(images[0], 2**63) == everything
+    assert database.query(images[0], 2**64 - 1, 2**64 - 1) == everything
+    assert database.query(images[0], 3, fast=True, fast_min_postings=2**63)
+
+
+def test_integer_arguments_take_numpy_integers_but_not_bools_or_floats(database, images):
+    assert database.query(images[0], np.int64(3)) == database.query(images[0], 3)
+    assert database.label(np.uint32(1)) == "image 1"
+    with pytest.raises(TypeError, match="max_results must be an int, got bool"):
+        database.query(images[0], True)
+    with pytest.raises(TypeError, match="entry must be an int, got float"):
+        database.label(1.0)
+    with pytest.raises(TypeError, match="seed must be an int, got float"):
+        binbow.Vocabulary.build(images[:2], seed=1.0)

@@ -2,6 +2,7 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "binbow/database.h"
@@ -46,6 +47,23 @@ FeatureVector from_binbow(const binbow::FeatureVector& fv) {
                    fv.node(i), std::vector<unsigned int>(features.begin(), features.end())));
   }
   return out;
+}
+
+// Ids outside the vocabulary are std::out_of_range throughout the DBoW2
+// layer (docs/dbow2-compat.md), as TemplatedVocabulary's getters have them;
+// binbow's database would report them as InvalidArgument.
+void check_words(const BowVector& v, const binbow::Vocabulary& vocabulary) {
+  if (!v.empty() && v.rbegin()->first >= vocabulary.word_count())
+    throw std::out_of_range("word " + std::to_string(v.rbegin()->first) +
+                            " does not exist (the vocabulary has " +
+                            std::to_string(vocabulary.word_count()) + " words)");
+}
+
+void check_nodes(const FeatureVector& fv, const binbow::Vocabulary& vocabulary) {
+  if (!fv.empty() && fv.rbegin()->first >= vocabulary.node_count())
+    throw std::out_of_range("node " + std::to_string(fv.rbegin()->first) +
+                            " does not exist (the vocabulary has " +
+                            std::to_string(vocabulary.node_count()) + " nodes)");
 }
 
 }  // namespace
@@ -125,6 +143,8 @@ int DatabaseCore::direct_index_levels() const {
 
 EntryId DatabaseCore::add(const BowVector& v, const FeatureVector& fv) {
   binbow::Database& database = impl_->require_database();
+  check_words(v, database.vocabulary());
+  if (impl_->use_di) check_nodes(fv, database.vocabulary());
   return database.add(to_binbow(v), impl_->use_di ? to_binbow(fv) : binbow::FeatureVector());
 }
 
@@ -144,8 +164,10 @@ unsigned int DatabaseCore::size() const {
 
 void DatabaseCore::query(const BowVector& v, QueryResults& ret, int max_results, int max_id) const {
   ret.clear();
-  if (!impl_->database || (max_id != -1 && max_id <= 0)) return;
+  if (!impl_->database) return;
   const binbow::Database& database = *impl_->database;
+  check_words(v, database.vocabulary());
+  if (max_id != -1 && max_id <= 0) return;
   const ScoringType scoring = impl_->scoring;
   const bool needs_common_words = scoring == CHI_SQUARE || scoring == BHATTACHARYYA;
   // The common-words rule is applied after the query, so those queries ask
@@ -188,8 +210,13 @@ void DatabaseCore::save(const std::string& filename) const {
 
 void DatabaseCore::load(const std::string& filename, VocabularyCore& vocabulary) {
   try {
+    // DBoW2's load either fails or leaves a usable database: the whole file
+    // is checked before it returns, rather than in the background, where
+    // damage would surface as an exception from a later query, add or erase.
+    binbow::DatabaseLoadOptions options;
+    options.verification = binbow::Verification::kBeforeReturn;
     std::unique_ptr<binbow::Database> database(
-        new binbow::Database(binbow::Database::load(filename)));
+        new binbow::Database(binbow::Database::load(filename, options)));
     VocabularyCore loaded(10, 5, TF_IDF, L1_NORM);
     loaded.impl_->assign(database->vocabulary());
     loaded.impl_->scoring = static_cast<ScoringType>(database->scoring());

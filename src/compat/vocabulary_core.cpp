@@ -4,6 +4,7 @@
 #include <cfloat>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "binbow/error.h"
@@ -30,6 +31,26 @@ binbow::Weighting to_binbow(WeightingType weighting) {
 }
 binbow::Scoring to_binbow(ScoringType scoring) {
   return binbow::scoring_from_code(static_cast<int>(scoring));
+}
+
+// DBoW2 stores whatever value it is given; one outside the enum would index
+// past the names operator<< prints and reach transform() and score(), so it
+// is refused where it is set. Compared as ints: an enum holding a value
+// outside its range need not compare as one.
+WeightingType checked(WeightingType weighting) {
+  const int code = static_cast<int>(weighting);
+  if (code < static_cast<int>(TF_IDF) || code > static_cast<int>(BINARY))
+    throw std::invalid_argument("weighting type " + std::to_string(code) +
+                                " is none of TF_IDF, TF, IDF, BINARY (0 to 3)");
+  return weighting;
+}
+ScoringType checked(ScoringType scoring) {
+  const int code = static_cast<int>(scoring);
+  if (code < static_cast<int>(L1_NORM) || code > static_cast<int>(DOT_PRODUCT))
+    throw std::invalid_argument(
+        "scoring type " + std::to_string(code) +
+        " is none of L1_NORM, L2_NORM, CHI_SQUARE, KL, BHATTACHARYYA, DOT_PRODUCT (0 to 5)");
+  return scoring;
 }
 
 std::out_of_range no_word(WordId wid, std::size_t words) {
@@ -69,8 +90,8 @@ VocabularyCore::VocabularyCore(int k, int L, WeightingType weighting, ScoringTyp
     : impl_(new Impl) {
   impl_->k = k;
   impl_->L = L;
-  impl_->weighting = weighting;
-  impl_->scoring = scoring;
+  impl_->weighting = checked(weighting);
+  impl_->scoring = checked(scoring);
 }
 
 VocabularyCore::VocabularyCore(const VocabularyCore& other) : impl_(new Impl(*other.impl_)) {}
@@ -88,6 +109,8 @@ void VocabularyCore::create(const std::vector<std::vector<unsigned char> >& imag
   if (k < 2 || L < 1)
     throw std::invalid_argument("a vocabulary needs k >= 2 and L >= 1, not k = " +
                                 std::to_string(k) + ", L = " + std::to_string(L));
+  checked(weighting);
+  checked(scoring);
   std::vector<binbow::DescriptorView> views;
   views.reserve(images.size());
   for (const auto& image : images)
@@ -126,10 +149,10 @@ ScoringType VocabularyCore::scoring() const {
   return impl_->scoring;
 }
 void VocabularyCore::set_weighting(WeightingType weighting) {
-  impl_->weighting = weighting;
+  impl_->weighting = checked(weighting);
 }
 void VocabularyCore::set_scoring(ScoringType scoring) {
-  impl_->scoring = scoring;
+  impl_->scoring = checked(scoring);
 }
 
 namespace {

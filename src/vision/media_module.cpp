@@ -4,9 +4,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <mutex>
 #include <string>
@@ -64,17 +64,22 @@ std::string load_error(const std::string& path, const std::string& reason) {
   return "cannot load the image/video module " + path + ": " + reason;
 }
 
-const media::Api& load(const std::string& path) {
+static_assert(offsetof(media::Api, version) == offsetof(detail::ModuleTableHeader, version) &&
+                  offsetof(media::Api, binbow_version) ==
+                      offsetof(detail::ModuleTableHeader, binbow_version),
+              "media::Api begins as every module table does");
+
+const media::Api& load(const std::string& given) {
+  const std::string path = detail::module_file(given);
   std::string reason;
   using Entry = const media::Api* (*)();
   const auto entry =
       reinterpret_cast<Entry>(detail::module_entry(path, kBinbowMediaApiSymbol, reason));
   if (entry == nullptr) throw Error(load_error(path, reason));
   const media::Api* api = entry();
-  if (api == nullptr) throw Error(load_error(path, "no binbow_media_api entry point"));
-  if (api->version != media::kApiVersion || std::strcmp(api->binbow_version, BINBOW_VERSION) != 0)
-    throw Error(load_error(path, std::string("built for binbow ") + api->binbow_version +
-                                     ", not for this binbow " + BINBOW_VERSION));
+  reason = detail::check_module_table(reinterpret_cast<const void*>(entry), api, sizeof(media::Api),
+                                      media::kApiVersion, BINBOW_VERSION);
+  if (!reason.empty()) throw Error(load_error(path, reason));
   return *api;
 }
 

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "binbow/database.h"
 #include "binbow/formats.h"
@@ -141,6 +142,65 @@ TEST(CliStartup, AMissingCommandsModuleIsAClearError) {
         << output;
     EXPECT_NE(output.find("set BINBOW_CLI_VISION_MODULE"), std::string::npos) << output;
   }
+}
+
+// What the CLI says when $BINBOW_CLI_VISION_MODULE names `module` and a
+// command needs it; it must fail as any error does.
+std::string module_error(const std::string& module, const std::string& directory = "") {
+  std::string output;
+  const std::string command = (directory.empty() ? "" : "cd '" + directory + "' && ") +
+                              "BINBOW_CLI_VISION_MODULE='" + module + "' '" + test::cli_path() +
+                              "' make-route --help";
+  EXPECT_EQ(run_command(command, &output), 1) << module << ": " << output;
+  return output;
+}
+
+// Files that are not the module (another library, another build's module, a
+// file that is no library) are errors naming the file and what is wrong,
+// never a crash, whatever the file holds.
+TEST(CliStartup, AMalformedCommandsModuleIsAClearError) {
+  TempDir dir;
+  const std::string prefix = "binbow: error: cannot load binbow's image and video commands, ";
+  const std::string modules = BINBOW_MALFORMED_MODULES_DIR;
+  const std::pair<std::string, std::string> cases[] = {
+      {"data_symbol.so", "binbow_cli_vision_commands is not a function"},
+      {"table_address.so", "its entry point returned an address outside the module"},
+      {"version_pointer.so", "its table names no binbow version"},
+      {"other_interface.so", "built by another build of binbow "},
+      {"other_release.so", "built for binbow 0.0.0-other, not for this binbow "},
+  };
+  for (const auto& [file, reason] : cases) {
+    const std::string path = modules + "/" + file;
+    const std::string output = module_error(path);
+    EXPECT_EQ(output.rfind(prefix + path + ": " + reason, 0), 0u) << output;
+  }
+  // The version is the same: what differs is the interface, and the message says so.
+  const std::string other = module_error(modules + "/other_interface.so");
+  EXPECT_NE(other.find("(module interface 1000, this binbow's is "), std::string::npos) << other;
+  EXPECT_EQ(other.find("not for this binbow"), std::string::npos) << other;
+
+  test::write_file(dir.file("text.so"), {'n', 'o', 't', '\n'});
+  const std::string text = module_error(dir.file("text.so"));
+  EXPECT_EQ(text.rfind(prefix + dir.file("text.so") + ": ", 0), 0u) << text;
+}
+
+// A module named without a slash is a file in the working directory, as any
+// path a user gives: never a library of that name on the library path.
+TEST(CliStartup, AModuleNameWithoutASlashIsInTheWorkingDirectory) {
+  TempDir dir;
+  const std::string libc = module_error("libc.so.6", dir.path());
+  EXPECT_EQ(libc.rfind("binbow: error: cannot load binbow's image and video commands, "
+                       "./libc.so.6: cannot open shared object file",
+                       0),
+            0u)
+      << libc;
+  test::write_file(dir.file("vision.so"), test::read_file(test::cli_vision_module_path()));
+  std::string output;
+  EXPECT_EQ(run_command("cd '" + dir.path() + "' && BINBOW_CLI_VISION_MODULE=vision.so '" +
+                            test::cli_path() + "' make-route --help",
+                        &output),
+            0)
+      << output;
 }
 
 TEST(CliStartup, JpegFramesAreReadWithoutTheModule) {

@@ -143,6 +143,47 @@ TEST(CliUsage, EveryUsageErrorExitsOneAndSaysWhereTheUsageIs) {
   EXPECT_FALSE(fs::exists(dir.file("x.bbdb")));
 }
 
+// Every option of an unsigned type takes decimal digits within its type, and
+// says so naming the option and the range: CLI11 alone read "-1" and numbers
+// past 2^64 - 1 as 2^64 - 1, and "010" as octal.
+TEST(CliUsage, UnsignedOptionsRefuseNegativesOverflowAndNonIntegers) {
+  TempDir dir;
+  const std::string image = quoted(shared_data("rtabmap-samples/samples/1.jpg"));
+  const std::string route = "make-route -o " + quoted(dir.file("route")) + " " + image + " ";
+  const std::string largest = "18446744073709551615";
+  for (const std::string value : {"-1", "18446744073709551616", "1e23", "0x10", "+3", "1.5"})
+    expect_usage_error(route + "--seed " + value, "binbow make-route",
+                       "--seed: must be a whole number from 0 to " + largest + ", not " + value);
+  expect_usage_error("db query --fast --fast-candidates 18446744073709551616 x.bbdb " + image,
+                     "binbow db query",
+                     "--fast-candidates: must be a whole number from 0 to " + largest +
+                         ", not 18446744073709551616");
+  expect_usage_error(
+      "build-vocab --max-descriptors -1 -o " + quoted(dir.file("v.bbw")) + " " + image,
+      "binbow build-vocab",
+      "--max-descriptors: must be a whole number from 0 to " + largest + ", not -1");
+  // 32-bit options: the range is their type's.
+  expect_usage_error("detect-loops --online-vocabulary --trees 4294967296 -o " +
+                         quoted(dir.file("loops.csv")) + " " + image,
+                     "binbow detect-loops",
+                     "--trees: must be a whole number from 0 to 4294967295, not 4294967296");
+  expect_usage_error("db remove x.bbdb 3 -2", "binbow db remove",
+                     "ENTRY: must be a whole number from 0 to 4294967295, not -2");
+  // Leading zeros are decimal: 017 is seventeen (octal 15 would pass).
+  expect_usage_error("build-vocab --levels 017 -o " + quoted(dir.file("v.bbw")) + " " + image,
+                     "binbow build-vocab", "--levels: Value 17 not in range 1 to 16");
+  // The largest value is taken: the command goes on to its photographs.
+  std::string output;
+  EXPECT_EQ(run_cli("make-route --seed " + largest + " --frames 0010 -o " +
+                        quoted(dir.file("route")) + " " + quoted(dir.file("missing.jpg")),
+                    &output),
+            1);
+  EXPECT_EQ(output.find("must be a whole number"), std::string::npos) << output;
+  EXPECT_NE(output.find("missing.jpg"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(dir.file("v.bbw")));
+  EXPECT_FALSE(fs::exists(dir.file("loops.csv")));
+}
+
 TEST(CliUsage, HelpAndVersionStillExitZero) {
   for (const std::string arguments : {"--help", "db query --help", "detect-loops --help"}) {
     std::string output;

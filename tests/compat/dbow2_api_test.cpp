@@ -4,16 +4,19 @@
 
 #include <algorithm>
 #include <bitset>
+#include <cstdint>
 #include <fstream>
 #include <initializer_list>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "binbow/compat/DBoW2.h"
 #include "binbow/formats.h"
 #include "compat/dbow2_golden.h"
+#include "support/query_results.h"
 #include "support/test_support.h"
 
 namespace {
@@ -217,6 +220,27 @@ TEST(Dbow2Database, FileErrorsNameTheFile) {
   expect_error_naming(blocked, [&] { db.save(blocked); });
 }
 
+// binbow's own load checks a database's postings in the background and
+// reports damage at a later call; DBoW2 code expects load to fail instead.
+TEST(Dbow2Database, LoadFailsOnDamagedPostings) {
+  TempDir dir;
+  OrbDatabase db(vocabulary(), true, 1);
+  for (const auto& image : golden().images) db.add(image);
+  const std::string path = dir.file("db.bbdb");
+  db.save(path);
+  std::vector<std::uint8_t> bytes = binbow::test::read_file(path);
+  constexpr std::uint32_t kPostingsSection = 5;
+  const auto section = binbow::test::bbdb_section(bytes, kPostingsSection);
+  ASSERT_GT(section.second, 16u);
+  bytes[section.first + section.second / 2] ^= 0x10;
+  binbow::test::write_file(path, bytes);
+
+  OrbDatabase loaded(vocabulary());
+  expect_error_naming(path, [&] { loaded.load(path); });
+  EXPECT_EQ(0u, loaded.size());  // unchanged by the failure
+  expect_error_naming(path, [&] { OrbDatabase constructed(path); });
+}
+
 TEST(Dbow2Vocabulary, SaveLoadRoundTripsInEveryFormat) {
   TempDir dir;
   OrbVocabulary voc = vocabulary();
@@ -366,6 +390,35 @@ TEST(Dbow2Vocabulary, WordsNodesAndDescriptors) {
   EXPECT_THROW(voc.transform(golden().images[0], v, fv, -1), std::invalid_argument);
 }
 
+// Word and node ids outside the vocabulary are std::out_of_range wherever
+// they are given, the database's add and query included.
+TEST(Dbow2Database, IdsOutsideTheVocabularyAreOutOfRange) {
+  OrbDatabase db(vocabulary(), true, 1);
+  DBoW2::BowVector outside;
+  outside.addWeight(0, 0.5);
+  outside.addWeight(vocabulary().size(), 0.5);
+  DBoW2::BowVector inside;
+  inside.addWeight(0, 1.0);
+  DBoW2::FeatureVector far_node;
+  far_node.addFeature(100000000, 0);
+  EXPECT_THROW(db.add(outside), std::out_of_range);
+  EXPECT_THROW(db.add(inside, far_node), std::out_of_range);
+  DBoW2::QueryResults ret;
+  EXPECT_THROW(db.query(outside, ret), std::out_of_range);
+  EXPECT_EQ(0u, db.size());  // nothing added
+  EXPECT_EQ(0u, db.add(inside));
+  db.query(inside, ret);
+  ASSERT_EQ(1u, ret.size());
+  try {
+    db.add(outside);
+    ADD_FAILURE() << "no error";
+  } catch (const std::out_of_range& e) {
+    EXPECT_NE(std::string(e.what()).find("word " + std::to_string(vocabulary().size())),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A BRIEF descriptor with exactly the tests in `tests` set (test i is bit
 // i % 8 of byte i / 8).
 cv::Mat brief_with_tests(std::initializer_list<int> tests) {
@@ -443,6 +496,30 @@ TEST(Dbow2Descriptors, ForbAndFbriefFunctions) {
   EXPECT_EQ(0.f, brief_floats.at<float>(0, 4));
   EXPECT_EQ(1.f, brief_floats.at<float>(0, 200));
   EXPECT_THROW(DBoW2::FBrief::distance(x, cv::Mat::zeros(1, 16, CV_8U)), std::invalid_argument);
+}
+
+// A type outside DBoW2's enums is refused where it is set: kept, it would
+// index past the names operator<< prints and reach transform() and score().
+TEST(Dbow2Vocabulary, WeightingAndScoringOutsideTheirEnumsAreRefused) {
+  OrbVocabulary voc = vocabulary();
+  EXPECT_THROW(voc.setWeightingType(static_cast<DBoW2::WeightingType>(4)), std::invalid_argument);
+  EXPECT_THROW(voc.setWeightingType(static_cast<DBoW2::WeightingType>(-1)), std::invalid_argument);
+  EXPECT_THROW(voc.setScoringType(static_cast<DBoW2::ScoringType>(6)), std::invalid_argument);
+  EXPECT_THROW(voc.setScoringType(static_cast<DBoW2::ScoringType>(1000)), std::invalid_argument);
+  ASSERT_EQ(DBoW2::TF_IDF, voc.getWeightingType());  // unchanged
+  ASSERT_EQ(DBoW2::L1_NORM, voc.getScoringType());
+  std::ostringstream out;
+  out << voc;
+  EXPECT_NE(out.str().find("Weighting = tf-idf, Scoring = L1-norm"), std::string::npos)
+      << out.str();
+  EXPECT_THROW(OrbVocabulary(10, 5, static_cast<DBoW2::WeightingType>(9)), std::invalid_argument);
+  EXPECT_THROW(OrbVocabulary(10, 5, DBoW2::TF, static_cast<DBoW2::ScoringType>(7)),
+               std::invalid_argument);
+  const std::vector<std::vector<cv::Mat> > training(2, golden().images[0]);
+  OrbVocabulary built;
+  EXPECT_THROW(built.create(training, 3, 2, static_cast<DBoW2::WeightingType>(5), DBoW2::L1_NORM),
+               std::invalid_argument);
+  EXPECT_TRUE(built.empty());
 }
 
 TEST(Dbow2Vectors, PrintingAndNormalisationAsDbow2) {

@@ -115,8 +115,8 @@ class TemplatedDatabase {
     return add(v);
   }
   /// Adds an image already transformed with this vocabulary; `fec` is kept
-  /// only with a direct index. Throws std::runtime_error for word or node
-  /// ids outside the vocabulary.
+  /// only with a direct index. Throws std::out_of_range for word or node
+  /// ids outside the vocabulary (and then adds nothing).
   EntryId add(const BowVector& vec, const FeatureVector& fec = FeatureVector()) {
     require_vocabulary();
     return core_.add(vec, fec);
@@ -145,6 +145,7 @@ class TemplatedDatabase {
     query(vec, ret, max_results, max_id);
   }
   /// Queries with a BoW vector: see the top of this file for the rules.
+  /// Throws std::out_of_range for word ids outside the vocabulary.
   void query(const BowVector& vec, QueryResults& ret, int max_results = 1, int max_id = -1) const {
     require_vocabulary();
     core_.query(vec, ret, max_results, max_id);
@@ -163,7 +164,9 @@ class TemplatedDatabase {
     core_.save(filename);
   }
   /// Reads a file written by save() (or by binbow's own tools with the
-  /// vocabulary included). Throws std::runtime_error naming the file.
+  /// vocabulary included). Every section's checksum is checked before it
+  /// returns, so a damaged file fails here rather than at a later call.
+  /// Throws std::runtime_error naming the file; the database is then unchanged.
   void load(const std::string& filename) {
     Vocabulary* voc = new Vocabulary();
     try {

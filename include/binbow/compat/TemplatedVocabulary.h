@@ -36,7 +36,8 @@ class TemplatedDatabase;
 /// (Hamming distance, lowest child index on ties, as DBoW2's FORB/FBrief).
 ///
 /// Errors: loading and saving throw std::runtime_error whose message names
-/// the file; descriptors of another size than the vocabulary's throw
+/// the file; descriptors of another size than the vocabulary's, and
+/// weighting or scoring types outside their enums, throw
 /// std::invalid_argument; word ids out of range throw std::out_of_range.
 template <class TDescriptor, class F>
 class TemplatedVocabulary {
@@ -134,7 +135,9 @@ class TemplatedVocabulary {
   WeightingType getWeightingType() const { return core_.weighting(); }
   ScoringType getScoringType() const { return core_.scoring(); }
   /// Changes how transform() weighs words; the word weights themselves stay.
+  /// A value outside the enum throws std::invalid_argument and changes nothing.
   void setWeightingType(WeightingType type) { core_.set_weighting(type); }
+  /// Throws std::invalid_argument for a value outside the enum, as above.
   void setScoringType(ScoringType type) { core_.set_scoring(type); }
 
   /// Writes the vocabulary in the format its extension names: .yml, .yaml,
