@@ -50,7 +50,6 @@
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <shared_mutex>
 #include <string>
 #include <vector>
@@ -63,7 +62,6 @@
 #include "core/database_lock.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
-#include "core/output_path.h"
 #include "core/sectioned_file.h"
 
 namespace binbow {
@@ -1250,13 +1248,8 @@ Database Database::deserialize(const std::uint8_t* data, std::size_t size,
 
 // Streams the file: the memory a save needs does not grow with the database.
 void Database::save(const std::string& given_path, bool include_vocabulary) const {
-  const bool in_place = detail::is_written_in_place(given_path);
-  const std::string path = in_place ? given_path : detail::resolve_database_path(given_path);
-  std::optional<DatabaseLock> writer;
-  if (!in_place) {
-    detail::prepare_output_file(given_path);  // the lock file needs the folder
-    writer.emplace(path);
-  }
+  const detail::SaveTarget target(given_path);
+  const std::string& path = target.path;
   std::shared_lock lock(impl_->mutex);
   std::lock_guard<std::mutex> saving(impl_->journal.mutex);
   impl_->journal.save_base(path, [&](std::FILE* file) {

@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <limits>
 #include <mutex>
-#include <optional>
 #include <shared_mutex>
 #include <utility>
 
@@ -697,20 +696,15 @@ std::string Database::journal_path(const std::string& path) {
 }
 
 void Database::save_incremental(const std::string& path, bool include_vocabulary) const {
-  const bool in_place = detail::is_written_in_place(path);
-  const std::string file = in_place ? path : detail::resolve_database_path(path);
-  // Held across the fallback to a full save, so no writer comes between.
-  std::optional<DatabaseLock> writer;
-  if (!in_place) {
-    detail::prepare_output_file(path);  // the lock file needs the folder
-    writer.emplace(file);
-  }
+  // The lock is held across the fallback to a full save, so no writer
+  // comes between.
+  const detail::SaveTarget target(path);
   {
     std::shared_lock lock(impl_->mutex);
     std::lock_guard<std::mutex> saving(impl_->journal.mutex);
-    if (impl_->journal.append(file)) return;
+    if (impl_->journal.append(target.path)) return;
   }
-  save(file, include_vocabulary);
+  save(target.path, include_vocabulary);
 }
 
 namespace detail {

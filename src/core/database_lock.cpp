@@ -19,6 +19,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "core/file_io.h"
+#include "core/output_path.h"
 
 namespace binbow {
 namespace detail {
@@ -117,6 +118,13 @@ void release_database_lock(const std::string& key) noexcept {
   ::close(found->second.fd);
   r.held.erase(found);
   r.released.notify_all();
+}
+
+SaveTarget::SaveTarget(const std::string& given) : path(given) {
+  if (is_written_in_place(given)) return;
+  path = resolve_database_path(given);
+  prepare_output_file(given);
+  writer.emplace(path);
 }
 
 }  // namespace detail

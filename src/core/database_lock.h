@@ -2,7 +2,10 @@
 // path by which a database's files are named whatever link leads to them.
 #pragma once
 
+#include <optional>
 #include <string>
+
+#include "binbow/database.h"
 
 namespace binbow::detail {
 
@@ -18,5 +21,15 @@ std::string resolve_database_path(const std::string& path);
 // it, FileError when its lock file cannot be opened.
 void acquire_database_lock(const std::string& key, const std::string& name, double wait_seconds);
 void release_database_lock(const std::string& key) noexcept;
+
+// Where a save of `given` writes, and the database's writer lock held while
+// the save lives: a file's path with links followed (its folders made, since
+// the lock file needs them), or an output written in place (/dev/stdout, a
+// FIFO) as given, without a lock.
+struct SaveTarget {
+  explicit SaveTarget(const std::string& given);
+  std::string path;
+  std::optional<DatabaseLock> writer;
+};
 
 }  // namespace binbow::detail
