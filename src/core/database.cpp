@@ -1257,6 +1257,14 @@ std::size_t Database::memory_usage() const {
   return bytes;
 }
 
+// save_incremental's append (database_journal.cpp) without its fallback to a
+// full save.
+bool Database::append_journal(const std::string& path) const {
+  std::shared_lock lock(impl_->mutex);
+  std::lock_guard<std::mutex> saving(impl_->journal.mutex);
+  return impl_->journal.append(path);
+}
+
 const Vocabulary& Database::vocabulary() const noexcept {
   return impl_->vocabulary;
 }
