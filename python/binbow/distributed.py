@@ -10,11 +10,12 @@ Dask is imported when a ShardedDatabase is made, so `import binbow` works
 without it. See docs/distributed.md.
 """
 
+import errno
 import json
 import math
 import os
 import re
-import tempfile
+import secrets
 
 import numpy as _np
 
@@ -129,6 +130,52 @@ def _remove_shard_files(folder, keep):
         path = os.path.join(folder, name)
         if name not in keep and _SHARD_FILE.fullmatch(name) and os.path.isfile(path):
             os.unlink(path)
+
+
+def _sync_folder(folder):
+    """Flushes the folder's entries to disk: the renames and new files in it."""
+    descriptor = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+    try:
+        os.fsync(descriptor)
+    except OSError as error:
+        if error.errno != errno.EINVAL:  # a file system that cannot sync a folder
+            raise
+    finally:
+        os.close(descriptor)
+
+
+def _replace_manifest(folder, manifest):
+    """Replaces folder/manifest.json with `manifest` in one rename.
+
+    The temporary is created with the permissions the umask asks for (as
+    binbow's own saves) and flushed to disk before the rename.
+    """
+    path = os.path.join(folder, _MANIFEST)
+    data = json.dumps(manifest, indent=2).encode("utf-8")
+    for _ in range(100):
+        temporary = f"{path}.tmp-{secrets.token_hex(3)}"
+        try:
+            descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC,
+                                 0o666)
+            break
+        except FileExistsError:
+            continue
+    else:
+        raise Error(f"ShardedDatabase: cannot create a temporary file beside {path}")
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(descriptor, view):]
+        os.fsync(descriptor)
+        os.replace(temporary, path)
+    except BaseException:
+        try:
+            os.unlink(temporary)
+        except OSError:
+            pass
+        raise
+    finally:
+        os.close(descriptor)
 
 
 def _cut_journal(journal, size, manifest):
@@ -475,6 +522,8 @@ class ShardedDatabase:
                 if os.path.isfile(os.path.join(folder, name)):
                     os.unlink(os.path.join(folder, name))
             raise
+        # The new manifest on disk before the files of the previous one go.
+        _sync_folder(folder)
         _remove_shard_files(folder, keep=set(files))
 
     def save_incremental(self, folder):
@@ -500,6 +549,7 @@ class ShardedDatabase:
         sizes = [os.path.getsize(path + _JOURNAL) if os.path.exists(path + _JOURNAL) else 0
                  for path in paths]
         self._write_manifest(folder, files, options, sizes)
+        _sync_folder(folder)
 
     def _write_manifest(self, folder, files, options, journal_bytes):
         manifest = {
@@ -513,14 +563,7 @@ class ShardedDatabase:
             "files": files,
             "journal_bytes": journal_bytes,
         }
-        descriptor, temporary = tempfile.mkstemp(prefix=".manifest-", dir=folder)
-        try:
-            with os.fdopen(descriptor, "w", encoding="utf-8") as file:
-                json.dump(manifest, file, indent=2)
-            os.replace(temporary, os.path.join(folder, _MANIFEST))
-        except BaseException:
-            os.unlink(temporary)
-            raise
+        _replace_manifest(folder, manifest)
         self._saved_folder = folder
         self._saved_files = files
 

@@ -433,3 +433,48 @@ def test_saves_named_without_generation_still_load_and_append(client, vocabulary
         "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb"]
     reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
     assert_same_answers(single, reloaded, queries)
+
+
+def test_the_manifest_has_the_umask_s_permissions_and_reaches_the_disk_before_it_counts(
+        client, vocabulary, tmp_path, monkeypatch):
+    import os
+    import stat
+
+    sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=2)
+    sharded.add_many(random_images(32, 3))
+    events = []
+    fsync, replace = os.fsync, os.replace
+
+    def recorded_fsync(descriptor):
+        events.append(("fsync", os.readlink(f"/proc/self/fd/{descriptor}")))
+        return fsync(descriptor)
+
+    def recorded_replace(source, destination):
+        events.append(("replace", os.fspath(source), os.fspath(destination)))
+        return replace(source, destination)
+
+    monkeypatch.setattr(os, "fsync", recorded_fsync)
+    monkeypatch.setattr(os, "replace", recorded_replace)
+    manifest = tmp_path / "manifest.json"
+    for mask, mode in ((0o022, 0o644), (0o077, 0o600), (0o002, 0o664)):
+        previous = os.umask(mask)
+        try:
+            sharded.save(tmp_path)
+        finally:
+            os.umask(previous)
+        assert stat.S_IMODE(manifest.stat().st_mode) == mode, oct(mask)
+    sharded.add(random_images(33, 1)[0])
+    events.clear()
+    previous = os.umask(0o002)
+    try:
+        sharded.save_incremental(tmp_path)
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE(manifest.stat().st_mode) == 0o664
+    # The temporary is flushed, renamed over the manifest, then the folder is flushed.
+    [renamed] = [event for event in events if event[0] == "replace"]
+    assert renamed[2] == str(manifest) and renamed[1].startswith(str(manifest) + ".tmp-")
+    at = events.index(renamed)
+    assert ("fsync", renamed[1]) in events[:at]
+    assert ("fsync", str(tmp_path)) in events[at:]
+    assert sorted(p.name for p in tmp_path.iterdir() if "tmp" in p.name) == []
