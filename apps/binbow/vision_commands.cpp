@@ -12,6 +12,7 @@
 
 #include "binbow/error.h"
 #include "core/module_entry.h"
+#include "interruption.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
@@ -38,6 +39,7 @@ const VisionCommands& load(const std::string& path) {
       std::strcmp(commands->binbow_version, BINBOW_VERSION) != 0)
     throw Error(load_error(path, std::string("built for binbow ") + commands->binbow_version +
                                      ", not for this binbow " + BINBOW_VERSION));
+  commands->watch_interruption_flag(&interruption_flag());
   return *commands;
 }
 

@@ -13,6 +13,7 @@
 // module's commands reach the executable's main() as they are.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -24,7 +25,7 @@
 namespace binbow::cli {
 
 // Raised whenever VisionCommands changes.
-inline constexpr int kVisionCommandsVersion = 1;
+inline constexpr int kVisionCommandsVersion = 2;
 
 struct VisionCommands {
   int version;
@@ -45,6 +46,9 @@ struct VisionCommands {
   // `binbow evaluate --sweep` and `--report` (evaluate.h).
   std::vector<double> (*evaluate_sweep_values)(const EvaluateArguments& arguments);
   void (*sweep_and_report)(const EvaluateArguments& arguments, const Evaluation& evaluation);
+  // Makes the module's check points read the executable's signal flag
+  // (interruption.h); called once the module is loaded.
+  void (*watch_interruption_flag)(const std::atomic<int>* flag) noexcept;
 };
 
 // Whether the command line names a command (or asks for the help or the
