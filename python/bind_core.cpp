@@ -577,6 +577,14 @@ void bind_core(py::module_& m) {
           "(path + \".journal\"), flushed to disk; a full save when the database was\n"
           "not last saved to or loaded from path, or the journal would pass a quarter\n"
           "of the file. Copy or remove the journal together with the .bbdb file.")
+      .def(
+          "append_journal",
+          [](const Database& db, const Path& path) { return db.append_journal(path.string()); },
+          py::arg("path"), py::call_guard<py::gil_scoped_release>(),
+          "The append of save_incremental alone: True once the changes since the last\n"
+          "save or load of path are in its journal (also when there were none); False,\n"
+          "with nothing written, where save_incremental would save the whole file\n"
+          "instead (then save it, under another name if path must not change).")
       .def_static(
           "load",
           [](const Path& path, const std::optional<Vocabulary>& vocabulary,

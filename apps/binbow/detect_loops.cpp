@@ -20,6 +20,7 @@
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
+#include "interruption.h"
 #include "loop_params_options.h"
 #include "output_options.h"
 #include "progress.h"
@@ -140,11 +141,12 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   if (!arguments.scoring.empty())
     arguments.online_options.scoring = parse_scoring(arguments.scoring);
   if (!arguments.online_vocabulary) check_vocabulary_given(arguments.vocab, arguments.descriptor);
-  prepare_output_file("-o", arguments.output);
+  CreatedFolders folders;
+  folders.prepare_file("-o", arguments.output);
   if (!arguments.save_vocabulary.empty())
-    prepare_output_file("--save-vocabulary", arguments.save_vocabulary);
-  if (!arguments.save_state.empty()) prepare_output_file("--save-state", arguments.save_state);
-  if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
+    folders.prepare_file("--save-vocabulary", arguments.save_vocabulary);
+  if (!arguments.save_state.empty()) folders.prepare_file("--save-state", arguments.save_state);
+  if (!arguments.report.empty()) folders.prepare_directory("--report", arguments.report);
   // The extractor is the vocabulary's unless --descriptor says otherwise.
   Vocabulary vocabulary;
   std::string vocabulary_path;
@@ -198,6 +200,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   run.source = arguments.source;
   for (const std::string& input : arguments.inputs) run.inputs.push_back(absolute(input));
 
+  throw_if_interrupted();  // loading the vocabulary, listing the inputs may take long
   const long long known = sequence.size();
   Progress progress("detecting loops", known > 0 ? static_cast<std::size_t>(known) : 0);
   loop::LoopRunFiles outputs(arguments.output, run);
@@ -205,10 +208,12 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   while (sequence.next(frame)) {
     warn_if_unreadable(frame.file, frame.unreadable);
     outputs.add(frame);
-    progress.update(outputs.frames());
+    progress.update(outputs.frames());  // a check point
   }
   progress.finish();
   if (outputs.frames() == 0) throw InvalidArgument("detect-loops: no images found in the inputs");
+  // From here on the outputs and the state are written whole.
+  throw_if_interrupted();
   outputs.commit();
   if (!arguments.save_state.empty()) {
     sequence.detector().save(arguments.save_state);
@@ -242,6 +247,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
                  no_candidates.c_str());
   if (arguments.timing) std::cout << loop::format_timing_table(outputs.timing()) << std::flush;
   if (!arguments.report.empty()) {
+    throw_if_interrupted();  // the report's similarity matrix may take long
     loop::LoopReport report;
     report.title = "binbow loop detection";
     report.facts = {{"inputs", run.inputs.front() + (run.inputs.size() > 1 ? " ..." : "")},

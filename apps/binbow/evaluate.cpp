@@ -13,6 +13,7 @@
 #include "binbow/loop/run_record.h"
 #include "commands.h"
 #include "evaluate.h"
+#include "interruption.h"
 #include "output_options.h"
 #include "vision_commands.h"
 
@@ -20,7 +21,8 @@ namespace binbow::cli {
 namespace {
 
 void run_evaluate(const EvaluateArguments& arguments) {
-  if (!arguments.report.empty()) prepare_output_directory("--report", arguments.report);
+  CreatedFolders folders;
+  if (!arguments.report.empty()) folders.prepare_directory("--report", arguments.report);
   // An unknown parameter is a usage error before anything is read.
   if (arguments.sweep) vision_commands().evaluate_sweep_values(arguments);
 
@@ -80,6 +82,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
   std::fflush(stdout);
 
   if (arguments.sweep || !arguments.report.empty()) {
+    throw_if_interrupted();  // a large ground truth may have taken long
     Evaluation evaluation;
     evaluation.run = run.get();
     evaluation.run_path = run_path;

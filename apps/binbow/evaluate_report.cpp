@@ -17,6 +17,7 @@
 #include "binbow/vocabulary.h"
 #include "default_vocabulary.h"
 #include "evaluate.h"
+#include "interruption.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -180,6 +181,7 @@ void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& eval
       if (found != recorded.end()) entry.inliers = found->second->inliers;
       report.loops.push_back(std::move(entry));
     }
+    throw_if_interrupted();
     const std::string page = loop::write_loop_report(arguments.report, report);
     std::fprintf(stderr, "report: %s\n", page.c_str());
   }

@@ -6,6 +6,7 @@
 
 #include "binbow/error.h"
 #include "commands.h"
+#include "interruption.h"
 #include "unsigned_options.h"
 #include "vision_commands.h"
 
@@ -44,12 +45,30 @@ int fail(const std::string& message) {
   return 1;
 }
 
+// The commands that can run for minutes, whose loops have check points
+// (interruption.h): a signal stops them there, their temporaries removed.
+bool stops_at_check_points(int argc, const char* const* argv) {
+  const std::string command = argc >= 2 ? argv[1] : "";
+  const std::string subcommand = argc >= 3 ? argv[2] : "";
+  return command == "detect-loops" || command == "evaluate" ||
+         (command == "db" && (subcommand == "build" || subcommand == "add"));
+}
+
+// 128 + the signal's number, as a shell reports a command a signal stopped.
+int interrupted(int signal) {
+  std::fprintf(stderr, "binbow: interrupted\n");
+  return 128 + signal;
+}
+
 }  // namespace
 
 // Every failure ends the same way, so scripts can rely on it: one
 // "binbow: error: ..." line on stderr and exit status 1; a usage error adds
 // where to read the usage. --help and --version print to stdout and exit 0.
+// A long command stopped by SIGINT or SIGTERM prints "binbow: interrupted"
+// and exits with 130 or 143.
 int main(int argc, char** argv) {
+  if (stops_at_check_points(argc, argv)) binbow::cli::stop_at_check_points();
   CLI::App app{"binbow: fast place recognition and loop closure with bags of binary words"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "binbow " BINBOW_VERSION);
@@ -68,6 +87,8 @@ int main(int argc, char** argv) {
     fail(message.empty() ? e.what() : message);
     std::fprintf(stderr, "Run '%s --help' for usage.\n", command_path(app).c_str());
     return 1;
+  } catch (const binbow::cli::Interrupted& e) {
+    return interrupted(e.signal());
   } catch (const binbow::Error& e) {
     return fail(e.what());
   } catch (const std::filesystem::filesystem_error& e) {
@@ -78,5 +99,8 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return fail(e.what());
   }
+  // A signal after the last check point: the outputs are written, but the
+  // caller asked to stop and a script must not go on as if it had not.
+  if (const int signal = binbow::cli::interruption_signal()) return interrupted(signal);
   return 0;
 }

@@ -3,6 +3,8 @@
 #include <unistd.h>
 #include <cstdio>
 
+#include "interruption.h"
+
 namespace binbow::cli {
 
 Progress::Progress(std::string label, std::size_t total)
@@ -17,6 +19,7 @@ Progress::~Progress() {
 }
 
 void Progress::update(std::size_t done) {
+  throw_if_interrupted();
   done_ = done;
   const auto now = std::chrono::steady_clock::now();
   const double seconds = std::chrono::duration<double>(now - start_).count();

@@ -14,6 +14,8 @@ class Progress {
   // total 0: unknown length (counts only).
   Progress(std::string label, std::size_t total);
   ~Progress();
+  // Also a check point (interruption.h): throws Interrupted once SIGINT or
+  // SIGTERM arrived, so that every stage that shows its progress stops there.
   void update(std::size_t done);
   void finish();
 

@@ -13,6 +13,7 @@
 
 #include "binbow/error.h"
 #include "core/module_entry.h"
+#include "interruption.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
@@ -43,6 +44,7 @@ const VisionCommands& load(const std::string& given) {
       detail::check_module_table(reinterpret_cast<const void*>(entry), commands,
                                  sizeof(VisionCommands), kVisionCommandsVersion, BINBOW_VERSION);
   if (!reason.empty()) throw Error(load_error(path, reason));
+  commands->watch_interruption_flag(&interruption_flag());
   return *commands;
 }
 

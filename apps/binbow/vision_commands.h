@@ -15,6 +15,7 @@
 // as they are.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -26,7 +27,7 @@
 namespace binbow::cli {
 
 // Raised whenever VisionCommands changes.
-inline constexpr int kVisionCommandsVersion = 1;
+inline constexpr int kVisionCommandsVersion = 2;
 
 struct VisionCommands {
   int version;
@@ -47,6 +48,9 @@ struct VisionCommands {
   // `binbow evaluate --sweep` and `--report` (evaluate.h).
   std::vector<double> (*evaluate_sweep_values)(const EvaluateArguments& arguments);
   void (*sweep_and_report)(const EvaluateArguments& arguments, const Evaluation& evaluation);
+  // Makes the module's check points read the executable's signal flag
+  // (interruption.h); called once the module is loaded.
+  void (*watch_interruption_flag)(const std::atomic<int>* flag) noexcept;
 };
 
 // Whether the command line names a command (or asks for the help or the

@@ -5,6 +5,7 @@
 #include "binbow/vision/features.h"
 #include "commands.h"
 #include "evaluate.h"
+#include "interruption.h"
 #include "vision_commands.h"
 
 namespace binbow::cli {
@@ -28,7 +29,8 @@ constexpr VisionCommands kCommands{
     print_loop_state_info,
     descriptor_code_size,
     evaluate_sweep_values,
-    sweep_and_report};
+    sweep_and_report,
+    watch_interruption_flag};
 // clang-format on
 
 }  // namespace

@@ -331,6 +331,14 @@ class Database {
   // changes (about their journal's size, counted in memory_usage(); past the
   // journal's limit it drops them and the next save is full).
   void save_incremental(const std::string& path, bool include_vocabulary = true) const;
+  // The append of save_incremental() alone: true once the changes since the
+  // last save or load of `path` are in its journal (also when there were
+  // none); false, with nothing written, where save_incremental() would make
+  // a full save instead. For a caller that must not see `path` rewritten in
+  // place, such as a set of files committed together by a manifest, which
+  // then saves the database whole under another name. Takes the writer lock
+  // and refuses another writer's changes as every save does (DatabaseLock).
+  bool append_journal(const std::string& path) const;
   // "<path>.journal": copy, move or remove it together with the .bbdb file.
   static std::string journal_path(const std::string& path);
   // Throws FileError naming the file and the problem (damaged file, a file

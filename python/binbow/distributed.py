@@ -10,11 +10,13 @@ Dask is imported when a ShardedDatabase is made, so `import binbow` works
 without it. See docs/distributed.md.
 """
 
+import errno
+import fcntl
 import json
 import math
 import os
 import re
-import tempfile
+import secrets
 
 import numpy as _np
 
@@ -65,6 +67,20 @@ class _Shard:
             return ids, error
         return ids, None
 
+    def append_journal(self, path):
+        """(whether the changes went to the journal of `path`, the journal's bytes).
+
+        The size is read here, by the process that wrote the journal: a client
+        on another machine may see an older size of a file on a shared file
+        system, and the manifest's size is what load() keeps of the journal.
+        """
+        if not self.database.append_journal(path):
+            return False, 0
+        try:
+            return True, os.path.getsize(path + _JOURNAL)
+        except FileNotFoundError:  # nothing changed since the last save
+            return True, 0
+
     def call(self, method, *arguments):
         """(result, None) of a Database method, or (None, its exception).
 
@@ -86,8 +102,8 @@ class _Shard:
             if method == "save":
                 # Database.save writes a temporary file and renames it: atomic.
                 return self.database.save(arguments[0], include_vocabulary=False), None
-            if method == "save_incremental":
-                return self.database.save_incremental(arguments[0], include_vocabulary=False), None
+            if method == "append_journal":
+                return self.append_journal(arguments[0]), None
             if method == "query":  # (image, max_results, max_entry_id, fast, fast keywords)
                 *positional, keywords = arguments
                 return self.database.query(*positional, **keywords), None
@@ -99,12 +115,20 @@ class _Shard:
 _JOURNAL = ".journal"  # Database.journal_path: beside each shard's file
 
 
-# Each full save writes a new generation of shard files: a shard's Database
+# A shard's file is only ever written whole under a name no manifest names
+# yet: a new generation of shard files (every shard's for a full save, the
+# shards whose journal is full for an incremental one). A shard's Database
 # stays tied to the name it wrote (so that the next save_incremental appends
-# to its journal), while the previous generation stays whole until the
-# manifest names the new one. A manifest may also name shard-<i>.bbdb, a
-# file without generation.
+# to its journal), while the files the manifest names stay whole until the
+# next manifest replaces it. A manifest may also name shard-<i>.bbdb, a file
+# without generation.
 _SHARD_FILE = re.compile(r"shard-[0-9]+(?:\.gen([0-9]+))?\.bbdb(?:\.journal)?")
+# The temporaries of a save that was killed: those binbow writes beside a
+# shard file, and the manifest's. Each is flock()ed while its writer lives.
+# The writer lock binbow takes beside a shard file while saving it (DatabaseLock).
+_SHARD_LOCK = re.compile(r"(shard-[0-9]+(?:\.gen[0-9]+)?\.bbdb)\.lock")
+_TEMPORARY = re.compile(r"(?:shard-[0-9]+(?:\.gen[0-9]+)?\.bbdb(?:\.journal)?|"
+                        r"manifest\.json)\.tmp-[0-9A-Za-z]{6}")
 
 
 def _shard_files(shards, generation):
@@ -123,12 +147,95 @@ def _next_generation(folder):
     return newest + 1
 
 
+def _named_files(files):
+    """The shard files a manifest naming `files` reads: each file and its journal."""
+    return set(files) | {name + _JOURNAL for name in files}
+
+
+def _remove_if_abandoned(path):
+    """Removes a temporary or a lock file that no live writer holds."""
+    try:
+        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        return
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.unlink(path)
+    except OSError:  # held by its writer, or gone already
+        pass
+    finally:
+        os.close(descriptor)
+
+
 def _remove_shard_files(folder, keep):
-    """Removes the shard files and journals in `folder` that `keep` does not name."""
-    for name in os.listdir(folder):
-        path = os.path.join(folder, name)
-        if name not in keep and _SHARD_FILE.fullmatch(name) and os.path.isfile(path):
-            os.unlink(path)
+    """Removes the shard files, journals and writer locks in `folder` that `keep`
+    does not name, and the temporaries of dead saves; nothing else in the folder."""
+    with os.scandir(folder) as found:
+        entries = [(entry.name, entry.path) for entry in found
+                   if entry.is_file(follow_symlinks=False)]
+    for name, path in entries:
+        if _SHARD_FILE.fullmatch(name) and name not in keep:
+            try:
+                os.unlink(path)
+            except FileNotFoundError:
+                pass
+        elif _TEMPORARY.fullmatch(name):
+            _remove_if_abandoned(path)
+        else:
+            lock = _SHARD_LOCK.fullmatch(name)
+            if lock and lock.group(1) not in keep:
+                _remove_if_abandoned(path)
+
+
+def _sync_folder(folder):
+    """Flushes the folder's entries to disk: the renames and new files in it."""
+    descriptor = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+    try:
+        os.fsync(descriptor)
+    except OSError as error:
+        if error.errno != errno.EINVAL:  # a file system that cannot sync a folder
+            raise
+    finally:
+        os.close(descriptor)
+
+
+def _replace_manifest(folder, manifest):
+    """Replaces folder/manifest.json with `manifest` in one rename.
+
+    The temporary is created with the permissions the umask asks for (as
+    binbow's own saves), locked while it is written (a load removes the
+    temporaries it can lock), and flushed to disk before the rename.
+    """
+    path = os.path.join(folder, _MANIFEST)
+    data = json.dumps(manifest, indent=2).encode("utf-8")
+    for _ in range(100):
+        temporary = f"{path}.tmp-{secrets.token_hex(3)}"
+        try:
+            descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC,
+                                 0o666)
+            break
+        except FileExistsError:
+            continue
+    else:
+        raise Error(f"ShardedDatabase: cannot create a temporary file beside {path}")
+    try:
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # a file system without locks: go on
+            pass
+        view = memoryview(data)
+        while view:
+            view = view[os.write(descriptor, view):]
+        os.fsync(descriptor)
+        os.replace(temporary, path)
+    except BaseException:
+        try:
+            os.unlink(temporary)
+        except OSError:
+            pass
+        raise
+    finally:
+        os.close(descriptor)
 
 
 def _cut_journal(journal, size, manifest):
@@ -463,9 +570,10 @@ class ShardedDatabase:
         client (a shared file system when they are on several machines). A
         database that lost a shard is refused (binbow.Error) before anything is
         written. The shards write a new generation <g> of files beside the
-        previous save, which stays until the manifest names the new one: a
-        shard lost during the save leaves the previous save as it was. Then
-        the previous generation's files and journals are removed.
+        previous save, which stays until the manifest, replaced in one rename,
+        names the new one: a save stopped at any point (a lost shard, a killed
+        process) leaves the previous save or this one loadable, never a mix.
+        Then the previous generation's files and journals are removed.
         """
         self._check_usable("save")
         folder = os.path.abspath(os.fspath(folder))
@@ -474,26 +582,22 @@ class ShardedDatabase:
         os.makedirs(folder, exist_ok=True)
         self._saved_folder = None  # until the manifest commits: the shards' files change
         files = _shard_files(self._shard_count, _next_generation(folder))
-        try:
-            self._call_all("save", "save", [(os.path.join(folder, name),) for name in files])
-            self._write_manifest(folder, files, options, [0] * self._shard_count)
-        except BaseException:
-            for name in files:  # none of them existed before this save
-                if os.path.isfile(os.path.join(folder, name)):
-                    os.unlink(os.path.join(folder, name))
-            raise
-        _remove_shard_files(folder, keep=set(files))
+        self._commit(folder, files, options, [0] * self._shard_count, written=range(len(files)),
+                     what="save")
 
     def save_incremental(self, folder):
         """Appends each shard's changes since the last save to its journal, then
         rewrites manifest.json, which records each journal's size.
 
         A save to another folder than this database's last save or load is a
-        full save(folder). Each shard appends with Database.save_incremental
-        (atomic per shard; a shard whose journal would pass a quarter of its
-        file writes its file whole instead). The manifest, written last, is
-        what a load follows: records appended after the manifest's sizes (a
-        save that did not finish) are cut off by load().
+        full save(folder). Each shard appends with Database.append_journal. A
+        shard whose journal would pass a quarter of its file (or that cannot
+        append) writes its file whole instead, under a new generation's name:
+        the files the manifest names are only ever appended to. The manifest,
+        replaced last in one rename, is what a load follows: records appended
+        after the manifest's sizes and files it does not name (a save that did
+        not finish) are dropped by load(). Then the rewritten shards' previous
+        files are removed.
         """
         self._check_usable("save_incremental")
         folder = os.path.abspath(os.fspath(folder))
@@ -501,12 +605,40 @@ class ShardedDatabase:
             self.save(folder)
             return
         options = self._call_all("save_incremental", "options", [()] * self._shard_count)[0]
-        files = self._saved_files
+        files = list(self._saved_files)
+        appended = self._call_all("save_incremental", "append_journal",
+                                  [(os.path.join(folder, name),) for name in files])
+        rewritten = [shard for shard in range(self._shard_count) if not appended[shard][0]]
+        if rewritten:
+            generation = _next_generation(folder)
+            for shard in rewritten:
+                files[shard] = f"shard-{shard}.gen{generation}.bbdb"
+        sizes = [appended[shard][1] for shard in range(self._shard_count)]
+        self._commit(folder, files, options, sizes, written=rewritten, what="save_incremental")
+
+    def _commit(self, folder, files, options, journal_bytes, written, what):
+        """Has the shards in `written` save their files whole under their new names
+        in `files`, replaces the manifest, then removes the files it no longer
+        names. Until the manifest is replaced, nothing it named has changed but
+        journals grown past its sizes; if anything fails before, the new files
+        are removed and the previous save stays as it was.
+        """
         paths = [os.path.join(folder, name) for name in files]
-        self._call_all("save_incremental", "save_incremental", [(path,) for path in paths])
-        sizes = [os.path.getsize(path + _JOURNAL) if os.path.exists(path + _JOURNAL) else 0
-                 for path in paths]
-        self._write_manifest(folder, files, options, sizes)
+        written = set(written)
+        try:
+            if written:
+                self._call_all(what, "save", [(paths[shard],) if shard in written else None
+                                              for shard in range(self._shard_count)])
+            self._write_manifest(folder, files, options, journal_bytes)
+        except BaseException:
+            for shard in written:  # none of them existed before this save
+                if os.path.isfile(paths[shard]):
+                    os.unlink(paths[shard])
+            raise
+        # The new manifest on disk before the files of the previous one go.
+        _sync_folder(folder)
+        if written:
+            _remove_shard_files(folder, keep=_named_files(files))
 
     def _write_manifest(self, folder, files, options, journal_bytes):
         manifest = {
@@ -520,14 +652,7 @@ class ShardedDatabase:
             "files": files,
             "journal_bytes": journal_bytes,
         }
-        descriptor, temporary = tempfile.mkstemp(prefix=".manifest-", dir=folder)
-        try:
-            with os.fdopen(descriptor, "w", encoding="utf-8") as file:
-                json.dump(manifest, file, indent=2)
-            os.replace(temporary, os.path.join(folder, _MANIFEST))
-        except BaseException:
-            os.unlink(temporary)
-            raise
+        _replace_manifest(folder, manifest)
         self._saved_folder = folder
         self._saved_files = files
 
@@ -563,11 +688,11 @@ class ShardedDatabase:
         if (not isinstance(journal_bytes, list) or len(journal_bytes) != shards
                 or not all(isinstance(size, int) and size >= 0 for size in journal_bytes)):
             raise Error(f"ShardedDatabase.load: {path} has an invalid journal_bytes field")
-        for name, size in zip(files, journal_bytes):
-            _cut_journal(os.path.join(folder, name) + _JOURNAL, size, path)
         if isinstance(vocabulary, Vocabulary) and checksum != vocabulary.checksum:
             raise Error(f"ShardedDatabase.load: {path} was saved with vocabulary checksum "
                         f"{checksum}, this vocabulary's is {vocabulary.checksum}")
+        for name, size in zip(files, journal_bytes):
+            _cut_journal(os.path.join(folder, name) + _JOURNAL, size, path)
         self = cls.__new__(cls)
         self._setup(client, vocabulary, shards, timeout)
         self._saved_folder = folder
@@ -579,4 +704,7 @@ class ShardedDatabase:
             if next_id != _shard_size(entries, shard, shards):
                 raise Error(f"ShardedDatabase.load: {files[shard]} holds {next_id} ids, "
                             f"{path} says {_shard_size(entries, shard, shards)}")
+        # What a save that did not finish left: only once the files the
+        # manifest names have loaded, so that a wrong manifest removes nothing.
+        _remove_shard_files(folder, keep=_named_files(files))
         return self

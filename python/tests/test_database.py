@@ -166,6 +166,27 @@ def test_one_writer_at_a_time(tmp_path, database, images):
     assert len(binbow.Database.load(path)) == len(first)
 
 
+def test_append_journal_appends_or_writes_nothing(tmp_path, database, images):
+    path = tmp_path / "db.bbdb"
+    journal = tmp_path / "db.bbdb.journal"
+    assert not database.append_journal(path)  # never saved there: a full save is needed
+    assert not path.exists()
+    database.save(path)
+    base = path.read_bytes()
+    assert database.append_journal(path) and not journal.exists()  # nothing changed
+    database.add(images[0], "again")
+    assert database.append_journal(path)
+    appended = journal.read_bytes()
+    assert path.read_bytes() == base and appended
+    # Past a quarter of the file (at least 1 MiB), the journal takes nothing.
+    database.add(images[1], "x" * (1 << 20))
+    assert not database.append_journal(path)
+    assert path.read_bytes() == base and journal.read_bytes() == appended
+    assert not database.append_journal(tmp_path / "other.bbdb")
+    database.save_incremental(path)  # the full save it asked for
+    assert not journal.exists() and binbow.Database.load(path).next_entry_id == len(images) + 2
+
+
 def damaged_postings(path):
     """Flips a byte in the middle of the postings, the section checked after load returns."""
     data = bytearray(path.read_bytes())

@@ -438,3 +438,190 @@ def test_saves_named_without_generation_still_load_and_append(client, vocabulary
         "manifest.json", "shard-0.gen1.bbdb", "shard-1.gen1.bbdb"]
     reloaded = module.ShardedDatabase.load(client, tmp_path, vocabulary)
     assert_same_answers(single, reloaded, queries)
+
+
+# Run in a process of its own, killed (SIGKILL) at the Nth call that changes a
+# file: a shard's save or append (a shard's own file writes are atomic,
+# docs/database-files.md) or the client's renames, removals and truncations.
+# The workers are threads of that process, so the kill stops every writer at
+# once, as a crash of the machine would. Prints the calls made when not killed.
+_KILLED_SAVE = r"""
+import os, signal, sys, threading
+import numpy as np
+import binbow, distributed
+import binbow.distributed as sharded
+
+folder, vocabulary_path, kind, kill_at = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+vocabulary = binbow.Vocabulary.load(vocabulary_path)
+calls, lock, counting = [0], threading.Lock(), [False]
+
+def step():
+    with lock:
+        if counting[0]:
+            calls[0] += 1
+            if calls[0] == kill_at:
+                os.kill(os.getpid(), signal.SIGKILL)
+
+def counted(function):
+    def call(*arguments, **keywords):
+        step()
+        return function(*arguments, **keywords)
+    return call
+
+for name in ("replace", "rename", "unlink", "remove", "truncate"):
+    setattr(os, name, counted(getattr(os, name)))
+shard_call = sharded._Shard.call
+def call(self, method, *arguments):
+    if method in ("save", "save_incremental", "append_journal"):
+        step()
+    return shard_call(self, method, *arguments)
+sharded._Shard.call = call
+
+rng = np.random.default_rng(30)
+with distributed.LocalCluster(n_workers=2, processes=False, threads_per_worker=1,
+                              dashboard_address=None) as cluster, \
+        distributed.Client(cluster) as client:
+    db = sharded.ShardedDatabase.load(client, folder, vocabulary)
+    if kind == "incremental":
+        # Entry 8 goes to shard 0, whose journal it overflows: that shard is
+        # written whole; shard 1 appends entry 9 and the removal of entry 3.
+        db.add(rng.integers(0, 256, size=(60, 32), dtype=np.uint8), "x" * (1100 << 10))
+        db.add(rng.integers(0, 256, size=(60, 32), dtype=np.uint8), "l9")
+        db.remove(3)
+        counting[0] = True
+        db.save_incremental(folder)
+    else:
+        db.add_many([rng.integers(0, 256, size=(60, 32), dtype=np.uint8) for _ in range(2)],
+                    ["l8", "l9"])
+        db.set_label(0, "first")
+        counting[0] = True
+        db.save(folder)
+    counting[0] = False
+print(calls[0])
+"""
+
+
+def sharded_state(db):
+    """What a save holds: the next id and every live entry's label."""
+    return db.next_entry_id, {entry: db.label(entry) for entry in range(db.next_entry_id)
+                              if entry in db}
+
+
+def test_a_save_killed_at_any_point_leaves_the_previous_or_the_new_save(client, vocabulary,
+                                                                        tmp_path):
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from concurrent.futures import ThreadPoolExecutor
+
+    module = sharded_module()
+    vocabulary_path = tmp_path / "vocabulary.bbw"
+    vocabulary.save(vocabulary_path)
+    images = random_images(31, 8)
+    labels = [f"l{i}" for i in range(8)]
+    sharded = module.ShardedDatabase(client, vocabulary, shards=2)
+    sharded.add_many(images[:6], labels[:6])
+    previous = tmp_path / "previous"
+    sharded.save(previous)
+    sharded.add_many(images[6:], labels[6:])
+    sharded.save_incremental(previous)  # both shards have a journal
+    assert len(list(previous.glob("*.journal"))) == 2
+    (previous / "notes.txt").write_text("not binbow's", encoding="utf-8")
+    (previous / "shard-0.gen1.bbdb.copy").write_text("not binbow's either", encoding="utf-8")
+    old = sharded_state(sharded)
+    new = {
+        "incremental": (10, {**{i: f"l{i}" for i in range(8) if i != 3},
+                             8: "x" * (1100 << 10), 9: "l9"}),
+        "full": (10, {**{i: f"l{i}" for i in range(10)}, 0: "first"}),
+    }
+
+    def run(kind, kill_at):
+        folder = tmp_path / f"{kind}-{kill_at}"
+        shutil.copytree(previous, folder)
+        result = subprocess.run([sys.executable, "-c", _KILLED_SAVE, str(folder),
+                                 str(vocabulary_path), kind, str(kill_at)],
+                                capture_output=True, text=True, timeout=120)
+        return folder, result
+
+    for kind in ("incremental", "full"):
+        folder, result = run(kind, 0)  # never killed: how many calls change files
+        assert result.returncode == 0, result.stderr
+        calls = int(result.stdout.split()[-1])
+        assert calls >= 3, result.stdout
+        found = sharded_state(module.ShardedDatabase.load(client, folder, vocabulary))
+        assert found == new[kind]
+        outcomes = set()
+        with ThreadPoolExecutor(2) as pool:  # the processes, two at a time
+            runs = list(pool.map(lambda kill_at: run(kind, kill_at), range(1, calls + 1)))
+        loaded, failures = {}, []
+        for kill_at, (folder, result) in enumerate(runs, 1):
+            assert result.returncode == -9, (kind, kill_at, result.stderr)
+            try:
+                loaded[kill_at] = module.ShardedDatabase.load(client, folder, vocabulary)
+            except binbow.Error as error:
+                failures.append(f"{kind} save killed at call {kill_at} of {calls}: {error}")
+        assert not failures, "\n".join(failures)
+        for kill_at, db in loaded.items():
+            folder = runs[kill_at - 1][0]
+            state = sharded_state(db)
+            assert state in (old, new[kind]), (kind, kill_at)
+            outcomes.add(state == old)
+            # Loading removed what the killed save left, and nothing else.
+            manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+            named = set(manifest["files"]) | {name + suffix for name in manifest["files"]
+                                               for suffix in (".journal", ".lock")}
+            assert sorted(p.name for p in folder.iterdir()) == sorted(
+                named & set(os.listdir(folder)) | {"manifest.json", "notes.txt",
+                                                   "shard-0.gen1.bbdb.copy"}), (kind, kill_at)
+            # The loaded database saves on: the next incremental save commits.
+            db.add(images[0], "after")
+            db.save_incremental(folder)
+            again = module.ShardedDatabase.load(client, folder, vocabulary)
+            assert sharded_state(again)[1][state[0]] == "after"
+        assert outcomes == {True, False}, f"{kind}: every kill left the same save"
+
+
+def test_the_manifest_has_the_umask_s_permissions_and_reaches_the_disk_before_it_counts(
+        client, vocabulary, tmp_path, monkeypatch):
+    import os
+    import stat
+
+    sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=2)
+    sharded.add_many(random_images(32, 3))
+    events = []
+    fsync, replace = os.fsync, os.replace
+
+    def recorded_fsync(descriptor):
+        events.append(("fsync", os.readlink(f"/proc/self/fd/{descriptor}")))
+        return fsync(descriptor)
+
+    def recorded_replace(source, destination):
+        events.append(("replace", os.fspath(source), os.fspath(destination)))
+        return replace(source, destination)
+
+    monkeypatch.setattr(os, "fsync", recorded_fsync)
+    monkeypatch.setattr(os, "replace", recorded_replace)
+    manifest = tmp_path / "manifest.json"
+    for mask, mode in ((0o022, 0o644), (0o077, 0o600), (0o002, 0o664)):
+        previous = os.umask(mask)
+        try:
+            sharded.save(tmp_path)
+        finally:
+            os.umask(previous)
+        assert stat.S_IMODE(manifest.stat().st_mode) == mode, oct(mask)
+    sharded.add(random_images(33, 1)[0])
+    events.clear()
+    previous = os.umask(0o002)
+    try:
+        sharded.save_incremental(tmp_path)
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE(manifest.stat().st_mode) == 0o664
+    # The temporary is flushed, renamed over the manifest, then the folder is flushed.
+    [renamed] = [event for event in events if event[0] == "replace"]
+    assert renamed[2] == str(manifest) and renamed[1].startswith(str(manifest) + ".tmp-")
+    at = events.index(renamed)
+    assert ("fsync", renamed[1]) in events[:at]
+    assert ("fsync", str(tmp_path)) in events[at:]
+    assert sorted(p.name for p in tmp_path.iterdir() if "tmp" in p.name) == []

@@ -707,6 +707,13 @@ void Database::save_incremental(const std::string& path, bool include_vocabulary
   save(target.path, include_vocabulary);
 }
 
+bool Database::append_journal(const std::string& path) const {
+  const detail::SaveTarget target(path);
+  std::shared_lock lock(impl_->mutex);
+  std::lock_guard<std::mutex> saving(impl_->journal.mutex);
+  return impl_->journal.append(target.path);
+}
+
 namespace detail {
 
 JournalReplay replay_journal(Database& database, const JournalScan& scan, const BaseId& base,
