@@ -29,8 +29,8 @@
 
 #include "bench_support.h"
 #include "binbow/database.h"
-#include "core/forward_index.h"
 #include "core/scoring.h"
+#include "database/forward_index.h"
 #include "orb_photographs.h"
 
 namespace binbow::bench {

@@ -19,7 +19,7 @@
 #include "binbow/formats.h"
 #include "binbow/vocabulary.h"
 #include "binding.h"
-#include "core/database_impl.h"
+#include "database/database_impl.h"
 
 namespace binbow::python {
 namespace {

@@ -9,13 +9,13 @@
 #include "binbow/error.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
-#include "core/vocabulary_block.h"
 #include "formats/codecs.h"
 #include "formats/container.h"
 #include "formats/gzip.h"
 #include "formats/loader.h"
 #include "formats/text_numbers.h"
 #include "formats/tree_checks.h"
+#include "vocabulary/vocabulary_block.h"
 
 namespace binbow {
 

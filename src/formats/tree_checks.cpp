@@ -3,8 +3,8 @@
 #include <cstdint>
 
 #include "binbow/error.h"
-#include "core/word_weights.h"
 #include "formats/codecs.h"
+#include "vocabulary/word_weights.h"
 
 namespace binbow::detail {
 

@@ -32,7 +32,7 @@ bool check_word_list(VocabularyTree& tree,
                      const std::vector<std::pair<std::uint32_t, std::uint32_t>>& words,
                      const std::string& name);
 
-// The weights of the tree's words (its leaves), as core/word_weights.h
+// The weights of the tree's words (its leaves), as vocabulary/word_weights.h
 // wants them; inner nodes' weights must already be zeroed. Throws
 // FileError(name, ...).
 void check_word_weights(const VocabularyTree& tree, const std::string& name);

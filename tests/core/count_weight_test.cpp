@@ -9,7 +9,7 @@
 #include <cstring>
 #include <random>
 
-#include "core/count_form.h"
+#include "database/count_form.h"
 
 namespace binbow::detail {
 namespace {

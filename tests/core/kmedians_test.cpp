@@ -1,4 +1,4 @@
-#include "core/kmedians.h"
+#include "vocabulary/kmedians.h"
 
 #include <gtest/gtest.h>
 

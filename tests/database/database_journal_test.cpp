@@ -16,9 +16,9 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
-#include "core/database_journal.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
+#include "database/database_journal.h"
 #include "support/test_support.h"
 
 namespace binbow {

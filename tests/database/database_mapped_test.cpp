@@ -15,8 +15,8 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
-#include "core/background_check.h"
 #include "core/file_io.h"
+#include "database/background_check.h"
 #include "support/query_results.h"
 #include "support/test_support.h"
 

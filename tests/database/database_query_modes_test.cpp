@@ -16,7 +16,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
-#include "core/database_impl.h"
+#include "database/database_impl.h"
 #include "support/query_results.h"
 
 namespace binbow {

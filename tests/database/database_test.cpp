@@ -12,7 +12,7 @@
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/vocabulary.h"
-#include "core/database_impl.h"
+#include "database/database_impl.h"
 #include "support/query_results.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"

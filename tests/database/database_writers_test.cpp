@@ -18,9 +18,9 @@
 #include "../../fuzz/fuzz_targets.h"
 #include "binbow/database.h"
 #include "binbow/error.h"
-#include "core/database_journal.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
+#include "database/database_journal.h"
 #include "support/test_support.h"
 
 namespace binbow {

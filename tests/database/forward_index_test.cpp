@@ -14,8 +14,8 @@
 
 #include "binbow/database.h"
 #include "binbow/vocabulary.h"
-#include "core/count_form.h"
-#include "core/forward_index.h"
+#include "database/count_form.h"
+#include "database/forward_index.h"
 #include "support/random_tree.h"
 #include "support/test_support.h"
 

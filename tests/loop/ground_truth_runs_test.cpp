@@ -1,4 +1,4 @@
-#include "loop/ground_truth_runs.h"
+#include "loop/evaluation/ground_truth_runs.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "loop/islands.h"
+#include "loop/detector/islands.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,100 @@
+// The state behind binbow::loop::LoopDetector, shared by its logic
+// (loop_detector.cpp) and its state file (loop_detector_file.cpp).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "binbow/loop/loop_detector.h"
+#include "loop/detector/islands.h"
+
+namespace binbow::loop {
+
+namespace detail {
+// The database a detector with these parameters keeps: a direct index for
+// GeometricCheck::kDirectIndex, at direct_index_levels.
+DatabaseOptions database_options(const LoopDetectorParams& params);
+}  // namespace detail
+
+struct LoopDetector::Impl {
+  Impl(Database database_in, const LoopDetectorParams& p, std::size_t code_size_in)
+      : params(p),
+        database(std::move(database_in)),
+        window(p.max_distance_between_islands, p.max_distance_between_queries),
+        code_size(code_size_in) {}
+
+  LoopDetectorParams params;
+  Database database;
+  // With an online vocabulary: its words, and the scratch of add_image().
+  std::optional<OnlineVocabulary> online;
+  OnlineImageWords image_words;
+  detail::TemporalWindow window;
+  BowVector previous_bow;
+  // Images with features so far: the time axis of the temporal window when
+  // featureless frames are skipped.
+  EntryId featured_frames = 0;
+  // The latest loop detected (query, match), which corroborates the next
+  // weak ones (LoopDetectorParams::min_uncorroborated_inliers).
+  bool has_previous_loop = false;
+  EntryId previous_loop_query = 0, previous_loop_match = 0;
+  // One per image processed (empty with GeometricCheck::kNone, and once
+  // forgotten): arrays of their own, so that forget() frees them at once.
+  struct FrameFeatures {
+    std::vector<vision::Keypoint> keypoints;
+    std::vector<std::uint8_t> descriptors;  // keypoints.size() rows of code_size bytes
+  };
+  std::vector<FrameFeatures> frames;
+  std::size_t code_size = 0;
+  // Scratch reused across frames.
+  std::vector<detail::Candidate> candidates;
+  std::vector<detail::Island> islands;
+  // Set by process(..., trail) for that call only: where each stage records
+  // what it saw. Null otherwise, and then nothing is recorded.
+  LoopDecisionTrail* trail = nullptr;
+
+  bool keeps_features() const { return params.geometric_check != GeometricCheck::kNone; }
+  DescriptorView descriptors_of(EntryId frame) const {
+    const FrameFeatures& f = frames[frame];
+    return {f.descriptors.data(), f.keypoints.size(), code_size};
+  }
+  // InvalidArgument unless `frame` was processed and not forgotten.
+  void check_remembered(EntryId frame) const;
+  // η's divisor: s(v_t, v_{t−Δt}), or 1 when the raw score is compared with α.
+  double normalisation_factor(const LoopResult& result) const {
+    return params.use_normalised_score ? result.normalisation_score : 1;
+  }
+
+  // The stages of Section V, in order; each sets result.status when the frame stops there.
+  void check_input(Span<vision::Keypoint> image_keypoints, const DescriptorView& descriptors) const;
+  // Adds the image to the online vocabulary, if there is one.
+  void transform(const DescriptorView& descriptors, BowVector& bow, FeatureVector& nodes);
+  std::vector<QueryResult> query(const BowVector& bow, LoopResult& result) const;
+  bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
+  void select_island(const std::vector<QueryResult>& found, LoopResult& result);
+  void verify_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                     const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
+  void verify(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+              const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
+  // Stage 6 for one pair: correspondences, then the fundamental matrix.
+  TrailCheck geometric_check(Span<vision::Keypoint> query_keypoints,
+                             const DescriptorView& query_descriptors,
+                             const FeatureVector& query_nodes, EntryId match) const;
+  LoopResult run(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
+  // Record in `trail` the islands of `candidates` (short ones too), and the
+  // temporal test of the chosen island (the window's state before it).
+  void record_islands();
+  void record_temporal(const detail::Island& chosen, const detail::TemporalWindow::State& before,
+                       EntryId position, int chain_after);
+  // Sets c's latest-loop fields, and corroborated when that loop corroborates
+  // the weak loop query → match (LoopDetectorParams::min_uncorroborated_inliers).
+  void corroborate_by_previous_loop(LoopCorroboration& c, EntryId query, EntryId match) const;
+  // Sets result's corroboration fields (LoopDetectorParams::min_uncorroborated_inliers).
+  void corroborate(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                   const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
+  void insert(BowVector& bow, const FeatureVector& nodes, Span<vision::Keypoint> image_keypoints,
+              const DescriptorView& descriptors);
+};
+
+}  // namespace binbow::loop
