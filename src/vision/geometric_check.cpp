@@ -274,7 +274,7 @@ double inlier_spread(Span<Keypoint> first, Span<Keypoint> second,
 std::size_t distinct_inliers(Span<Keypoint> first, Span<Keypoint> second,
                              const std::vector<Correspondence>& inliers) {
   constexpr float r2 = kDistinctInlierRadius * kDistinctInlierRadius;
-  const auto near = [r2](const Keypoint& a, const Keypoint& b) {
+  const auto near = [](const Keypoint& a, const Keypoint& b) {
     const float dx = a.x - b.x, dy = a.y - b.y;
     return dx * dx + dy * dy <= r2;
   };

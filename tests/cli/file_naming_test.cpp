@@ -93,7 +93,7 @@ TEST(CliFileNaming, AStateNamingAnUnknownOrMismatchedDescriptorIsNamed) {
 // AKAZE keeps several float copies of the image per scale: on a large
 // image with little memory, the error says which image it was.
 TEST(CliFileNaming, RunningOutOfMemoryOnAnImageNamesIt) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(BINBOW_TEST_ASAN)
   // Its shadow memory is a reservation of terabytes, which `ulimit -v` forbids.
   GTEST_SKIP() << "an AddressSanitizer build cannot run under an address-space limit; the "
                   "release build runs this test";

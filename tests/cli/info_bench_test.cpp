@@ -91,7 +91,7 @@ TEST(CliInfo, CutGzipFailsAsTruncatedWithinLittleMemory) {
       test::read_file(test::shared_data("vins-lite-brief-vocab/brief_lite.voc.gz"));
   bytes.pop_back();
   test::write_file(dir.file("cut.voc.gz"), bytes);
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(BINBOW_TEST_ASAN)
   // ASan reserves terabytes of shadow memory, so ulimit -v cannot apply.
   const std::string limited = "ASAN_OPTIONS=\"$ASAN_OPTIONS:max_allocation_size_mb=1000\" ";
 #else
@@ -191,7 +191,7 @@ TEST(CliBench, TimesEveryStageOnRealFrames) {
 // which the estimate counts with the machine's available memory), instead
 // of dying out of memory.
 TEST(CliBench, RefusesADatabaseSizeBeyondTheAvailableMemory) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(BINBOW_TEST_ASAN)
   // Its shadow memory is a reservation of terabytes, which `ulimit -v` forbids.
   GTEST_SKIP() << "an AddressSanitizer build cannot run under an address-space limit; the "
                   "release build runs this test";

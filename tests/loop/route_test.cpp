@@ -194,11 +194,9 @@ TEST(Route, GroundTruthFileIsReadByEvaluate) {
       300);
   // A detections file with one true loop: evaluate counts it.
   const auto [query, match] = route.loop_pairs().front();
-  test::write_file(dir.file("loops.csv"), [&] {
-    const std::string text = "query_index,match_index,query_file,match_file,score,inliers\n" +
-                             std::to_string(query) + "," + std::to_string(match) + ",q,m,1,50\n";
-    return std::vector<std::uint8_t>(text.begin(), text.end());
-  }());
+  const std::string text = "query_index,match_index,query_file,match_file,score,inliers\n" +
+                           std::to_string(query) + "," + std::to_string(match) + ",q,m,1,50\n";
+  test::write_file(dir.file("loops.csv"), std::vector<std::uint8_t>(text.begin(), text.end()));
   ASSERT_EQ(test::run_cli(
                 "evaluate --gt " + dir.file("route/ground_truth.txt") + " " + dir.file("loops.csv"),
                 &out),

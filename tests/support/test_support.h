@@ -7,6 +7,16 @@
 #include <string>
 #include <vector>
 
+// Whether AddressSanitizer instruments this build (GCC defines
+// __SANITIZE_ADDRESS__; clang answers __has_feature).
+#if defined(__SANITIZE_ADDRESS__)
+#define BINBOW_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define BINBOW_TEST_ASAN 1
+#endif
+#endif
+
 #include "binbow/descriptors.h"
 #include "binbow/vocabulary.h"
 

@@ -25,11 +25,14 @@ typedef unsigned int NodeId;
 enum LNorm { L1, L2 };
 
 /// How a word's occurrences in an image become its value (DBoW2's codes).
-enum WeightingType { TF_IDF, TF, IDF, BINARY };
+/// An int underneath, so that a code read from a file, such as 7, is a value
+/// the setters can refuse rather than undefined behaviour.
+enum WeightingType : int { TF_IDF, TF, IDF, BINARY };
 
 /// How two BoW vectors are compared (DBoW2's codes). KL is a divergence
 /// (lower is more similar); every other score is higher for more similar.
-enum ScoringType { L1_NORM, L2_NORM, CHI_SQUARE, KL, BHATTACHARYYA, DOT_PRODUCT };
+/// An int underneath, as WeightingType.
+enum ScoringType : int { L1_NORM, L2_NORM, CHI_SQUARE, KL, BHATTACHARYYA, DOT_PRODUCT };
 
 /// Sparse BoW vector: word id -> value, ordered by word id, as DBoW2's.
 class BowVector : public std::map<WordId, WordValue> {

@@ -27,11 +27,17 @@ const Table kTable{1, "0.0.0-other", {}};
 #endif
 }  // namespace
 
-EXPORTED const void* binbow_cli_vision_commands() {
+// The entry point's own type, so that calling it is not itself the fault
+// (UBSan's -fsanitize=function checks the type a function is called as).
+namespace binbow::cli {
+struct VisionCommands;
+}
+
+EXPORTED const binbow::cli::VisionCommands* binbow_cli_vision_commands() {
 #if defined(MALFORMED_TABLE_ADDRESS)
-  return reinterpret_cast<const void*>(0x10);
+  return reinterpret_cast<const binbow::cli::VisionCommands*>(0x10);
 #else
-  return &kTable;
+  return reinterpret_cast<const binbow::cli::VisionCommands*>(&kTable);
 #endif
 }
 #endif
