@@ -1,12 +1,9 @@
-"""The package's surface: version, docstrings on everything, type stubs that match."""
-import ast
+"""The package's surface: version, docstrings on everything (the stubs: test_stubs.py)."""
 import inspect
 import re
 
 import binbow
 from conftest import SOURCE_DIR
-
-STUBS = SOURCE_DIR / "python" / "binbow" / "__init__.pyi"
 
 
 def test_version_is_the_project_version():
@@ -45,37 +42,6 @@ def own_doc(name, value):
 def test_every_function_method_and_property_has_a_docstring():
     missing = [name for name, value in public_members() if not own_doc(name, value)]
     assert not missing, f"without a docstring: {missing}"
-
-
-def stub_names():
-    """Names defined at the top of the stubs, and the members of each class."""
-    tree = ast.parse(STUBS.read_text(encoding="utf-8"))
-    names = {}
-    for node in tree.body:
-        if isinstance(node, ast.ClassDef):
-            names[node.name] = {
-                n.name for n in node.body if isinstance(n, ast.FunctionDef)
-            } | {n.target.id for n in node.body if isinstance(n, ast.AnnAssign)}
-        elif isinstance(node, ast.FunctionDef):
-            names[node.name] = set()
-        elif isinstance(node, ast.AnnAssign):
-            names[node.target.id] = set()
-    return names
-
-
-def test_the_stubs_describe_the_runtime_api():
-    stubs = stub_names()
-    public = set(binbow.__all__) | {"__version__"}
-    assert {n for n in stubs if not n.startswith("_") or n == "__version__"} == public
-    for name in binbow.__all__:
-        value = getattr(binbow, name)
-        if not inspect.isclass(value) or issubclass(value, BaseException):
-            continue
-        runtime = {m for m in vars(value) if not m.startswith("_")}
-        assert {m for m in stubs[name] if not m.startswith("_")} == runtime, name
-        for dunder in ("__len__", "__eq__", "__contains__", "__copy__", "__deepcopy__",
-                       "__getstate__", "__setstate__"):
-            assert (dunder in vars(value)) == (dunder in stubs[name]), (name, dunder)
 
 
 def test_the_package_is_typed():
