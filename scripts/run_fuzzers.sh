@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds every libFuzzer target (fuzz/fuzz_*.cpp) with clang, AddressSanitizer
-# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 15; 22
+# and UndefinedBehaviorSanitizer, then runs each for SECONDS (default 15; 21
 # targets, JOBS at a time) on its corpus fuzz/corpus/<name>/ and prints the coverage reached.
 # Fails if any target crashes, leaks, hangs, exceeds 2 GiB, or makes a single
 # allocation over 512 MiB (inputs are at most a few KiB, see max_len_of: such
