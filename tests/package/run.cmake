@@ -85,6 +85,21 @@ if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
 endif()
 expect_linkage(${build}/consumer dbow2)
 message(STATUS "CMake dbow2: ${output}")
+# Declaring the CMake versions of the projects written for DBoW2
+# (DLoopDetector and ORB-SLAM2 declare 2.8), whose policies the package's
+# files run under.
+foreach(minimum 2.8.12 3.0 3.5)
+  set(build ${WORK_DIR}/dbow2-cmake-${minimum})
+  run("configuring the dbow2 consumer as a CMake ${minimum} project" ${CMAKE_COMMAND}
+      -S ${CONSUMER_SOURCE_DIR}/dbow2 -B ${build} -DCMAKE_PREFIX_PATH=${prefix}
+      -DCMAKE_BUILD_TYPE=Release -DCONSUMER_CMAKE_MINIMUM=${minimum})
+  run("building the dbow2 consumer as a CMake ${minimum} project" ${CMAKE_COMMAND} --build ${build})
+  run("running the dbow2 consumer built as a CMake ${minimum} project" ${build}/consumer ${orbvoc}
+      ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
+  if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
+    message(FATAL_ERROR "the dbow2 consumer built as a CMake ${minimum} project printed: ${output}")
+  endif()
+endforeach()
 
 # pkg-config: binbow (core) and binbow-vision.
 set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
