@@ -36,6 +36,20 @@ std::string no_entry_message(EntryId entry, EntryId next) {
   return "entry " + std::to_string(entry) + " was removed";
 }
 
+// An add under the database's lock: the entry, its journal record, its label,
+// then a frozen tail if it is full. (A template only because Database::Impl is
+// private to the class.)
+template <class Impl>
+EntryId append_entry(Impl& impl, const BowVector& bow, const FeatureVector& features,
+                     std::string label) {
+  const EntryId entry = impl.append(bow, features);
+  impl.journal.record_add(entry, bow, impl.options.direct_index ? features : FeatureVector(),
+                          label);
+  if (!label.empty()) impl.store_label(entry, std::move(label));
+  impl.freeze_tail_if_full();
+  return entry;
+}
+
 }  // namespace
 
 Database::Impl::Impl(Vocabulary vocabulary_in, DatabaseOptions options_in)
@@ -80,12 +94,7 @@ EntryId Database::add(const DescriptorView& descriptors, std::string label) {
     impl_->vocabulary.transform(descriptors, bow);
   std::unique_lock lock(impl_->mutex);
   impl_->throw_if_damaged();
-  const EntryId entry = impl_->append(bow, features);
-  impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
-                            label);
-  if (!label.empty()) impl_->store_label(entry, std::move(label));
-  impl_->freeze_tail_if_full();
-  return entry;
+  return append_entry(*impl_, bow, features, std::move(label));
 }
 
 EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::string label) {
@@ -93,12 +102,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
     std::unique_lock lock(impl_->mutex);
     impl_->throw_if_damaged();
     if (!bow.empty()) impl_->grow_words(std::size_t{bow[bow.size() - 1].word} + 1);
-    const EntryId entry = impl_->append(bow, features);
-    impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
-                              label);
-    if (!label.empty()) impl_->store_label(entry, std::move(label));
-    impl_->freeze_tail_if_full();
-    return entry;
+    return append_entry(*impl_, bow, features, std::move(label));
   }
   // append checks the values.
   detail::check_bow_words(bow, impl_->vocabulary, "Database::add");
@@ -110,12 +114,7 @@ EntryId Database::add(const BowVector& bow, const FeatureVector& features, std::
                           std::to_string(impl_->vocabulary.node_count()) + " nodes)");
   std::unique_lock lock(impl_->mutex);
   impl_->throw_if_damaged();
-  const EntryId entry = impl_->append(bow, features);
-  impl_->journal.record_add(entry, bow, impl_->options.direct_index ? features : FeatureVector(),
-                            label);
-  if (!label.empty()) impl_->store_label(entry, std::move(label));
-  impl_->freeze_tail_if_full();
-  return entry;
+  return append_entry(*impl_, bow, features, std::move(label));
 }
 
 void Database::remove(EntryId entry) {
