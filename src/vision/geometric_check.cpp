@@ -271,25 +271,6 @@ double inlier_spread(Span<Keypoint> first, Span<Keypoint> second,
   return std::min(spread_in(first, true), spread_in(second, false));
 }
 
-std::size_t distinct_inliers(Span<Keypoint> first, Span<Keypoint> second,
-                             const std::vector<Correspondence>& inliers) {
-  constexpr float r2 = kDistinctInlierRadius * kDistinctInlierRadius;
-  const auto near = [](const Keypoint& a, const Keypoint& b) {
-    const float dx = a.x - b.x, dy = a.y - b.y;
-    return dx * dx + dy * dy <= r2;
-  };
-  std::vector<Correspondence> kept;
-  for (const Correspondence& c : inliers) {
-    if (c.first >= first.size() || c.second >= second.size())
-      throw InvalidArgument("correspondence refers to a keypoint past the end");
-    const bool repeated = std::any_of(kept.begin(), kept.end(), [&](const Correspondence& k) {
-      return near(first[c.first], first[k.first]) || near(second[c.second], second[k.second]);
-    });
-    if (!repeated) kept.push_back(c);
-  }
-  return kept.size();
-}
-
 double inlier_thickness(Span<Keypoint> first, Span<Keypoint> second,
                         const std::vector<Correspondence>& inliers) {
   if (inliers.size() < 2) return 0;
@@ -362,9 +343,14 @@ FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> se
   result.inlier_spread = inlier_spread(first, second, result.inliers);
   result.distinct_inliers = distinct_inliers(first, second, result.inliers);
   result.inlier_thickness = inlier_thickness(first, second, result.inliers);
+  result.determinacy =
+      fit_determinacy(first, second, result.inliers, params.max_reprojection_error);
+  const bool determined = result.determinacy.evidence == FitEvidence::kFundamental ||
+                          result.determinacy.evidence == FitEvidence::kHomography;
   result.consistent = result.inliers.size() >= static_cast<std::size_t>(params.min_inliers) &&
                       result.inlier_ratio >= params.min_inlier_ratio &&
-                      result.inlier_spread >= params.min_inlier_spread;
+                      result.inlier_spread >= params.min_inlier_spread &&
+                      (determined || !params.reject_degenerate);
   return result;
 }
 

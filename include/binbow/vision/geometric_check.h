@@ -79,6 +79,71 @@ FundamentalEstimator parse_fundamental_estimator(const std::string& name);
 // Cells per side of the grid inlier_spread() counts.
 inline constexpr int kSpreadGridCells = 4;
 
+// What the inliers of a fit show about the geometry of the two views
+// (fit_evidence()).
+enum class FitEvidence : std::uint8_t {
+  kNone,         // no fit: too few correspondences, or the estimator found none
+  kFundamental,  // the inliers determine the fundamental matrix
+  // They fit a whole family of fundamental matrices (a plane seen twice, a
+  // camera that only rotated) but determine a homography, which they follow.
+  kHomography,
+  // They determine neither: too few distinct points, points near one line,
+  // points on one small patch, a critical configuration. Some fundamental
+  // matrix fits such points whatever the two views are, so the fit is no
+  // evidence that they show one place.
+  kDegenerate,
+};
+
+// "none", "fundamental", "homography", "degenerate".
+const char* to_string(FitEvidence evidence);
+
+// Whether a fit's inliers determine its geometry, and the numbers that say so.
+//
+// The inliers are first reduced to distinct points (distinct_inliers()).
+// A model is tested only by more points than it needs: 8 for a fundamental
+// matrix (7 points fit one exactly, so a 7-point fit is no test at all), 5
+// for a homography (4). Coordinates are normalised over each image's
+// keypoints (all of them, Hartley's way), so that a geometry is judged over
+// the whole view, not over the part of it the inliers cover.
+// With 8 or more points, their 8-point system gives the best fundamental
+// matrix (its smallest singular vector) and the best one orthogonal to it
+// (the second smallest); the alternatives are the two matrices halfway
+// between them (45° from the best). When either alternative, a different
+// epipolar geometry of the view, also puts at least kAmbiguousShare of the
+// points within `tolerance` pixels of their epipolar lines (both ways), the
+// points cannot tell it from the best: the fundamental matrix is not
+// determined. This is what points near a line, on one small patch or on a
+// plane give, each within the measurement tolerance, whatever their number,
+// and also two views from nearly one place (a small baseline: nearly a
+// homography).
+// The points then still prove one place if the homography most of them
+// follow (RANSAC, deterministic) maps at least 5 of them within tolerance ×
+// √2 pixels (point to point, both ways; the others are parallax), and those
+// points determine it: in neither image do kAmbiguousShare of them lie
+// within that tolerance of one line (a line's points leave a homography
+// free off the line), and in neither image does their bounding box fit in
+// one cell of the kSpreadGridCells × kSpreadGridCells grid over the image's
+// keypoints, both ways (a patch that small is a texture, not a view). Otherwise the fit
+// is degenerate.
+inline constexpr double kAmbiguousShare = 0.8;
+struct FitDeterminacy {
+  FitEvidence evidence = FitEvidence::kNone;
+  std::size_t points = 0;  // distinct inliers examined
+  // Points within tolerance of the alternative fundamental matrix that fits
+  // more of them (every point with fewer than 8).
+  std::size_t alternative_fundamental_fits = 0;
+  // Points the homography maps within tolerance (0 when the fundamental
+  // matrix is determined or with fewer than 5 points), and whether they lie
+  // near one line or on one patch.
+  std::size_t homography_fits = 0;
+  bool homography_on_a_line = false;
+  bool homography_on_a_patch = false;
+};
+// kNone without inliers. Throws InvalidArgument if a correspondence indexes
+// past a keypoint vector or tolerance is not positive.
+FitDeterminacy fit_determinacy(Span<Keypoint> first, Span<Keypoint> second,
+                               const std::vector<Correspondence>& inliers, double tolerance);
+
 struct FundamentalCheckParams {
   FundamentalEstimator estimator = FundamentalEstimator::kRansac;
   int min_inliers = 12;                 // also the minimum number of correspondences tried
@@ -92,6 +157,10 @@ struct FundamentalCheckParams {
   // (a door, a poster repeated along a corridor) constrains the epipolar
   // geometry badly and is what repeated structure produces.
   double min_inlier_spread = 0;
+  // Consistent also needs inliers that determine the geometry
+  // (fit_determinacy(): evidence kFundamental or kHomography). A degenerate
+  // fit is accepted by no count of inliers.
+  bool reject_degenerate = true;
 };
 
 struct FundamentalCheckResult {
@@ -105,6 +174,9 @@ struct FundamentalCheckResult {
   std::size_t distinct_inliers = 0;
   // inlier_thickness() of the inliers: what min_inlier_thickness compares.
   double inlier_thickness = 0;
+  // fit_determinacy() of the inliers at max_reprojection_error (evidence
+  // kNone when no fit was made).
+  FitDeterminacy determinacy;
 };
 
 // Inliers that are different points: an inlier whose keypoint lies within
@@ -133,8 +205,8 @@ double inlier_spread(Span<Keypoint> first, Span<Keypoint> second,
                      const std::vector<Correspondence>& inliers);
 
 // Fits a fundamental matrix x_secondᵀ F x_first = 0 to the correspondences with
-// the chosen estimator. Fewer than max(8, min_inliers) correspondences: not
-// consistent, no fit attempted. Deterministic (OpenCV seeds its RANSAC, and
+// the chosen estimator, then judges its inliers (fit_determinacy()). Fewer than max(8, min_inliers)
+// correspondences: not consistent, no fit attempted. Deterministic (OpenCV seeds its RANSAC, and
 // its USAC estimators start from a fixed random state).
 // Throws InvalidArgument if a correspondence indexes past a keypoint vector.
 FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> second,
