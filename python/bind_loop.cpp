@@ -375,13 +375,15 @@ py::tuple frame_state(const loop::SequenceFrame& frame) {
                         r.exhaustive_fallback_used, inliers,
                         std::array<double, 5>{t.transform_ms, t.query_ms, t.islands_ms,
                                               t.verification_ms, t.insertion_ms},
-                        r.features, frame.unreadable);
+                        r.features, frame.unreadable, static_cast<int>(r.fit_evidence),
+                        static_cast<int>(r.accepted_by));
 }
 
 loop::SequenceFrame frame_from_state(const py::tuple& state) {
   constexpr int kLastStatus = static_cast<int>(loop::LoopStatus::kNoGeometricConsistency);
-  // 20 fields before `unreadable` was added.
-  if (state.size() != 20 && state.size() != 21)
+  // 20 fields before `unreadable` was added, 21 before the fit's evidence and
+  // what accepted the loop.
+  if (state.size() != 20 && state.size() != 21 && state.size() != 23)
     throw py::value_error("invalid pickled binbow.LoopResult");
   loop::SequenceFrame frame;
   frame.file = state[0].cast<std::string>();
@@ -412,6 +414,16 @@ loop::SequenceFrame frame_from_state(const py::tuple& state) {
   r.times = {ms[0], ms[1], ms[2], ms[3], ms[4]};
   r.features = state[19].cast<std::size_t>();
   if (state.size() > 20) frame.unreadable = state[20].cast<std::string>();
+  if (state.size() > 21) {
+    const int evidence = state[21].cast<int>(), accepted_by = state[22].cast<int>();
+    if (evidence < 0 || evidence > static_cast<int>(vision::FitEvidence::kDegenerate) ||
+        accepted_by < 0 || accepted_by > static_cast<int>(loop::LoopEvidence::kNeighbour))
+      throw py::value_error("invalid pickled binbow.LoopResult: evidence " +
+                            std::to_string(evidence) + ", accepted by " +
+                            std::to_string(accepted_by));
+    r.fit_evidence = static_cast<vision::FitEvidence>(evidence);
+    r.accepted_by = static_cast<loop::LoopEvidence>(accepted_by);
+  }
   return frame;
 }
 
@@ -486,6 +498,16 @@ void bind_detection(py::module_& m) {
           "exhaustive_fallback_used",
           [](const loop::SequenceFrame& f) { return f.result.exhaustive_fallback_used; },
           "Whether the geometric check retried with exhaustive matching.")
+      .def_property_readonly(
+          "fit_evidence",
+          [](const loop::SequenceFrame& f) { return vision::to_string(f.result.fit_evidence); },
+          "What the geometric check's inliers determine: \"fundamental\", \"homography\",\n"
+          "\"degenerate\" (points near a line, on one patch, too few: no evidence), or \"none\".")
+      .def_property_readonly(
+          "accepted_by",
+          [](const loop::SequenceFrame& f) { return loop::to_string(f.result.accepted_by); },
+          "What accepted the loop: \"strong-fit\", \"near-previous-loop\", \"revisit-pace\",\n"
+          "\"neighbour\", \"unchecked\" (no geometric check), or \"none\" (no loop).")
       .def_property_readonly(
           "inliers", [](const loop::SequenceFrame& f) { return inlier_array(f.result.inliers); },
           "RANSAC inliers as an int64 (M, 2) array: feature of the frame, feature of the match\n"

@@ -168,6 +168,9 @@ const std::vector<Field>& fields() {
                  "Minimum inliers / correspondences of the fundamental matrix, [0, 1]."),
       real_field("min_inlier_spread", &P::min_inlier_spread,
                  "Minimum share of the image the inliers must cover, [0, 1]."),
+      bool_field("reject_degenerate_fits", &P::reject_degenerate_fits,
+                 "A fit whose inliers do not determine its geometry (points near a line, on\n"
+                 "one small patch, too few distinct points) accepts no loop."),
       int_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers,
                 "Fewer inliers need corroboration (a loop just before, or a neighbour of the "
                 "match), [0, 10000] (0: off)."),

@@ -216,6 +216,7 @@ class LoopDetectorParams:
     max_ransac_iterations: int
     min_inlier_ratio: float
     min_inlier_spread: float
+    reject_degenerate_fits: bool
     min_uncorroborated_inliers: int
     corroboration_distance: int
     corroboration_horizon: int
@@ -270,6 +271,12 @@ class LoopResult:
     def features(self) -> int: ...
     @property
     def exhaustive_fallback_used(self) -> bool: ...
+    @property
+    def fit_evidence(self) -> Literal["none", "fundamental", "homography", "degenerate"]: ...
+    @property
+    def accepted_by(
+        self,
+    ) -> Literal["none", "unchecked", "strong-fit", "near-previous-loop", "revisit-pace", "neighbour"]: ...
     @property
     def inliers(self) -> npt.NDArray[np.int64]: ...
     @property

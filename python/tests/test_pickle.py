@@ -81,7 +81,7 @@ def test_database_copies_are_independent(database, vocabulary, images, clone):
 LOOP_RESULT_FIELDS = (
     "file", "match_file", "status", "detection", "query", "match", "score",
     "normalisation_score", "normalised_score", "island", "island_score", "consistent_queries",
-    "correspondences", "exhaustive_fallback_used", "times",
+    "correspondences", "exhaustive_fallback_used", "fit_evidence", "accepted_by", "times",
 )
 
 

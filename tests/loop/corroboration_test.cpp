@@ -14,6 +14,7 @@
 #include "binbow/loop/loop_detector.h"
 #include "binbow/vision/features.h"
 #include "binbow/vision/image_source.h"
+#include "loop/detector/loop_detector_impl.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -81,6 +82,56 @@ TEST(Corroboration, WithoutThePaceRuleTheSameWeakLoopIsRejected) {
   EXPECT_NE(text.find("(neither within corroboration_distance 1 nor at the revisit's pace"),
             std::string::npos)
       << text;
+}
+
+// A neighbour's fit corroborates only when most of its inliers are query
+// features the match's fit did not use: these are what it counts, copies of
+// one corner (within vision::kDistinctInlierRadius) included.
+TEST(Corroboration, SharedQueryFeaturesCountsTheNeighboursInliersOnTheMatchsFeatures) {
+  const std::vector<vision::Keypoint> query = {{10, 10, 31, 0, 1, 0},   {11, 11, 31, 0, 1, 0},
+                                               {100, 50, 31, 0, 1, 0},  {300, 200, 31, 0, 1, 0},
+                                               {302, 200, 31, 0, 1, 0}, {500, 400, 31, 0, 1, 0}};
+  const Span<vision::Keypoint> points{query.data(), query.size()};
+  const std::vector<vision::Correspondence> match = {{0, 7}, {2, 8}, {3, 9}};
+  // 1 is a copy of 0, 4 of 3; 5 is a feature the match's fit did not use.
+  EXPECT_EQ(detail::shared_query_features(points, match, {{1, 0}, {4, 1}, {5, 2}}), 2u);
+  EXPECT_EQ(detail::shared_query_features(points, match, {{5, 2}}), 0u);
+  EXPECT_EQ(detail::shared_query_features(points, {}, {{0, 1}}), 0u);
+  EXPECT_EQ(detail::shared_query_features(points, match, match), 3u);
+}
+
+// What accepted each loop is recorded: on rtabmap-samples every loop says
+// which evidence took it, and a loop with min_uncorroborated_inliers or more
+// stands on its fit, which determines the fundamental matrix or a homography.
+TEST(Corroboration, EveryLoopSaysWhatAcceptedIt) {
+  const std::string vocabulary = test::source_path("data/vocab/brief_default.bbw");
+  LoopDetector detector(Vocabulary::load(vocabulary), LoopDetectorParams{});
+  const auto extractor = vision::make_extractor("brief");
+  vision::ImageSource source({test::samples_folder()});
+  vision::Frame frame;
+  std::size_t loops = 0, weak = 0;
+  while (source.next(frame)) {
+    const LoopResult r = detector.process(extractor->extract(frame.image));
+    if (!r.detection()) {
+      EXPECT_EQ(r.accepted_by, LoopEvidence::kNone);
+      continue;
+    }
+    ++loops;
+    EXPECT_TRUE(r.fit_evidence == vision::FitEvidence::kFundamental ||
+                r.fit_evidence == vision::FitEvidence::kHomography)
+        << "query " << r.query << ": " << vision::to_string(r.fit_evidence);
+    if (r.inliers.size() >= 16) {
+      EXPECT_EQ(r.accepted_by, LoopEvidence::kStrongFit) << "query " << r.query;
+    } else {
+      ++weak;
+      EXPECT_NE(r.accepted_by, LoopEvidence::kStrongFit) << "query " << r.query;
+      EXPECT_TRUE(r.corroboration.corroborated) << "query " << r.query;
+    }
+  }
+  EXPECT_GE(loops, 30u);
+  EXPECT_GE(weak, 1u);
+  EXPECT_STREQ(to_string(LoopEvidence::kRevisitPace), "revisit-pace");
+  EXPECT_STREQ(to_string(LoopEvidence::kNeighbour), "neighbour");
 }
 
 }  // namespace

@@ -196,7 +196,7 @@ TEST(Explanation, WeakLoopSaysWhatCorroboratedIt) {
                        "(the latest loop was 35 → 7 (neither within corroboration_distance 4 nor "
                        "at the revisit's pace: corroboration_horizon 10, "
                        "corroboration_pace_tolerance 0.25); the best neighbour of the match, 11, "
-                       "has 0 inliers)"))
+                       "has 0 inliers, 0 on query features the match's inliers use)"))
       << text;
 }
 

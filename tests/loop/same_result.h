@@ -34,6 +34,8 @@ inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult
   EXPECT_EQ(a.inlier_spread, b.inlier_spread);
   EXPECT_EQ(a.distinct_inliers, b.distinct_inliers);
   EXPECT_EQ(a.inlier_thickness, b.inlier_thickness);
+  EXPECT_EQ(a.fit_evidence, b.fit_evidence);
+  EXPECT_EQ(a.accepted_by, b.accepted_by);
   const loop::LoopCorroboration &x = a.corroboration, &y = b.corroboration;
   EXPECT_EQ(x.needed, y.needed);
   EXPECT_EQ(x.has_previous_loop, y.has_previous_loop);
@@ -43,6 +45,7 @@ inline void expect_same_result(const loop::LoopResult& a, const loop::LoopResult
   EXPECT_EQ(x.neighbour_checked, y.neighbour_checked);
   EXPECT_EQ(x.corroborating_neighbour, y.corroborating_neighbour);
   EXPECT_EQ(x.neighbour_inliers, y.neighbour_inliers);
+  EXPECT_EQ(x.neighbour_shared_inliers, y.neighbour_shared_inliers);
   EXPECT_EQ(x.corroborated, y.corroborated);
 }
 

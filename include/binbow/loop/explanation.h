@@ -36,11 +36,16 @@ struct CheckMeasure {
   double threshold = 0;
   bool passed = false;
   bool whole = false;  // counts: printed without decimals
+  std::string note;    // what the value is a share of, "" for none
 };
 
 // The tests of `check` under `params`, in the order the check applies them:
 // correspondences and inliers against min_inliers, then the ratio and
-// spread thresholds (a new FundamentalCheckResult measure is one more line here).
+// spread thresholds, whether the inliers determine the geometry
+// (reject_degenerate_fits: the share of distinct points another fundamental
+// matrix fits, and when that is most of them, the share another homography
+// fits), then corroboration (a new FundamentalCheckResult measure is one
+// more line here).
 std::vector<CheckMeasure> check_measures(const TrailCheck& check, const LoopDetectorParams& params);
 // "9 inliers < min_inliers 12", "inlier ratio 0.45 ≥ min_inlier_ratio 0.3".
 std::string to_string(const CheckMeasure& measure);

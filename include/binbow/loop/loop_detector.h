@@ -68,11 +68,11 @@ inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  //
 // defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
 // except binbow's measured departures, each switchable back:
 // accept_single_candidate, exhaustive_fallback, skip_featureless_frames,
-// fundamental_estimator and min_uncorroborated_inliers
+// fundamental_estimator, reject_degenerate_fits and min_uncorroborated_inliers
 // (docs/loop-detection.md has their effect). The DLoopDetector rules:
 // {"accept_single_candidate": true, "exhaustive_fallback": false,
 // "skip_featureless_frames": false, "fundamental_estimator": "ransac",
-// "min_uncorroborated_inliers": 0}.
+// "reject_degenerate_fits": false, "min_uncorroborated_inliers": 0}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
@@ -158,6 +158,11 @@ struct LoopDetectorParams {
   // correspondences, and minimum inlier_spread() over both images. [0, 1]
   double min_inlier_ratio = 0;
   double min_inlier_spread = 0;
+  // binbow's addition, on by default: a fit whose inliers do not determine
+  // its geometry (vision::fit_determinacy(): too few distinct points, points
+  // near a line or on one small patch) accepts no loop, whatever its count
+  // of inliers (FundamentalCheckParams::reject_degenerate).
+  bool reject_degenerate_fits = true;
   // binbow's addition, on by default: a loop whose fundamental matrix has
   // fewer inliers than this must be corroborated, by the loop before it or
   // else by a second place: the match's neighbour (match − 1 or match + 1)
@@ -262,6 +267,10 @@ struct LoopResult {
   std::size_t distinct_inliers = 0;
   double inlier_thickness = 0;
   LoopCorroboration corroboration;
+  // What accepted the loop (kNone unless detection()).
+  LoopEvidence accepted_by = LoopEvidence::kNone;
+  // The fit's evidence (vision::FitDeterminacy::evidence; kNone before any check).
+  vision::FitEvidence fit_evidence = vision::FitEvidence::kNone;
   LoopStageTimes times;
 
   bool detection() const noexcept { return status == LoopStatus::kLoopDetected; }

@@ -32,6 +32,40 @@ double milliseconds_since(Clock::time_point& start) {
 
 }  // namespace
 
+const char* to_string(LoopEvidence evidence) {
+  switch (evidence) {
+    case LoopEvidence::kNone:
+      return "none";
+    case LoopEvidence::kUnchecked:
+      return "unchecked";
+    case LoopEvidence::kStrongFit:
+      return "strong-fit";
+    case LoopEvidence::kNearPreviousLoop:
+      return "near-previous-loop";
+    case LoopEvidence::kRevisitPace:
+      return "revisit-pace";
+    case LoopEvidence::kNeighbour:
+      return "neighbour";
+  }
+  return "?";
+}
+
+std::size_t detail::shared_query_features(Span<Keypoint> query_keypoints,
+                                          const std::vector<Correspondence>& first,
+                                          const std::vector<Correspondence>& second) {
+  constexpr float r2 = vision::kDistinctInlierRadius * vision::kDistinctInlierRadius;
+  std::size_t shared = 0;
+  for (const Correspondence& b : second) {
+    const Keypoint& q = query_keypoints[b.first];
+    shared += std::any_of(first.begin(), first.end(), [&](const Correspondence& a) {
+      const Keypoint& p = query_keypoints[a.first];
+      const float dx = p.x - q.x, dy = p.y - q.y;
+      return dx * dx + dy * dy <= r2;
+    });
+  }
+  return shared;
+}
+
 DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
   DatabaseOptions options;
   options.direct_index = params.geometric_check == GeometricCheck::kDirectIndex;
@@ -56,6 +90,7 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
   check.estimator = params.fundamental_estimator;
   check.min_inlier_ratio = params.min_inlier_ratio;
   check.min_inlier_spread = params.min_inlier_spread;
+  check.reject_degenerate = params.reject_degenerate_fits;
 
   MatchOptions matching;
   matching.max_neighbor_ratio = params.max_neighbor_ratio;
@@ -88,6 +123,7 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
                                 const FeatureVector& query_nodes) const {
   if (params.geometric_check == GeometricCheck::kNone) {
     result.status = LoopStatus::kLoopDetected;
+    result.accepted_by = LoopEvidence::kUnchecked;
     return;
   }
   TrailCheck check = geometric_check(query_keypoints, query_descriptors, query_nodes, result.match);
@@ -99,6 +135,7 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   result.distinct_inliers = fit.distinct_inliers;
   result.inlier_thickness = fit.inlier_thickness;
   result.inliers = fit.inliers;
+  result.fit_evidence = fit.determinacy.evidence;
   result.corroboration.needed =
       fit.consistent && params.min_uncorroborated_inliers > 0 &&
       result.inliers.size() < static_cast<std::size_t>(params.min_uncorroborated_inliers);
@@ -107,6 +144,14 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   const bool accepted =
       fit.consistent && (!result.corroboration.needed || result.corroboration.corroborated);
   result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+  result.accepted_by = LoopEvidence::kNone;
+  if (accepted) {
+    const LoopCorroboration& c = result.corroboration;
+    result.accepted_by = !c.needed                 ? LoopEvidence::kStrongFit
+                         : c.neighbour_checked     ? LoopEvidence::kNeighbour
+                         : c.previous_loop_at_pace ? LoopEvidence::kRevisitPace
+                                                   : LoopEvidence::kNearPreviousLoop;
+  }
   if (trail != nullptr) {
     check.normalised_score = result.normalised_score;
     check.corroboration = result.corroboration;
@@ -150,13 +195,16 @@ void LoopDetector::Impl::corroborate(LoopResult& result, Span<Keypoint> query_ke
     if (!database.contains(entry) || frames[entry].keypoints.empty()) continue;
     const FundamentalCheckResult fit =
         geometric_check(query_keypoints, query_descriptors, query_nodes, entry).fit;
+    const std::size_t shared =
+        detail::shared_query_features(query_keypoints, result.inliers, fit.inliers);
     if (!result.corroboration.neighbour_checked ||
         fit.inliers.size() > result.corroboration.neighbour_inliers) {
       result.corroboration.corroborating_neighbour = entry;
       result.corroboration.neighbour_inliers = fit.inliers.size();
+      result.corroboration.neighbour_shared_inliers = shared;
     }
     result.corroboration.neighbour_checked = true;
-    result.corroboration.corroborated = fit.consistent;
+    result.corroboration.corroborated = fit.consistent && 2 * shared <= fit.inliers.size();
   }
 }
 

@@ -16,6 +16,11 @@ namespace detail {
 // The database a detector with these parameters keeps: a direct index for
 // GeometricCheck::kDirectIndex, at direct_index_levels.
 DatabaseOptions database_options(const LoopDetectorParams& params);
+// Correspondences of `second` whose query feature (their `first`) lies within
+// vision::kDistinctInlierRadius of a query feature of `first`'s.
+std::size_t shared_query_features(Span<vision::Keypoint> query_keypoints,
+                                  const std::vector<vision::Correspondence>& first,
+                                  const std::vector<vision::Correspondence>& second);
 }  // namespace detail
 
 struct LoopDetector::Impl {

@@ -123,6 +123,7 @@ const std::vector<Field>& fields() {
       number_field("max_ransac_iterations", &P::max_ransac_iterations),
       number_field("min_inlier_ratio", &P::min_inlier_ratio),
       number_field("min_inlier_spread", &P::min_inlier_spread),
+      bool_field("reject_degenerate_fits", &P::reject_degenerate_fits),
       number_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers),
       number_field("corroboration_distance", &P::corroboration_distance),
       number_field("corroboration_horizon", &P::corroboration_horizon),

@@ -41,23 +41,42 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
   const double needed = std::max(8.0, min_inliers);
   measures.push_back({"correspondences", correspondences,
                       min_inliers >= 8 ? "min_inliers" : "max(8, min_inliers)", needed,
-                      correspondences >= needed, true});
+                      correspondences >= needed, true, ""});
   const auto inliers = static_cast<double>(check.fit.inliers.size());
   measures.push_back(
-      {"inliers", inliers, "min_inliers", min_inliers, inliers >= min_inliers, true});
+      {"inliers", inliers, "min_inliers", min_inliers, inliers >= min_inliers, true, ""});
   if (params.min_inlier_ratio > 0)
     measures.push_back({"inlier ratio", check.fit.inlier_ratio, "min_inlier_ratio",
                         params.min_inlier_ratio, check.fit.inlier_ratio >= params.min_inlier_ratio,
-                        false});
+                        false, ""});
   if (params.min_inlier_spread > 0)
     measures.push_back({"inlier spread", check.fit.inlier_spread, "min_inlier_spread",
                         params.min_inlier_spread,
-                        check.fit.inlier_spread >= params.min_inlier_spread, false});
+                        check.fit.inlier_spread >= params.min_inlier_spread, false, ""});
+  const vision::FitDeterminacy& d = check.fit.determinacy;
+  if (params.reject_degenerate_fits && d.points > 0) {
+    const auto share = [&d](std::size_t fits) {
+      return static_cast<double>(fits) / static_cast<double>(d.points);
+    };
+    const std::string of = "of " + std::to_string(d.points) + " distinct points";
+    const bool fundamental = d.evidence == vision::FitEvidence::kFundamental;
+    measures.push_back({"share fitting another fundamental matrix",
+                        share(d.alternative_fundamental_fits), "reject_degenerate_fits",
+                        vision::kAmbiguousShare, fundamental, false, of});
+    if (!fundamental)
+      measures.push_back({"points following a homography", static_cast<double>(d.homography_fits),
+                          "reject_degenerate_fits", 5,
+                          d.evidence == vision::FitEvidence::kHomography, true,
+                          of + (d.homography_fits < 5     ? ""
+                                : d.homography_on_a_line  ? ", near one line"
+                                : d.homography_on_a_patch ? ", within one cell of a 4 × 4 grid"
+                                                          : ", which determine it")});
+  }
   // Fewer inliers pass only when corroborated (by the latest loop or a neighbour).
   const double alone = params.min_uncorroborated_inliers;
   if (alone > 0 && check.fit.consistent && (check.corroboration.needed || inliers >= alone))
     measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
-                        !check.corroboration.needed || check.corroboration.corroborated, true});
+                        !check.corroboration.needed || check.corroboration.corroborated, true, ""});
   return measures;
 }
 
@@ -65,7 +84,8 @@ std::string to_string(const CheckMeasure& m) {
   const char* pattern = m.whole ? "%.0f" : "%.3g";
   const std::string value = number(m.value, pattern);
   const std::string what = m.whole ? value + " " + m.name : m.name + " " + value;
-  return what + (m.value >= m.threshold ? " ≥ " : " < ") + m.parameter + " " +
+  return what + (m.note.empty() ? "" : " (" + m.note + ")") +
+         (m.value >= m.threshold ? " ≥ " : " < ") + m.parameter + " " +
          number(m.threshold, pattern);
 }
 
@@ -111,7 +131,9 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
     if (check.corroboration.neighbour_checked)
       by += "; the best neighbour of the match, " +
             std::to_string(check.corroboration.corroborating_neighbour) + ", has " +
-            std::to_string(check.corroboration.neighbour_inliers) + " inliers";
+            std::to_string(check.corroboration.neighbour_inliers) + " inliers, " +
+            std::to_string(check.corroboration.neighbour_shared_inliers) +
+            " on query features the match's inliers use";
     if (check.corroboration.corroborated)
       return text + ": accepted (" + passed + "; " + weak + ", corroborated: " + by + ")";
     return text + ": rejected: " + weak + " and not corroborated (" + by + ")";

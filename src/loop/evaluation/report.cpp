@@ -640,9 +640,10 @@ std::string explained_figure(const LoopExplanation& e) {
          << "</p><table class='measures'><tr><th>test</th><th>value</th><th>parameter</th>"
             "<th>threshold</th><th>result</th></tr>";
     for (const CheckMeasure& m : e.measures)
-      html << "<tr><td>" << escape(m.name) << "</td><td class='n'>"
-           << format(m.whole ? "%.0f" : "%.3f", m.value) << "</td><td>" << escape(m.parameter)
-           << "</td><td class='n'>" << format(m.whole ? "%.0f" : "%.3f", m.threshold) << "</td><td>"
+      html << "<tr><td>" << escape(m.note.empty() ? m.name : m.name + " (" + m.note + ")")
+           << "</td><td class='n'>" << format(m.whole ? "%.0f" : "%.3f", m.value) << "</td><td>"
+           << escape(m.parameter) << "</td><td class='n'>"
+           << format(m.whole ? "%.0f" : "%.3f", m.threshold) << "</td><td>"
            << (m.passed ? "<span class='tp'>passed</span>" : "<span class='fp'>failed</span>")
            << "</td></tr>";
     html << "</table>";
