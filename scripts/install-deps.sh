@@ -16,6 +16,7 @@ packages=(
   clang libclang-rt-14-dev clang-format strace
   chromium
   lomiri-wallpapers-16.04 lomiri-wallpapers-20.04 plasma-workspace-wallpapers
+  lxqt-themes mate-backgrounds
   colcon python3-colcon-cmake python3-colcon-ros python3-colcon-bash python3-colcon-recursive-crawl
   python3-colcon-parallel-executor python3-colcon-package-selection python3-colcon-output
   python3-colcon-library-path python3-colcon-metadata python3-colcon-defaults

@@ -6,6 +6,7 @@
 #
 #   scripts/measure_accuracy.sh [-b BUILD_DIR] [-w WORK_DIR] [-p PARAMS] [-m] [VOCAB...]
 #   scripts/measure_accuracy.sh -s [-b BUILD_DIR] [-w WORK_DIR] [-p PARAMS] [-m] [CASE...]
+#   scripts/measure_accuracy.sh -c SEED [-b BUILD_DIR] [-w WORK_DIR] [-p PARAMS] [CASE...]
 #
 # -p PARAMS  a --params file for detect-loops (JSON or YAML); default: none,
 #            the detector's defaults.
@@ -21,6 +22,16 @@
 #            WORK_DIR/variations; needs ffmpeg), one row per CASE (default:
 #            all, `scripts/make_variations.sh -l` lists them) with the
 #            bundled orb_default and brief_default vocabularies.
+# -c SEED    the case suite of that seed instead: rtabmap-samples rotated,
+#            cropped, tilted, distorted, blurred, occluded, vignetted, its
+#            second visit re-timed or re-lit, and make-route routes, by
+#            scripts/make_cases.py (made once in WORK_DIR/cases-SEED; needs
+#            ffmpeg, python3-numpy and the packages of
+#            scripts/route_photographs_other.sh), one row per CASE (default:
+#            all, `scripts/make_cases.py --seed 1 --list` lists them): ORB then
+#            BRIEF (bundled vocabularies), precision/recall (found/with-loop,
+#            false), each case against its own ground_truth.txt; then every
+#            false loop as `case descriptor query<->match inliers N`.
 # The shared data is read from ../shared/data (or $BINBOW_SHARED_DATA).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,13 +40,15 @@ work=
 params=
 misses=0
 suite=0
-while getopts "b:w:p:ms" option; do
+cases_seed=
+while getopts "b:w:p:msc:" option; do
   case $option in
     b) build=$OPTARG ;;
     w) work=$OPTARG ;;
     p) params=$(realpath "$OPTARG") ;;
     m) misses=1 ;;
     s) suite=1 ;;
+    c) cases_seed=$OPTARG ;;
     *) exit 2 ;;
   esac
 done
@@ -91,6 +104,52 @@ for i, frame in enumerate(run["frames"]):
 EOF
   fi
 }
+
+if [ -n "$cases_seed" ]; then
+  [[ $cases_seed =~ ^[0-9]+$ ]] || { echo "-c takes a seed, a number" >&2; exit 2; }
+  make_cases=(/usr/bin/python3 scripts/make_cases.py --seed "$cases_seed" --binbow "$binbow")
+  cases=("$@")
+  [ ${#cases[@]} -gt 0 ] || mapfile -t cases < <("${make_cases[@]}" --list | cut -d' ' -f1)
+  out="$work/cases-$cases_seed"
+  "${make_cases[@]}" "$samples" "${gt%.bmp}_pairs.txt" "$out" "${cases[@]}"
+  false_loops=()
+  printf '%-16s %-10s %-30s %s\n' case part "ORB p/r (found/loops, false)" \
+    "BRIEF p/r (found/loops, false)"
+  for name in "${cases[@]}"; do
+    part=$("${make_cases[@]}" --list | awk -v name="$name" '$1 == name { print $2 }')
+    images="$out/$name/frames"
+    [ -d "$out/$name/route" ] && images="$out/$name/route/frames"
+    row=()
+    for descriptor in orb brief; do
+      loops="$out/$name.$descriptor.csv"
+      "$binbow" detect-loops --descriptor "$descriptor" \
+        --vocab "data/vocab/${descriptor}_default.bbw" ${params:+--params "$params"} \
+        -o "$loops" "$images" >/dev/null 2>&1
+      result=$("$binbow" evaluate --gt "$out/$name/ground_truth.txt" "$loops" | tee "$loops.eval")
+      value() { sed -n "s/^$1: //p" <<<"$result"; }
+      row+=("$(printf '%.3f/%.3f (%s/%s, %s)' "$(value precision)" "$(value recall)" \
+        "$(value 'queries found')" "$(value 'queries with a loop')" "$(value 'false positives')")")
+      # evaluate counts the false loops; list them: detections that are no pair of the truth.
+      while IFS= read -r line; do false_loops+=("$line"); done < <(python3 -c '
+import csv, sys
+same = set()
+for line in open(sys.argv[2]):
+    if line.strip() and not line.startswith("#"):
+        q, m = map(int, line.split()[:2])
+        same |= {(q, m), (m, q)}
+for r in csv.DictReader(open(sys.argv[1])):
+    q, m = int(r["query_index"]), int(r["match_index"])
+    inliers = r["inliers"]
+    if (q, m) not in same:
+        print(f"{sys.argv[3]} {sys.argv[4]} {q}<->{m} inliers {inliers}")
+' "$loops" "$out/$name/ground_truth.txt" "$name" "$descriptor")
+    done
+    printf '%-16s %-10s %-30s %s\n' "$name" "$part" "${row[0]}" "${row[1]}"
+  done
+  echo "false loops: ${#false_loops[@]}"
+  for line in "${false_loops[@]}"; do echo "  $line"; done
+  exit 0
+fi
 
 if [ $suite -eq 1 ]; then
   cases=("$@")
