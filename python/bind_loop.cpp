@@ -506,7 +506,8 @@ void bind_detection(py::module_& m) {
       .def_property_readonly(
           "accepted_by",
           [](const loop::SequenceFrame& f) { return loop::to_string(f.result.accepted_by); },
-          "What accepted the loop: \"strong-fit\", \"near-previous-loop\", \"revisit-pace\",\n"
+          "What accepted the loop: \"strong-fit\", \"strong-fit-alone\" (before temporal\n"
+          "consistency), \"near-previous-loop\", \"revisit-pace\",\n"
           "\"neighbour\", \"unchecked\" (no geometric check), or \"none\" (no loop).")
       .def_property_readonly(
           "inliers", [](const loop::SequenceFrame& f) { return inlier_array(f.result.inliers); },

@@ -174,6 +174,9 @@ const std::vector<Field>& fields() {
       int_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers,
                 "Fewer inliers need corroboration (a loop just before, or a neighbour of the "
                 "match), [0, 10000] (0: off)."),
+      bool_field("strong_fits_skip_temporal_check", &P::strong_fits_skip_temporal_check,
+                 "A fit with min_uncorroborated_inliers inliers or more is a loop without\n"
+                 "temporal consistency."),
       int_field("corroboration_distance", &P::corroboration_distance,
                 "Frames from the loop before them that weak loops accept, [1, 1e6]."),
       int_field("corroboration_horizon", &P::corroboration_horizon,

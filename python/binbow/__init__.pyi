@@ -218,6 +218,7 @@ class LoopDetectorParams:
     min_inlier_spread: float
     reject_degenerate_fits: bool
     min_uncorroborated_inliers: int
+    strong_fits_skip_temporal_check: bool
     corroboration_distance: int
     corroboration_horizon: int
     corroboration_pace_tolerance: float
@@ -276,7 +277,15 @@ class LoopResult:
     @property
     def accepted_by(
         self,
-    ) -> Literal["none", "unchecked", "strong-fit", "near-previous-loop", "revisit-pace", "neighbour"]: ...
+    ) -> Literal[
+        "none",
+        "unchecked",
+        "strong-fit",
+        "strong-fit-alone",
+        "near-previous-loop",
+        "revisit-pace",
+        "neighbour",
+    ]: ...
     @property
     def inliers(self) -> npt.NDArray[np.int64]: ...
     @property

@@ -174,7 +174,7 @@ def test_write_report_with_ground_truth_and_plain_lists(tmp_path, results):
     assert "Precision and recall" in text
     plain = binbow.write_report(str(tmp_path / "plain"), list(results))
     facts, text = report_facts(tmp_path / "plain" / "index.html")
-    assert facts["loops"] == "41" and "Parameters" not in text, "unknown parameters not shown"
+    assert facts["loops"] == "40" and "Parameters" not in text, "unknown parameters not shown"
     assert plain.endswith("index.html")
     with pytest.raises(TypeError, match="LoopResult"):
         binbow.write_report(tmp_path / "bad", [1, 2])

@@ -134,5 +134,37 @@ TEST(Corroboration, EveryLoopSaysWhatAcceptedIt) {
   EXPECT_STREQ(to_string(LoopEvidence::kNeighbour), "neighbour");
 }
 
+// With a temporal test no query can pass (k beyond the sequence), only fits
+// of min_uncorroborated_inliers inliers or more are loops, each accepted on
+// its own; without strong_fits_skip_temporal_check there is none.
+TEST(Corroboration, StrongFitsSkipTheTemporalTestWeakOnesDoNot) {
+  LoopDetectorParams params;
+  params.k = 1000;
+  std::size_t loops = 0;
+  for (const bool skip : {true, false}) {
+    params.strong_fits_skip_temporal_check = skip;
+    LoopDetector detector(Vocabulary::load(test::source_path("data/vocab/brief_default.bbw")),
+                          params);
+    const auto extractor = vision::make_extractor("brief");
+    vision::ImageSource source({test::samples_folder()});
+    vision::Frame frame;
+    std::size_t found = 0;
+    while (source.next(frame)) {
+      const LoopResult r = detector.process(extractor->extract(frame.image));
+      if (!r.detection()) continue;
+      ++found;
+      EXPECT_EQ(r.accepted_by, LoopEvidence::kStrongFitAlone) << "query " << r.query;
+      EXPECT_GE(r.inliers.size(), 16u) << "query " << r.query;
+      EXPECT_LE(r.consistent_queries, params.k);
+    }
+    if (skip) {
+      loops = found;
+    } else {
+      EXPECT_EQ(found, 0u);
+    }
+  }
+  EXPECT_GE(loops, 20u);
+}
+
 }  // namespace
 }  // namespace binbow::loop

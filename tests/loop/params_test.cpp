@@ -39,6 +39,8 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
   EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
   EXPECT_EQ(p.min_uncorroborated_inliers, 16);
+  EXPECT_TRUE(p.reject_degenerate_fits);
+  EXPECT_TRUE(p.strong_fits_skip_temporal_check);
   EXPECT_EQ(p.corroboration_distance, 4);
   EXPECT_EQ(p.corroboration_horizon, 10);
   EXPECT_DOUBLE_EQ(p.corroboration_pace_tolerance, 0.25);
@@ -64,6 +66,8 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.min_inlier_ratio = 0.5;
   p.min_inlier_spread = 0.25;
   p.min_uncorroborated_inliers = 0;
+  p.reject_degenerate_fits = false;
+  p.strong_fits_skip_temporal_check = false;
   p.corroboration_distance = 7;
   p.corroboration_horizon = 9;
   p.corroboration_pace_tolerance = 0.5;

@@ -41,6 +41,9 @@ void expect_no_false_loop(const test::TempDir& dir, const std::string& descripto
   ASSERT_GT(std::stoul(line_value(out, "queries with a loop")), 300u) << out;
   EXPECT_GT(std::stoul(line_value(out, "true positives")), 0u) << out;
   EXPECT_EQ(line_value(out, "false positives"), "0") << out;
+  // A revisit of 5 to 12 frames cannot wait for k + 1 consistent queries:
+  // recall stays near 0.33 unless strong fits skip the temporal test.
+  EXPECT_GE(std::stod(line_value(out, "recall")), 0.5) << out;
   // Each false loop, for whoever looks into it: the frames, score and inliers.
   const GroundTruth truth = GroundTruth::load(truth_file);
   for (const Detection& d : read_detections_csv(loops))

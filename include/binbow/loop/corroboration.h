@@ -36,15 +36,18 @@ struct LoopCorroboration {
 
 // What accepted a loop (LoopResult::accepted_by).
 enum class LoopEvidence : std::uint8_t {
-  kNone,              // no loop
-  kUnchecked,         // geometric_check "none": the temporal rules alone
-  kStrongFit,         // a fit with min_uncorroborated_inliers inliers or more (or the rule off)
+  kNone,       // no loop
+  kUnchecked,  // geometric_check "none": the temporal rules alone
+  kStrongFit,  // a fit with min_uncorroborated_inliers inliers or more (or the rule off)
+  // Such a fit before the temporal test passed (strong_fits_skip_temporal_check).
+  kStrongFitAlone,
   kNearPreviousLoop,  // a weak fit near the latest loop (corroboration_distance)
   kRevisitPace,       // a weak fit at the revisit's pace since the latest loop
   kNeighbour,         // a weak fit that a neighbour of the match corroborates with other features
 };
 
-// "none", "unchecked", "strong-fit", "near-previous-loop", "revisit-pace", "neighbour".
+// "none", "unchecked", "strong-fit", "strong-fit-alone", "near-previous-loop",
+// "revisit-pace", "neighbour".
 const char* to_string(LoopEvidence evidence);
 
 }  // namespace binbow::loop

@@ -72,9 +72,17 @@ struct TrailCheck {
   // needs corroboration, as in LoopResult. Not evaluated for checks run
   // outside detection (LoopDetector::check_pair).
   LoopCorroboration corroboration;
+  // Run before the temporal test passed (strong_fits_skip_temporal_check):
+  // only a fit with min_uncorroborated_inliers inliers or more counts, and
+  // nothing corroborates a weaker one.
+  bool before_temporal_consistency = false;
+  std::size_t min_strong_inliers = 0;  // min_uncorroborated_inliers then
 
-  // Whether the check let the entry through: a consistent fit, corroborated when needed.
+  // Whether the check let the entry through: a consistent fit, corroborated
+  // when needed (strong, before temporal consistency).
   bool accepted() const noexcept {
+    if (before_temporal_consistency)
+      return fit.consistent && fit.inliers.size() >= min_strong_inliers;
     return fit.consistent && (!corroboration.needed || corroboration.corroborated);
   }
 };

@@ -68,11 +68,12 @@ inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  //
 // defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
 // except binbow's measured departures, each switchable back:
 // accept_single_candidate, exhaustive_fallback, skip_featureless_frames,
-// fundamental_estimator, reject_degenerate_fits and min_uncorroborated_inliers
-// (docs/loop-detection.md has their effect). The DLoopDetector rules:
-// {"accept_single_candidate": true, "exhaustive_fallback": false,
-// "skip_featureless_frames": false, "fundamental_estimator": "ransac",
-// "reject_degenerate_fits": false, "min_uncorroborated_inliers": 0}.
+// fundamental_estimator, reject_degenerate_fits, min_uncorroborated_inliers and
+// strong_fits_skip_temporal_check (docs/loop-detection.md has their effect).
+// The DLoopDetector rules: {"accept_single_candidate": true,
+// "exhaustive_fallback": false, "skip_featureless_frames": false,
+// "fundamental_estimator": "ransac", "reject_degenerate_fits": false,
+// "min_uncorroborated_inliers": 0, "strong_fits_skip_temporal_check": false}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
@@ -182,6 +183,14 @@ struct LoopDetectorParams {
   // Loops with at least this many inliers stand alone. 0: off (the paper).
   // [0, 1e4]
   int min_uncorroborated_inliers = 16;
+  // binbow's addition, on by default: when the temporal test fails, the best
+  // island's best entry is checked anyway, and a fit with at least
+  // min_uncorroborated_inliers inliers (non-degenerate) is a loop on its
+  // own. Temporal consistency is corroboration by the next queries; a fit
+  // that needs no corroboration needs none of them either, and a revisit of
+  // a few frames cannot wait for k + 1 of them. Weaker fits still need the
+  // temporal test. Off when min_uncorroborated_inliers is 0.
+  bool strong_fits_skip_temporal_check = true;
   int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
   int corroboration_horizon = 10;  // frames (10 f) [1, 1e6]
   // Fraction of the queries since the loop before it. [0, 1]

@@ -40,6 +40,8 @@ const char* to_string(LoopEvidence evidence) {
       return "unchecked";
     case LoopEvidence::kStrongFit:
       return "strong-fit";
+    case LoopEvidence::kStrongFitAlone:
+      return "strong-fit-alone";
     case LoopEvidence::kNearPreviousLoop:
       return "near-previous-loop";
     case LoopEvidence::kRevisitPace:
@@ -120,7 +122,8 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
 
 void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
                                 const DescriptorView& query_descriptors,
-                                const FeatureVector& query_nodes) const {
+                                const FeatureVector& query_nodes,
+                                bool before_temporal_consistency) const {
   if (params.geometric_check == GeometricCheck::kNone) {
     result.status = LoopStatus::kLoopDetected;
     result.accepted_by = LoopEvidence::kUnchecked;
@@ -136,25 +139,32 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   result.inlier_thickness = fit.inlier_thickness;
   result.inliers = fit.inliers;
   result.fit_evidence = fit.determinacy.evidence;
-  result.corroboration.needed =
-      fit.consistent && params.min_uncorroborated_inliers > 0 &&
-      result.inliers.size() < static_cast<std::size_t>(params.min_uncorroborated_inliers);
+  const auto strong = static_cast<std::size_t>(params.min_uncorroborated_inliers);
+  result.corroboration.needed = !before_temporal_consistency && fit.consistent && strong > 0 &&
+                                result.inliers.size() < strong;
   if (result.corroboration.needed)
     corroborate(result, query_keypoints, query_descriptors, query_nodes);
   const bool accepted =
-      fit.consistent && (!result.corroboration.needed || result.corroboration.corroborated);
-  result.status = accepted ? LoopStatus::kLoopDetected : LoopStatus::kNoGeometricConsistency;
+      before_temporal_consistency
+          ? fit.consistent && result.inliers.size() >= strong
+          : fit.consistent && (!result.corroboration.needed || result.corroboration.corroborated);
+  result.status = accepted                      ? LoopStatus::kLoopDetected
+                  : before_temporal_consistency ? LoopStatus::kNoTemporalConsistency
+                                                : LoopStatus::kNoGeometricConsistency;
   result.accepted_by = LoopEvidence::kNone;
   if (accepted) {
     const LoopCorroboration& c = result.corroboration;
-    result.accepted_by = !c.needed                 ? LoopEvidence::kStrongFit
-                         : c.neighbour_checked     ? LoopEvidence::kNeighbour
-                         : c.previous_loop_at_pace ? LoopEvidence::kRevisitPace
-                                                   : LoopEvidence::kNearPreviousLoop;
+    result.accepted_by = before_temporal_consistency ? LoopEvidence::kStrongFitAlone
+                         : !c.needed                 ? LoopEvidence::kStrongFit
+                         : c.neighbour_checked       ? LoopEvidence::kNeighbour
+                         : c.previous_loop_at_pace   ? LoopEvidence::kRevisitPace
+                                                     : LoopEvidence::kNearPreviousLoop;
   }
   if (trail != nullptr) {
     check.normalised_score = result.normalised_score;
     check.corroboration = result.corroboration;
+    check.before_temporal_consistency = before_temporal_consistency;
+    check.min_strong_inliers = strong;
     trail->checks.push_back(std::move(check));
   }
 }
@@ -475,6 +485,14 @@ LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorVie
       result.times.islands_ms = milliseconds_since(clock);
       if (result.status == LoopStatus::kNoGeometricConsistency) {
         d.verify_island(result, keypoints, descriptors, nodes);
+        result.times.verification_ms = milliseconds_since(clock);
+      } else if (result.status == LoopStatus::kNoTemporalConsistency &&
+                 d.params.strong_fits_skip_temporal_check &&
+                 d.params.min_uncorroborated_inliers > 0 &&
+                 d.params.geometric_check != GeometricCheck::kNone) {
+        LoopResult strong = result;
+        d.verify(strong, keypoints, descriptors, nodes, true);
+        if (strong.detection()) result = std::move(strong);
         result.times.verification_ms = milliseconds_since(clock);
       }
     }

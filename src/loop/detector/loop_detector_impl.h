@@ -80,8 +80,10 @@ struct LoopDetector::Impl {
   void select_island(const std::vector<QueryResult>& found, LoopResult& result);
   void verify_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
                      const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
+  // before_temporal_consistency: only a strong fit (min_uncorroborated_inliers) is a loop.
   void verify(LoopResult& result, Span<vision::Keypoint> query_keypoints,
-              const DescriptorView& query_descriptors, const FeatureVector& query_nodes) const;
+              const DescriptorView& query_descriptors, const FeatureVector& query_nodes,
+              bool before_temporal_consistency = false) const;
   // Stage 6 for one pair: correspondences, then the fundamental matrix.
   TrailCheck geometric_check(Span<vision::Keypoint> query_keypoints,
                              const DescriptorView& query_descriptors,

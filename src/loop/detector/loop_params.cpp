@@ -125,6 +125,7 @@ const std::vector<Field>& fields() {
       number_field("min_inlier_spread", &P::min_inlier_spread),
       bool_field("reject_degenerate_fits", &P::reject_degenerate_fits),
       number_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers),
+      bool_field("strong_fits_skip_temporal_check", &P::strong_fits_skip_temporal_check),
       number_field("corroboration_distance", &P::corroboration_distance),
       number_field("corroboration_horizon", &P::corroboration_horizon),
       number_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance),

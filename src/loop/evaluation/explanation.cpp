@@ -74,7 +74,10 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
   }
   // Fewer inliers pass only when corroborated (by the latest loop or a neighbour).
   const double alone = params.min_uncorroborated_inliers;
-  if (alone > 0 && check.fit.consistent && (check.corroboration.needed || inliers >= alone))
+  if (alone > 0 && check.fit.consistent && check.before_temporal_consistency)
+    measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
+                        inliers >= alone, true, "before temporal consistency"});
+  else if (alone > 0 && check.fit.consistent && (check.corroboration.needed || inliers >= alone))
     measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
                         !check.corroboration.needed || check.corroboration.corroborated, true, ""});
   return measures;
@@ -138,6 +141,8 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
       return text + ": accepted (" + passed + "; " + weak + ", corroborated: " + by + ")";
     return text + ": rejected: " + weak + " and not corroborated (" + by + ")";
   }
+  if (check.fit.consistent && check.before_temporal_consistency && !check.accepted())
+    return text + ": rejected: " + failed;
   if (check.fit.consistent) return text + ": accepted (" + passed + ")";
   if (failed.empty()) return text + ": rejected by the estimator (no consistent model)";
   return text + ": rejected: " + failed;
@@ -205,10 +210,13 @@ class Explainer {
       lost(ExplainedStage::kNoGroundTruth, "the query has no ground-truth loop");
     if (e_.false_loop) {
       const TrailCheck* accepted = t_.checks.empty() ? nullptr : &t_.checks.back();
+      const bool alone = accepted != nullptr && accepted->before_temporal_consistency;
       std::string why = "false loop with " + std::to_string(t_.match) + " (η " +
                         number(accepted != nullptr ? accepted->normalised_score : 0) +
                         ", temporal consistency " + std::to_string(t_.temporal.chain_after - 1) +
-                        " ≥ k " + std::to_string(p_.k) + ") accepted by the geometric check: ";
+                        (alone ? " < k " : " ≥ k ") + std::to_string(p_.k) +
+                        (alone ? ", skipped by a strong fit" : "") +
+                        ") accepted by the geometric check: ";
       if (accepted != nullptr)
         why += describe_check(*accepted, p_);
       else
@@ -400,7 +408,20 @@ class Explainer {
                                  " (consistent queries before this one; " + chain + ")";
     step(sentence);
     if (!passes) {
-      lost(ExplainedStage::kTemporalConsistency, sentence);
+      const TrailCheck* early = t_.checks.empty() ? nullptr : &t_.checks.front();
+      if (early != nullptr && early->accepted()) {
+        step("a fit of min_uncorroborated_inliers " +
+             std::to_string(p_.min_uncorroborated_inliers) +
+             " inliers or more is a loop without temporal consistency "
+             "(strong_fits_skip_temporal_check)");
+        explain_checks();
+        return;
+      }
+      lost(ExplainedStage::kTemporalConsistency,
+           early == nullptr
+               ? sentence
+               : sentence + "; the strong-fit check of " + std::to_string(early->entry) +
+                     " before it: " + describe_check(*early, p_));
       return;
     }
     explain_checks();
