@@ -302,11 +302,13 @@ TEST(DecisionTrail, ReportExplainsFalseLoopsAndMissesThroughTheCommandLine) {
   test::TempDir dir;
   const std::string csv = dir.file("loops.csv"), report = dir.file("report");
   std::string out;
-  // min_inliers 8 without corroboration lets a false loop through; 3
-  // database results lose true matches to islands and temporal consistency.
+  // min_inliers 8 without corroboration and with degenerate fits lets a
+  // false loop through; 3 database results lose true matches to islands and
+  // temporal consistency.
   ASSERT_EQ(
       test::run_cli("detect-loops --vocab " + test::source_path("data/vocab/orb_default.bbw") +
-                        " --min-inliers 8 --min-uncorroborated-inliers 0 --max-db-results 3 -o " +
+                        " --min-inliers 8 --min-uncorroborated-inliers 0"
+                        " --reject-degenerate-fits false --max-db-results 3 -o " +
                         csv + " " + test::shared_data("rtabmap-samples/samples"),
                     &out),
       0)
