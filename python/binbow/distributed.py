@@ -352,7 +352,13 @@ class ShardedDatabase:
             reason = f"failed ({type(error).__name__}: {error})"
             lost = True
         if lost and shard is not None:
+            # Said the same way as every later call says it (_check_usable), however
+            # Dask reported the loss (a timeout first, then a lost actor, or at once).
             self._lost.setdefault(shard, f"{what} {reason}")
+            raise Error(f"ShardedDatabase: shard {shard} was lost ({what} {reason}); its "
+                        "entries are gone: is the Dask cluster alive? A shard lost with its "
+                        "worker can only come back from the last save: load the last save "
+                        "(ShardedDatabase.load)") from failure
         raise Error(f"ShardedDatabase: {what} {reason}: is the Dask cluster alive? "
                     "A shard lost with its worker can only come back from the last save "
                     "(ShardedDatabase.load)") from failure
