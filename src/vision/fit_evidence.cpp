@@ -209,7 +209,12 @@ FitDeterminacy fit_determinacy(Span<Keypoint> first, Span<Keypoint> second,
           std::max(out.alternative_fundamental_fits,
                    fundamental_fits(tq.t() * as_matrix(f) * tp, p, q, tolerance));
     if (!most(out.alternative_fundamental_fits, out.points)) {
-      out.evidence = FitEvidence::kFundamental;
+      // The probe at 45° can miss a narrow configuration's freedom: a line or a
+      // patch within the tolerance is degenerate whatever it says.
+      const double point_tolerance = tolerance * std::sqrt(2.0);
+      out.on_a_line = near_one_line(p, point_tolerance) || near_one_line(q, point_tolerance);
+      out.on_a_patch = within_one_cell(p, first) || within_one_cell(q, second);
+      if (!out.on_a_line && !out.on_a_patch) out.evidence = FitEvidence::kFundamental;
       return out;
     }
   }
@@ -231,12 +236,10 @@ FitDeterminacy fit_determinacy(Span<Keypoint> first, Span<Keypoint> second,
       on_plane_p.push_back(p[i]);
       on_plane_q.push_back(q[i]);
     }
-  out.homography_on_a_line =
+  out.on_a_line =
       near_one_line(on_plane_p, point_tolerance) || near_one_line(on_plane_q, point_tolerance);
-  out.homography_on_a_patch =
-      within_one_cell(on_plane_p, first) || within_one_cell(on_plane_q, second);
-  if (!out.homography_on_a_line && !out.homography_on_a_patch)
-    out.evidence = FitEvidence::kHomography;
+  out.on_a_patch = within_one_cell(on_plane_p, first) || within_one_cell(on_plane_q, second);
+  if (!out.on_a_line && !out.on_a_patch) out.evidence = FitEvidence::kHomography;
   return out;
 }
 

