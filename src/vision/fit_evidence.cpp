@@ -32,10 +32,33 @@ std::vector<Correspondence> distinct_correspondences(Span<Keypoint> first, Span<
   return kept;
 }
 
-// Hartley's normalisation of an image's keypoints: their centroid to the
-// origin, their mean distance from it √2. The alternatives are then
-// different geometries of the whole view, not of the inliers' part of it.
-cv::Matx33d normalisation_of(Span<Keypoint> keypoints) {
+// Width and height of the bounding box of points.
+struct Extent {
+  double width = 0, height = 0;
+};
+
+template <typename Points>
+Extent extent_of(const Points& points) {
+  double min_x = points[0].x, max_x = min_x, min_y = points[0].y, max_y = min_y;
+  for (const auto& p : points) {
+    min_x = std::min<double>(min_x, p.x);
+    max_x = std::max<double>(max_x, p.x);
+    min_y = std::min<double>(min_y, p.y);
+    max_y = std::max<double>(max_y, p.y);
+  }
+  return {max_x - min_x, max_y - min_y};
+}
+
+// What the inliers are judged against, from all of an image's keypoints:
+// Hartley's normalisation (their centroid to the origin, their mean
+// distance from it √2), so that the alternatives are different geometries
+// of the whole view, not of the inliers' part of it; and their extent.
+struct View {
+  cv::Matx33d normalisation;
+  Extent extent;
+};
+
+View view_of(Span<Keypoint> keypoints) {
   cv::Point2d centre(0, 0);
   for (const Keypoint& k : keypoints) centre += cv::Point2d(k.x, k.y);
   centre *= 1.0 / static_cast<double>(keypoints.size());
@@ -43,23 +66,22 @@ cv::Matx33d normalisation_of(Span<Keypoint> keypoints) {
   for (const Keypoint& k : keypoints) mean_distance += cv::norm(cv::Point2d(k.x, k.y) - centre);
   mean_distance /= static_cast<double>(keypoints.size());
   const double s = mean_distance > 0 ? std::sqrt(2.0) / mean_distance : 1.0;
-  return {s, 0, -s * centre.x, 0, s, -s * centre.y, 0, 0, 1};
+  return {{s, 0, -s * centre.x, 0, s, -s * centre.y, 0, 0, 1}, extent_of(keypoints)};
 }
 
 cv::Point2d apply(const cv::Matx33d& t, const cv::Point2d& p) {
   return {t(0, 0) * p.x + t(0, 2), t(1, 1) * p.y + t(1, 2)};
 }
 
-// The least-squares solution of `system` (rows of 9 unknowns: its right
-// singular vector of the smallest singular value), and the two solutions
-// halfway (45°) between it and the best solution orthogonal to it (the
-// second smallest): when the system leaves a family of solutions open,
-// these are members of it as different from the best as they are similar.
-void best_and_alternatives(const cv::Mat& system, Vec9& best, Vec9 (&alternatives)[2]) {
+// The two solutions of `system` (rows of 9 unknowns) halfway (45°) between
+// its least-squares solution (the right singular vector of the smallest
+// singular value) and the best solution orthogonal to it (the second
+// smallest): when the system leaves a family of solutions open, these are
+// members of it as different from the best as they are similar.
+void alternatives_of(const cv::Mat& system, Vec9 (&alternatives)[2]) {
   cv::Mat w, u, vt;
   cv::SVD::compute(system, w, u, vt, cv::SVD::FULL_UV);
   for (int i = 0; i < 9; ++i) {
-    best(i) = vt.at<double>(8, i);
     alternatives[0](i) = vt.at<double>(8, i) + vt.at<double>(7, i);
     alternatives[1](i) = vt.at<double>(8, i) - vt.at<double>(7, i);
   }
@@ -86,22 +108,23 @@ std::size_t fundamental_fits(const cv::Matx33d& f, const std::vector<cv::Point2d
   return fits;
 }
 
-// Points that `h` maps within `tolerance` of their partners, both ways.
-std::size_t homography_fits(const cv::Matx33d& h, const std::vector<cv::Point2d>& p,
-                            const std::vector<cv::Point2d>& q, double tolerance) {
+// Whether `h` maps each point within `tolerance` of its partner, both ways
+// (none when h is singular).
+std::vector<bool> homography_inliers(const cv::Matx33d& h, const std::vector<cv::Point2d>& p,
+                                     const std::vector<cv::Point2d>& q, double tolerance) {
+  std::vector<bool> inlier(p.size(), false);
   bool invertible = false;
   const cv::Matx33d inverse = h.inv(cv::DECOMP_LU, &invertible);
-  if (!invertible) return 0;
+  if (!invertible) return inlier;
   const auto maps_within = [tolerance](const cv::Matx33d& m, const cv::Point2d& from,
                                        const cv::Point2d& to) {
     const cv::Vec3d x = m * cv::Vec3d(from.x, from.y, 1);
     if (!(std::abs(x[2]) > std::numeric_limits<double>::epsilon())) return false;
     return std::hypot(x[0] / x[2] - to.x, x[1] / x[2] - to.y) <= tolerance;
   };
-  std::size_t fits = 0;
   for (std::size_t i = 0; i < p.size(); ++i)
-    if (maps_within(h, p[i], q[i]) && maps_within(inverse, q[i], p[i])) ++fits;
-  return fits;
+    inlier[i] = maps_within(h, p[i], q[i]) && maps_within(inverse, q[i], p[i]);
+  return inlier;
 }
 
 // Whether most of `points` lie within `tolerance` of their total least
@@ -126,24 +149,11 @@ bool near_one_line(const std::vector<cv::Point2d>& points, double tolerance) {
 }
 
 // Whether the bounding box of `points` fits in one cell of the
-// kSpreadGridCells × kSpreadGridCells grid over the image's keypoints.
-bool within_one_cell(const std::vector<cv::Point2d>& points, Span<Keypoint> keypoints) {
-  double min_x = points[0].x, max_x = min_x, min_y = points[0].y, max_y = min_y;
-  for (const cv::Point2d& p : points) {
-    min_x = std::min(min_x, p.x);
-    max_x = std::max(max_x, p.x);
-    min_y = std::min(min_y, p.y);
-    max_y = std::max(max_y, p.y);
-  }
-  double k_min_x = keypoints[0].x, k_max_x = k_min_x, k_min_y = keypoints[0].y, k_max_y = k_min_y;
-  for (const Keypoint& k : keypoints) {
-    k_min_x = std::min<double>(k_min_x, k.x);
-    k_max_x = std::max<double>(k_max_x, k.x);
-    k_min_y = std::min<double>(k_min_y, k.y);
-    k_max_y = std::max<double>(k_max_y, k.y);
-  }
-  return (max_x - min_x) * kSpreadGridCells <= k_max_x - k_min_x &&
-         (max_y - min_y) * kSpreadGridCells <= k_max_y - k_min_y;
+// kSpreadGridCells × kSpreadGridCells grid over the view.
+bool within_one_cell(const std::vector<cv::Point2d>& points, const View& view) {
+  const Extent e = extent_of(points);
+  return e.width * kSpreadGridCells <= view.extent.width &&
+         e.height * kSpreadGridCells <= view.extent.height;
 }
 
 bool most(std::size_t fits, std::size_t points) {
@@ -189,8 +199,10 @@ FitDeterminacy fit_determinacy(Span<Keypoint> first, Span<Keypoint> second,
     p.emplace_back(first[c.first].x, first[c.first].y);
     q.emplace_back(second[c.second].x, second[c.second].y);
   }
-  const cv::Matx33d tp = normalisation_of(first), tq = normalisation_of(second);
+  const View first_view = view_of(first), second_view = view_of(second);
+  const cv::Matx33d &tp = first_view.normalisation, &tq = second_view.normalisation;
   const int n = static_cast<int>(p.size());
+  const double point_tolerance = tolerance * std::sqrt(2.0);
 
   out.alternative_fundamental_fits = out.points;
   out.evidence = FitEvidence::kDegenerate;
@@ -201,19 +213,19 @@ FitDeterminacy fit_determinacy(Span<Keypoint> first, Span<Keypoint> second,
       const double row[9] = {b.x * a.x, b.x * a.y, b.x, b.y * a.x, b.y * a.y, b.y, a.x, a.y, 1};
       std::copy(row, row + 9, system.ptr<double>(i));
     }
-    Vec9 best, alternatives[2];
-    best_and_alternatives(system, best, alternatives);
+    Vec9 alternatives[2];
+    alternatives_of(system, alternatives);
     out.alternative_fundamental_fits = 0;
     for (const Vec9& f : alternatives)
       out.alternative_fundamental_fits =
           std::max(out.alternative_fundamental_fits,
                    fundamental_fits(tq.t() * as_matrix(f) * tp, p, q, tolerance));
-    if (!most(out.alternative_fundamental_fits, out.points)) {
+    out.fundamental_determined = !most(out.alternative_fundamental_fits, out.points);
+    if (out.fundamental_determined) {
       // The probe at 45° can miss a narrow configuration's freedom: a line or a
       // patch within the tolerance is degenerate whatever it says.
-      const double point_tolerance = tolerance * std::sqrt(2.0);
       out.on_a_line = near_one_line(p, point_tolerance) || near_one_line(q, point_tolerance);
-      out.on_a_patch = within_one_cell(p, first) || within_one_cell(q, second);
+      out.on_a_patch = within_one_cell(p, first_view) || within_one_cell(q, second_view);
       if (!out.on_a_line && !out.on_a_patch) out.evidence = FitEvidence::kFundamental;
       return out;
     }
@@ -221,24 +233,24 @@ FitDeterminacy fit_determinacy(Span<Keypoint> first, Span<Keypoint> second,
 
   if (out.points < kMinHomographyPoints) return out;
   // The homography most points follow (the others may be parallax, or fit
-  // only some other member of the fundamental matrices' family), then the
-  // alternatives of the homography of those points.
-  const double point_tolerance = tolerance * std::sqrt(2.0);
+  // only some other member of the fundamental matrices' family).
   const cv::Mat found = cv::findHomography(p, q, cv::RANSAC, point_tolerance, cv::noArray(), 2000);
   if (found.rows != 3 || found.cols != 3) return out;
   cv::Matx33d homography;
   found.convertTo(cv::Mat(3, 3, CV_64F, homography.val), CV_64F);
-  out.homography_fits = homography_fits(homography, p, q, point_tolerance);
-  if (out.homography_fits < kMinHomographyPoints) return out;
+  const std::vector<bool> on_plane = homography_inliers(homography, p, q, point_tolerance);
   std::vector<cv::Point2d> on_plane_p, on_plane_q;
   for (std::size_t i = 0; i < p.size(); ++i)
-    if (homography_fits(homography, {p[i]}, {q[i]}, point_tolerance) == 1) {
+    if (on_plane[i]) {
       on_plane_p.push_back(p[i]);
       on_plane_q.push_back(q[i]);
     }
+  out.homography_fits = on_plane_p.size();
+  if (out.homography_fits < kMinHomographyPoints) return out;
   out.on_a_line =
       near_one_line(on_plane_p, point_tolerance) || near_one_line(on_plane_q, point_tolerance);
-  out.on_a_patch = within_one_cell(on_plane_p, first) || within_one_cell(on_plane_q, second);
+  out.on_a_patch =
+      within_one_cell(on_plane_p, first_view) || within_one_cell(on_plane_q, second_view);
   if (!out.on_a_line && !out.on_a_patch) out.evidence = FitEvidence::kHomography;
   return out;
 }

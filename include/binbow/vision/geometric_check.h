@@ -131,6 +131,10 @@ struct FitDeterminacy {
   // Points within tolerance of the alternative fundamental matrix that fits
   // more of them (every point with fewer than 8).
   std::size_t alternative_fundamental_fits = 0;
+  // Whether that probe found the fundamental matrix determined (8 points or
+  // more, fewer than kAmbiguousShare of them fitting an alternative), before
+  // the line and patch tests; when not, the homography is tried.
+  bool fundamental_determined = false;
   // Points the homography maps within tolerance (0 when the fundamental
   // matrix is determined or with fewer than 5 points).
   std::size_t homography_fits = 0;

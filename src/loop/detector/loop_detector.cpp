@@ -144,10 +144,11 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
                                 result.inliers.size() < strong;
   if (result.corroboration.needed)
     corroborate(result, query_keypoints, query_descriptors, query_nodes);
-  const bool accepted =
-      before_temporal_consistency
-          ? fit.consistent && result.inliers.size() >= strong
-          : fit.consistent && (!result.corroboration.needed || result.corroboration.corroborated);
+  check.normalised_score = result.normalised_score;
+  check.corroboration = result.corroboration;
+  check.before_temporal_consistency = before_temporal_consistency;
+  check.min_strong_inliers = strong;
+  const bool accepted = check.accepted();
   result.status = accepted                      ? LoopStatus::kLoopDetected
                   : before_temporal_consistency ? LoopStatus::kNoTemporalConsistency
                                                 : LoopStatus::kNoGeometricConsistency;
@@ -160,13 +161,7 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
                          : c.previous_loop_at_pace   ? LoopEvidence::kRevisitPace
                                                      : LoopEvidence::kNearPreviousLoop;
   }
-  if (trail != nullptr) {
-    check.normalised_score = result.normalised_score;
-    check.corroboration = result.corroboration;
-    check.before_temporal_consistency = before_temporal_consistency;
-    check.min_strong_inliers = strong;
-    trail->checks.push_back(std::move(check));
-  }
+  if (trail != nullptr) trail->checks.push_back(std::move(check));
 }
 
 // Near the latest loop, or else at the revisit's pace since it: the match

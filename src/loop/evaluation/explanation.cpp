@@ -60,16 +60,14 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
     };
     const std::string of = "of " + std::to_string(d.points) + " distinct points";
     const bool fundamental = d.evidence == vision::FitEvidence::kFundamental;
-    const bool probe_determined =
-        d.points >= 8 && share(d.alternative_fundamental_fits) < vision::kAmbiguousShare;
     const std::string narrow = d.on_a_line    ? ", near one line"
                                : d.on_a_patch ? ", within one cell of a 4 × 4 grid"
                                               : "";
     measures.push_back({"share fitting another fundamental matrix",
                         share(d.alternative_fundamental_fits), "reject_degenerate_fits",
                         vision::kAmbiguousShare, fundamental, false,
-                        of + (probe_determined ? narrow : "")});
-    if (!probe_determined)
+                        of + (d.fundamental_determined ? narrow : "")});
+    if (!d.fundamental_determined)
       measures.push_back({"points following a homography", static_cast<double>(d.homography_fits),
                           "reject_degenerate_fits", 5,
                           d.evidence == vision::FitEvidence::kHomography, true,
