@@ -100,18 +100,24 @@ TEST(Corroboration, SharedQueryFeaturesCountsTheNeighboursInliersOnTheMatchsFeat
   EXPECT_EQ(detail::shared_query_features(points, match, match), 3u);
 }
 
+// Every frame's result on rtabmap-samples with BRIEF and the bundled vocabulary.
+std::vector<LoopResult> sample_results(const LoopDetectorParams& params) {
+  LoopDetector detector(Vocabulary::load(test::source_path("data/vocab/brief_default.bbw")),
+                        params);
+  const auto extractor = vision::make_extractor("brief");
+  vision::ImageSource source({test::samples_folder()});
+  vision::Frame frame;
+  std::vector<LoopResult> results;
+  while (source.next(frame)) results.push_back(detector.process(extractor->extract(frame.image)));
+  return results;
+}
+
 // What accepted each loop is recorded: on rtabmap-samples every loop says
 // which evidence took it, and a loop with min_uncorroborated_inliers or more
 // stands on its fit, which determines the fundamental matrix or a homography.
 TEST(Corroboration, EveryLoopSaysWhatAcceptedIt) {
-  const std::string vocabulary = test::source_path("data/vocab/brief_default.bbw");
-  LoopDetector detector(Vocabulary::load(vocabulary), LoopDetectorParams{});
-  const auto extractor = vision::make_extractor("brief");
-  vision::ImageSource source({test::samples_folder()});
-  vision::Frame frame;
   std::size_t loops = 0, weak = 0;
-  while (source.next(frame)) {
-    const LoopResult r = detector.process(extractor->extract(frame.image));
+  for (const LoopResult& r : sample_results(LoopDetectorParams{})) {
     if (!r.detection()) {
       EXPECT_EQ(r.accepted_by, LoopEvidence::kNone);
       continue;
@@ -143,14 +149,8 @@ TEST(Corroboration, StrongFitsSkipTheTemporalTestWeakOnesDoNot) {
   std::size_t loops = 0;
   for (const bool skip : {true, false}) {
     params.strong_fits_skip_temporal_check = skip;
-    LoopDetector detector(Vocabulary::load(test::source_path("data/vocab/brief_default.bbw")),
-                          params);
-    const auto extractor = vision::make_extractor("brief");
-    vision::ImageSource source({test::samples_folder()});
-    vision::Frame frame;
     std::size_t found = 0;
-    while (source.next(frame)) {
-      const LoopResult r = detector.process(extractor->extract(frame.image));
+    for (const LoopResult& r : sample_results(params)) {
       if (!r.detection()) continue;
       ++found;
       EXPECT_EQ(r.accepted_by, LoopEvidence::kStrongFitAlone) << "query " << r.query;
