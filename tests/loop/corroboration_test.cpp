@@ -140,6 +140,37 @@ TEST(Corroboration, EveryLoopSaysWhatAcceptedIt) {
   EXPECT_STREQ(to_string(LoopEvidence::kNeighbour), "neighbour");
 }
 
+// Before temporal consistency only a fit of min_uncorroborated_inliers counts:
+// a direct-index fit short of it is retried by exhaustive matching, as an
+// inconsistent fit is, and the explanation measures it by that parameter.
+// (k beyond the sequence: every query's check comes before the temporal test.)
+TEST(Corroboration, AStrongFitIsSoughtByExhaustiveMatchingBeforeTheTemporalTest) {
+  LoopDetectorParams params;
+  params.k = 1000;
+  LoopDetector detector(Vocabulary::load(test::source_path("data/vocab/brief_default.bbw")),
+                        params);
+  const auto extractor = vision::make_extractor("brief");
+  vision::ImageSource source({test::samples_folder()});
+  vision::Frame frame;
+  std::size_t early = 0, retried = 0;
+  while (source.next(frame)) {
+    LoopDecisionTrail trail;
+    detector.process(extractor->extract(frame.image), trail);
+    for (const TrailCheck& check : trail.checks) {
+      if (!check.before_temporal_consistency) continue;
+      ++early;
+      const std::string text = describe_check(check, detector.params());
+      EXPECT_NE(text.find("min_uncorroborated_inliers 16"), std::string::npos)
+          << "query " << trail.query << ": " << text;
+      if (check.accepted()) continue;
+      EXPECT_TRUE(check.exhaustive_fallback_used) << "query " << trail.query << ": " << text;
+      retried += check.exhaustive_fallback_used;
+    }
+  }
+  EXPECT_GE(early, 10u);
+  EXPECT_GE(retried, 5u);
+}
+
 // With a temporal test no query can pass (k beyond the sequence), only fits
 // of min_uncorroborated_inliers inliers or more are loops, each accepted on
 // its own; without strong_fits_skip_temporal_check there is none.

@@ -40,7 +40,8 @@ struct CheckMeasure {
 };
 
 // The tests of `check` under `params`, in the order the check applies them:
-// correspondences and inliers against min_inliers, then the ratio and
+// correspondences and inliers against min_inliers (before temporal
+// consistency: min_uncorroborated_inliers, the only fit counted there), then the ratio and
 // spread thresholds, whether the inliers determine the geometry
 // (reject_degenerate_fits: the share of distinct points another fundamental
 // matrix fits, and when that is most of them, the share another homography

@@ -77,8 +77,8 @@ DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
 
 TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
                                                const DescriptorView& query_descriptors,
-                                               const FeatureVector& query_nodes,
-                                               EntryId match) const {
+                                               const FeatureVector& query_nodes, EntryId match,
+                                               bool strong_fit_only) const {
   TrailCheck out;
   out.entry = match;
   const Span<Keypoint> match_keypoints{frames[match].keypoints.data(),
@@ -93,6 +93,8 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
   check.min_inlier_ratio = params.min_inlier_ratio;
   check.min_inlier_spread = params.min_inlier_spread;
   check.reject_degenerate = params.reject_degenerate_fits;
+  if (strong_fit_only)
+    check.min_inliers = std::max(check.min_inliers, params.min_uncorroborated_inliers);
 
   MatchOptions matching;
   matching.max_neighbor_ratio = params.max_neighbor_ratio;
@@ -129,7 +131,8 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
     result.accepted_by = LoopEvidence::kUnchecked;
     return;
   }
-  TrailCheck check = geometric_check(query_keypoints, query_descriptors, query_nodes, result.match);
+  TrailCheck check = geometric_check(query_keypoints, query_descriptors, query_nodes, result.match,
+                                     before_temporal_consistency);
   if (check.exhaustive_fallback_used) result.exhaustive_fallback_used = true;
   const FundamentalCheckResult& fit = check.fit;
   result.correspondences = fit.correspondences;

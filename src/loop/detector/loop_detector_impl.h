@@ -85,9 +85,13 @@ struct LoopDetector::Impl {
               const DescriptorView& query_descriptors, const FeatureVector& query_nodes,
               bool before_temporal_consistency = false) const;
   // Stage 6 for one pair: correspondences, then the fundamental matrix.
+  // strong_fit_only: only a fit of min_uncorroborated_inliers inliers counts,
+  // so a direct-index fit with fewer is retried by exhaustive matching as an
+  // inconsistent one is.
   TrailCheck geometric_check(Span<vision::Keypoint> query_keypoints,
                              const DescriptorView& query_descriptors,
-                             const FeatureVector& query_nodes, EntryId match) const;
+                             const FeatureVector& query_nodes, EntryId match,
+                             bool strong_fit_only = false) const;
   LoopResult run(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
   // Record in `trail` the islands of `candidates` (short ones too), and the
   // temporal test of the chosen island (the window's state before it).

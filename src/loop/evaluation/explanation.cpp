@@ -35,16 +35,22 @@ std::string matches_text(const std::vector<std::uint32_t>& matches) {
 std::vector<CheckMeasure> check_measures(const TrailCheck& check,
                                          const LoopDetectorParams& params) {
   const double correspondences = static_cast<double>(check.correspondences.size());
-  const double min_inliers = params.min_inliers;
+  // Before temporal consistency only a strong fit counts, so the check asks
+  // for min_uncorroborated_inliers where it otherwise asks for min_inliers.
+  const bool strong_only =
+      check.before_temporal_consistency && params.min_uncorroborated_inliers > params.min_inliers;
+  const double min_inliers = strong_only ? params.min_uncorroborated_inliers : params.min_inliers;
+  const std::string parameter = strong_only ? "min_uncorroborated_inliers" : "min_inliers";
+  const std::string note = strong_only ? "before temporal consistency" : "";
   std::vector<CheckMeasure> measures;
   // check_fundamental fits nothing below max(8, min_inliers) correspondences.
   const double needed = std::max(8.0, min_inliers);
   measures.push_back({"correspondences", correspondences,
-                      min_inliers >= 8 ? "min_inliers" : "max(8, min_inliers)", needed,
-                      correspondences >= needed, true, ""});
+                      min_inliers >= 8 ? parameter : "max(8, " + parameter + ")", needed,
+                      correspondences >= needed, true, note});
   const auto inliers = static_cast<double>(check.fit.inliers.size());
   measures.push_back(
-      {"inliers", inliers, "min_inliers", min_inliers, inliers >= min_inliers, true, ""});
+      {"inliers", inliers, parameter, min_inliers, inliers >= min_inliers, true, note});
   if (params.min_inlier_ratio > 0)
     measures.push_back({"inlier ratio", check.fit.inlier_ratio, "min_inlier_ratio",
                         params.min_inlier_ratio, check.fit.inlier_ratio >= params.min_inlier_ratio,
@@ -77,10 +83,8 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
   }
   // Fewer inliers pass only when corroborated (by the latest loop or a neighbour).
   const double alone = params.min_uncorroborated_inliers;
-  if (alone > 0 && check.fit.consistent && check.before_temporal_consistency)
-    measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
-                        inliers >= alone, true, "before temporal consistency"});
-  else if (alone > 0 && check.fit.consistent && (check.corroboration.needed || inliers >= alone))
+  if (alone > 0 && !check.before_temporal_consistency && check.fit.consistent &&
+      (check.corroboration.needed || inliers >= alone))
     measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
                         !check.corroboration.needed || check.corroboration.corroborated, true, ""});
   return measures;
@@ -144,8 +148,6 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
       return text + ": accepted (" + passed + "; " + weak + ", corroborated: " + by + ")";
     return text + ": rejected: " + weak + " and not corroborated (" + by + ")";
   }
-  if (check.fit.consistent && check.before_temporal_consistency && !check.accepted())
-    return text + ": rejected: " + failed;
   if (check.fit.consistent) return text + ": accepted (" + passed + ")";
   if (failed.empty()) return text + ": rejected by the estimator (no consistent model)";
   return text + ": rejected: " + failed;
