@@ -6,10 +6,12 @@ install(TARGETS binbow_core EXPORT binbowCoreTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(TARGETS binbow_vision EXPORT binbowVisionTargets
-        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+if(BINBOW_BUILD_VISION)
+  install(TARGETS binbow_vision EXPORT binbowVisionTargets
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endif()
 # binbow::dbow2 (DBoW2's API) needs OpenCV core only.
 install(TARGETS binbow_dbow2 EXPORT binbowDbow2Targets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
@@ -18,12 +20,16 @@ install(TARGETS binbow_dbow2 EXPORT binbowDbow2Targets
 install(TARGETS binbow RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # The image/video module, loaded by binbow::vision on first use (src/media/),
 # and the CLI's commands that need OpenCV (apps/binbow/vision_commands.h).
-install(TARGETS binbow_media binbow_cli_vision LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/binbow)
+if(BINBOW_BUILD_VISION)
+  install(TARGETS binbow_media binbow_cli_vision LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/binbow)
+endif()
 install(DIRECTORY include/binbow DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(EXPORT binbowCoreTargets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
-install(EXPORT binbowVisionTargets NAMESPACE binbow::
-        DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
+if(BINBOW_BUILD_VISION)
+  install(EXPORT binbowVisionTargets NAMESPACE binbow::
+          DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
+endif()
 install(EXPORT binbowDbow2Targets NAMESPACE binbow::
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/binbow)
 
@@ -47,7 +53,11 @@ if(BUILD_SHARED_LIBS)
 else()
   set(BINBOW_PC_PRIVATE "")
 endif()
-foreach(pc_file binbow binbow-vision binbow-dbow2)
+set(BINBOW_PC_FILES binbow binbow-dbow2)
+if(BINBOW_BUILD_VISION)
+  list(APPEND BINBOW_PC_FILES binbow-vision)
+endif()
+foreach(pc_file ${BINBOW_PC_FILES})
   configure_file(cmake/${pc_file}.pc.in ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc @ONLY)
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pc_file}.pc
           DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -20,6 +20,10 @@ packages=(
   colcon python3-colcon-cmake python3-colcon-ros python3-colcon-bash python3-colcon-recursive-crawl
   python3-colcon-parallel-executor python3-colcon-package-selection python3-colcon-output
   python3-colcon-library-path python3-colcon-metadata python3-colcon-defaults
+  # The aarch64 cross build tested under emulation (scripts/test-aarch64.sh):
+  # the cross compiler, qemu, and the target's libraries through multiarch.
+  g++-aarch64-linux-gnu qemu-user
+  zlib1g-dev:arm64 libopencv-core-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
 )
 if [ "$(id -u)" -ne 0 ]; then
   if ! command -v sudo >/dev/null 2>&1; then
@@ -30,6 +34,8 @@ if [ "$(id -u)" -ne 0 ]; then
   exec sudo "$0" "$@"
 fi
 export DEBIAN_FRONTEND=noninteractive
+# arm64 packages beside the build machine's (multiarch), for the cross build.
+dpkg --add-architecture arm64
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
 echo "binbow dependencies installed."

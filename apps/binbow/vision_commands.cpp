@@ -71,6 +71,12 @@ const VisionCommands& find_and_load() {
   const std::vector<std::string> paths = candidates();
   for (const std::string& path : paths)
     if (::access(path.c_str(), F_OK) == 0) return load(path);
+#if defined(BINBOW_CLI_WITHOUT_VISION)
+  throw Error(
+      "this binbow was built without its image and video commands (BINBOW_BUILD_VISION=OFF): "
+      "build it with OpenCV (Debian: libopencv-dev) and -DBINBOW_BUILD_VISION=ON, or set "
+      "BINBOW_CLI_VISION_MODULE to the path of a binbow_cli_vision.so of this version");
+#endif
   std::string elsewhere;
   for (std::size_t i = 1; i < paths.size(); ++i) elsewhere += (i > 1 ? ", " : "") + paths[i];
   throw Error(load_error(
@@ -86,6 +92,11 @@ bool is_lean_command(const std::string& first, const std::string& second) {
 
 bool needs_vision_commands(int argc, const char* const* argv) {
   if (argc == 2 && std::strcmp(argv[1], "--version") == 0) return false;
+#if defined(BINBOW_CLI_WITHOUT_VISION)
+  // Help and unknown commands list the commands this build has.
+  if (const char* chosen = std::getenv("BINBOW_CLI_VISION_MODULE"); chosen == nullptr || !*chosen)
+    return false;
+#endif
   return !(argc >= 2 && is_lean_command(argv[1], argc >= 3 ? argv[2] : ""));
 }
 

@@ -83,13 +83,19 @@ void nearest_neighbors(const DescriptorView& queries, const DescriptorView& cand
                        std::uint32_t* best_index, std::uint32_t* best_distance);
 
 // Name of the Hamming kernel set chosen at run time for this CPU, the fastest it
-// supports: "avx512" (AVX-512 VPOPCNTDQ), "popcnt" (hardware popcount) or
-// "generic" (portable bit counting). Transform, database and matching speed depend
-// on it, so benchmarks should name it (`binbow info --system` prints it).
+// supports: on x86-64 "avx512" (AVX-512 VPOPCNTDQ), "avx2" (256-bit nibble
+// lookups), "popcnt" (hardware popcount) or "generic" (portable bit counting);
+// on aarch64 "neon" or "generic". The environment variable
+// BINBOW_HAMMING_KERNEL, read once on first use, forces one of the supported
+// sets instead (for measurements and tests; every set gives the same results).
+// Transform, database and matching speed depend on it, so benchmarks should
+// name it (`binbow info --system` prints it). Throws InvalidArgument naming the
+// variable, its value and the supported sets if BINBOW_HAMMING_KERNEL names a
+// set this CPU cannot run, as does every function that computes distances.
 const char* hamming_kernel_name();
 
-// Every kernel set this CPU can run, from the portable one to the fastest; the
-// last one is hamming_kernel_name().
+// Every kernel set this CPU can run, from the portable one to the fastest (the
+// one chosen unless BINBOW_HAMMING_KERNEL says otherwise).
 std::vector<std::string> supported_hamming_kernels();
 
 // A CPU feature that decides which kernel set can run.
@@ -99,8 +105,8 @@ struct CpuFeature {
 };
 
 // The CPU features binbow's kernel choice depends on, in a fixed order
-// (popcnt, avx512f, avx512vpopcntdq); empty on non-x86 builds, which always run
-// the compiler's own popcount.
+// (popcnt, avx2, avx512f, avx512vpopcntdq); empty on other processors (NEON,
+// which the aarch64 kernels use, is part of every aarch64 CPU).
 std::vector<CpuFeature> cpu_features();
 
 }  // namespace binbow

@@ -1,5 +1,6 @@
 // Hot kernels, compiled once per instruction set (kernels_generic.cpp,
-// kernels_popcnt.cpp, kernels_avx512.cpp) from kernels_impl.h and selected once at run time.
+// kernels_popcnt.cpp, kernels_avx2.cpp, kernels_avx512.cpp, kernels_neon.cpp)
+// from kernels_impl.h and selected once at run time.
 #pragma once
 
 #include <cstddef>
@@ -43,12 +44,19 @@ struct Kernels {
                   std::uint32_t* words, std::uint32_t* level_nodes, std::uint32_t level_depth);
 };
 
-// The best kernels this CPU supports (chosen on first call, thread-safe).
+// The environment variable that forces a kernel set by name.
+inline constexpr const char* kKernelVariable = "BINBOW_HAMMING_KERNEL";
+
+// The kernels in use (chosen on first call, thread-safe): select_kernels()
+// of BINBOW_HAMMING_KERNEL's value.
 const Kernels& kernels();
+// The supported set named `requested`, or the fastest when it is null or
+// empty. Throws InvalidArgument naming the variable, the value and the
+// supported sets otherwise.
+const Kernels& select_kernels(const char* requested);
 // Kernels without hardware popcount, for tests that compare implementations.
 const Kernels& generic_kernels();
-// Every kernel set this CPU can run, from the portable one to the fastest;
-// kernels() is the last one.
+// Every kernel set this CPU can run, from the portable one to the fastest.
 std::vector<const Kernels*> supported_kernels();
 
 struct CpuFeatureFlag {
