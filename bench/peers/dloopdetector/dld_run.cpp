@@ -11,12 +11,12 @@
 // usage: dld_run --descriptor orb|brief --vocab VOC.yml.gz [--pattern P.yml]
 //                [--k K] [--di-levels L] [--alpha A] [--frequency F]
 //                [--fast-threshold T] [--seed S] -o OUT.csv FRAMES_DIR
+#include <dirent.h>
 #include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <dirent.h>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -69,20 +69,34 @@ Options parse(int argc, char** argv) {
       if (i + 1 >= argc) usage(("missing value for " + a).c_str());
       return argv[++i];
     };
-    if (a == "--descriptor") o.descriptor = next();
-    else if (a == "--vocab") o.vocab = next();
-    else if (a == "--pattern") o.pattern = next();
-    else if (a == "-o" || a == "--output") o.out = next();
-    else if (a == "--k") o.k = std::stoi(next());
-    else if (a == "--di-levels") o.di_levels = std::stoi(next());
-    else if (a == "--alpha") o.alpha = std::stof(next());
-    else if (a == "--frequency") o.frequency = std::stof(next());
-    else if (a == "--fast-threshold") o.fast_threshold = std::stoi(next());
-    else if (a == "--seed") o.seed = std::stoi(next());
-    else if (a == "--max-features") o.max_features = std::stoi(next());
-    else if (a == "--drop-border-corners") o.drop_border_corners = true;
-    else if (!a.empty() && a[0] == '-') usage(("unknown option " + a).c_str());
-    else o.frames = a;
+    if (a == "--descriptor")
+      o.descriptor = next();
+    else if (a == "--vocab")
+      o.vocab = next();
+    else if (a == "--pattern")
+      o.pattern = next();
+    else if (a == "-o" || a == "--output")
+      o.out = next();
+    else if (a == "--k")
+      o.k = std::stoi(next());
+    else if (a == "--di-levels")
+      o.di_levels = std::stoi(next());
+    else if (a == "--alpha")
+      o.alpha = std::stof(next());
+    else if (a == "--frequency")
+      o.frequency = std::stof(next());
+    else if (a == "--fast-threshold")
+      o.fast_threshold = std::stoi(next());
+    else if (a == "--seed")
+      o.seed = std::stoi(next());
+    else if (a == "--max-features")
+      o.max_features = std::stoi(next());
+    else if (a == "--drop-border-corners")
+      o.drop_border_corners = true;
+    else if (!a.empty() && a[0] == '-')
+      usage(("unknown option " + a).c_str());
+    else
+      o.frames = a;
   }
   if (o.vocab.empty() || o.out.empty() || o.frames.empty()) usage("missing argument");
   if (o.descriptor != "orb" && o.descriptor != "brief") usage("descriptor must be orb or brief");
@@ -143,14 +157,22 @@ std::vector<std::string> list_images(const std::string& dir) {
 const char* status_name(DLoopDetector::DetectionStatus s) {
   using namespace DLoopDetector;
   switch (s) {
-    case LOOP_DETECTED: return "LOOP_DETECTED";
-    case CLOSE_MATCHES_ONLY: return "CLOSE_MATCHES_ONLY";
-    case NO_DB_RESULTS: return "NO_DB_RESULTS";
-    case LOW_NSS_FACTOR: return "LOW_NSS_FACTOR";
-    case LOW_SCORES: return "LOW_SCORES";
-    case NO_GROUPS: return "NO_GROUPS";
-    case NO_TEMPORAL_CONSISTENCY: return "NO_TEMPORAL_CONSISTENCY";
-    case NO_GEOMETRICAL_CONSISTENCY: return "NO_GEOMETRICAL_CONSISTENCY";
+    case LOOP_DETECTED:
+      return "LOOP_DETECTED";
+    case CLOSE_MATCHES_ONLY:
+      return "CLOSE_MATCHES_ONLY";
+    case NO_DB_RESULTS:
+      return "NO_DB_RESULTS";
+    case LOW_NSS_FACTOR:
+      return "LOW_NSS_FACTOR";
+    case LOW_SCORES:
+      return "LOW_SCORES";
+    case NO_GROUPS:
+      return "NO_GROUPS";
+    case NO_TEMPORAL_CONSISTENCY:
+      return "NO_TEMPORAL_CONSISTENCY";
+    case NO_GEOMETRICAL_CONSISTENCY:
+      return "NO_GEOMETRICAL_CONSISTENCY";
   }
   return "?";
 }
@@ -231,8 +253,8 @@ int run(const Options& o, const std::vector<std::string>& files, Extract extract
     }
   }
   std::cerr << files.size() << " frames, " << loops << " loops; features "
-            << 1e3 * t_feat / files.size() << " ms/frame, detection "
-            << 1e3 * t_det / files.size() << " ms/frame\n";
+            << 1e3 * t_feat / files.size() << " ms/frame, detection " << 1e3 * t_det / files.size()
+            << " ms/frame\n";
   return 0;
 }
 
@@ -253,8 +275,7 @@ int main(int argc, char** argv) {
 
   if (o.descriptor == "orb") {
     // binbow's ORB settings.
-    cv::Ptr<cv::ORB> orb =
-        cv::ORB::create(1000, 1.2f, 8, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31, 20);
+    cv::Ptr<cv::ORB> orb = cv::ORB::create(1000, 1.2f, 8, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31, 20);
     auto extract = [&](const cv::Mat& im, std::vector<cv::KeyPoint>& keys,
                        std::vector<cv::Mat>& descs) {
       keys.clear();

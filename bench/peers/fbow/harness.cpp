@@ -135,20 +135,36 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
-      if (i + 1 >= argc) { std::fprintf(stderr, "%s needs a value\n", a.c_str()); std::exit(2); }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", a.c_str());
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--bbw") bbw = next();
-    else if (a == "--fbow") fbw = next();
-    else if (a == "--images") images_set = next();
-    else if (a == "--reps") reps = std::stoi(next());
-    else if (a == "--first") first = next();
-    else if (a == "--check-only") check_only = true;
-    else if (a == "--no-check") no_check = true;
-    else if (a == "--profile") profile = next();
-    else if (a == "--passes") passes = std::stoi(next());
-    else if (a == "--cache") cache = next();
-    else { std::fprintf(stderr, "unknown argument %s\n", a.c_str()); return 2; }
+    if (a == "--bbw")
+      bbw = next();
+    else if (a == "--fbow")
+      fbw = next();
+    else if (a == "--images")
+      images_set = next();
+    else if (a == "--reps")
+      reps = std::stoi(next());
+    else if (a == "--first")
+      first = next();
+    else if (a == "--check-only")
+      check_only = true;
+    else if (a == "--no-check")
+      no_check = true;
+    else if (a == "--profile")
+      profile = next();
+    else if (a == "--passes")
+      passes = std::stoi(next());
+    else if (a == "--cache")
+      cache = next();
+    else {
+      std::fprintf(stderr, "unknown argument %s\n", a.c_str());
+      return 2;
+    }
   }
   if (bbw.empty() || fbw.empty()) {
     std::fprintf(stderr, "usage: harness --bbw V.bbw --fbow V.fbow [options]\n");
@@ -184,7 +200,10 @@ int main(int argc, char** argv) {
       std::fclose(f);
     }
   }
-  if (im.mats.empty()) { std::fprintf(stderr, "no images\n"); return 1; }
+  if (im.mats.empty()) {
+    std::fprintf(stderr, "no images\n");
+    return 1;
+  }
 
   // ---- words-identical check, every descriptor ----
   std::size_t total = 0, word_mismatch = 0, bow_mismatch = 0, fbow_zero_entries = 0;
@@ -210,21 +229,27 @@ int main(int argc, char** argv) {
     // fbow keeps words of weight 0 (stop words) as 0 entries; binbow drops them.
     std::vector<std::pair<std::uint32_t, float>> fnz;
     for (const auto& e : fv) {
-      if (e.second.var != 0.0f) fnz.emplace_back(e.first, e.second.var);
-      else ++fbow_zero_entries;
+      if (e.second.var != 0.0f)
+        fnz.emplace_back(e.first, e.second.var);
+      else
+        ++fbow_zero_entries;
     }
     bool same = fnz.size() == bv.size();
     for (std::size_t i = 0; same && i < fnz.size(); ++i) {
-      if (fnz[i].first != bv[i].word) { same = false; break; }
+      if (fnz[i].first != bv[i].word) {
+        same = false;
+        break;
+      }
       const double rel = std::fabs(fnz[i].second - bv[i].value) / std::fabs(bv[i].value);
       max_rel = std::max(max_rel, rel);
       if (rel > 1e-5) same = false;
     }
     if (!same) ++bow_mismatch;
   }
-  std::printf("check: %zu descriptors, %zu word mismatches; %zu images, %zu BoW mismatches "
-              "(max relative value difference %.2g; %zu zero-weight entries in fbow's BoW)\n",
-              total, word_mismatch, im.mats.size(), bow_mismatch, max_rel, fbow_zero_entries);
+  std::printf(
+      "check: %zu descriptors, %zu word mismatches; %zu images, %zu BoW mismatches "
+      "(max relative value difference %.2g; %zu zero-weight entries in fbow's BoW)\n",
+      total, word_mismatch, im.mats.size(), bow_mismatch, max_rel, fbow_zero_entries);
   if (word_mismatch != 0 || bow_mismatch != 0) return 3;
   if (!no_check) {
     // Path statistics (public API walk): inner nodes visited and children
@@ -240,7 +265,10 @@ int main(int argc, char** argv) {
           std::uint32_t best = ~0u, bi = 0;
           for (std::uint32_t i = 0; i < c; ++i) {
             const std::uint32_t h = binbow::hamming_distance(d, bb.node_descriptor(f + i), 32);
-            if (h < best) { best = h; bi = i; }
+            if (h < best) {
+              best = h;
+              bi = i;
+            }
           }
           ++levels;
           children += c;
@@ -248,10 +276,10 @@ int main(int argc, char** argv) {
         }
         if (bb.node_word(node) != bb.quantize(d)) ++walk_mismatch;
       }
-    std::printf("descent: %.3f inner nodes and %.2f child distances per descriptor "
-                "(%.2f children per node); %zu walk mismatches\n",
-                double(levels) / total, double(children) / total, double(children) / levels,
-                walk_mismatch);
+    std::printf(
+        "descent: %.3f inner nodes and %.2f child distances per descriptor "
+        "(%.2f children per node); %zu walk mismatches\n",
+        double(levels) / total, double(children) / total, double(children) / levels, walk_mismatch);
   }
   if (check_only) return 0;
 
@@ -300,7 +328,10 @@ int main(int argc, char** argv) {
   };
   // Warm-up: two passes of each.
   for (int w = 0; w < 2; ++w)
-    for (const cv::Mat& m : im.mats) { run_binbow(m); run_fbow(m); }
+    for (const cv::Mat& m : im.mats) {
+      run_binbow(m);
+      run_fbow(m);
+    }
 
   const bool binbow_first = first == "binbow";
   std::vector<double> tb, tf, tq, pair_ratio, pass_ratio;
@@ -309,8 +340,13 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < im.mats.size(); ++i) {
       const bool b_first = ((rep + i) % 2 == 0) == binbow_first;
       double b, f;
-      if (b_first) { b = run_binbow(im.mats[i]); f = run_fbow(im.mats[i]); }
-      else { f = run_fbow(im.mats[i]); b = run_binbow(im.mats[i]); }
+      if (b_first) {
+        b = run_binbow(im.mats[i]);
+        f = run_fbow(im.mats[i]);
+      } else {
+        f = run_fbow(im.mats[i]);
+        b = run_binbow(im.mats[i]);
+      }
       // binbow's descent alone, on the image half a pass away (not the one
       // just transformed, whose tree nodes are still in cache).
       tq.push_back(run_quantize(im.mats[(i + im.mats.size() / 2) % im.mats.size()]));
@@ -329,14 +365,23 @@ int main(int argc, char** argv) {
   for (int rep = 0; rep < std::max(1, reps / 4); ++rep)
     for (std::size_t i = 0; i < im.mats.size(); ++i) {
       const bool b_first = ((rep + i) % 2 == 0) == binbow_first;
-      if (b_first) { run_binbow(im.mats[i]); wb.push_back(run_binbow(im.mats[i])); }
-      run_fbow(im.mats[i]); wf.push_back(run_fbow(im.mats[i]));
-      if (!b_first) { run_binbow(im.mats[i]); wb.push_back(run_binbow(im.mats[i])); }
+      if (b_first) {
+        run_binbow(im.mats[i]);
+        wb.push_back(run_binbow(im.mats[i]));
+      }
+      run_fbow(im.mats[i]);
+      wf.push_back(run_fbow(im.mats[i]));
+      if (!b_first) {
+        run_binbow(im.mats[i]);
+        wb.push_back(run_binbow(im.mats[i]));
+      }
     }
   g_sink = sink;
   const double mb = median(tb), mf = median(tf);
-  std::printf("warm (repeat on the same image): binbow median %.1f us, fbow median %.1f us, "
-              "ratio %.2f\n", median(wb), median(wf), median(wf) / median(wb));
+  std::printf(
+      "warm (repeat on the same image): binbow median %.1f us, fbow median %.1f us, "
+      "ratio %.2f\n",
+      median(wb), median(wf), median(wf) / median(wb));
   std::printf("WARM binbow_us=%.1f fbow_us=%.1f ratio=%.2f\n", median(wb), median(wf),
               median(wf) / median(wb));
   std::printf("calls: %zu per library (%d reps x %zu images of 1000 descriptors), first=%s\n",
@@ -346,15 +391,17 @@ int main(int argc, char** argv) {
   std::printf("fbow   median %.1f us (p25 %.1f, p75 %.1f)\n", mf, quantile(tf, 0.25),
               quantile(tf, 0.75));
   std::printf("binbow quantize (descent only) median %.1f us\n", median(tq));
-  std::printf("ratio of medians fbow/binbow %.2f; median per-call-pair ratio %.2f "
-              "(p25 %.2f, p75 %.2f); per-pass ratio min %.2f median %.2f max %.2f\n",
-              mf / mb, median(pair_ratio), quantile(pair_ratio, 0.25), quantile(pair_ratio, 0.75),
-              *std::min_element(pass_ratio.begin(), pass_ratio.end()), median(pass_ratio),
-              *std::max_element(pass_ratio.begin(), pass_ratio.end()));
-  std::printf("RESULT kernel=%s binbow_us=%.1f fbow_us=%.1f ratio=%.2f pair_ratio=%.2f "
-              "pass_ratio_min=%.2f pass_ratio_max=%.2f quantize_us=%.1f\n",
-              binbow::hamming_kernel_name(), mb, mf, mf / mb, median(pair_ratio),
-              *std::min_element(pass_ratio.begin(), pass_ratio.end()),
-              *std::max_element(pass_ratio.begin(), pass_ratio.end()), median(tq));
+  std::printf(
+      "ratio of medians fbow/binbow %.2f; median per-call-pair ratio %.2f "
+      "(p25 %.2f, p75 %.2f); per-pass ratio min %.2f median %.2f max %.2f\n",
+      mf / mb, median(pair_ratio), quantile(pair_ratio, 0.25), quantile(pair_ratio, 0.75),
+      *std::min_element(pass_ratio.begin(), pass_ratio.end()), median(pass_ratio),
+      *std::max_element(pass_ratio.begin(), pass_ratio.end()));
+  std::printf(
+      "RESULT kernel=%s binbow_us=%.1f fbow_us=%.1f ratio=%.2f pair_ratio=%.2f "
+      "pass_ratio_min=%.2f pass_ratio_max=%.2f quantize_us=%.1f\n",
+      binbow::hamming_kernel_name(), mb, mf, mf / mb, median(pair_ratio),
+      *std::min_element(pass_ratio.begin(), pass_ratio.end()),
+      *std::max_element(pass_ratio.begin(), pass_ratio.end()), median(tq));
   return 0;
 }
