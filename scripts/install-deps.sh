@@ -20,11 +20,16 @@ packages=(
   colcon python3-colcon-cmake python3-colcon-ros python3-colcon-bash python3-colcon-recursive-crawl
   python3-colcon-parallel-executor python3-colcon-package-selection python3-colcon-output
   python3-colcon-library-path python3-colcon-metadata python3-colcon-defaults
-  # The aarch64 cross build tested under emulation (scripts/test-aarch64.sh):
-  # the cross compiler, qemu, and the target's libraries through multiarch.
-  g++-aarch64-linux-gnu qemu-user
-  zlib1g-dev:arm64 libopencv-core-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
 )
+# On x86-64, the aarch64 cross build tested under emulation
+# (scripts/test-aarch64.sh): the cross compiler, qemu, and the target's
+# libraries through multiarch. An arm64 machine builds natively instead.
+cross_arm64=false
+if [ "$(dpkg --print-architecture)" = amd64 ]; then
+  cross_arm64=true
+  packages+=(g++-aarch64-linux-gnu qemu-user
+    zlib1g-dev:arm64 libopencv-core-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64)
+fi
 if [ "$(id -u)" -ne 0 ]; then
   if ! command -v sudo >/dev/null 2>&1; then
     echo "install-deps.sh: error: installing packages needs root: run this script as root," \
@@ -35,7 +40,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 export DEBIAN_FRONTEND=noninteractive
 # arm64 packages beside the build machine's (multiarch), for the cross build.
-dpkg --add-architecture arm64
+if $cross_arm64; then dpkg --add-architecture arm64; fi
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
 echo "binbow dependencies installed."
