@@ -73,16 +73,13 @@ struct TrailCheck {
   // outside detection (LoopDetector::check_pair).
   LoopCorroboration corroboration;
   // Run before the temporal test passed (strong_fits_skip_temporal_check):
-  // only a fit with min_uncorroborated_inliers inliers or more counts, and
-  // nothing corroborates a weaker one.
+  // the fit itself then needs min_uncorroborated_inliers inliers (where it
+  // otherwise needs min_inliers) to be consistent, so it needs no
+  // corroboration, and nothing corroborates a weaker one.
   bool before_temporal_consistency = false;
-  std::size_t min_strong_inliers = 0;  // min_uncorroborated_inliers then
 
-  // Whether the check let the entry through: a consistent fit, corroborated
-  // when needed (strong, before temporal consistency).
+  // Whether the check let the entry through: a consistent fit, corroborated when needed.
   bool accepted() const noexcept {
-    if (before_temporal_consistency)
-      return fit.consistent && fit.inliers.size() >= min_strong_inliers;
     return fit.consistent && (!corroboration.needed || corroboration.corroborated);
   }
 };

@@ -142,15 +142,15 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
   result.inlier_thickness = fit.inlier_thickness;
   result.inliers = fit.inliers;
   result.fit_evidence = fit.determinacy.evidence;
+  // Before temporal consistency a consistent fit has min_uncorroborated_inliers
+  // inliers (geometric_check asks for them), so it never needs corroboration.
   const auto strong = static_cast<std::size_t>(params.min_uncorroborated_inliers);
-  result.corroboration.needed = !before_temporal_consistency && fit.consistent && strong > 0 &&
-                                result.inliers.size() < strong;
+  result.corroboration.needed = fit.consistent && strong > 0 && result.inliers.size() < strong;
   if (result.corroboration.needed)
     corroborate(result, query_keypoints, query_descriptors, query_nodes);
   check.normalised_score = result.normalised_score;
   check.corroboration = result.corroboration;
   check.before_temporal_consistency = before_temporal_consistency;
-  check.min_strong_inliers = strong;
   const bool accepted = check.accepted();
   result.status = accepted                      ? LoopStatus::kLoopDetected
                   : before_temporal_consistency ? LoopStatus::kNoTemporalConsistency
