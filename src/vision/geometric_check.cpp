@@ -341,10 +341,11 @@ FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> se
   result.inlier_ratio =
       static_cast<double>(result.inliers.size()) / static_cast<double>(correspondences.size());
   result.inlier_spread = inlier_spread(first, second, result.inliers);
-  result.distinct_inliers = distinct_inliers(first, second, result.inliers);
   result.inlier_thickness = inlier_thickness(first, second, result.inliers);
   result.determinacy =
       fit_determinacy(first, second, result.inliers, params.max_reprojection_error);
+  // The distinct points fit_determinacy judged: distinct_inliers() of the inliers.
+  result.distinct_inliers = result.determinacy.points;
   const bool determined = result.determinacy.evidence == FitEvidence::kFundamental ||
                           result.determinacy.evidence == FitEvidence::kHomography;
   result.consistent = result.inliers.size() >= static_cast<std::size_t>(params.min_inliers) &&
