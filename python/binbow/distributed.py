@@ -271,6 +271,14 @@ def _no_entry(method, entry, entries):
                       f"ids below {entries})")
 
 
+def _lost_shard(where, shard, reason):
+    """The error of every call once a shard is lost, the call that finds it included."""
+    return Error(f"{where}: shard {shard} was lost ({reason}); its entries are gone, so this "
+                 "database no longer answers as one Database: is the Dask cluster alive? A "
+                 "shard lost with its worker can only come back from the last save: load the "
+                 "last save (ShardedDatabase.load)")
+
+
 class ShardedDatabase:
     """One binbow.Database per shard on the workers of a Dask cluster.
 
@@ -352,13 +360,10 @@ class ShardedDatabase:
             reason = f"failed ({type(error).__name__}: {error})"
             lost = True
         if lost and shard is not None:
-            # Said the same way as every later call says it (_check_usable), however
-            # Dask reported the loss (a timeout first, then a lost actor, or at once).
+            # Said as every later call says it, however Dask reported the loss
+            # (a timeout first, then a lost actor, or at once).
             self._lost.setdefault(shard, f"{what} {reason}")
-            raise Error(f"ShardedDatabase: shard {shard} was lost ({what} {reason}); its "
-                        "entries are gone: is the Dask cluster alive? A shard lost with its "
-                        "worker can only come back from the last save: load the last save "
-                        "(ShardedDatabase.load)") from failure
+            raise _lost_shard("ShardedDatabase", shard, f"{what} {reason}") from failure
         raise Error(f"ShardedDatabase: {what} {reason}: is the Dask cluster alive? "
                     "A shard lost with its worker can only come back from the last save "
                     "(ShardedDatabase.load)") from failure
@@ -367,9 +372,7 @@ class ShardedDatabase:
         """binbow.Error if a shard was lost: its entries would silently be missing."""
         if self._lost:
             shard, reason = min(self._lost.items())
-            raise Error(f"ShardedDatabase.{what}: shard {shard} was lost ({reason}); its "
-                        "entries are gone, so this database no longer answers as one "
-                        "Database: load the last save (ShardedDatabase.load)")
+            raise _lost_shard(f"ShardedDatabase.{what}", shard, reason)
 
     def _call_all(self, what, method, arguments, changes=False):
         """Calls `method` on every shard with its own arguments (None: skip); the results.
