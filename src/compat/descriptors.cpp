@@ -5,6 +5,7 @@
 
 #include "binbow/compat/FBrief.h"
 #include "binbow/compat/FORB.h"
+#include "binbow/compat/detail/descriptor_bytes.h"
 #include "binbow/descriptors.h"
 
 namespace DBoW2 {
@@ -121,61 +122,28 @@ void FORB::toMat8U(const std::vector<TDescriptor>& descriptors, cv::Mat& mat) {
   }
 }
 
-namespace {
-// The 32 bytes of a BRIEF descriptor; throws std::invalid_argument for
-// anything but one row of 32 CV_8U bytes.
-const unsigned char* brief_bytes(const cv::Mat& d) {
-  std::size_t size = 0;
-  const unsigned char* bytes = orb_bytes(d, size);
-  if (size * 8 != static_cast<std::size_t>(FBrief::L))
-    throw std::invalid_argument("a BRIEF descriptor must be one row of 32 bytes, not " +
-                                std::to_string(size));
-  return bytes;
-}
-
-bool brief_test(const unsigned char* bytes, std::size_t test) {
-  return (bytes[test / 8] >> (test % 8)) & 1u;
-}
-}  // namespace
-
 void FBrief::meanValue(const std::vector<pDescriptor>& descriptors, TDescriptor& mean) {
-  if (descriptors.empty()) {
-    mean.release();
-    return;
-  }
+  mean.reset();
   std::vector<std::size_t> ones(L, 0);
-  for (pDescriptor descriptor : descriptors) {
-    const unsigned char* bytes = brief_bytes(*descriptor);
-    for (std::size_t test = 0; test < ones.size(); ++test) ones[test] += brief_test(bytes, test);
-  }
-  mean = cv::Mat::zeros(1, L / 8, CV_8U);
-  unsigned char* out = mean.ptr<unsigned char>(0);
+  for (pDescriptor descriptor : descriptors)
+    for (std::size_t bit = 0; bit < ones.size(); ++bit) ones[bit] += descriptor->test(bit);
   const std::size_t half = descriptors.size() / 2;
-  for (std::size_t test = 0; test < ones.size(); ++test)
-    if (ones[test] > half) out[test / 8] |= static_cast<unsigned char>(1u << (test % 8));
+  for (std::size_t bit = 0; bit < ones.size(); ++bit)
+    if (ones[bit] > half) mean.set(bit);
 }
 
 double FBrief::distance(const TDescriptor& a, const TDescriptor& b) {
-  return static_cast<double>(binbow::hamming_distance(brief_bytes(a), brief_bytes(b), L / 8));
+  return static_cast<double>((a ^ b).count());
 }
 
 std::string FBrief::toString(const TDescriptor& a) {
-  const unsigned char* bytes = brief_bytes(a);
-  std::string bits(L, '0');
-  for (std::size_t test = 0; test < bits.size(); ++test)
-    if (brief_test(bytes, test)) bits[bits.size() - 1 - test] = '1';
-  return bits;
+  return a.to_string();
 }
 
 void FBrief::fromString(TDescriptor& a, const std::string& s) {
   if (s.size() != static_cast<std::size_t>(L) || s.find_first_not_of("01") != std::string::npos)
     throw std::invalid_argument("FBrief::fromString needs 256 characters '0' or '1'");
-  cv::Mat bits = cv::Mat::zeros(1, L / 8, CV_8U);
-  unsigned char* bytes = bits.ptr<unsigned char>(0);
-  for (std::size_t test = 0; test < s.size(); ++test)
-    if (s[s.size() - 1 - test] == '1')
-      bytes[test / 8] |= static_cast<unsigned char>(1u << (test % 8));
-  a = bits;
+  a = TDescriptor(s);
 }
 
 void FBrief::toMat32F(const std::vector<TDescriptor>& descriptors, cv::Mat& mat) {
@@ -185,10 +153,9 @@ void FBrief::toMat32F(const std::vector<TDescriptor>& descriptors, cv::Mat& mat)
   }
   mat.create(static_cast<int>(descriptors.size()), L, CV_32F);
   for (std::size_t i = 0; i < descriptors.size(); ++i) {
-    const unsigned char* bytes = brief_bytes(descriptors[i]);
     float* row = mat.ptr<float>(static_cast<int>(i));
-    for (std::size_t test = 0; test < static_cast<std::size_t>(L); ++test)
-      row[test] = brief_test(bytes, test) ? 1.f : 0.f;
+    for (std::size_t bit = 0; bit < static_cast<std::size_t>(L); ++bit)
+      row[bit] = descriptors[i].test(bit) ? 1.f : 0.f;
   }
 }
 

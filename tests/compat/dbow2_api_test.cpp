@@ -419,16 +419,14 @@ TEST(Dbow2Database, IdsOutsideTheVocabularyAreOutOfRange) {
   }
 }
 
-// A BRIEF descriptor with exactly the tests in `tests` set (test i is bit
-// i % 8 of byte i / 8).
-cv::Mat brief_with_tests(std::initializer_list<int> tests) {
-  cv::Mat d = cv::Mat::zeros(1, 32, CV_8U);
-  for (int test : tests)
-    d.at<unsigned char>(0, test / 8) |= static_cast<unsigned char>(1 << (test % 8));
+// A BRIEF descriptor with exactly the tests in `tests` set.
+DBoW2::FBrief::TDescriptor brief_with_tests(std::initializer_list<int> tests) {
+  DBoW2::FBrief::TDescriptor d;
+  for (int test : tests) d.set(static_cast<std::size_t>(test));
   return d;
 }
 
-TEST(Dbow2Vocabulary, BriefDescriptorsAreMatRowsInDbow2BitOrder) {
+TEST(Dbow2Vocabulary, BriefDescriptorsAreBitsetsOrMatRowsInDbow2BitOrder) {
   const BriefVocabulary voc(source_path("data/vocab/brief_default.bbw"));
   const binbow::Vocabulary core =
       binbow::load_vocabulary(source_path("data/vocab/brief_default.bbw"));
@@ -437,7 +435,18 @@ TEST(Dbow2Vocabulary, BriefDescriptorsAreMatRowsInDbow2BitOrder) {
     const binbow::DescriptorMatrix bytes = binbow::test::random_descriptors(1, 32, rng);
     const cv::Mat row(1, 32, CV_8U, const_cast<std::uint8_t*>(bytes.row(0)));
     EXPECT_EQ(core.quantize(bytes.row(0)), voc.transform(row));
+    DBoW2::FBrief::TDescriptor bits;
+    for (std::size_t b = 0; b < bits.size(); ++b) bits[b] = (bytes.row(0)[b / 8] >> (b % 8)) & 1;
+    EXPECT_EQ(core.quantize(bytes.row(0)), voc.transform(bits));
   }
+  // getWord gives the word's bits in the same order (here against the bytes
+  // of the same file's words as rows).
+  const OrbVocabulary rows(source_path("data/vocab/brief_default.bbw"));
+  const DBoW2::FBrief::TDescriptor word = voc.getWord(7);
+  const cv::Mat row = rows.getWord(7);
+  for (std::size_t b = 0; b < word.size(); ++b)
+    EXPECT_EQ(((row.at<unsigned char>(0, static_cast<int>(b / 8)) >> (b % 8)) & 1) != 0, word[b])
+        << b;
   TempDir dir;
   voc.save(dir.file("brief.yml"));  // FBrief's bit strings, as DBoW2 writes them
   std::ifstream file(dir.file("brief.yml").c_str());
@@ -473,8 +482,8 @@ TEST(Dbow2Descriptors, ForbAndFbriefFunctions) {
   DBoW2::FORB::toMat8U(golden().images[0], rows);
   EXPECT_EQ(static_cast<int>(golden().images[0].size()), rows.rows);
 
-  const cv::Mat x = brief_with_tests({3, 200});
-  const cv::Mat y = brief_with_tests({3});
+  const DBoW2::FBrief::TDescriptor x = brief_with_tests({3, 200});
+  const DBoW2::FBrief::TDescriptor y = brief_with_tests({3});
   EXPECT_EQ(1, DBoW2::FBrief::distance(x, y));
   // DBoW2's bitset::to_string: test 255 first.
   const std::string text = DBoW2::FBrief::toString(x);
@@ -482,20 +491,26 @@ TEST(Dbow2Descriptors, ForbAndFbriefFunctions) {
   EXPECT_EQ('1', text[255 - 3]);
   EXPECT_EQ('1', text[255 - 200]);
   EXPECT_EQ(2, std::count(text.begin(), text.end(), '1'));
-  cv::Mat z;
+  EXPECT_EQ(x.to_string(), text);
+  DBoW2::FBrief::TDescriptor z;
   DBoW2::FBrief::fromString(z, text);
-  EXPECT_EQ(0, DBoW2::FBrief::distance(x, z));
+  EXPECT_EQ(x, z);
   EXPECT_THROW(DBoW2::FBrief::fromString(z, "0101"), std::invalid_argument);
+  // DBoW2's majority: more than half.
   std::vector<DBoW2::FBrief::pDescriptor> votes = {&x, &x, &y};
   DBoW2::FBrief::meanValue(votes, z);
-  EXPECT_EQ(0, DBoW2::FBrief::distance(x, z));
+  EXPECT_EQ(x, z);
+  votes = {&x, &y};
+  DBoW2::FBrief::meanValue(votes, z);
+  EXPECT_EQ(y, z);
+  DBoW2::FBrief::meanValue(std::vector<DBoW2::FBrief::pDescriptor>(), z);
+  EXPECT_TRUE(z.none());
   cv::Mat brief_floats;
-  DBoW2::FBrief::toMat32F(std::vector<cv::Mat>(1, x), brief_floats);
+  DBoW2::FBrief::toMat32F(std::vector<DBoW2::FBrief::TDescriptor>(1, x), brief_floats);
   ASSERT_EQ(256, brief_floats.cols);
   EXPECT_EQ(1.f, brief_floats.at<float>(0, 3));
   EXPECT_EQ(0.f, brief_floats.at<float>(0, 4));
   EXPECT_EQ(1.f, brief_floats.at<float>(0, 200));
-  EXPECT_THROW(DBoW2::FBrief::distance(x, cv::Mat::zeros(1, 16, CV_8U)), std::invalid_argument);
 }
 
 // A type outside DBoW2's enums is refused where it is set: kept, it would

@@ -4,7 +4,6 @@
 #ifndef BINBOW_COMPAT_DBOW2_FORB_H
 #define BINBOW_COMPAT_DBOW2_FORB_H
 
-#include <cstddef>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -39,12 +38,6 @@ class FORB {
 };
 
 namespace binbow_detail {
-// The vocabulary templates pass descriptors to binbow as contiguous bytes.
-// Throws std::invalid_argument unless `d` is one row of `code_size` CV_8U bytes
-// (of any length when `code_size` is 0).
-void append_descriptor_bytes(const cv::Mat& d, std::size_t code_size,
-                             std::vector<unsigned char>& out);
-void descriptor_from_bytes(const unsigned char* bytes, std::size_t code_size, cv::Mat& d);
 // DBoW2 YAML files hold decimal bytes for every descriptor class but FBrief,
 // whose words are bit strings (see FBrief.h).
 template <class F>

@@ -6,6 +6,8 @@
 // max_results of them are returned (all for max_results <= 0), best first:
 // highest score, lowest for KL; CHI_SQUARE and BHATTACHARYYA queries return
 // only entries sharing at least 5 words with the query, as DBoW2's do.
+// With setVinsQueryRule(true), L1_NORM queries also consider the newest
+// entry, as VINS's fork of DBoW2 does.
 // Entries with equal scores come in increasing id order (DBoW2's order among
 // ties is unspecified). Scores come from binbow's inverted index, computed
 // from single-precision BoW values: they agree with DBoW2's to about 1e-7.
@@ -102,17 +104,14 @@ class TemplatedDatabase {
   /// given. Returns the new entry's id.
   EntryId add(const std::vector<TDescriptor>& features, BowVector* bowvec = NULL,
               FeatureVector* fvec = NULL) {
-    BowVector aux_bow;
-    BowVector& v = bowvec ? *bowvec : aux_bow;
-    FeatureVector aux_fv;
-    FeatureVector& fv = fvec ? *fvec : aux_fv;
-    require_vocabulary();
-    if (core_.using_direct_index() || fvec) {
-      voc_->transform(features, v, fv, core_.direct_index_levels());
-      return core_.using_direct_index() ? add(v, fv) : add(v);
-    }
-    voc_->transform(features, v);
-    return add(v);
+    return add_features(features, bowvec, fvec);
+  }
+  /// The same for descriptors of another type (see TemplatedVocabulary).
+  template <class D>
+  typename binbow_detail::if_descriptor<D, EntryId>::type add(const std::vector<D>& features,
+                                                              BowVector* bowvec = NULL,
+                                                              FeatureVector* fvec = NULL) {
+    return add_features(features, bowvec, fvec);
   }
   /// Adds an image already transformed with this vocabulary; `fec` is kept
   /// only with a direct index. Throws std::out_of_range for word or node
@@ -139,10 +138,14 @@ class TemplatedDatabase {
   /// Queries with an image's features (transformed with the vocabulary).
   void query(const std::vector<TDescriptor>& features, QueryResults& ret, int max_results = 1,
              int max_id = -1) const {
-    BowVector vec;
-    require_vocabulary();
-    voc_->transform(features, vec);
-    query(vec, ret, max_results, max_id);
+    query_features(features, ret, max_results, max_id);
+  }
+  /// The same for descriptors of another type (see TemplatedVocabulary).
+  template <class D>
+  typename binbow_detail::if_descriptor<D>::type query(const std::vector<D>& features,
+                                                       QueryResults& ret, int max_results = 1,
+                                                       int max_id = -1) const {
+    query_features(features, ret, max_results, max_id);
   }
   /// Queries with a BoW vector: see the top of this file for the rules.
   /// Throws std::out_of_range for word ids outside the vocabulary.
@@ -150,6 +153,16 @@ class TemplatedDatabase {
     require_vocabulary();
     core_.query(vec, ret, max_results, max_id);
   }
+
+  /// VINS's fork's query rule: VINS-Mono/Fusion's copy of DBoW2 also
+  /// considers the newest entry (id size() - 1) in L1_NORM queries, whatever
+  /// max_id (its queryL1 adds `entry_id == m_nentries - 1` to `entry_id <
+  /// max_id`); VINS queries before adding each keyframe, so the newest entry
+  /// is the previous keyframe. Off by default (DBoW2's rule); on by default in
+  /// every database of a program that includes the VINS spellings of the
+  /// headers (ThirdParty/DBoW/*.h, docs/dbow2-compat.md). Copies keep it.
+  void setVinsQueryRule(bool on) { core_.set_vins_query_rule(on); }
+  bool usingVinsQueryRule() const { return core_.vins_query_rule(); }
 
   /// The feature vector of entry `id`. The reference stays valid until the
   /// entry is erased or the database is cleared, loaded or assigned.
@@ -180,6 +193,30 @@ class TemplatedDatabase {
   }
 
  private:
+  template <class D>
+  EntryId add_features(const std::vector<D>& features, BowVector* bowvec, FeatureVector* fvec) {
+    BowVector aux_bow;
+    BowVector& v = bowvec ? *bowvec : aux_bow;
+    FeatureVector aux_fv;
+    FeatureVector& fv = fvec ? *fvec : aux_fv;
+    require_vocabulary();
+    if (core_.using_direct_index() || fvec) {
+      voc_->transform(features, v, fv, core_.direct_index_levels());
+      return core_.using_direct_index() ? add(v, fv) : add(v);
+    }
+    voc_->transform(features, v);
+    return add(v);
+  }
+
+  template <class D>
+  void query_features(const std::vector<D>& features, QueryResults& ret, int max_results,
+                      int max_id) const {
+    BowVector vec;
+    require_vocabulary();
+    voc_->transform(features, vec);
+    query(vec, ret, max_results, max_id);
+  }
+
   void require_vocabulary() const {
     if (!voc_) throw std::logic_error("DBoW2::TemplatedDatabase: no vocabulary set");
   }

@@ -23,6 +23,7 @@
 #include "binbow/compat/FORB.h"
 #include "binbow/compat/FeatureVector.h"
 #include "binbow/compat/detail/core.h"
+#include "binbow/compat/detail/descriptor_bytes.h"
 
 namespace DBoW2 {
 
@@ -31,9 +32,15 @@ class TemplatedDatabase;
 
 /// A vocabulary tree of k branches and L levels whose leaves are the words.
 /// TDescriptor/F: FORB::TDescriptor/FORB (ORB, cv::Mat rows of 32 bytes) or
-/// FBrief::TDescriptor/FBrief (BRIEF, cv::Mat rows of 32 bytes); any F with the same
+/// FBrief::TDescriptor/FBrief (BRIEF, std::bitset<256>); any F with the same
 /// descriptor types works, since binbow compares descriptors itself
 /// (Hamming distance, lowest child index on ties, as DBoW2's FORB/FBrief).
+///
+/// create(), transform() (and TemplatedDatabase's add() and query()) also
+/// take descriptors of the other types binbow knows: cv::Mat rows of CV_8U
+/// bytes, std::bitset<N>, and boost::dynamic_bitset<> or any bitset type with
+/// size() and test(i); bit i of a bitset is bit i % 8 of byte i / 8 of the
+/// row (FBrief.h), so the same bits give the same words in every type.
 ///
 /// Errors: loading and saving throw std::runtime_error whose message names
 /// the file; descriptors of another size than the vocabulary's, and
@@ -61,21 +68,34 @@ class TemplatedVocabulary {
   /// Throws std::invalid_argument for unusable input (e.g. IDF weights from
   /// fewer than two images, k outside 2..255, L outside 1..16).
   virtual void create(const std::vector<std::vector<TDescriptor> >& training_features) {
-    create(training_features, core_.branching(), core_.levels(), core_.weighting(),
-           core_.scoring());
+    create_from(training_features, core_.branching(), core_.levels(), core_.weighting(),
+                core_.scoring());
   }
   virtual void create(const std::vector<std::vector<TDescriptor> >& training_features, int k,
                       int L) {
-    create(training_features, k, L, core_.weighting(), core_.scoring());
+    create_from(training_features, k, L, core_.weighting(), core_.scoring());
   }
   virtual void create(const std::vector<std::vector<TDescriptor> >& training_features, int k, int L,
                       WeightingType weighting, ScoringType scoring) {
-    std::vector<std::vector<unsigned char> > images(training_features.size());
-    const std::size_t bytes = training_code_size(training_features);
-    for (std::size_t i = 0; i < training_features.size(); ++i)
-      for (std::size_t j = 0; j < training_features[i].size(); ++j)
-        binbow_detail::append_descriptor_bytes(training_features[i][j], bytes, images[i]);
-    core_.create(images, bytes, k, L, weighting, scoring);
+    create_from(training_features, k, L, weighting, scoring);
+  }
+  /// The same from descriptors of another type (see the class comment).
+  template <class D>
+  typename binbow_detail::if_descriptor<D>::type create(
+      const std::vector<std::vector<D> >& training_features) {
+    create_from(training_features, core_.branching(), core_.levels(), core_.weighting(),
+                core_.scoring());
+  }
+  template <class D>
+  typename binbow_detail::if_descriptor<D>::type create(
+      const std::vector<std::vector<D> >& training_features, int k, int L) {
+    create_from(training_features, k, L, core_.weighting(), core_.scoring());
+  }
+  template <class D>
+  typename binbow_detail::if_descriptor<D>::type create(
+      const std::vector<std::vector<D> >& training_features, int k, int L, WeightingType weighting,
+      ScoringType scoring) {
+    create_from(training_features, k, L, weighting, scoring);
   }
 
   /// Number of words.
@@ -85,8 +105,13 @@ class TemplatedVocabulary {
   /// BoW vector of an image's features (cleared first; left empty by an
   /// empty vocabulary).
   virtual void transform(const std::vector<TDescriptor>& features, BowVector& v) const {
-    std::vector<unsigned char> bytes;
-    core_.transform(to_bytes(features, bytes), v);
+    transform_from(features, v);
+  }
+  /// The same for descriptors of another type (see the class comment).
+  template <class D>
+  typename binbow_detail::if_descriptor<D>::type transform(const std::vector<D>& features,
+                                                           BowVector& v) const {
+    transform_from(features, v);
   }
   /// Also the feature vector: each kept feature under its word's ancestor at
   /// depth L - levelsup from the root (the root when levelsup >= L; the leaf
@@ -95,15 +120,19 @@ class TemplatedVocabulary {
   /// instead: the two differ for leaves shallower than L.
   virtual void transform(const std::vector<TDescriptor>& features, BowVector& v, FeatureVector& fv,
                          int levelsup) const {
-    std::vector<unsigned char> bytes;
-    core_.transform(to_bytes(features, bytes), v, fv, levelsup);
+    transform_from(features, v, fv, levelsup);
+  }
+  template <class D>
+  typename binbow_detail::if_descriptor<D>::type transform(const std::vector<D>& features,
+                                                           BowVector& v, FeatureVector& fv,
+                                                           int levelsup) const {
+    transform_from(features, v, fv, levelsup);
   }
   /// The word of one descriptor (0 for an empty vocabulary).
-  virtual WordId transform(const TDescriptor& feature) const {
-    if (empty()) return 0;
-    std::vector<unsigned char> bytes;
-    binbow_detail::append_descriptor_bytes(feature, core_.code_size(), bytes);
-    return core_.transform(bytes.data(), bytes.size());
+  virtual WordId transform(const TDescriptor& feature) const { return word_of(feature); }
+  template <class D>
+  typename binbow_detail::if_descriptor<D, WordId>::type transform(const D& feature) const {
+    return word_of(feature);
   }
 
   /// Similarity of two BoW vectors under the scoring type (DBoW2's
@@ -176,8 +205,19 @@ class TemplatedVocabulary {
   template <class, class>
   friend class TemplatedDatabase;
 
-  std::size_t training_code_size(
-      const std::vector<std::vector<TDescriptor> >& training_features) const {
+  template <class D>
+  void create_from(const std::vector<std::vector<D> >& training_features, int k, int L,
+                   WeightingType weighting, ScoringType scoring) {
+    std::vector<std::vector<unsigned char> > images(training_features.size());
+    const std::size_t bytes = training_code_size(training_features);
+    for (std::size_t i = 0; i < training_features.size(); ++i)
+      for (std::size_t j = 0; j < training_features[i].size(); ++j)
+        binbow_detail::append_descriptor_bytes(training_features[i][j], bytes, images[i]);
+    core_.create(images, bytes, k, L, weighting, scoring);
+  }
+
+  template <class D>
+  static std::size_t training_code_size(const std::vector<std::vector<D> >& training_features) {
     for (std::size_t i = 0; i < training_features.size(); ++i)
       if (!training_features[i].empty()) {
         std::vector<unsigned char> first;
@@ -187,7 +227,27 @@ class TemplatedVocabulary {
     return 0;
   }
 
-  binbow_detail::DescriptorBytes to_bytes(const std::vector<TDescriptor>& features,
+  template <class D>
+  void transform_from(const std::vector<D>& features, BowVector& v) const {
+    std::vector<unsigned char> bytes;
+    core_.transform(to_bytes(features, bytes), v);
+  }
+  template <class D>
+  void transform_from(const std::vector<D>& features, BowVector& v, FeatureVector& fv,
+                      int levelsup) const {
+    std::vector<unsigned char> bytes;
+    core_.transform(to_bytes(features, bytes), v, fv, levelsup);
+  }
+  template <class D>
+  WordId word_of(const D& feature) const {
+    if (empty()) return 0;
+    std::vector<unsigned char> bytes;
+    binbow_detail::append_descriptor_bytes(feature, core_.code_size(), bytes);
+    return core_.transform(bytes.data(), bytes.size());
+  }
+
+  template <class D>
+  binbow_detail::DescriptorBytes to_bytes(const std::vector<D>& features,
                                           std::vector<unsigned char>& bytes) const {
     const std::size_t code_size = core_.code_size();
     if (!empty()) {
