@@ -1,4 +1,5 @@
 // TemplatedDatabase's implementation over binbow::Database.
+#include <atomic>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -17,6 +18,10 @@ namespace {
 // DBoW2's CHI_SQUARE and BHATTACHARYYA queries drop entries sharing fewer
 // words with the query than this (its MIN_COMMON_WORDS).
 constexpr std::uint32_t kMinCommonWords = 5;
+
+// select_vins_query_rule()'s choice: set by static initialisers, read by
+// queries on any thread.
+std::atomic<bool> vins_query_rule_selected{false};
 
 binbow::BowVector to_binbow(const BowVector& v) {
   std::vector<binbow::BowEntry> entries;
@@ -72,6 +77,8 @@ struct DatabaseCore::Impl {
   bool use_di = true;
   int di_levels = 0;
   ScoringType scoring = L1_NORM;
+  // VINS's query rule: -1 until set_vins_query_rule(), then 0 or 1.
+  int vins_query_rule = -1;
   std::unique_ptr<binbow::Database> database;  // null until a non-empty vocabulary is set
   // retrieveFeatures() returns references: the entries' converted feature
   // vectors live here until the entry goes.
@@ -100,6 +107,7 @@ DatabaseCore& DatabaseCore::operator=(const DatabaseCore& other) {
   copy->use_di = other.impl_->use_di;
   copy->di_levels = other.impl_->di_levels;
   copy->scoring = other.impl_->scoring;
+  copy->vins_query_rule = other.impl_->vins_query_rule;
   if (other.impl_->database) {
     const binbow::Database& source = *other.impl_->database;
     const std::vector<std::uint8_t> bytes = source.serialize(false);
@@ -167,17 +175,28 @@ void DatabaseCore::query(const BowVector& v, QueryResults& ret, int max_results,
   if (!impl_->database) return;
   const binbow::Database& database = *impl_->database;
   check_words(v, database.vocabulary());
-  if (max_id != -1 && max_id <= 0) return;
   const ScoringType scoring = impl_->scoring;
+  const EntryId entries = database.next_entry_id();
+  // VINS's fork (its queryL1) also scores the newest entry when max_id
+  // leaves it out: the entries it skips are then those from max_id (or 0)
+  // up to the newest.
+  const bool newest_too = vins_query_rule() && scoring == L1_NORM && max_id != -1 && entries > 0 &&
+                          static_cast<long long>(entries) - 1 >= max_id;
+  const EntryId newest = entries - 1;
+  const EntryId first_skipped = max_id > 0 ? static_cast<EntryId>(max_id) : 0;
+  if (max_id != -1 && max_id <= 0 && !newest_too) return;
   const bool needs_common_words = scoring == CHI_SQUARE || scoring == BHATTACHARYYA;
   // The common-words rule is applied after the query, so those queries ask
-  // for every candidate before keeping the best max_results.
-  const std::size_t wanted = max_results > 0 && !needs_common_words
-                                 ? static_cast<std::size_t>(max_results)
-                                 : static_cast<std::size_t>(database.next_entry_id());
+  // for every candidate before keeping the best max_results; the newest
+  // entry's rule asks for as many more as it skips.
+  std::size_t wanted = max_results > 0 && !needs_common_words
+                           ? static_cast<std::size_t>(max_results)
+                           : static_cast<std::size_t>(entries);
+  if (newest_too) wanted += newest - first_skipped;
   const binbow::EntryId last =
-      max_id == -1 ? binbow::kAllEntries : static_cast<EntryId>(max_id - 1);
+      max_id == -1 || newest_too ? binbow::kAllEntries : static_cast<EntryId>(max_id - 1);
   for (const binbow::QueryResult& found : database.query(to_binbow(v), wanted, last)) {
+    if (newest_too && found.entry >= first_skipped && found.entry != newest) continue;
     if (needs_common_words && found.shared_words < kMinCommonWords) continue;
     Result result(found.entry, found.score);
     result.nWords = static_cast<int>(found.shared_words);
@@ -186,6 +205,20 @@ void DatabaseCore::query(const BowVector& v, QueryResults& ret, int max_results,
     ret.push_back(result);
     if (max_results > 0 && ret.size() == static_cast<std::size_t>(max_results)) break;
   }
+}
+
+void DatabaseCore::set_vins_query_rule(bool on) {
+  impl_->vins_query_rule = on ? 1 : 0;
+}
+
+bool DatabaseCore::vins_query_rule() const {
+  return impl_->vins_query_rule == -1 ? vins_query_rule_selected.load()
+                                      : impl_->vins_query_rule == 1;
+}
+
+bool select_vins_query_rule() {
+  vins_query_rule_selected.store(true);
+  return true;
 }
 
 const FeatureVector& DatabaseCore::features(EntryId id) const {

@@ -95,6 +95,11 @@ class DatabaseCore {
   void query(const BowVector& v, QueryResults& ret, int max_results, int max_id) const;
   const FeatureVector& features(EntryId id) const;
 
+  // VINS's fork's query rule (TemplatedDatabase::setVinsQueryRule); until
+  // set, the program's default (select_vins_query_rule()).
+  void set_vins_query_rule(bool on);
+  bool vins_query_rule() const;
+
   void save(const std::string& filename) const;
   // Replaces the database; `vocabulary` receives the one the file holds.
   void load(const std::string& filename, VocabularyCore& vocabulary);
@@ -103,6 +108,11 @@ class DatabaseCore {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Makes VINS's query rule the default of every database of the program that
+// has not chosen (what the VINS spellings of the headers do, from a static
+// initialiser, see names/ThirdParty/DBoW/); returns true.
+bool select_vins_query_rule();
 
 }  // namespace binbow_detail
 }  // namespace DBoW2
