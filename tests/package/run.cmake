@@ -3,7 +3,9 @@
 # (find_package COMPONENTS core), one of binbow::vision exactly as the README
 # shows, the same two sources built with nothing but the compiler and
 # pkg-config, and one of binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built
-# as C++11 through find_package and through pkg-config. With SHARED, every
+# as C++11 through find_package and through pkg-config, and one written as
+# VINS uses its copy of DBoW2, as C++14 (needs binbow::dbow2_names, Boost
+# and OpenCV imgproc). With SHARED, every
 # program must link binbow's shared libraries.
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
@@ -154,3 +156,36 @@ if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
 endif()
 expect_linkage(${program} dbow2)
 message(STATUS "pkg-config dbow2: ${output}")
+
+# Code written as VINS calls its copy of DBoW2 (VINS's include names from
+# binbow-dbow2-names, DVision::BRIEF's boost::dynamic_bitset descriptors, a
+# VINS binary vocabulary, VINS's query rule), as C++14 through CMake and
+# pkg-config, against DBoW2's numbers as VINS's copy returns them.
+set(vins_vocabulary ${WORK_DIR}/brief_k10L6.bin)
+run("converting the vocabulary for the vins consumer" ${cli} convert ${prefix}/share/binbow/vocab/orb_default.bbw
+    ${vins_vocabulary} --to vins)
+set(vins_expect "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0, newest entry returned: [1-9]")
+set(golden ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
+set(build ${WORK_DIR}/vins-cmake)
+run("configuring the vins consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/vins -B ${build}
+    -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+run("building the vins consumer" ${CMAKE_COMMAND} --build ${build})
+run("running the vins consumer" ${build}/consumer ${vins_vocabulary} ${golden})
+if(NOT output MATCHES "${vins_expect}")
+  message(FATAL_ERROR "the vins consumer printed: ${output}")
+endif()
+expect_linkage(${build}/consumer dbow2)
+message(STATUS "CMake vins: ${output}")
+run("pkg-config binbow-dbow2-names" pkg-config --cflags --libs binbow-dbow2-names binbow-dbow2 opencv4)
+string(STRIP "${output}" flags)
+separate_arguments(flags UNIX_COMMAND "${flags}")
+set(program ${WORK_DIR}/vins-pkgconfig)
+run("building the vins consumer with pkg-config" ${CXX} -std=c++14 -O1
+    -I${CONSUMER_SOURCE_DIR}/../compat -I${CONSUMER_SOURCE_DIR}/../compat_vins
+    ${CONSUMER_SOURCE_DIR}/vins/main.cpp -o ${program} ${flags} -Wl,-rpath,${prefix}/${LIBDIR})
+run("running the vins consumer (pkg-config)" ${program} ${vins_vocabulary} ${golden})
+if(NOT output MATCHES "${vins_expect}")
+  message(FATAL_ERROR "the vins consumer built with pkg-config printed: ${output}")
+endif()
+expect_linkage(${program} dbow2)
+message(STATUS "pkg-config vins: ${output}")
