@@ -366,19 +366,23 @@ void bind_core(py::module_& m) {
                          "A vocabulary tree of binary words. Immutable: copies share the tree.")
       .def_static(
           "load",
-          [](const Path& path, const std::string& format) {
+          [](const Path& path, const std::string& format, const std::string& descriptor) {
             try {
-              return load_vocabulary(path.string(), parse_vocabulary_format(format));
+              return load_vocabulary(path.string(), parse_vocabulary_format(format), descriptor);
             } catch (const FileError& e) {
               if (e.problem().rfind(kUnknownVocabularyFormat, 0) != 0) throw;
               throw FileError(e.path(), e.problem() + " with Vocabulary.load(path, format=...)");
             }
           },
-          py::arg("path"), py::arg("format") = "auto", py::call_guard<py::gil_scoped_release>(),
+          py::arg("path"), py::arg("format") = "auto", py::kw_only(), py::arg("descriptor") = "",
+          py::call_guard<py::gil_scoped_release>(),
           "Load any supported format (.bbw, DBoW2 YAML, ORBvoc.txt, ORB-SLAM .bin, DBoW3, fbow,\n"
           "VINS brief_k10L6.bin). format: \"auto\" (detect from the content, then the\n"
           "extension) or one of \"bbw\", \"dbow2\", \"orbslam-text\", \"orbslam-binary\",\n"
-          "\"dbow3\", \"fbow\", \"vins\".")
+          "\"dbow3\", \"fbow\", \"vins\". descriptor: the extractor the vocabulary was trained\n"
+          "on (\"orb\", \"brief\", ...) for files that do not record it (all but .bbw); without\n"
+          "it a VINS file is brief, and another file of 256-bit descriptors is taken for orb\n"
+          "with a warning on stderr naming the file. A .bbw that records one keeps its own.")
       .def(
           "save",
           [](const Vocabulary& v, const Path& path, const std::string& format) {

@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "binbow/error.h"
+
 namespace binbow::python {
 
 std::string type_name(const py::handle& object) {
@@ -63,13 +65,14 @@ py::array_t<std::uint8_t, py::array::c_style> contiguous_uint8(const py::array& 
     return py::reinterpret_borrow<py::array_t<std::uint8_t, py::array::c_style>>(array);
   // A strided view may stand for far more bytes than it holds (a broadcast
   // row has stride 0): its size is checked before anything is allocated.
+  // Its dtype and shape are fine, so it is not a bad argument (ValueError)
+  // but a limit of binbow's: binbow.Error.
   const auto bytes = static_cast<std::size_t>(array.size());
   if (bytes > kMaxCopiedBytes)
-    throw py::value_error(what + " (dtype " + py::str(array.dtype()).cast<std::string>() +
-                          ", shape " + shape_of(array) +
-                          ") is not C-contiguous and too large to copy (" + std::to_string(bytes) +
-                          " bytes, at most " + std::to_string(kMaxCopiedBytes) +
-                          "); pass C-contiguous rows (numpy.ascontiguousarray)");
+    throw Error(what + " (dtype " + py::str(array.dtype()).cast<std::string>() + ", shape " +
+                shape_of(array) + ") is not C-contiguous and too large to copy (" +
+                std::to_string(bytes) + " bytes, at most " + std::to_string(kMaxCopiedBytes) +
+                "); pass C-contiguous rows (numpy.ascontiguousarray)");
   auto copy = py::array_t<std::uint8_t, py::array::c_style>::ensure(array);
   if (!copy)
     throw py::value_error(what + " (dtype " + py::str(array.dtype()).cast<std::string>() +

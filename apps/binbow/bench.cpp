@@ -99,7 +99,7 @@ void run_bench(BenchArguments args) {
   auto& load = stage("vocabulary load");
   for (int i = 0; i < args.load_repeats; ++i) {
     const auto start = Clock::now();
-    const Vocabulary v = load_vocabulary(vocabulary_path);
+    const Vocabulary v = load_vocabulary(vocabulary_path, VocabularyFormat::kAuto, args.descriptor);
     load.push_back(elapsed_ms(start));
   }
 

@@ -25,7 +25,8 @@ void add_demo_command(CLI::App& app);
 void add_make_route_command(CLI::App& app);
 // Prints `binbow info` lines for a .bbdb file, after checking the whole file
 // with `verify`; false if `path` is not one.
-bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary);
+bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary,
+                         const std::string& descriptor);
 // Checks a loop detector state (.bbld) as `detect-loops --resume-state`
 // would and prints its `binbow info` lines.
 void print_loop_state_info(const std::string& path, const std::string& vocab_argument);

@@ -1,6 +1,7 @@
 // `binbow convert IN OUT [--from F] [--to F] [--descriptor NAME]`: a vocabulary
 // from any readable format to any writable one (formats and extensions:
-// docs/formats.md), optionally recording the extractor it was trained on.
+// docs/formats.md), naming the extractor it was trained on when IN does not
+// record it (and recording it in a .bbw OUT).
 #include <sys/stat.h>
 #include <chrono>
 #include <cstdio>
@@ -12,8 +13,8 @@
 #include "commands.h"
 #include "formats/loader.h"
 #include "output_options.h"
+#include "trained_on_option.h"
 #include "validators.h"
-#include "vision_commands.h"
 
 namespace binbow::cli {
 
@@ -21,7 +22,7 @@ namespace {
 
 struct ConvertArguments {
   std::string input, output, from = "auto", to = "auto", descriptors = "auto";
-  std::string descriptor;  // extractor to record, "" to keep the input's
+  std::string descriptor;  // the extractor it was trained on, "" to keep the input's
 };
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -33,14 +34,11 @@ void run_convert(const ConvertArguments& args) {
   VocabularyFormat to = parse_vocabulary_format(args.to);
   if (to == VocabularyFormat::kAuto) to = format_for_output(args.output);
   prepare_output_file("OUT", args.output);
-  if (!args.descriptor.empty() && to != VocabularyFormat::kBinbow)
-    throw InvalidArgument("--descriptor: only .bbw files record the extractor, not " +
-                          std::string(to_string(to)) + " files");
 
   const auto start = std::chrono::steady_clock::now();
   detail::LoadedVocabulary loaded;
   try {
-    loaded = detail::load_vocabulary_with_details(args.input, from);
+    loaded = load_vocabulary_trained_on(args.input, from, args.descriptor);
   } catch (const FileError& e) {
     if (e.problem().rfind(kUnknownVocabularyFormat, 0) != 0) throw;
     throw FileError(e.path(), e.problem() + " with --from");
@@ -63,23 +61,24 @@ void run_convert(const ConvertArguments& args) {
     std::printf(
         "note: fbow files store no weighting or scoring type; they read back as tf-idf, "
         "l1\n");
+  // A .bbw that records another extractor is relabelled: that is how a
+  // wrong name is corrected.
+  if (!args.descriptor.empty() && loaded.vocabulary.descriptor() != args.descriptor)
+    loaded.vocabulary = loaded.vocabulary.with_descriptor(args.descriptor);
   const std::string& trained_on = loaded.vocabulary.descriptor();
+  if (to == VocabularyFormat::kBinbow && !args.descriptor.empty())
+    std::printf("descriptor: %s (recorded)\n", trained_on.c_str());
   if (to == VocabularyFormat::kVinsBinary && !trained_on.empty() && trained_on != "brief")
     std::printf(
         "note: VINS files do not record the extractor and VINS computes BRIEF descriptors; "
         "this vocabulary was trained on %s ones\n",
         trained_on.c_str());
-
-  if (!args.descriptor.empty()) {
-    const std::size_t code_size = vision_commands().descriptor_code_size(args.descriptor);
-    if (code_size != loaded.vocabulary.code_size())
-      throw InvalidArgument("--descriptor " + args.descriptor + ": " + args.descriptor + " gives " +
-                            std::to_string(code_size * 8) +
-                            "-bit descriptors, the vocabulary has " +
-                            std::to_string(loaded.vocabulary.code_size() * 8) + "-bit ones");
-    loaded.vocabulary = loaded.vocabulary.with_descriptor(args.descriptor);
-    std::printf("descriptor: %s (recorded)\n", args.descriptor.c_str());
-  }
+  else if (to != VocabularyFormat::kBinbow && to != VocabularyFormat::kVinsBinary &&
+           !trained_on.empty() && trained_on != "orb")
+    std::printf(
+        "note: %s files do not record the extractor: reading %s back assumes orb; give "
+        "--descriptor %s then\n",
+        to_string(to), args.output.c_str(), trained_on.c_str());
 
   const auto write_start = std::chrono::steady_clock::now();
   detail::save_vocabulary_as(loaded.vocabulary, args.output, to, text);
@@ -123,9 +122,8 @@ void add_convert_command(CLI::App& app) {
                   "(FORB decimal bytes) or auto (as the input file, else bytes)")
       ->check(CLI::IsMember({"auto", "bits", "bytes"}))
       ->capture_default_str();
-  cmd->add_option("--descriptor", args->descriptor,
-                  "Record the extractor the vocabulary was trained on (orb, brief, akaze, "
-                  "brisk) in the output .bbw, for files that do not say");
+  add_trained_on_option(cmd, args->descriptor,
+                        "A .bbw OUT records it (relabelling a .bbw IN that records another)");
   cmd->callback([args] { run_convert(*args); });
 }
 

@@ -13,13 +13,17 @@
 
 namespace binbow::cli {
 
-// The database, with the --vocab given for one built with --external-vocab.
-// Checked whole before use: a command is over before a background check
-// would end, and must not print results from a damaged file.
-inline Database load_database(const std::string& path, const std::string& vocabulary) {
+// The database, with the --vocab given for one built with --external-vocab
+// (trained on `descriptor`, --descriptor, when its file does not say; see
+// load_vocabulary). Checked whole before use: a command is over before a
+// background check would end, and must not print results from a damaged file.
+inline Database load_database(const std::string& path, const std::string& vocabulary,
+                              const std::string& descriptor) {
   const DatabaseLoadOptions options{Verification::kBeforeReturn};
-  return vocabulary.empty() ? Database::load(path, options)
-                            : Database::load(path, load_vocabulary(vocabulary), options);
+  return vocabulary.empty()
+             ? Database::load(path, options)
+             : Database::load(
+                   path, load_vocabulary(vocabulary, VocabularyFormat::kAuto, descriptor), options);
 }
 
 inline std::string wait_hint(double wait_seconds) {

@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "core/regular_file.h"
 #include "database_loading.h"
+#include "trained_on_option.h"
 
 namespace binbow::cli {
 namespace {
@@ -22,6 +23,7 @@ struct DbRemoveArguments {
   std::string database;
   std::vector<EntryId> entries;
   std::string vocabulary;
+  std::string descriptor;  // the extractor of --vocab when its file does not record it
   bool compact = false;
   double wait_seconds = 0;
 };
@@ -29,7 +31,8 @@ struct DbRemoveArguments {
 void run_db_remove(const DbRemoveArguments& arguments) {
   const DatabaseLock writer = lock_database(arguments.database, arguments.wait_seconds);
   const bool vocabulary_included = Database::inspect(arguments.database, false).vocabulary_included;
-  Database database = load_database(arguments.database, arguments.vocabulary);
+  if (!arguments.descriptor.empty()) check_known_descriptor(arguments.descriptor);
+  Database database = load_database(arguments.database, arguments.vocabulary, arguments.descriptor);
   std::vector<std::pair<EntryId, std::string>> removed;
   for (const EntryId entry : arguments.entries) {
     if (!database.contains(entry)) {
@@ -47,7 +50,8 @@ void run_db_remove(const DbRemoveArguments& arguments) {
 
 }  // namespace
 
-bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary) {
+bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary,
+                         const std::string& descriptor) {
   detail::require_regular_file(path);  // a FIFO would block the read below
   char magic[8] = {};
   std::ifstream file(path, std::ios::binary);
@@ -61,7 +65,7 @@ bool print_database_info(const std::string& path, bool verify, const std::string
   // cannot be checked: the file's sections and the journal's records are.
   if (verify &&
       (info.vocabulary_included || info.vocabulary_checksum == 0 || !vocabulary.empty())) {
-    const Database database = load_database(path, vocabulary);
+    const Database database = load_database(path, vocabulary, descriptor);
     entries = database.size();
     next_entry_id = database.next_entry_id();
   } else if (verify) {
@@ -114,6 +118,7 @@ void add_db_command(CLI::App& app, void (*add_image_commands)(CLI::App& db)) {
       ->required();
   remove_command->add_option("--vocab", remove->vocabulary,
                              "Vocabulary, for databases built with --external-vocab");
+  add_trained_on_option(remove_command, remove->descriptor, "");
   remove_command->add_flag("--compact", remove->compact, kCompactHelp);
   add_wait_option(remove_command, remove->wait_seconds);
   remove_command->callback([remove] { run_db_remove(*remove); });

@@ -62,12 +62,10 @@ struct DbQueryArguments : DbArguments {
 std::shared_ptr<const vision::FeatureExtractor> extractor_for(const Vocabulary& vocabulary,
                                                               const std::string& vocabulary_name,
                                                               const std::string& descriptor,
-                                                              int features,
-                                                              bool embedded_in_database = false) {
+                                                              int features) {
   const std::string name = descriptor_for(descriptor, vocabulary);
   auto extractor = vision::make_extractor(name, features);
-  check_vocabulary_fits(vocabulary, vocabulary_name, name, extractor->code_size(),
-                        embedded_in_database);
+  check_vocabulary_fits(vocabulary, vocabulary_name, name, extractor->code_size());
   return extractor;
 }
 
@@ -77,7 +75,7 @@ std::shared_ptr<const vision::FeatureExtractor> database_extractor(const Databas
                                                                    const DbArguments& arguments) {
   const bool embedded = arguments.vocabulary.empty();
   return extractor_for(database.vocabulary(), embedded ? arguments.database : arguments.vocabulary,
-                       arguments.descriptor, arguments.features, embedded);
+                       arguments.descriptor, arguments.features);
 }
 
 // What add_images added: the entries with their labels, and the frames
@@ -144,7 +142,8 @@ void run_db_build(DbBuildArguments arguments) {
 }
 
 void run_db_query(const DbQueryArguments& arguments) {
-  const Database database = load_database(arguments.database, arguments.vocabulary);
+  const Database database =
+      load_database(arguments.database, arguments.vocabulary, arguments.descriptor);
   const auto extractor = database_extractor(database, arguments);
   vision::FramePipeline frames =
       described_frames(arguments.inputs, arguments.source, extractor, arguments.threads);
@@ -176,7 +175,7 @@ void run_db_add(const DbArguments& arguments) {
   const DatabaseLock writer = lock_database(arguments.database, arguments.wait_seconds);
   // load() checks the whole file: the header is enough here.
   const bool vocabulary_included = Database::inspect(arguments.database, false).vocabulary_included;
-  Database database = load_database(arguments.database, arguments.vocabulary);
+  Database database = load_database(arguments.database, arguments.vocabulary, arguments.descriptor);
   const auto extractor = database_extractor(database, arguments);
   const AddedImages added = add_images(database, extractor, arguments.inputs, arguments.source,
                                        arguments.threads, nullptr);

@@ -86,8 +86,7 @@ std::string default_vocabulary_path(const std::string& descriptor) {
 }
 
 void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,
-                           const std::string& descriptor, std::size_t code_size,
-                           bool embedded_in_database) {
+                           const std::string& descriptor, std::size_t code_size) {
   if (vocabulary.code_size() != code_size)
     throw InvalidArgument(vocabulary_name + ": vocabulary of " +
                           std::to_string(vocabulary.code_size() * 8) + "-bit descriptors, but " +
@@ -102,14 +101,7 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
                  "an empty bag of words and no place can be recognised; rebuild the vocabulary "
                  "('binbow build-vocab') or convert it from a file that has its weights\n",
                  vocabulary_name.c_str());
-  if (vocabulary.descriptor().empty()) {
-    if (embedded_in_database) return;
-    std::fprintf(stderr,
-                 "binbow: warning: %s: the vocabulary does not record its extractor; using %s. "
-                 "If it was trained on another one, record it with 'binbow convert "
-                 "--descriptor NAME %s OUT.bbw'\n",
-                 vocabulary_name.c_str(), descriptor.c_str(), vocabulary_name.c_str());
-  } else if (vocabulary.descriptor() != descriptor) {
+  if (!vocabulary.descriptor().empty() && vocabulary.descriptor() != descriptor) {
     throw InvalidArgument(vocabulary_name + ": the vocabulary was trained on " +
                           vocabulary.descriptor() + " descriptors, not " + descriptor +
                           ": pass --descriptor " + vocabulary.descriptor() +
@@ -130,7 +122,9 @@ std::string load_loop_vocabulary(const std::string& vocab_argument, std::string&
           ? default_vocabulary_path(descriptor.empty() ? std::string(vision::kDefaultDescriptor)
                                                        : descriptor)
           : vocab_argument;
-  vocabulary = load_vocabulary(path);
+  // The extractor given is the vocabulary's when its file does not say (the
+  // loader warns when it has to assume one).
+  vocabulary = load_vocabulary(path, VocabularyFormat::kAuto, descriptor);
   descriptor = descriptor_for(descriptor, vocabulary);
   check_vocabulary_fits(vocabulary, path, descriptor,
                         vision::make_extractor(descriptor)->code_size());

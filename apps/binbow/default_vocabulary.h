@@ -42,12 +42,10 @@ std::string default_vocabulary_path(const std::string& descriptor);
 // instead, unless the vocabulary fits descriptors of extractor `descriptor`
 // with `code_size` bytes: same length, and trained on that extractor when
 // the vocabulary records one. Warns when every word weighs 0 (legal, but no
-// image can be told from another). When it records none, prints a warning naming
-// `descriptor` and how to record the right extractor, unless the vocabulary
-// is `embedded_in_database` (db build warned when it read the file).
+// image can be told from another). A vocabulary read from a file that does
+// not record its extractor was named, or warned about, by load_vocabulary.
 void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& vocabulary_name,
-                           const std::string& descriptor, std::size_t code_size,
-                           bool embedded_in_database = false);
+                           const std::string& descriptor, std::size_t code_size);
 
 // The extractor of a command with a vocabulary: `given` (--descriptor, ""
 // when not given), else the one the vocabulary records, else
@@ -58,7 +56,8 @@ void check_vocabulary_fits(const Vocabulary& vocabulary, const std::string& voca
 std::string descriptor_for(const std::string& given, const Vocabulary& vocabulary);
 
 // --vocab, or the default vocabulary of `descriptor` (kDefaultDescriptor when
-// empty) when --vocab is empty; loads it, sets `descriptor` by descriptor_for
+// empty) when --vocab is empty; loads it (a file that does not record its
+// extractor takes `descriptor`, see load_vocabulary), sets `descriptor` by descriptor_for
 // and checks that the vocabulary fits it (check_vocabulary_fits). Returns the
 // absolute path.
 std::string load_loop_vocabulary(const std::string& vocab_argument, std::string& descriptor,

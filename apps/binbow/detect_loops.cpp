@@ -24,6 +24,7 @@
 #include "loop_params_options.h"
 #include "output_options.h"
 #include "progress.h"
+#include "saved_state_descriptor.h"
 #include "threads_options.h"
 
 namespace binbow::cli {
@@ -72,25 +73,6 @@ void print_status_counts(const loop::StatusCounts& counts) {
                  counts[value]);
 }
 
-// The state's descriptor name, read from the file, must name an extractor
-// that makes descriptors of the state's size.
-void check_saved_descriptor(const std::string& path, const loop::LoopDetectorFileInfo& saved) {
-  const std::vector<std::string> known = vision::extractor_names();
-  if (std::find(known.begin(), known.end(), saved.descriptor) == known.end()) {
-    constexpr std::size_t kShown = 40;
-    std::string list;
-    for (const std::string& name : known) list += (list.empty() ? "" : ", ") + name;
-    throw FileError(path, "the state names the descriptor \"" + saved.descriptor.substr(0, kShown) +
-                              (saved.descriptor.size() > kShown ? "..." : "") +
-                              "\", which binbow cannot extract (expected one of " + list + ")");
-  }
-  const std::size_t code_size = vision::make_extractor(saved.descriptor, 0)->code_size();
-  if (code_size != saved.code_size)
-    throw FileError(path, "the state's descriptors have " + std::to_string(saved.code_size) +
-                              " bytes, but " + saved.descriptor + " descriptors have " +
-                              std::to_string(code_size));
-}
-
 // With --resume-state, what the command line leaves open comes from the
 // saved state (its kind, its descriptor); what it says must agree with it.
 void adopt_saved_state(DetectLoopsArguments& arguments, const loop::LoopDetectorFileInfo& saved) {
@@ -104,8 +86,8 @@ void adopt_saved_state(DetectLoopsArguments& arguments, const loop::LoopDetector
                                " holds a fixed vocabulary's state; --online-vocabulary conflicts "
                                "with it (give the vocabulary it was run with, --vocab)");
   arguments.online_vocabulary = saved.online;
+  check_saved_descriptor(path, saved);
   if (!saved.descriptor.empty()) {
-    check_saved_descriptor(path, saved);
     if (arguments.descriptor_given && arguments.descriptor != saved.descriptor)
       throw CLI::ValidationError("--resume-state " + path + " was run with " + saved.descriptor +
                                  " descriptors; --descriptor " + arguments.descriptor +

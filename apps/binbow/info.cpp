@@ -14,6 +14,7 @@
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "formats/loader.h"
+#include "trained_on_option.h"
 #include "vision_commands.h"
 
 namespace binbow::cli {
@@ -66,6 +67,7 @@ void add_info_command(CLI::App& app) {
   auto header_only = std::make_shared<bool>(false);
   auto system = std::make_shared<bool>(false);
   auto vocab = std::make_shared<std::string>();
+  auto descriptor = std::make_shared<std::string>();
   auto* file = cmd->add_option("FILE", *path,
                                "Vocabulary (.bbw, DBoW2 .yml[.gz], ORBvoc.txt, ...) or database");
   auto* header = cmd->add_flag("--header-only", *header_only,
@@ -75,19 +77,22 @@ void add_info_command(CLI::App& app) {
                   "state as --resume-state does (default: the descriptor's bundled one, when it "
                   "is the state's). Database built with --external-vocab: its vocabulary, to "
                   "load it whole as db query does");
+  add_trained_on_option(cmd, *descriptor,
+                        "Also for a database's --vocab; a loop detector state names its own");
   cmd->add_flag("--system", *system,
                 "Print the CPU features binbow uses and the Hamming kernel set in use")
       ->excludes(file)
       ->excludes(header);
-  cmd->callback([path, header_only, vocab, system] {
+  cmd->callback([path, header_only, vocab, descriptor, system] {
     if (*system) return print_system_info();
     if (path->empty()) throw CLI::RequiredError("FILE");
+    if (!descriptor->empty()) check_known_descriptor(*descriptor);
     if (print_if_loop_state(*path, *vocab)) return;
-    if (print_database_info(*path, !*header_only, *vocab)) return;
+    if (print_database_info(*path, !*header_only, *vocab, *descriptor)) return;
     // The format the loader settled on: inside a .gz it is known only after
     // decompressing (ORB-SLAM and VINS binary files are told apart by size).
     const detail::LoadedVocabulary loaded =
-        detail::load_vocabulary_with_details(*path, VocabularyFormat::kAuto);
+        load_vocabulary_trained_on(*path, VocabularyFormat::kAuto, *descriptor);
     std::printf("format: %s\n", to_string(loaded.format));
     print_vocabulary(loaded.vocabulary);
   });

@@ -11,6 +11,7 @@
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "default_vocabulary.h"
+#include "saved_state_descriptor.h"
 
 namespace binbow::cli {
 
@@ -57,6 +58,7 @@ void verify_loop_state(const std::string& path, const loop::LoopDetectorFileInfo
 
 void print_loop_state_info(const std::string& path, const std::string& vocab_argument) {
   const loop::LoopDetectorFileInfo info = loop::LoopDetector::inspect(path);
+  check_saved_descriptor(path, info);
   verify_loop_state(path, info, vocab_argument);
   std::printf("kind: loop detector state\n");
   std::printf("version: %u\n", info.version);

@@ -43,8 +43,19 @@ VocabularyFormat format_for_output(const std::string& path);
 
 // Reads a vocabulary in any supported format. Throws FileError naming the file
 // and the problem for anything unreadable, truncated or inconsistent.
+//
+// The extractor the vocabulary was trained on (Vocabulary::descriptor) is
+// recorded by .bbw files only. A .bbw that records it keeps its own;
+// otherwise `descriptor` ("orb", "brief", ...; "" when unknown) is taken.
+// Without it, a VINS file is brief (VINS computes BRIEF descriptors), and any
+// other file is assumed to be orb when its descriptors are 256-bit (left
+// without a name otherwise), with a warning through the warning handler
+// (set_warning_handler) naming the file, the assumption and how to give the
+// right one. InvalidArgument for a `descriptor` that is not a valid name
+// (VocabularyTree::descriptor).
 Vocabulary load_vocabulary(const std::string& path,
-                           VocabularyFormat format = VocabularyFormat::kAuto);
+                           VocabularyFormat format = VocabularyFormat::kAuto,
+                           const std::string& descriptor = "");
 // Writes atomically (temporary file, then rename; missing folders are made);
 // kAuto: by extension. DBoW2
 // YAML is written with decimal-byte descriptors (DBoW2's FORB) unless

@@ -384,6 +384,36 @@ def test_a_lost_worker_is_a_binbow_error_and_the_last_save_stays(vocabulary, tmp
         assert len(loaded) == 4 and loaded.label(3) == "l3" and loaded.next_entry_id == 4
 
 
+@pytest.mark.parametrize("first", ["query", "len", "save"])
+def test_the_call_that_meets_a_killed_worker_names_the_shard_and_what_to_do(vocabulary, tmp_path,
+                                                                           first):
+    """Whichever call meets the dead worker first, it raises binbow.Error (never Dask's own
+    exception) naming the shard and the way back; every later call says the shard was lost."""
+    import os
+    import signal
+
+    distributed = require_module("distributed", "python3-distributed")
+    module = sharded_module()
+    images = random_images(16, 4)
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as dask_client:
+        sharded = module.ShardedDatabase(dask_client, vocabulary, shards=2, timeout=20)
+        sharded.add_many(images)
+        calls = {"query": lambda: sharded.query(images[0]), "len": lambda: len(sharded),
+                 "save": lambda: sharded.save(tmp_path / "saved")}
+        worker = sharded.workers[1]
+        os.kill(dask_client.run(os.getpid, workers=[worker])[worker], signal.SIGKILL)
+        with pytest.raises(binbow.Error, match=r"^ShardedDatabase[.: ].*shard 1 .*"
+                                               r"ShardedDatabase\.load\)$") as raised:
+            calls[first]()
+        assert type(raised.value) is binbow.Error
+        for name, call in calls.items():
+            with pytest.raises(binbow.Error, match="shard 1 was lost.*load the last save"):
+                call()
+        assert not (tmp_path / "saved" / "manifest.json").exists()
+
+
 def test_a_shard_lost_during_a_save_leaves_the_previous_save(client, vocabulary, tmp_path):
     """Shard files replace the previous ones only once every shard has written."""
     sharded = sharded_module().ShardedDatabase(client, vocabulary, shards=2)

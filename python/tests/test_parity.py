@@ -47,7 +47,7 @@ def test_the_descriptors_are_described_by_dtype_and_shape(database):
 def test_huge_strided_views_are_refused_without_copying(database, vocabulary, make):
     view = make()
     for call in (vocabulary.transform, database.add, database.query, vocabulary.quantize):
-        with pytest.raises(ValueError, match=r"descriptors \(dtype uint8, shape \(1000000000, 32\)\) "
+        with pytest.raises(binbow.Error, match=r"descriptors \(dtype uint8, shape \(1000000000, 32\)\) "
                                              r"is not C-contiguous and too large to copy"):
             call(view)
     assert len(database) == 12

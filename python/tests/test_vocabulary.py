@@ -82,6 +82,26 @@ def test_records_the_descriptor_it_was_trained_on(tmp_path, images, vocabulary):
         binbow.Vocabulary.build(images, branching=5, levels=2, descriptor="ORB!")
 
 
+def test_files_that_do_not_record_the_descriptor_take_it_or_say_what_is_assumed(
+        tmp_path, images, capfd):
+    brief = binbow.Vocabulary.build(images, branching=5, levels=2, descriptor="brief")
+    brief.save(tmp_path / "v.yml.gz")
+    brief.save(tmp_path / "v.vins.bin")
+    capfd.readouterr()
+    assumed = binbow.Vocabulary.load(tmp_path / "v.yml.gz")
+    assert assumed.descriptor == "orb"
+    assert capfd.readouterr().err == (
+        f"binbow: warning: {tmp_path / 'v.yml.gz'}: dbow2 files do not store the descriptor "
+        "kind; assuming orb (give --descriptor brief, or descriptor=\"brief\" in Python, if it "
+        "is BRIEF)\n")
+    told = binbow.Vocabulary.load(tmp_path / "v.yml.gz", descriptor="brief")
+    assert told.descriptor == "brief" and told.checksum == brief.checksum
+    assert binbow.Vocabulary.load(tmp_path / "v.vins.bin").descriptor == "brief"
+    assert capfd.readouterr().err == ""
+    with pytest.raises(ValueError, match="descriptor name"):
+        binbow.Vocabulary.load(tmp_path / "v.yml.gz", descriptor="BRIEF!")
+
+
 def test_stop_words_get_weight_zero(images):
     # With a fraction of 0.5 every word present in more than half of the
     # images is a stop word: transforms become sparser.

@@ -10,6 +10,7 @@
 #include "binbow/error.h"
 #include "binbow/formats.h"
 #include "compat/core_impl.h"
+#include "formats/loader.h"
 
 namespace DBoW2 {
 namespace binbow_detail {
@@ -339,9 +340,15 @@ int VocabularyCore::stop_words(double min_weight) {
   return stopped;
 }
 
+// DBoW2's API never extracts features, so the extractor a file does not
+// record is left unnamed, without the warning binbow's own loading gives;
+// ORB-SLAM's loaders read ORB-SLAM's ORB vocabularies.
 void VocabularyCore::load(const std::string& filename) {
   try {
-    impl_->assign(binbow::load_vocabulary(filename));
+    impl_->assign(binbow::detail::load_vocabulary_with_details(
+                      filename, binbow::VocabularyFormat::kAuto, "",
+                      binbow::detail::UnrecordedDescriptor::kLeaveBlank)
+                      .vocabulary);
   } catch (...) {
     rethrow_naming(filename);
   }
@@ -359,9 +366,10 @@ void VocabularyCore::save(const std::string& filename, bool bit_strings) const {
 
 bool VocabularyCore::load_orbslam(const std::string& filename, bool binary) {
   try {
-    impl_->assign(binbow::load_vocabulary(filename, binary
-                                                        ? binbow::VocabularyFormat::kOrbSlamBinary
-                                                        : binbow::VocabularyFormat::kOrbSlamText));
+    impl_->assign(binbow::load_vocabulary(
+        filename,
+        binary ? binbow::VocabularyFormat::kOrbSlamBinary : binbow::VocabularyFormat::kOrbSlamText,
+        "orb"));
     return true;
   } catch (const binbow::Error&) {
     return false;

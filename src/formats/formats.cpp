@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <utility>
 
 #include "binbow/error.h"
 #include "core/file_io.h"
 #include "core/little_endian.h"
+#include "core/warnings.h"
 #include "formats/codecs.h"
 #include "formats/container.h"
 #include "formats/gzip.h"
@@ -243,14 +245,60 @@ ParsedVocabulary parse_vocabulary_bytes(VocabularyFormat format, const std::uint
   }
 }
 
-LoadedVocabulary load_vocabulary_with_details(const std::string& path, VocabularyFormat format) {
+namespace {
+
+// The extractor of a vocabulary whose file does not record one (see
+// UnrecordedDescriptor); sets `warning` when it is an assumption or unknown.
+std::string unrecorded_descriptor(const std::string& path, VocabularyFormat format,
+                                  std::size_t code_size, const std::string& given,
+                                  UnrecordedDescriptor unrecorded, std::string& warning) {
+  if (!given.empty()) return given;
+  // VINS computes BRIEF descriptors: its files hold BRIEF words by definition.
+  if (format == VocabularyFormat::kVinsBinary) return "brief";
+  if (unrecorded == UnrecordedDescriptor::kLeaveBlank) return "";
+  const std::string what =
+      path + ": " +
+      (format == VocabularyFormat::kBinbow ? std::string("the file")
+                                           : std::string(to_string(format)) + " files") +
+      " do" + (format == VocabularyFormat::kBinbow ? "es" : "") + " not store the descriptor kind";
+  // ORB is binbow's default extractor and the one of ORB-SLAM and most DBoW2
+  // files; any other length is not ORB's, and nothing can be assumed.
+  if (code_size == 32) {
+    warning = what +
+              "; assuming orb (give --descriptor brief, or descriptor=\"brief\" in Python, if "
+              "it is BRIEF)";
+    return "orb";
+  }
+  warning = what + ", and its " + std::to_string(code_size * 8) +
+            "-bit descriptors are not orb's: give it with --descriptor NAME (descriptor=\"NAME\" "
+            "in Python)";
+  return "";
+}
+
+}  // namespace
+
+LoadedVocabulary load_vocabulary_with_details(const std::string& path, VocabularyFormat format,
+                                              const std::string& descriptor,
+                                              UnrecordedDescriptor unrecorded) {
+  // Checked first: a bad name is the caller's mistake, not the file's.
+  if (!valid_descriptor_name(descriptor))
+    throw InvalidArgument("descriptor name \"" + descriptor + "\" is not " + kDescriptorNameRule);
   LoadedVocabulary loaded;
+  // A .bbw records the extractor, or says nothing: only then does the rest apply.
+  const auto name_unrecorded = [&] {
+    if (!loaded.vocabulary.descriptor().empty()) return;
+    const std::string name =
+        unrecorded_descriptor(path, VocabularyFormat::kBinbow, loaded.vocabulary.code_size(),
+                              descriptor, unrecorded, loaded.descriptor_warning);
+    if (!name.empty()) loaded.vocabulary = loaded.vocabulary.with_descriptor(name);
+  };
   const MappedFile file(path);
   if (!is_gzip(file.data(), file.size())) {
     if (format == VocabularyFormat::kAuto) format = detect_vocabulary_format(path);
     loaded.format = format;
     if (format == VocabularyFormat::kBinbow) {
       loaded.vocabulary = Vocabulary::load(path);  // memory-mapped
+      name_unrecorded();
       return loaded;
     }
   }
@@ -266,17 +314,17 @@ LoadedVocabulary load_vocabulary_with_details(const std::string& path, Vocabular
   loaded.format = format;
   if (format == VocabularyFormat::kBinbow) {
     loaded.vocabulary = Vocabulary::deserialize(contained.data, contained.size, path);
+    name_unrecorded();
     return loaded;
   }
-  const ParsedVocabulary parsed =
-      parse_vocabulary_bytes(format, contained.data, contained.size, path);
+  ParsedVocabulary parsed = parse_vocabulary_bytes(format, contained.data, contained.size, path);
   loaded.descriptor_text = parsed.descriptor_text;
   loaded.word_ids_match = parsed.word_ids_match;
+  // No other format records the extractor: named here, before the tree
+  // becomes a vocabulary, so that nothing is copied to name it.
+  parsed.tree.descriptor = unrecorded_descriptor(path, format, parsed.tree.code_size, descriptor,
+                                                 unrecorded, loaded.descriptor_warning);
   loaded.vocabulary = vocabulary_from_parsed(parsed, path);
-  // ORB-SLAM's files hold ORB words (its FORB): recorded, so that commands
-  // take the extractor from the vocabulary. The other formats cannot say.
-  if (format == VocabularyFormat::kOrbSlamText || format == VocabularyFormat::kOrbSlamBinary)
-    loaded.vocabulary = loaded.vocabulary.with_descriptor("orb");
   return loaded;
 }
 
@@ -327,8 +375,11 @@ void save_vocabulary_as(const Vocabulary& vocabulary, const std::string& path,
 
 }  // namespace detail
 
-Vocabulary load_vocabulary(const std::string& path, VocabularyFormat format) {
-  return detail::load_vocabulary_with_details(path, format).vocabulary;
+Vocabulary load_vocabulary(const std::string& path, VocabularyFormat format,
+                           const std::string& descriptor) {
+  detail::LoadedVocabulary loaded = detail::load_vocabulary_with_details(path, format, descriptor);
+  if (!loaded.descriptor_warning.empty()) detail::warn(loaded.descriptor_warning);
+  return std::move(loaded.vocabulary);
 }
 
 void save_vocabulary(const Vocabulary& vocabulary, const std::string& path, VocabularyFormat format,

@@ -84,6 +84,14 @@ TEST(CliFileNaming, AStateNamingAnUnknownOrMismatchedDescriptorIsNamed) {
     EXPECT_NE(output.find("binbow: error: " + dir.file("state.bbld") + ": " + problem),
               std::string::npos)
         << output;
+    // `info` refuses what resuming refuses, in the same words, with the
+    // vocabulary or without.
+    for (const std::string& vocab : {" --vocab '" + dir.file("v.bbw") + "'", std::string()}) {
+      EXPECT_EQ(run_cli("info '" + dir.file("state.bbld") + "'" + vocab, &output), 1) << output;
+      EXPECT_NE(output.find("binbow: error: " + dir.file("state.bbld") + ": " + problem),
+                std::string::npos)
+          << output;
+    }
   };
   expect_state_error("sift", 32, "the state names the descriptor \"sift\"");
   expect_state_error("brisk", 32,

@@ -40,8 +40,8 @@ TEST(CliInfo, PrintsTheKeysScriptsRelyOn) {
   const std::string out = run("info " + dir.file("v.bbw"), &status);
   ASSERT_EQ(status, 0) << out;
   for (const std::string& line : std::vector<std::string>{
-           "kind: vocabulary\n", "descriptor: unknown\n", "descriptor_bits: 256\n",
-           "branching: 6\n", "levels: 3\n", "nodes: " + std::to_string(v.node_count()) + "\n",
+           "kind: vocabulary\n", "descriptor: orb\n", "descriptor_bits: 256\n", "branching: 6\n",
+           "levels: 3\n", "nodes: " + std::to_string(v.node_count()) + "\n",
            "words: " + std::to_string(v.word_count()) + "\n", "weighting: tf-idf\n",
            "scoring: l1\n"})
     EXPECT_NE(out.find(line), std::string::npos) << "missing '" << line << "' in:\n" << out;

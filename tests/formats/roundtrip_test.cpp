@@ -132,23 +132,81 @@ TEST(FormatsRoundTrip, BuiltVocabularyTransformsIdenticallyAfterEveryFormat) {
 
 TEST(FormatsRoundTrip, BbwToTextToBbwIsByteIdentical) {
   TempDir dir;
-  // ORB-SLAM's files are read as ORB vocabularies: an ORB one goes round unchanged.
-  const Vocabulary vocabulary = random_vocabulary(10, 4, 32, 11).with_descriptor("orb");
+  // Only .bbw records the extractor: told it when reading the others back, a
+  // vocabulary goes round unchanged.
+  const Vocabulary vocabulary = random_vocabulary(10, 4, 32, 11).with_descriptor("brief");
   vocabulary.save(dir.file("a.bbw"));
   save_vocabulary(load_vocabulary(dir.file("a.bbw")), dir.file("a.txt"));
-  save_vocabulary(load_vocabulary(dir.file("a.txt")), dir.file("b.bbw"));
+  save_vocabulary(load_vocabulary(dir.file("a.txt"), VocabularyFormat::kAuto, "brief"),
+                  dir.file("b.bbw"));
   save_vocabulary(load_vocabulary(dir.file("b.bbw")), dir.file("b.txt"));
   EXPECT_EQ(read_file(dir.file("a.bbw")), read_file(dir.file("b.bbw")));
   EXPECT_EQ(read_file(dir.file("a.txt")), read_file(dir.file("b.txt")));
-  // Through every other writer as well; those formats cannot say which extractor.
-  vocabulary.with_descriptor("").save(dir.file("unnamed.bbw"));
-  for (const char* name : {"c.yml", "c.yml.gz", "c.dbow3", "c.bin"}) {
+  // Through every other writer as well.
+  for (const char* name : {"c.yml", "c.yml.gz", "c.dbow3", "c.bin", "c.vins.bin"}) {
     SCOPED_TRACE(name);
     save_vocabulary(vocabulary, dir.file(name));
-    save_vocabulary(load_vocabulary(dir.file(name)), dir.file("c.bbw"));
-    EXPECT_EQ(read_file(dir.file(std::string(name) == "c.bin" ? "a.bbw" : "unnamed.bbw")),
-              read_file(dir.file("c.bbw")));
+    save_vocabulary(load_vocabulary(dir.file(name), VocabularyFormat::kAuto, "brief"),
+                    dir.file("c.bbw"));
+    EXPECT_EQ(read_file(dir.file("a.bbw")), read_file(dir.file("c.bbw")));
   }
+}
+
+// A file that does not record the extractor is read as ORB's when its
+// descriptors are 256-bit, with one warning naming the file, the assumption
+// and how to say otherwise; told the extractor, it takes it without a word.
+TEST(FormatsRoundTrip, AFileThatDoesNotRecordTheExtractorSaysWhatIsAssumed) {
+  TempDir dir;
+  const Vocabulary brief = random_vocabulary(6, 3, 32, 5).with_descriptor("brief");
+  const Vocabulary wide = random_vocabulary(6, 3, 64, 5);
+  brief.with_descriptor("").save(dir.file("unnamed.bbw"));
+  std::vector<std::string> warnings;
+  set_warning_handler([&](const std::string& message) { warnings.push_back(message); });
+  struct Expected {
+    const char* file;
+    const char* says;
+  };
+  for (const Expected& e :
+       {Expected{"v.txt", "orbslam-text files do"}, Expected{"v.bin", "orbslam-binary files do"},
+        Expected{"v.yml.gz", "dbow2 files do"}, Expected{"v.dbow3", "dbow3 files do"},
+        Expected{"v.fbow", "fbow files do"}, Expected{"unnamed.bbw", "the file does"}}) {
+    SCOPED_TRACE(e.file);
+    const std::string path = dir.file(e.file);
+    if (std::string(e.file) != "unnamed.bbw") save_vocabulary(brief, path);
+    warnings.clear();
+    EXPECT_EQ(load_vocabulary(path).descriptor(), "orb");
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0], path + ": " + e.says +
+                               " not store the descriptor kind; assuming orb (give --descriptor "
+                               "brief, or descriptor=\"brief\" in Python, if it is BRIEF)");
+    warnings.clear();
+    EXPECT_EQ(load_vocabulary(path, VocabularyFormat::kAuto, "brief").descriptor(), "brief");
+    EXPECT_TRUE(warnings.empty());
+    // The DBoW2 API's loading names nothing and says nothing.
+    EXPECT_EQ(detail::load_vocabulary_with_details(path, VocabularyFormat::kAuto, "",
+                                                   detail::UnrecordedDescriptor::kLeaveBlank)
+                  .vocabulary.descriptor(),
+              "");
+    EXPECT_TRUE(warnings.empty());
+  }
+  // Descriptors of another length are not ORB's: nothing is assumed.
+  save_vocabulary(wide, dir.file("wide.yml"));
+  warnings.clear();
+  EXPECT_EQ(load_vocabulary(dir.file("wide.yml")).descriptor(), "");
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], dir.file("wide.yml") +
+                             ": dbow2 files do not store the descriptor kind, and its 512-bit "
+                             "descriptors are not orb's: give it with --descriptor NAME "
+                             "(descriptor=\"NAME\" in Python)");
+  // A .bbw that records its extractor keeps it, silently.
+  brief.save(dir.file("named.bbw"));
+  warnings.clear();
+  EXPECT_EQ(load_vocabulary(dir.file("named.bbw"), VocabularyFormat::kAuto, "orb").descriptor(),
+            "brief");
+  EXPECT_TRUE(warnings.empty());
+  set_warning_handler(nullptr);
+  EXPECT_THROW(load_vocabulary(dir.file("v.txt"), VocabularyFormat::kAuto, "BRIEF"),
+               InvalidArgument);
 }
 
 TEST(FormatsRoundTrip, TextMatchesOrbSlamLayoutWithShortestWeights) {

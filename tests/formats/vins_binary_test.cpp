@@ -140,7 +140,9 @@ TEST(VinsBinary, RandomTreeRoundTripKeepsTreeWordsAndBytes) {
       detail::load_vocabulary_with_details(dir.file("v.data"), VocabularyFormat::kAuto);
   EXPECT_EQ(loaded.format, VocabularyFormat::kVinsBinary);
   EXPECT_TRUE(loaded.word_ids_match);
-  EXPECT_TRUE(loaded.vocabulary.descriptor().empty());  // the file cannot say ORB or BRIEF
+  // VINS computes BRIEF descriptors: its vocabularies are BRIEF's, without a warning.
+  EXPECT_EQ(loaded.vocabulary.descriptor(), "brief");
+  EXPECT_TRUE(loaded.descriptor_warning.empty()) << loaded.descriptor_warning;
   expect_same_vocabulary(vocabulary, loaded.vocabulary);
   // bbw -> vins -> bbw -> vins: the same bytes both times.
   save_vocabulary(loaded.vocabulary, dir.file("back.bbw"));
@@ -153,6 +155,26 @@ TEST(VinsBinary, RandomTreeRoundTripKeepsTreeWordsAndBytes) {
   EXPECT_TRUE(gz.compressed);
   EXPECT_EQ(gz.format, VocabularyFormat::kVinsBinary);
   EXPECT_EQ(gz.vocabulary.checksum(), vocabulary.checksum());
+  EXPECT_EQ(gz.vocabulary.descriptor(), "brief");
+}
+
+// A VINS file holds no name: an ORB vocabulary written in its layout reads
+// back as ORB's when told so.
+TEST(VinsBinary, ReadsAsBriefUnlessToldOtherwise) {
+  TempDir dir;
+  const Vocabulary orb = random_vocabulary(6, 4, 32, 17).with_descriptor("orb");
+  save_vocabulary(orb, dir.file("v.vins.bin"));
+  std::vector<std::string> warnings;
+  set_warning_handler([&](const std::string& message) { warnings.push_back(message); });
+  const Vocabulary assumed = load_vocabulary(dir.file("v.vins.bin"));
+  const Vocabulary told = load_vocabulary(dir.file("v.vins.bin"), VocabularyFormat::kAuto, "orb");
+  set_warning_handler(nullptr);
+  EXPECT_EQ(assumed.descriptor(), "brief");
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  EXPECT_EQ(told.descriptor(), "orb");
+  told.save(dir.file("back.bbw"));
+  orb.save(dir.file("orb.bbw"));
+  EXPECT_EQ(read_file(dir.file("back.bbw")), read_file(dir.file("orb.bbw")));
 }
 
 // VINS's header holds DBoW2's enum values, as the other formats' headers.
@@ -232,7 +254,7 @@ TEST(VinsBinary, AgreesWithFbriefBitStrings) {
 // reads back as the same vocabulary.
 TEST(VinsBinary, RealBriefLiteVocabularyConvertsBothWays) {
   const std::string path = shared_data("vins-lite-brief-vocab/brief_lite.voc.gz");
-  const Vocabulary vocabulary = load_vocabulary(path);
+  const Vocabulary vocabulary = load_vocabulary(path, VocabularyFormat::kAuto, "brief");
   ASSERT_EQ(vocabulary.node_count(), 31233u);
   TempDir dir;
   save_vocabulary(vocabulary, dir.file("brief.bbw"));
