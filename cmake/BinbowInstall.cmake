@@ -12,8 +12,9 @@ if(BINBOW_BUILD_VISION)
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
           INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endif()
-# binbow::dbow2 (DBoW2's API) needs OpenCV core only.
-install(TARGETS binbow_dbow2 EXPORT binbowDbow2Targets
+# binbow::dbow2 (DBoW2's API) needs OpenCV core only; binbow::dbow2_names
+# (DBoW2's include names) is a folder of the installed headers on top of it.
+install(TARGETS binbow_dbow2 binbow_dbow2_names EXPORT binbowDbow2Targets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
@@ -53,7 +54,7 @@ if(BUILD_SHARED_LIBS)
 else()
   set(BINBOW_PC_PRIVATE "")
 endif()
-set(BINBOW_PC_FILES binbow binbow-dbow2)
+set(BINBOW_PC_FILES binbow binbow-dbow2 binbow-dbow2-names)
 if(BINBOW_BUILD_VISION)
   list(APPEND BINBOW_PC_FILES binbow-vision)
 endif()

@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git ccache
   libopencv-dev libjpeg-dev libmatio-dev zlib1g-dev ffmpeg
   libgtest-dev libgmock-dev libboost-dev libbenchmark-dev
+  libboost-serialization-dev
   opencv-doc
   libcli11-dev nlohmann-json3-dev
   pybind11-dev python3-dev python3-numpy

@@ -3,9 +3,11 @@
 # (find_package COMPONENTS core), one of binbow::vision exactly as the README
 # shows, the same two sources built with nothing but the compiler and
 # pkg-config, and one of binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built
-# as C++11 through find_package and through pkg-config, and one written as
-# VINS uses its copy of DBoW2, as C++14 (needs binbow::dbow2_names, Boost
-# and OpenCV imgproc). With SHARED, every
+# as C++11 through find_package and through pkg-config, the programs of
+# binbow::dbow2_names written as DLoopDetector and ORB-SLAM2/3 call DBoW2
+# (their include lines unchanged), the same two ways, and one written as
+# VINS uses its copy of DBoW2, as C++14 (needs Boost and OpenCV imgproc).
+# With SHARED, every
 # program must link binbow's shared libraries.
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
@@ -103,6 +105,41 @@ foreach(minimum 2.8.12 3.0 3.5)
   endif()
 endforeach()
 
+# binbow::dbow2_names: code written as DLoopDetector and ORB-SLAM2/3 call
+# DBoW2, their include lines unchanged (tests/package/dbow2_names), each
+# program checked against DBoW2's numbers. ORB-SLAM3's Boost.Serialization
+# of the vectors is built where Boost's library is found.
+set(golden ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
+set(dbow2_expect "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
+function(run_dbow2_names_consumers directory how)
+  set(programs dloopdetector orbslam)
+  if(EXISTS ${directory}/orbslam3_serialization)
+    list(APPEND programs orbslam3_serialization)
+  endif()
+  foreach(program ${programs})
+    if(program STREQUAL "dloopdetector")
+      set(arguments ${vocabulary} ${golden})
+    else()
+      set(arguments ${orbvoc} ${golden})
+    endif()
+    run("running the dbow2_names consumer ${program} (${how})" ${directory}/${program} ${arguments})
+    if(NOT output MATCHES "${dbow2_expect}")
+      message(FATAL_ERROR "the dbow2_names consumer ${program} built with ${how} printed: ${output}")
+    endif()
+    expect_linkage(${directory}/${program} dbow2)
+    message(STATUS "${how} dbow2_names ${program}: ${output}")
+  endforeach()
+  if(NOT EXISTS ${directory}/orbslam3_serialization)
+    message(STATUS "${how} dbow2_names: Boost.Serialization not found, "
+                   "ORB-SLAM3's archives of the vectors not tested")
+  endif()
+endfunction()
+set(names_build ${WORK_DIR}/dbow2_names-cmake)
+run("configuring the dbow2_names consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/dbow2_names
+    -B ${names_build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+run("building the dbow2_names consumer" ${CMAKE_COMMAND} --build ${names_build})
+run_dbow2_names_consumers(${names_build} CMake)
+
 # pkg-config: binbow (core) and binbow-vision.
 set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
 foreach(consumer core vision)
@@ -156,6 +193,28 @@ if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
 endif()
 expect_linkage(${program} dbow2)
 message(STATUS "pkg-config dbow2: ${output}")
+
+# pkg-config: binbow-dbow2-names, as C++11, the same sources as the CMake
+# consumer; Boost.Serialization where that one found it.
+run("pkg-config binbow-dbow2-names" pkg-config --cflags --libs binbow-dbow2-names)
+string(STRIP "${output}" flags)
+separate_arguments(flags UNIX_COMMAND "${flags}")
+set(names_programs ${WORK_DIR}/dbow2_names-pkgconfig)
+file(MAKE_DIRECTORY ${names_programs})
+set(programs dloopdetector orbslam)
+if(EXISTS ${names_build}/orbslam3_serialization)
+  list(APPEND programs orbslam3_serialization)
+endif()
+foreach(program ${programs})
+  set(extra)
+  if(program STREQUAL "orbslam3_serialization")
+    set(extra -lboost_serialization)
+  endif()
+  run("building the dbow2_names consumer ${program} with pkg-config" ${CXX} -std=c++11 -O1
+      -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2_names/${program}.cpp
+      -o ${names_programs}/${program} ${flags} ${extra} -Wl,-rpath,${prefix}/${LIBDIR})
+endforeach()
+run_dbow2_names_consumers(${names_programs} pkg-config)
 
 # Code written as VINS calls its copy of DBoW2 (VINS's include names from
 # binbow-dbow2-names, DVision::BRIEF's boost::dynamic_bitset descriptors, a
