@@ -106,7 +106,7 @@ inline cv::Mat orb_descriptors(const std::string& file, int features, double sca
     std::fprintf(stderr, "cannot read %s\n", file.c_str());
     std::exit(1);
   }
-  if (scale != 1.0) cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);
+  if (scale != 1.0) cv::resize(image, image, cv::Size(), scale, scale);
   if (mirrored) cv::flip(image, image, 1);
   static thread_local cv::Ptr<cv::ORB> orb;
   if (orb.empty() || orb->getMaxFeatures() != features) orb = cv::ORB::create(features);
