@@ -16,6 +16,7 @@
 
 int main(int argc, char** argv) {
   int reps = 1;
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // tables appear as they are made, even through tee
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--reps" && i + 1 < argc) {

@@ -38,6 +38,7 @@ bench() {
   echo "### binbow / DBoW2 @${PEER_COMMIT[dorian3d/DBoW2]:0:7}: vocabulary building"
   echo
   peer_header "$binbow"
+  echo
   "$work/build/dbow2-harness/build_harness" --reps "${REPS:-1}"
   echo
   echo "- finished: $(date -u '+%H:%M UTC'); load average: $(cut -d' ' -f1-3 /proc/loadavg)"

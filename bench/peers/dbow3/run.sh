@@ -49,6 +49,7 @@ bench() {
   echo "### binbow / DBoW3 @${PEER_COMMIT[rmsalinas/DBow3]:0:7}"
   echo
   peer_header "$binbow"
+  echo
   "$work/build/dbow3-harness/harness" --bbw "$vocabulary.bbw" --dbow3 "$vocabulary.dbow3" \
     --text "$vocabulary.txt" --reps "${REPS:-3}" --tables "${TABLES:-load,transform,database}" \
     --entries "${ENTRIES:-10000}" --queries "${QUERIES:-200}"

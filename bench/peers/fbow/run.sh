@@ -49,9 +49,9 @@ cd "$work"
 setup() {
   # Every file of the pinned commit but orb_mur.fbow, which is stored with Git LFS.
   peer_clone rmsalinas/fbow fbow 'orb_mur\.fbow$'
-  cmake -S fbow -B fbow-build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS="$PEER_CXX_FLAGS" \
-    -DBUILD_UTILS=OFF -DBUILD_SHARED_LIBS=ON >/dev/null
-  cmake --build fbow-build >/dev/null
+  { cmake -S fbow -B fbow-build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS="$PEER_CXX_FLAGS" \
+    -DBUILD_UTILS=OFF -DBUILD_SHARED_LIBS=ON && cmake --build fbow-build; } >fbow-build.log 2>&1 ||
+    { echo "fbow/run.sh: building fbow failed; see $work/fbow-build.log" >&2; exit 1; }
   # binbow's static core library copied, so that a rebuild cannot change it mid-run.
   mkdir -p binbow-lib && cp "$build_dir/src/libbinbow_core.a" binbow-lib/
   git -C "$main" rev-parse HEAD >binbow-lib/COMMIT
@@ -109,9 +109,11 @@ bench() {
 
 # Vocabulary building, k=10 L=5 on 150k ORB: binbow and fbow's creator.
 build_table() {
+  echo
   echo "### binbow / fbow @${PEER_COMMIT[rmsalinas/fbow]:0:7}: vocabulary building"
   echo
   peer_header "$binbow"
+  echo
   nice -n "$nice_level" ./build/build_harness --reps "${BUILD_REPS:-1}"
   echo
   echo "- finished: $(date -u '+%H:%M UTC'); load average: $(cut -d' ' -f1-3 /proc/loadavg)"
