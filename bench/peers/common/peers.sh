@@ -73,9 +73,10 @@ peer_cmake() {
 peer_header() {
   local binbow=$1
   echo "- date: $(date -u '+%F %H:%M UTC'); load average: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
-  echo "- CPU: $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1);" \
-    "binbow $("$binbow" info --system 2>/dev/null | sed -n 's/^hamming_kernel: /hamming_kernel /p')" \
-    "${BINBOW_HAMMING_KERNEL:+(forced by BINBOW_HAMMING_KERNEL)}"
+  local kernel
+  kernel=$("$binbow" info --system 2>/dev/null | sed -n 's/^hamming_kernel: //p')
+  [ -z "${BINBOW_HAMMING_KERNEL:-}" ] || kernel="$kernel (forced by BINBOW_HAMMING_KERNEL)"
+  echo "- CPU: $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1); binbow's Hamming kernel set: $kernel"
 }
 
 # peer_vocabulary WORK BINBOW: the trained benchmark vocabulary (k=10 L=6

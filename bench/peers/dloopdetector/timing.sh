@@ -72,15 +72,18 @@ for sequence in "${sequences[@]}"; do
   for ((round = 0; round < reps; round++)); do
     log=$work/timing/$name.dld.log
     nice -n "$nice_level" "$driver" --descriptor orb --vocab "$work/orb_default.yml.gz" \
-      --frequency $frequency --seed 0 -o "$work/timing/$name.dld.csv" "$sequence" 2>"$log"
-    read -r wall cpu loops_dld < <(sed -n 's/^frame loop: \([0-9.]*\) s wall, \([0-9.]*\) s CPU, [0-9]* frames, \([0-9]*\) loops$/\1 \2 \3/p' "$log")
-    [ -n "${wall:-}" ] || { echo "timing.sh: DLoopDetector failed, see $log" >&2; exit 1; }
+      --frequency $frequency --seed 0 -o "$work/timing/$name.dld.csv" "$sequence" 2>"$log" ||
+      { echo "timing.sh: DLoopDetector's driver failed, see $log" >&2; exit 1; }
+    wall=
+    read -r wall cpu loops_dld < <(sed -n 's/^frame loop: \([0-9.]*\) s wall, \([0-9.]*\) s CPU, [0-9]* frames, \([0-9]*\) loops$/\1 \2 \3/p' "$log") || true
+    [ -n "$wall" ] || { echo "timing.sh: DLoopDetector failed, see $log" >&2; exit 1; }
     dld+=("$wall") cpu_dld=$cpu
     for threads in 1 2; do
       log=$work/timing/$name.binbow$threads.log
       csv=$work/timing/$name.binbow$threads.csv
       /usr/bin/time -f 'cpu %U %S' nice -n "$nice_level" "$binbow" detect-loops --threads $threads \
-        --descriptor orb --vocab "$repo/data/vocab/orb_default.bbw" -o "$csv" "$sequence" >/dev/null 2>"$log"
+        --descriptor orb --vocab "$repo/data/vocab/orb_default.bbw" -o "$csv" "$sequence" >/dev/null 2>"$log" ||
+        { echo "timing.sh: binbow failed, see $log" >&2; exit 1; }
       wall=$(sed -n 's/^detecting loops: [0-9]* done in \([0-9.]*\)s$/\1/p' "$log")
       cpu=$(awk '/^cpu / { printf "%.2f", $2 + $3 }' "$log")
       [ -n "$wall" ] || { echo "timing.sh: binbow failed, see $log" >&2; exit 1; }
