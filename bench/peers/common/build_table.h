@@ -55,7 +55,7 @@ inline void print_build_table(const std::vector<BuildRow>& rows) {
       ratio.push_back(r.cpu_s[i] / reference.cpu_s[i]);
     std::printf("| %s | %u | %s | %s | %s | %s |\n", r.builder.c_str(), r.threads,
                 spread(r.cpu_s, "%.2f").c_str(), r.words.c_str(), r.error.c_str(),
-                &r == &reference ? "1x" : ("**" + spread(ratio, "%.1f") + "x**").c_str());
+                &r == &reference ? "1x" : ("**" + spread(ratio, "%.1fx") + "**").c_str());
   }
 }
 

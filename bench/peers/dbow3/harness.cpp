@@ -110,7 +110,7 @@ struct Row {
     std::vector<double> ratio;
     for (std::size_t i = 0; i < binbow.size(); ++i) ratio.push_back(dbow3[i] / binbow[i]);
     std::printf("| %s | %s | %s | **%s** |\n", label.c_str(), spread(binbow, format).c_str(),
-                spread(dbow3, format).c_str(), (spread(ratio, "%.1f") + "x").c_str());
+                spread(dbow3, format).c_str(), spread(ratio, "%.1fx").c_str());
   }
 };
 
