@@ -18,12 +18,16 @@ namespace binbow::detail {
 // problem, naming the first bad one as "<unit> i" ("word 7", "node 12").
 template <class WeightOf>
 std::string word_weights_problem(std::size_t count, const WeightOf& weight, const char* unit) {
+  // The message is made only for a bad weight: made for every word, it was
+  // most of the time a .bbw took to load.
+  auto which = [&](std::size_t i) {
+    return std::string("the weight of ") + unit + " " + std::to_string(i);
+  };
   for (std::size_t i = 0; i < count; ++i) {
     const float w = weight(i);
-    const std::string which = std::string("the weight of ") + unit + " " + std::to_string(i);
-    if (!std::isfinite(w)) return which + " is not a finite number";
+    if (!std::isfinite(w)) return which(i) + " is not a finite number";
     if (w < 0)
-      return which + " is negative (" + std::to_string(w) +
+      return which(i) + " is negative (" + std::to_string(w) +
              "); weights are 0 (a stop word) or positive";
   }
   return {};

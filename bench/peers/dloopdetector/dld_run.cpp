@@ -8,15 +8,22 @@
 //   <out>          query_index,match_index   (0-based, one line per loop)
 //   <out>.status   query_index,status,candidate,n_features  (every frame)
 //
+// FRAMES is an image folder or a video file (cv::VideoCapture, frames
+// converted to grey). Last line on stderr: the frame loop's wall and process
+// CPU time (reading, decoding, features and detection; not the vocabulary's
+// load), which bench/peers/dloopdetector/timing.sh reads.
+//
 // usage: dld_run --descriptor orb|brief --vocab VOC.yml.gz [--pattern P.yml]
 //                [--k K] [--di-levels L] [--alpha A] [--frequency F]
-//                [--fast-threshold T] [--seed S] -o OUT.csv FRAMES_DIR
+//                [--fast-threshold T] [--seed S] -o OUT.csv FRAMES
 #include <dirent.h>
+#include <time.h>
 #include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -26,6 +33,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>  // DVision/BRIEF256.h uses cv::cvtColor/GaussianBlur without including it
+#include <opencv2/videoio.hpp>
 
 #include <DBoW2/DBoW2.h>
 #include <DUtils/DUtils.h>
@@ -154,6 +162,62 @@ std::vector<std::string> list_images(const std::string& dir) {
   return names;
 }
 
+// The frames of an image folder (natural order) or of a video file, grey.
+class Frames {
+ public:
+  explicit Frames(const std::string& path) : path_(path) {
+    if (std::filesystem::is_directory(path)) {
+      files_ = list_images(path);
+    } else if (!video_.open(path)) {
+      std::cerr << "dld_run: cannot open the video " << path << "\n";
+      std::exit(1);
+    }
+  }
+  bool empty() const { return video_.isOpened() ? false : files_.empty(); }
+  std::string describe() const {
+    if (video_.isOpened()) return "video " + path_;
+    return std::to_string(files_.size()) + " images, first " + files_.front() + ", last " +
+           files_.back();
+  }
+  // The number of frames when known in advance (a video's may be 0).
+  std::size_t expected() const {
+    return video_.isOpened() ? static_cast<std::size_t>(video_.get(cv::CAP_PROP_FRAME_COUNT))
+                             : files_.size();
+  }
+  // The next frame, grey; false at the end.
+  bool next(cv::Mat& grey) {
+    if (video_.isOpened()) {
+      cv::Mat frame;
+      if (!video_.read(frame)) return false;
+      if (frame.channels() == 3)
+        cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
+      else
+        grey = frame;
+      return true;
+    }
+    if (index_ == files_.size()) return false;
+    grey = cv::imread(files_[index_], cv::IMREAD_GRAYSCALE);
+    if (grey.empty()) {
+      std::cerr << "dld_run: cannot read " << files_[index_] << "\n";
+      std::exit(1);
+    }
+    ++index_;
+    return true;
+  }
+
+ private:
+  std::string path_;
+  std::vector<std::string> files_;
+  std::size_t index_ = 0;
+  cv::VideoCapture video_;
+};
+
+double process_cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
 const char* status_name(DLoopDetector::DetectionStatus s) {
   using namespace DLoopDetector;
   switch (s) {
@@ -178,10 +242,10 @@ const char* status_name(DLoopDetector::DetectionStatus s) {
 }
 
 template <class TVocabulary, class TDetector, class TDescriptor, class Extract>
-int run(const Options& o, const std::vector<std::string>& files, Extract extract) {
-  cv::Mat first = cv::imread(files.front(), cv::IMREAD_GRAYSCALE);
-  if (first.empty()) {
-    std::cerr << "dld_run: cannot read " << files.front() << "\n";
+int run(const Options& o, Extract extract) {
+  cv::Mat first;
+  if (!Frames(o.frames).next(first)) {
+    std::cerr << "dld_run: no frame in " << o.frames << "\n";
     return 1;
   }
   // DLoopDetector's constructor defaults, then what demo_brief sets.
@@ -212,7 +276,8 @@ int run(const Options& o, const std::vector<std::string>& files, Extract extract
             << " max_neighbor_ratio=" << params.max_neighbor_ratio << "\n";
 
   TDetector detector(voc, params);
-  detector.allocate(files.size());
+  Frames frames(o.frames);
+  if (frames.expected() > 0) detector.allocate(frames.expected());
 
   std::ofstream out(o.out);
   std::ofstream st(o.out + ".status");
@@ -222,12 +287,10 @@ int run(const Options& o, const std::vector<std::string>& files, Extract extract
   std::vector<TDescriptor> descriptors;
   int loops = 0;
   double t_feat = 0, t_det = 0;
-  for (size_t i = 0; i < files.size(); ++i) {
-    cv::Mat im = cv::imread(files[i], cv::IMREAD_GRAYSCALE);
-    if (im.empty()) {
-      std::cerr << "dld_run: cannot read " << files[i] << "\n";
-      return 1;
-    }
+  const auto loop_start = std::chrono::steady_clock::now();
+  const double loop_cpu_start = process_cpu_seconds();
+  size_t i = 0;
+  for (cv::Mat im; frames.next(im); ++i) {
     auto t0 = std::chrono::steady_clock::now();
     extract(im, keys, descriptors);
     auto t1 = std::chrono::steady_clock::now();
@@ -252,9 +315,13 @@ int run(const Options& o, const std::vector<std::string>& files, Extract extract
       return 1;
     }
   }
-  std::cerr << files.size() << " frames, " << loops << " loops; features "
-            << 1e3 * t_feat / files.size() << " ms/frame, detection " << 1e3 * t_det / files.size()
-            << " ms/frame\n";
+  const double loop_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  const double loop_cpu = process_cpu_seconds() - loop_cpu_start;
+  std::cerr << i << " frames, " << loops << " loops; features " << 1e3 * t_feat / i
+            << " ms/frame, detection " << 1e3 * t_det / i << " ms/frame\n";
+  std::fprintf(stderr, "frame loop: %.3f s wall, %.3f s CPU, %zu frames, %d loops\n", loop_wall,
+               loop_cpu, i, loops);
   return 0;
 }
 
@@ -265,13 +332,12 @@ int main(int argc, char** argv) {
   // DUtils::Random (DVision's RANSAC in FSolver, BRIEF pattern generation)
   // seeds itself from the clock unless seeded first: fix it for repeatable runs.
   DUtils::Random::SeedRandOnce(o.seed);
-  const std::vector<std::string> files = list_images(o.frames);
-  if (files.empty()) {
+  const Frames frames(o.frames);
+  if (frames.empty()) {
     std::cerr << "dld_run: no images in " << o.frames << "\n";
     return 1;
   }
-  std::cerr << files.size() << " images, first " << files.front() << ", last " << files.back()
-            << "\n";
+  std::cerr << frames.describe() << "\n";
 
   if (o.descriptor == "orb") {
     // binbow's ORB settings.
@@ -284,7 +350,7 @@ int main(int argc, char** argv) {
       descs.resize(d.rows);
       for (int r = 0; r < d.rows; ++r) descs[r] = d.row(r).clone();
     };
-    return run<OrbVocabulary, OrbLoopDetector, FORB::TDescriptor>(o, files, extract);
+    return run<OrbVocabulary, OrbLoopDetector, FORB::TDescriptor>(o, extract);
   }
 
   // DLoopDetector's demo_brief: FAST (threshold 20, non-max suppression),
@@ -330,5 +396,5 @@ int main(int argc, char** argv) {
     }
     brief.compute(im, keys, descs);
   };
-  return run<BriefVocabulary, BriefLoopDetector, FBrief::TDescriptor>(o, files, extract);
+  return run<BriefVocabulary, BriefLoopDetector, FBrief::TDescriptor>(o, extract);
 }

@@ -12,8 +12,8 @@
 # GROUND_TRUTH  anything `binbow evaluate --gt` reads
 #
 # Environment: BINBOW (default: build/bin/binbow of this repository),
-# GIT_BASE (default https://github.com/dorian3d; the three repositories are
-# cloned from it), PATTERN (DLoopDetector's BRIEF pattern file, default the
+# GIT_BASE (the three repositories are cloned from GIT_BASE/NAME; default:
+# PEERS_MIRROR or GitHub, see common/peers.sh), PATTERN (DLoopDetector's BRIEF pattern file, default the
 # shared data's vins-lite-brief-vocab/brief_pattern.yml, which binbow's BRIEF
 # uses too).
 #
@@ -40,49 +40,18 @@ ground_truth=$(realpath "$3")
 here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../../.." && pwd)
 binbow=${BINBOW:-$repo/build/bin/binbow}
-git_base=${GIT_BASE:-https://github.com/dorian3d}
 pattern=${PATTERN:-$repo/../shared/data/vins-lite-brief-vocab/brief_pattern.yml}
 [ -x "$binbow" ] || { echo "side_by_side.sh: no binbow at $binbow (build it, or set BINBOW)" >&2; exit 1; }
 [ -f "$pattern" ] || { echo "side_by_side.sh: no BRIEF pattern at $pattern (set PATTERN)" >&2; exit 1; }
 
-pins=(DLoopDetector:f69778b12b880aa3cca0aa92cf4b8ae154ac0bfb
-  DLib:16ceae3e5e6bfcc67d52297f1b0ce9c0072bb0d4
-  DBoW2:3924753db6145f12618e7de09b7e6b258db93c6e)
-flags="-O3 -march=native"
-mkdir -p "$work/src" "$work/build" "$work/results"
-
-for pin in "${pins[@]}"; do
-  name=${pin%%:*} commit=${pin#*:}
-  [ -d "$work/src/$name/.git" ] || git clone -q "$git_base/$name" "$work/src/$name"
-  git -C "$work/src/$name" checkout -q "$commit"
-done
-# DLib and DBoW2 build unpatched (OpenCV 4.6, GCC 12); DLoopDetector is used
-# as headers (its own CMakeLists downloads its dependencies).
-for lib in DLib DBoW2; do
-  if [ ! -f "$work/install/lib/lib$lib.so" ]; then
-    extra=()
-    [ $lib = DBoW2 ] && extra=(-DBUILD_Demo=OFF)
-    cmake -S "$work/src/$lib" -B "$work/build/$lib" -DCMAKE_BUILD_TYPE=Release \
-      -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_INSTALL_PREFIX="$work/install" "${extra[@]}" >/dev/null
-    cmake --build "$work/build/$lib" -j2 >/dev/null
-    cmake --install "$work/build/$lib" >/dev/null
-  fi
-done
-cmake -S "$here" -B "$work/build/driver" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS="$flags" \
-  -DPEERS_PREFIX="$work/install" -DDLD_SRC="$work/src/DLoopDetector" >/dev/null
-cmake --build "$work/build/driver" >/dev/null
+# shellcheck source=setup.sh
+source "$here/setup.sh"
+dld_setup "$work" "$binbow"
 driver=$work/build/driver/dld_run
-
-for descriptor in orb brief; do
-  format=bytes
-  [ $descriptor = brief ] && format=bits
-  [ -f "$work/${descriptor}_default.yml.gz" ] ||
-    "$binbow" convert "$repo/data/vocab/${descriptor}_default.bbw" \
-      "$work/${descriptor}_default.yml.gz" --descriptors $format >/dev/null
-done
+mkdir -p "$work/results"
 
 row() {  # label loops.csv
-  local result value
+  local result
   result=$("$binbow" evaluate --gt "$ground_truth" "$2")
   value() { sed -n "s/^$1: //p" <<<"$result"; }
   printf '| %s | %.3f | %.3f | %s / %s | %s |\n' "$1" "$(value precision)" "$(value recall)" \
