@@ -118,6 +118,24 @@ TEST(CliScriptConventions, ConvertToStdoutEqualsTheFile) {
   EXPECT_EQ(plain.out, read_text(dir.file("v.bbw")));
 }
 
+TEST(CliScriptConventions, VocabulariesAndDatabasesToStdoutEqualTheFiles) {
+  TempDir dir;
+  const std::string frames = quoted(test::write_frame_list(dir, 20));
+  for (const auto& [command, file] :
+       {std::pair<std::string, std::string>{"build-vocab --branching 3 --levels 2 --threads 1",
+                                            "v.bbw"},
+        {"db build --threads 1", "d.bbdb"}}) {
+    SCOPED_TRACE(command);
+    const Streams to_file = run_split(dir, command + " -o " + file + " " + frames);
+    ASSERT_EQ(to_file.status, 0) << to_file.err;
+    const Streams to_stdout = run_split(dir, command + " -o - " + frames);
+    ASSERT_EQ(to_stdout.status, 0) << to_stdout.err;
+    EXPECT_EQ(to_stdout.out, read_text(dir.file(file)));
+    EXPECT_NE(to_stdout.err.find("-: "), std::string::npos) << "the summary: " << to_stdout.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("-")));
+  }
+}
+
 TEST(CliScriptConventions, DashIsRefusedWhereTheOutputIsAFolderOrASecondStream) {
   TempDir dir;
   const std::string frames = test::write_frame_list(dir, 3);
