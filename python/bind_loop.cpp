@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -704,6 +705,28 @@ std::vector<loop::SequenceFrame> frames_of(const py::handle& results) {
   return frames;
 }
 
+// Who writes a report from Python: this binbow, now (UTC), and the
+// interpreter's command line as a shell reads it back (none when sys.argv
+// is missing or empty, as in an embedded interpreter).
+loop::Provenance python_provenance() {
+  loop::Provenance provenance;
+  provenance.binbow_version = BINBOW_VERSION;
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  provenance.date = date;
+  const py::module_ sys = py::module_::import("sys");
+  if (py::hasattr(sys, "argv") && py::len(sys.attr("argv")) > 0) {
+    py::list command;
+    command.append(sys.attr("executable"));
+    for (const py::handle argument : sys.attr("argv")) command.append(argument);
+    provenance.command = py::module_::import("shlex").attr("join")(command).cast<std::string>();
+  }
+  return provenance;
+}
+
 // The CLI's detect-loops report: make_loop_report's page with the facts the
 // CLI shows (inputs, frequency, vocabulary, descriptor) where the run knew them.
 std::string write_report(const Path& folder, const py::object& results,
@@ -715,6 +738,7 @@ std::string write_report(const Path& folder, const py::object& results,
   if (similarity != nullptr && !similarity->empty() && similarity->frames != frames.size())
     throw py::value_error("the similarity matrix has " + std::to_string(similarity->frames) +
                           " frames but results has " + std::to_string(frames.size()));
+  const loop::Provenance provenance = python_provenance();
   py::gil_scoped_release release;
   loop::LoopReport report =
       similarity != nullptr
@@ -728,6 +752,7 @@ std::string write_report(const Path& folder, const py::object& results,
   } else {
     report.params_json.clear();  // not known: not shown as the defaults
   }
+  report.provenance = provenance;
   if (!inputs.empty()) report.facts.insert(report.facts.begin(), {"inputs", inputs});
   if (!vocabulary.empty()) report.facts.emplace_back("vocabulary", vocabulary);
   if (!descriptor.empty()) report.facts.emplace_back("descriptor", descriptor);

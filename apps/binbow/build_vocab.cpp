@@ -18,6 +18,7 @@
 #include "core/parallel_for.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
+#include "invocation.h"
 #include "output_options.h"
 #include "progress.h"
 #include "validators.h"
@@ -134,7 +135,10 @@ void run_build_vocab(const BuildVocabArguments& arguments) {
   options.threads = arguments.threads;
   options.seed = arguments.seed;
   // Checked before reading any image: a typo should not cost a long extraction.
-  format_for_output(arguments.output);
+  // Standard output has no extension to tell the format: binbow's own.
+  const bool on_stdout = is_standard_output(arguments.output);
+  if (!on_stdout) format_for_output(arguments.output);
+  refuse_binary_on_terminal("-o", arguments.output, "a vocabulary");
   prepare_output_file("-o", arguments.output);
 
   const auto start = std::chrono::steady_clock::now();
@@ -153,13 +157,20 @@ void run_build_vocab(const BuildVocabArguments& arguments) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
   progress.finish();
 
-  save_vocabulary(vocabulary, arguments.output);
-  std::printf("%s: %s\n", arguments.output.c_str(), vocabulary.description().c_str());
-  std::printf("trained on %zu descriptors from %zu images\n", set.descriptors.rows(), set.images());
-  std::printf("words: %zu, nodes: %zu\n", vocabulary.word_count(), vocabulary.node_count());
-  std::printf("time: %.2f s features, %.2f s clustering\n", extraction_seconds, build_seconds);
-  std::printf("mean quantisation error: %.2f bits\n",
-              vocabulary.mean_quantisation_error(set.descriptors.view()));
+  if (on_stdout)
+    vocabulary.save(output_file(arguments.output));
+  else
+    save_vocabulary(vocabulary, arguments.output);
+  print_summary(on_stdout, "%s: %s\n", arguments.output.c_str(), vocabulary.description().c_str());
+  print_summary(on_stdout, "trained on %zu descriptors from %zu images\n", set.descriptors.rows(),
+                set.images());
+  print_summary(on_stdout, "words: %zu, nodes: %zu\n", vocabulary.word_count(),
+                vocabulary.node_count());
+  print_summary(on_stdout, "time: %.2f s features, %.2f s clustering\n", extraction_seconds,
+                build_seconds);
+  if (summary_stream(on_stdout) != nullptr)  // a pass over every descriptor: only when shown
+    print_summary(on_stdout, "mean quantisation error: %.2f bits\n",
+                  vocabulary.mean_quantisation_error(set.descriptors.view()));
 }
 
 }  // namespace
@@ -195,7 +206,10 @@ void add_build_vocab_command(CLI::App& app) {
   command->add_option("--max-descriptors", arguments->max_descriptors,
                       "Train on a seeded random subset of at most N descriptors (0: all)");
   add_features_option(command, arguments->features_per_image, "--features-per-image,--features");
-  command->add_option("-o,--output", arguments->output, "Output vocabulary (.bbw, .yml.gz, ...)")
+  command
+      ->add_option("-o,--output", arguments->output,
+                   std::string("Output vocabulary (.bbw, .yml.gz, ...)") + kOutputFileHelp +
+                       " (as .bbw, only when redirected; the summary then goes to stderr)")
       ->required();
   command
       ->add_option("inputs", arguments->inputs,

@@ -8,6 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "info_fields.h"
+
 namespace binbow::cli {
 
 void add_info_command(CLI::App& app);
@@ -23,13 +25,14 @@ void add_db_image_commands(CLI::App& db);
 void add_bench_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_make_route_command(CLI::App& app);
-// Prints `binbow info` lines for a .bbdb file, after checking the whole file
+// The `binbow info` fields of a .bbdb file, after checking the whole file
 // with `verify`; false if `path` is not one.
-bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary,
-                         const std::string& descriptor);
+bool describe_database(const std::string& path, bool verify, const std::string& vocabulary,
+                       const std::string& descriptor, InfoFields& fields);
 // Checks a loop detector state (.bbld) as `detect-loops --resume-state`
-// would and prints its `binbow info` lines.
-void print_loop_state_info(const std::string& path, const std::string& vocab_argument);
+// would and gives its `binbow info` fields.
+void describe_loop_state(const std::string& path, const std::string& vocab_argument,
+                         InfoFields& fields);
 // "unknown command 'detect-loop'; did you mean 'detect-loops'?" when the
 // argument after the commands given names none of the next level's commands;
 // empty otherwise.

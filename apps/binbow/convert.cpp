@@ -12,6 +12,7 @@
 #include "binbow/formats.h"
 #include "commands.h"
 #include "formats/loader.h"
+#include "invocation.h"
 #include "output_options.h"
 #include "trained_on_option.h"
 #include "validators.h"
@@ -32,8 +33,14 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 void run_convert(const ConvertArguments& args) {
   const VocabularyFormat from = parse_vocabulary_format(args.from);
   VocabularyFormat to = parse_vocabulary_format(args.to);
-  if (to == VocabularyFormat::kAuto) to = format_for_output(args.output);
+  // Standard output has no extension to tell the format: binbow's own.
+  const bool on_stdout = is_standard_output(args.output);
+  if (to == VocabularyFormat::kAuto)
+    to = on_stdout ? VocabularyFormat::kBinbow : format_for_output(args.output);
+  if (to != VocabularyFormat::kOrbSlamText && to != VocabularyFormat::kDbow2Yaml)
+    refuse_binary_on_terminal("OUT", args.output, std::string("a ") + to_string(to) + " file");
   prepare_output_file("OUT", args.output);
+  const std::string output = output_file(args.output);
 
   const auto start = std::chrono::steady_clock::now();
   detail::LoadedVocabulary loaded;
@@ -43,11 +50,11 @@ void run_convert(const ConvertArguments& args) {
     if (e.problem().rfind(kUnknownVocabularyFormat, 0) != 0) throw;
     throw FileError(e.path(), e.problem() + " with --from");
   }
-  std::printf("read %s: %s%s, %s (%.3f s)\n", args.input.c_str(), to_string(loaded.format),
-              loaded.compressed ? " (gzip)" : "", loaded.vocabulary.description().c_str(),
-              seconds_since(start));
+  print_summary(on_stdout, "read %s: %s%s, %s (%.3f s)\n", args.input.c_str(),
+                to_string(loaded.format), loaded.compressed ? " (gzip)" : "",
+                loaded.vocabulary.description().c_str(), seconds_since(start));
   if (!loaded.word_ids_match)
-    std::printf(
+    note(
         "note: the file numbers its words in another order; binbow numbers them as the leaves "
         "appear in DBoW2's node order, so word ids differ from the file's\n");
 
@@ -58,7 +65,7 @@ void run_convert(const ConvertArguments& args) {
     text = detail::DescriptorText::kBytes;
   if (to == VocabularyFormat::kFbow && (loaded.vocabulary.weighting() != Weighting::kTfIdf ||
                                         loaded.vocabulary.scoring() != Scoring::kL1))
-    std::printf(
+    note(
         "note: fbow files store no weighting or scoring type; they read back as tf-idf, "
         "l1\n");
   // A .bbw that records another extractor is relabelled: that is how a
@@ -67,29 +74,32 @@ void run_convert(const ConvertArguments& args) {
     loaded.vocabulary = loaded.vocabulary.with_descriptor(args.descriptor);
   const std::string& trained_on = loaded.vocabulary.descriptor();
   if (to == VocabularyFormat::kBinbow && !args.descriptor.empty())
-    std::printf("descriptor: %s (recorded)\n", trained_on.c_str());
+    print_summary(on_stdout, "descriptor: %s (recorded)\n", trained_on.c_str());
   if (to == VocabularyFormat::kVinsBinary && !trained_on.empty() && trained_on != "brief")
-    std::printf(
+    note(
         "note: VINS files do not record the extractor and VINS computes BRIEF descriptors; "
         "this vocabulary was trained on %s ones\n",
         trained_on.c_str());
   else if (to != VocabularyFormat::kBinbow && to != VocabularyFormat::kVinsBinary &&
            !trained_on.empty() && trained_on != "orb")
-    std::printf(
+    note(
         "note: %s files do not record the extractor: reading %s back assumes orb; give "
         "--descriptor %s then\n",
         to_string(to), args.output.c_str(), trained_on.c_str());
 
   const auto write_start = std::chrono::steady_clock::now();
-  detail::save_vocabulary_as(loaded.vocabulary, args.output, to, text);
+  detail::save_vocabulary_as(loaded.vocabulary, output, to, text);
   struct stat st {};
-  const long long bytes = ::stat(args.output.c_str(), &st) == 0 ? st.st_size : -1;
-  std::printf("wrote %s: %s%s, %lld bytes (%.3f s)\n", args.output.c_str(), to_string(to),
-              to == VocabularyFormat::kDbow2Yaml
-                  ? (text == detail::DescriptorText::kBits ? " with bit-string descriptors"
-                                                           : " with decimal-byte descriptors")
-                  : "",
-              bytes, seconds_since(write_start));
+  // The size of a file; a stream written in place has none to stat.
+  const std::string size = !on_stdout && ::stat(output.c_str(), &st) == 0
+                               ? ", " + std::to_string(st.st_size) + " bytes"
+                               : "";
+  print_summary(on_stdout, "wrote %s: %s%s%s (%.3f s)\n", args.output.c_str(), to_string(to),
+                to == VocabularyFormat::kDbow2Yaml
+                    ? (text == detail::DescriptorText::kBits ? " with bit-string descriptors"
+                                                             : " with decimal-byte descriptors")
+                    : "",
+                size.c_str(), seconds_since(write_start));
 }
 
 }  // namespace
@@ -103,9 +113,12 @@ void add_convert_command(CLI::App& app) {
   cmd->add_option("IN", args->input, "Vocabulary to read (format detected from its content)")
       ->required();
   cmd->add_option("OUT", args->output,
-                  "File to write; its extension picks the format: .bbw, .txt (ORB-SLAM text), "
-                  ".bin (ORB-SLAM binary), .vins.bin (VINS binary), .yml/.yml.gz/.voc.gz "
-                  "(DBoW2 YAML), .dbow3, .fbow")
+                  std::string("File to write; its extension picks the format: .bbw, .txt "
+                              "(ORB-SLAM text), .bin (ORB-SLAM binary), .vins.bin (VINS binary), "
+                              ".yml/.yml.gz/.voc.gz (DBoW2 YAML), .dbow3, .fbow") +
+                      kOutputFileHelp +
+                      " (as .bbw unless --to says; binary formats only when redirected; the "
+                      "summary then goes to stderr)")
       ->required();
   cmd->add_option("--from", args->from,
                   "Input format: auto, bbw, dbow2, orbslam-text, orbslam-binary, dbow3, fbow, "

@@ -14,6 +14,8 @@
 #include "commands.h"
 #include "core/regular_file.h"
 #include "database_loading.h"
+#include "info_fields.h"
+#include "invocation.h"
 #include "trained_on_option.h"
 
 namespace binbow::cli {
@@ -50,8 +52,8 @@ void run_db_remove(const DbRemoveArguments& arguments) {
 
 }  // namespace
 
-bool print_database_info(const std::string& path, bool verify, const std::string& vocabulary,
-                         const std::string& descriptor) {
+bool describe_database(const std::string& path, bool verify, const std::string& vocabulary,
+                       const std::string& descriptor, InfoFields& fields) {
   detail::require_regular_file(path);  // a FIFO would block the read below
   char magic[8] = {};
   std::ifstream file(path, std::ios::binary);
@@ -70,34 +72,36 @@ bool print_database_info(const std::string& path, bool verify, const std::string
     next_entry_id = database.next_entry_id();
   } else if (verify) {
     Database::inspect(path, true);
-    std::fprintf(stderr,
-                 "%s: its vocabulary is external: the entries' words are checked with "
-                 "--vocab VOCABULARY\n",
-                 path.c_str());
+    note(
+        "%s: its vocabulary is external: the entries' words are checked with "
+        "--vocab VOCABULARY\n",
+        path.c_str());
   }
-  std::printf("kind: database\n");
-  std::printf("entries: %zu\n", entries);
-  std::printf("next_entry_id: %u\n", next_entry_id);
+  fields.add("kind", "database");
+  fields.add("entries", entries);
+  fields.add("next_entry_id", next_entry_id);
   if (info.direct_index)
-    std::printf("direct_index: %u levels up\n", info.direct_index_levels_up);
+    fields.add("direct_index", std::to_string(info.direct_index_levels_up) + " levels up");
   else
-    std::printf("direct_index: none\n");
-  std::printf("vocabulary: %s\n", info.vocabulary_description.c_str());
-  std::printf("vocabulary_checksum: %08x\n", info.vocabulary_checksum);
-  std::printf("vocabulary_included: %s\n", info.vocabulary_included ? "yes" : "no");
+    fields.add("direct_index", "none");
+  fields.add("vocabulary", info.vocabulary_description);
+  fields.add("vocabulary_checksum", hex_checksum(info.vocabulary_checksum));
+  fields.add("vocabulary_included", info.vocabulary_included ? "yes" : "no");
   if (!journal.present) {
-    std::printf("journal: none\n");
+    fields.add("journal", "none");
   } else if (journal.superseded) {
-    std::printf("journal: %llu bytes, superseded by the database file (ignored)\n",
-                static_cast<unsigned long long>(journal.bytes));
+    fields.add("journal",
+               std::to_string(journal.bytes) + " bytes, superseded by the database file (ignored)");
   } else {
-    std::printf(
-        "journal: %llu bytes, %zu saves: %zu entries added, %zu removed, %zu labels set%s\n",
-        static_cast<unsigned long long>(journal.bytes), journal.saves, journal.added,
-        journal.removed, journal.labels_set, journal.cleared > 0 ? ", cleared" : "");
+    fields.add("journal", std::to_string(journal.bytes) + " bytes, " +
+                              std::to_string(journal.saves) +
+                              " saves: " + std::to_string(journal.added) + " entries added, " +
+                              std::to_string(journal.removed) + " removed, " +
+                              std::to_string(journal.labels_set) + " labels set" +
+                              (journal.cleared > 0 ? ", cleared" : ""));
     if (journal.torn_bytes > 0)
-      std::printf("journal_torn_bytes: %llu (an interrupted save, dropped)\n",
-                  static_cast<unsigned long long>(journal.torn_bytes));
+      fields.add("journal_torn_bytes",
+                 std::to_string(journal.torn_bytes) + " (an interrupted save, dropped)");
   }
   return true;
 }

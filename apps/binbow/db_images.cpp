@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "binbow/database.h"
 #include "binbow/error.h"
 #include "binbow/formats.h"
@@ -19,6 +21,7 @@
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
+#include "invocation.h"
 #include "output_options.h"
 #include "progress.h"
 #include "query_options.h"
@@ -56,6 +59,7 @@ struct DbArguments {
 
 struct DbQueryArguments : DbArguments {
   std::size_t top = 10;
+  bool json = false;
   QueryOptions query;  // --fast and its tuning
 };
 
@@ -117,13 +121,15 @@ AddedImages add_images(Database& database,
     progress.update(added.entries.size());
   }
   progress.finish();
-  if (options.skip_unreadable) std::fprintf(stderr, "skipped frames: %zu\n", added.skipped);
+  if (options.skip_unreadable) note("skipped frames: %zu\n", added.skipped);
   return added;
 }
 
 void run_db_build(DbBuildArguments arguments) {
   check_vocabulary_given(arguments.vocabulary, arguments.descriptor);
+  refuse_binary_on_terminal("-o", arguments.output, "a database");
   prepare_output_file("-o", arguments.output);
+  const std::string output = output_file(arguments.output);
   Vocabulary vocabulary;
   const std::string vocabulary_path =
       load_loop_vocabulary(arguments.vocabulary, arguments.descriptor, vocabulary);
@@ -134,11 +140,13 @@ void run_db_build(DbBuildArguments arguments) {
   add_images(database, extractor, arguments.inputs, arguments.source, arguments.threads, &features);
   if (database.size() == 0) throw InvalidArgument("db build: no images found in the inputs");
   std::optional<DatabaseLock> writer;
-  if (!detail::is_written_in_place(arguments.output))
-    writer.emplace(lock_database(arguments.output, arguments.wait_seconds));
-  database.save(arguments.output, !arguments.external_vocabulary);
-  std::printf("%s: %zu entries, %zu features, vocabulary %s (%s)\n", arguments.output.c_str(),
-              database.size(), features, vocabulary.description().c_str(), vocabulary_path.c_str());
+  if (!detail::is_written_in_place(output))
+    writer.emplace(lock_database(output, arguments.wait_seconds));
+  database.save(output, !arguments.external_vocabulary);
+  print_summary(is_standard_output(arguments.output),
+                "%s: %zu entries, %zu features, vocabulary %s (%s)\n", arguments.output.c_str(),
+                database.size(), features, vocabulary.description().c_str(),
+                vocabulary_path.c_str());
 }
 
 void run_db_query(const DbQueryArguments& arguments) {
@@ -150,6 +158,8 @@ void run_db_query(const DbQueryArguments& arguments) {
   vision::ExtractedFrame extracted;
   BowVector bow;
   std::size_t skipped = 0;
+  using Json = nlohmann::ordered_json;
+  Json queries_json = Json::array();
   for (std::size_t queries = 0; frames.next(extracted);) {
     const vision::Frame& frame = extracted.frame;
     if (warn_if_unreadable(frame.name, frame.unreadable)) {
@@ -158,6 +168,16 @@ void run_db_query(const DbQueryArguments& arguments) {
     }
     database.vocabulary().transform(extracted.features.descriptors.view(), bow);
     const auto results = database.query(bow, arguments.top, kAllEntries, arguments.query);
+    if (arguments.json) {
+      Json ranked = Json::array();
+      for (std::size_t rank = 0; rank < results.size(); ++rank)
+        ranked.push_back({{"rank", rank + 1},
+                          {"entry", results[rank].entry},
+                          {"file", database.label(results[rank].entry)},
+                          {"score", results[rank].score}});
+      queries_json.push_back({{"query", frame.name}, {"results", ranked}});
+      continue;
+    }
     std::printf("%squery: %s\nrank\tentry\tfile\tscore\n", queries == 0 ? "" : "\n",
                 frame.name.c_str());
     for (std::size_t rank = 0; rank < results.size(); ++rank) {
@@ -168,7 +188,17 @@ void run_db_query(const DbQueryArguments& arguments) {
     std::fflush(stdout);
     ++queries;
   }
-  if (arguments.source.skip_unreadable) std::fprintf(stderr, "skipped frames: %zu\n", skipped);
+  if (arguments.source.skip_unreadable) note("skipped frames: %zu\n", skipped);
+  if (arguments.json) {
+    const Json summary = {{"binbow_version", BINBOW_VERSION},
+                          {"database", arguments.database},
+                          {"top", arguments.top},
+                          {"skipped_frames", skipped},
+                          {"queries", queries_json}};
+    // Invalid UTF-8 in a file name is replaced rather than refused.
+    std::printf("%s\n", summary.dump(2, ' ', false, Json::error_handler_t::replace).c_str());
+    std::fflush(stdout);
+  }
 }
 
 void run_db_add(const DbArguments& arguments) {
@@ -208,7 +238,11 @@ void add_db_image_commands(CLI::App& db) {
   build_command->add_option("--vocab", build->vocabulary,
                             "Vocabulary (any format binbow reads); default: the bundled "
                             "data/vocab/<descriptor>_default.bbw");
-  build_command->add_option("-o,--output", build->output, "Output database (.bbdb)")->required();
+  build_command
+      ->add_option("-o,--output", build->output,
+                   std::string("Output database (.bbdb)") + kOutputFileHelp +
+                       " (the summary then goes to stderr)")
+      ->required();
   add_vocabulary_extractor_options(build_command, build->descriptor, build->features);
   build_command
       ->add_option("--direct-index-levels-up", build->levels_up,
@@ -240,6 +274,9 @@ void add_db_image_commands(CLI::App& db) {
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   add_fast_query_options(query_command, query->query);
+  query_command->add_flag("--json", query->json,
+                          "Print every query's results as one JSON object on stdout, after the "
+                          "last query");
   query_command->callback([query] { run_db_query(*query); });
 
   auto add = std::make_shared<DbArguments>();

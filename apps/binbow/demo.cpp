@@ -72,7 +72,8 @@ void add_demo_command(CLI::App& app) {
   auto out_dir = std::make_shared<std::string>("binbow-demo");
   auto* cmd = app.add_subcommand(
       "demo", "Detect loops in the bundled sample sequence and evaluate them, with an HTML report");
-  cmd->add_option("--out", *out_dir, "Directory for loops.csv and the report")
+  cmd->add_option("--out", *out_dir,
+                  std::string("Directory for loops.csv and the report") + kOutputFolderHelp)
       ->capture_default_str();
   cmd->callback([out_dir] { run_demo(*out_dir); });
 }

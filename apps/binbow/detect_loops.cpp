@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "binbow/error.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/run_record.h"
@@ -17,10 +19,12 @@
 #include "binbow/vision/features.h"
 #include "binbow/vocabulary.h"
 #include "commands.h"
+#include "core/output_path.h"
 #include "default_vocabulary.h"
 #include "extractor_options.h"
 #include "image_source_options.h"
 #include "interruption.h"
+#include "invocation.h"
 #include "loop_params_options.h"
 #include "output_options.h"
 #include "progress.h"
@@ -48,6 +52,7 @@ struct DetectLoopsArguments {
   bool print_params = false;
   std::string report;
   bool timing = false;
+  bool json = false;
   std::string output;
   std::vector<std::string> inputs;
   vision::ImageSourceOptions source;
@@ -66,11 +71,54 @@ std::string hertz(double frequency) {
   return text;
 }
 
-void print_status_counts(const loop::StatusCounts& counts) {
-  std::fprintf(stderr, "frames by status:\n");
+void print_status_counts(bool summary_on_stderr, const loop::StatusCounts& counts) {
+  print_summary(summary_on_stderr, "frames by status:\n");
   for (std::size_t value = 0; value < counts.size(); ++value)
-    std::fprintf(stderr, "  %s: %zu\n", loop::to_string(static_cast<loop::LoopStatus>(value)),
-                 counts[value]);
+    print_summary(summary_on_stderr, "  %s: %zu\n",
+                  loop::to_string(static_cast<loop::LoopStatus>(value)), counts[value]);
+}
+
+// What the command line said and the run wrote, for the summary and --json.
+struct DetectLoopsOutcome {
+  std::string run_record;  // empty: none (-o -, /dev/null, a FIFO)
+  std::string saved_state, saved_vocabulary, report;
+};
+
+// --json: the summary as one object on stdout (docs/cli.md).
+void print_json_summary(const DetectLoopsArguments& arguments, loop::SequenceDetector& sequence,
+                        const loop::LoopRunFiles& outputs, const DetectLoopsOutcome& outcome) {
+  using Json = nlohmann::ordered_json;
+  const auto path_or_null = [](const std::string& path) {
+    return path.empty() ? Json(nullptr) : Json(path);
+  };
+  Json statuses = Json::object();
+  const loop::StatusCounts& counts = sequence.status_counts();
+  for (std::size_t value = 0; value < counts.size(); ++value)
+    statuses[loop::to_string(static_cast<loop::LoopStatus>(value))] = counts[value];
+  Json summary = {{"binbow_version", BINBOW_VERSION},
+                  {"loops_csv", arguments.output},
+                  {"run_record", path_or_null(outcome.run_record)},
+                  {"frames", outputs.frames()},
+                  {"loops", outputs.detections().size()},
+                  {"unreadable_frames", sequence.unreadable_frames()},
+                  {"skipped_frames", sequence.skipped_frames()},
+                  {"frequency_hz", sequence.params().frequency},
+                  {"frequency_origin", sequence.frequency_origin()},
+                  {"frames_by_status", statuses},
+                  {"saved_state", path_or_null(outcome.saved_state)},
+                  {"saved_vocabulary", path_or_null(outcome.saved_vocabulary)},
+                  {"report", path_or_null(outcome.report)}};
+  if (arguments.timing) {
+    Json stages = Json::array();
+    for (const loop::StageTiming& stage : outputs.timing())
+      stages.push_back({{"stage", stage.stage},
+                        {"mean_ms", stage.mean()},
+                        {"median_ms", stage.median()},
+                        {"max_ms", stage.max()}});
+    summary["timing"] = stages;
+  }
+  // Invalid UTF-8 in a file name is replaced rather than refused.
+  std::printf("%s\n", summary.dump(2, ' ', false, Json::error_handler_t::replace).c_str());
 }
 
 // With --resume-state, what the command line leaves open comes from the
@@ -114,6 +162,12 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   }
   if (arguments.output.empty()) throw CLI::RequiredError("-o,--output");
   if (arguments.inputs.empty()) throw CLI::RequiredError("inputs");
+  // Where the loops go: "-" is stdout, which then carries nothing else.
+  const bool loops_on_stdout = is_standard_output(arguments.output);
+  if (loops_on_stdout && arguments.json)
+    throw CLI::ValidationError(
+        "--json and -o - both write to standard output; give -o a file name");
+  const std::string loops_csv = output_file(arguments.output);
   // Everything that can be checked is checked before the sequence is read.
   loop::LoopDetectorFileInfo saved;
   if (!arguments.resume_state.empty()) {
@@ -125,6 +179,8 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   if (!arguments.online_vocabulary) check_vocabulary_given(arguments.vocab, arguments.descriptor);
   CreatedFolders folders;
   folders.prepare_file("-o", arguments.output);
+  refuse_standard_output("--save-vocabulary", arguments.save_vocabulary);
+  refuse_standard_output("--save-state", arguments.save_state);
   if (!arguments.save_vocabulary.empty())
     folders.prepare_file("--save-vocabulary", arguments.save_vocabulary);
   if (!arguments.save_state.empty()) folders.prepare_file("--save-state", arguments.save_state);
@@ -166,8 +222,7 @@ void run_detect_loops(DetectLoopsArguments arguments) {
                                                           options);
   }
   if (!arguments.resume_state.empty()) {
-    std::fprintf(stderr, "resuming after %zu frames from %s\n", saved.frames,
-                 arguments.resume_state.c_str());
+    note("resuming after %zu frames from %s\n", saved.frames, arguments.resume_state.c_str());
     run.resumed_from = absolute(arguments.resume_state);
     run.resumed_frames = saved.frames;
     if (saved.online) {
@@ -179,13 +234,17 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   run.descriptor = arguments.descriptor;
   run.max_features = arguments.max_features;
   run.params_json = sequence.params().to_json();
+  run.provenance = {BINBOW_VERSION, invocation().started_utc, invocation().command_line};
   run.source = arguments.source;
   for (const std::string& input : arguments.inputs) run.inputs.push_back(absolute(input));
 
   throw_if_interrupted();  // loading the vocabulary, listing the inputs may take long
   const long long known = sequence.size();
   Progress progress("detecting loops", known > 0 ? static_cast<std::size_t>(known) : 0);
-  loop::LoopRunFiles outputs(arguments.output, run);
+  loop::LoopRunFiles outputs(loops_csv, run);
+  DetectLoopsOutcome outcome;
+  if (!detail::is_written_in_place(loops_csv))
+    outcome.run_record = loop::LoopRun::path_for(arguments.output);
   loop::SequenceFrame frame;
   while (sequence.next(frame)) {
     warn_if_unreadable(frame.file, frame.unreadable);
@@ -199,39 +258,45 @@ void run_detect_loops(DetectLoopsArguments arguments) {
   outputs.commit();
   if (!arguments.save_state.empty()) {
     sequence.detector().save(arguments.save_state);
-    std::fprintf(stderr, "state: %zu frames -> %s\n", sequence.detector().size(),
-                 arguments.save_state.c_str());
+    outcome.saved_state = arguments.save_state;
+    note("state: %zu frames -> %s\n", sequence.detector().size(), arguments.save_state.c_str());
   }
   if (!arguments.save_vocabulary.empty()) {
     BuildOptions build;
     build.descriptor = arguments.descriptor;
     sequence.detector().online_vocabulary()->to_vocabulary(build).save(arguments.save_vocabulary);
-    std::fprintf(stderr, "online vocabulary: %zu words -> %s\n",
-                 sequence.detector().online_vocabulary()->word_count(),
-                 arguments.save_vocabulary.c_str());
+    outcome.saved_vocabulary = arguments.save_vocabulary;
+    note("online vocabulary: %zu words -> %s\n",
+         sequence.detector().online_vocabulary()->word_count(), arguments.save_vocabulary.c_str());
   }
 
+  // The summary: results on stdout, unless stdout carries the loops or
+  // --json's object (then on stderr, where a log keeps it).
   const loop::LoopDetectorParams& params = sequence.params();
-  std::fprintf(stderr, "%zu frames, %zu loops -> %s\n", outputs.frames(),
-               outputs.detections().size(), arguments.output.c_str());
+  const bool summary_on_stderr = loops_on_stdout || arguments.json;
+  print_summary(summary_on_stderr, "%zu frames, %zu loops -> %s\n", outputs.frames(),
+                outputs.detections().size(), arguments.output.c_str());
   if (sequence.unreadable_frames() > 0)
-    std::fprintf(stderr, "frames unreadable: %zu\n", sequence.unreadable_frames());
+    print_summary(summary_on_stderr, "frames unreadable: %zu\n", sequence.unreadable_frames());
   if (arguments.source.skip_unreadable)
-    std::fprintf(stderr, "skipped frames: %zu\n", sequence.skipped_frames());
-  std::fprintf(stderr, "frequency: %s (%s)\n", hertz(params.frequency).c_str(),
-               sequence.frequency_origin().c_str());
-  print_status_counts(sequence.status_counts());
+    print_summary(summary_on_stderr, "skipped frames: %zu\n", sequence.skipped_frames());
+  print_summary(summary_on_stderr, "frequency: %s (%s)\n", hertz(params.frequency).c_str(),
+                sequence.frequency_origin().c_str());
+  print_status_counts(summary_on_stderr, sequence.status_counts());
   const std::string no_candidates = loop::no_candidate_reason(params, outputs.frames());
   if (!no_candidates.empty())
     std::fprintf(stderr,
                  "binbow: warning: %s; set a smaller \"dislocal\" with --params (a JSON file "
                  "such as {\"dislocal\": 5}) or --dislocal 5\n",
                  no_candidates.c_str());
-  if (arguments.timing) std::cout << loop::format_timing_table(outputs.timing()) << std::flush;
+  if (arguments.timing && !arguments.json)
+    std::fprintf(loops_on_stdout ? stderr : stdout, "%s",
+                 loop::format_timing_table(outputs.timing()).c_str());
   if (!arguments.report.empty()) {
     throw_if_interrupted();  // the report's similarity matrix may take long
     loop::LoopReport report;
     report.title = "binbow loop detection";
+    report.provenance = run.provenance;
     report.facts = {{"inputs", run.inputs.front() + (run.inputs.size() > 1 ? " ..." : "")},
                     {"frames", std::to_string(outputs.frames())},
                     {"loops", std::to_string(outputs.detections().size())},
@@ -249,9 +314,11 @@ void run_detect_loops(DetectLoopsArguments arguments) {
                               i < outputs.loops().size() ? outputs.loops()[i].inliers
                                                          : std::vector<std::array<float, 4>>{},
                               -1});
-    const std::string page = loop::write_loop_report(arguments.report, report);
-    std::fprintf(stderr, "report: %s\n", page.c_str());
+    outcome.report = loop::write_loop_report(arguments.report, report);
+    note("report: %s\n", outcome.report.c_str());
   }
+  if (arguments.json) print_json_summary(arguments, sequence, outputs, outcome);
+  std::fflush(stdout);
 }
 
 }  // namespace
@@ -272,8 +339,9 @@ void add_detect_loops_command(CLI::App& app) {
   online->excludes(vocab);
   command
       ->add_option("--save-vocabulary", arguments->save_vocabulary,
-                   "With --online-vocabulary: after the run, export the grown words as a fixed "
-                   "vocabulary (.bbw) for later runs")
+                   std::string("With --online-vocabulary: after the run, export the grown words "
+                               "as a fixed vocabulary (.bbw) for later runs") +
+                       kOutputFolderParentsHelp)
       ->needs(online);
   // OnlineVocabularyOptions, one flag per field (docs/online-vocabulary.md).
   const OnlineVocabularyOptions defaults;
@@ -326,8 +394,9 @@ void add_detect_loops_command(CLI::App& app) {
                           "keys it omits keep their defaults, whose frame counts (dislocal, ...) "
                           "follow the frames processed per second of a video");
   command->add_option("--save-state", arguments->save_state,
-                      "After the run, save the detector's whole state (.bbld) for "
-                      "--resume-state");
+                      std::string("After the run, save the detector's whole state (.bbld) for "
+                                  "--resume-state") +
+                          kOutputFolderParentsHelp);
   CLI::Option* resume =
       command->add_option("--resume-state", arguments->resume_state,
                           "Start from a state saved by --save-state: its frames, parameters and "
@@ -342,13 +411,19 @@ void add_detect_loops_command(CLI::App& app) {
                     "defaults, then --params, then the parameter flags; reads no images (a "
                     "video's frame rate is not applied: pass --frequency)");
   for (CLI::Option* option : online_options) resume->excludes(option);
-  command->add_option("--report", arguments->report, "Write an HTML report into this directory");
+  command->add_option("--report", arguments->report,
+                      std::string("Write an HTML report into this directory") + kOutputFolderHelp);
   command->add_flag("--timing", arguments->timing,
-                    "Print mean, median and max milliseconds per frame of each stage");
+                    "Print mean, median and max milliseconds per frame of each stage (with "
+                    "--json: its \"timing\" key)");
+  command->add_flag("--json", arguments->json,
+                    "Print the summary as one JSON object on stdout (other lines go to stderr)");
   command->add_option("-o,--output", arguments->output,
-                      "Detected loops, CSV: query_index,match_index,query_file,match_file,score,"
-                      "inliers (a run record <output>.run.json is written beside it); required "
-                      "unless --print-params");
+                      std::string("Detected loops, CSV: query_index,match_index,query_file,"
+                                  "match_file,score,inliers (a run record <output>.run.json is "
+                                  "written beside it, none for -); required unless "
+                                  "--print-params") +
+                          kOutputFileHelp + " (the summary then goes to stderr)");
   command->add_option("inputs", arguments->inputs,
                       "Image files, directories, videos or text lists of images (required "
                       "unless --print-params)");

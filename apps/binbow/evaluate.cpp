@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
 #include "binbow/loop/misses.h"
@@ -14,11 +16,82 @@
 #include "commands.h"
 #include "evaluate.h"
 #include "interruption.h"
+#include "invocation.h"
 #include "output_options.h"
 #include "vision_commands.h"
 
 namespace binbow::cli {
 namespace {
+
+void print_result(const loop::PrecisionRecall& result,
+                  const std::vector<loop::MissedLoop>& missed) {
+  std::printf("precision: %.6g\nrecall: %.6g\n", result.precision, result.recall);
+  std::printf(
+      "detections: %zu\ntrue positives: %zu\nfalse positives: %zu\n"
+      "queries with a loop: %zu\nqueries found: %zu\n",
+      result.detections, result.true_positives, result.false_positives, result.queries_with_loops,
+      result.queries_found);
+  std::printf("missed loops: %zu\n", missed.size());
+  for (const loop::MissedLoop& miss : missed)
+    std::printf("%s\n", loop::format_missed_loop(miss).c_str());
+  std::fflush(stdout);
+}
+
+using Json = nlohmann::ordered_json;
+
+Json json_of(const loop::PrecisionRecall& result) {
+  return {{"precision", result.precision},
+          {"recall", result.recall},
+          {"detections", result.detections},
+          {"true_positives", result.true_positives},
+          {"false_positives", result.false_positives},
+          {"queries_with_loops", result.queries_with_loops},
+          {"queries_found", result.queries_found}};
+}
+
+// -1 (not known) as null.
+Json known(long long value) {
+  return value < 0 ? Json(nullptr) : Json(value);
+}
+
+// --json: the lines above and the sweep as one object (docs/cli.md).
+void print_json(const EvaluateArguments& arguments, const std::string& run_path,
+                const loop::LoopRun* run, const loop::PrecisionRecall& result,
+                const std::vector<loop::MissedLoop>& missed, const SweepOutcome& outcome) {
+  Json summary = {{"binbow_version", BINBOW_VERSION},
+                  {"loops_csv", arguments.detections},
+                  {"ground_truth", arguments.ground_truth},
+                  {"run_record", run ? Json(run_path) : Json(nullptr)}};
+  summary.update(json_of(result));
+  Json misses = Json::array();
+  for (const loop::MissedLoop& miss : missed)
+    misses.push_back({{"query", miss.query},
+                      {"file", miss.file.empty() ? Json(nullptr) : Json(miss.file)},
+                      {"status", miss.status.empty() ? Json(nullptr) : Json(miss.status)},
+                      {"match", known(miss.match)},
+                      {"candidate_right",
+                       miss.candidate_right < 0 ? Json(nullptr) : Json(miss.candidate_right == 1)},
+                      {"correspondences", known(miss.correspondences)},
+                      {"inliers", known(miss.inliers)},
+                      {"features", known(miss.features)}});
+  summary["missed_loops"] = misses;
+  if (arguments.sweep) {
+    Json curve = Json::array();
+    for (const loop::PrCurvePoint& point : outcome.curve) {
+      Json entry = {{"value", point.parameter}};
+      entry.update(json_of(point.result));
+      curve.push_back(entry);
+    }
+    summary["sweep"] = {
+        {"parameter", outcome.swept},
+        {"recall_at_full_precision", loop::recall_at_full_precision(outcome.curve)},
+        {"reached_at", outcome.reached_at ? Json(*outcome.reached_at) : Json(nullptr)},
+        {"curve", curve}};
+  }
+  summary["report"] = outcome.report.empty() ? Json(nullptr) : Json(outcome.report);
+  std::printf("%s\n", summary.dump(2, ' ', false, Json::error_handler_t::replace).c_str());
+  std::fflush(stdout);
+}
 
 void run_evaluate(const EvaluateArguments& arguments) {
   CreatedFolders folders;
@@ -38,11 +111,11 @@ void run_evaluate(const EvaluateArguments& arguments) {
   }
   if (run && !run->resumed_from.empty()) {
     // Its frames start after the state's, which the record cannot re-run.
-    std::fprintf(stderr,
-                 "note: %s resumed from %s after %zu frames; evaluating %s alone, without its "
-                 "run record\n",
-                 arguments.detections.c_str(), run->resumed_from.c_str(), run->resumed_frames,
-                 arguments.detections.c_str());
+    note(
+        "note: %s resumed from %s after %zu frames; evaluating %s alone, without its run "
+        "record\n",
+        arguments.detections.c_str(), run->resumed_from.c_str(), run->resumed_frames,
+        arguments.detections.c_str());
     run.reset();
   }
   if (arguments.sweep && !run && arguments.sweep_parameter != "alpha")
@@ -70,17 +143,9 @@ void run_evaluate(const EvaluateArguments& arguments) {
     std::fprintf(stderr, "warning: %zu frames were processed but the ground truth has %zu\n",
                  run->frames.size(), truth.frames());
 
-  std::printf("precision: %.6g\nrecall: %.6g\n", result.precision, result.recall);
-  std::printf(
-      "detections: %zu\ntrue positives: %zu\nfalse positives: %zu\n"
-      "queries with a loop: %zu\nqueries found: %zu\n",
-      result.detections, result.true_positives, result.false_positives, result.queries_with_loops,
-      result.queries_found);
-  std::printf("missed loops: %zu\n", missed.size());
-  for (const loop::MissedLoop& miss : missed)
-    std::printf("%s\n", loop::format_missed_loop(miss).c_str());
-  std::fflush(stdout);
+  if (!arguments.json) print_result(result, missed);
 
+  SweepOutcome outcome;
   if (arguments.sweep || !arguments.report.empty()) {
     throw_if_interrupted();  // a large ground truth may have taken long
     Evaluation evaluation;
@@ -89,9 +154,10 @@ void run_evaluate(const EvaluateArguments& arguments) {
     evaluation.truth = &truth;
     evaluation.detections = &detections;
     evaluation.result = result;
-    evaluation.missed = std::move(missed);
-    vision_commands().sweep_and_report(arguments, evaluation);
+    evaluation.missed = missed;
+    outcome = vision_commands().sweep_and_report(arguments, evaluation);
   }
+  if (arguments.json) print_json(arguments, run_path, run.get(), result, missed, outcome);
 }
 
 }  // namespace
@@ -126,7 +192,10 @@ void add_evaluate_command(CLI::App& app) {
                    "Values to sweep, comma-separated (default: a range around the default)")
       ->delimiter(',')
       ->needs(sweep);
-  command->add_option("--report", arguments->report, "Write an HTML report into this directory");
+  command->add_option("--report", arguments->report,
+                      std::string("Write an HTML report into this directory") + kOutputFolderHelp);
+  command->add_flag("--json", arguments->json,
+                    "Print the results (and --sweep's curve) as one JSON object on stdout");
   command->add_option("loops", arguments->detections, "loops.csv written by detect-loops")
       ->required();
   command->callback([arguments] { run_evaluate(*arguments); });

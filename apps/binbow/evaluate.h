@@ -4,6 +4,7 @@
 // in the binbow_cli_vision module (evaluate_report.cpp), loaded when asked for.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct EvaluateArguments {
   std::string sweep_parameter = "alpha";
   std::vector<double> sweep_values;  // empty: loop::default_sweep_values
   std::string report;
+  bool json = false;  // one JSON object on stdout instead of the lines
   std::string detections;
 };
 
@@ -33,9 +35,18 @@ struct Evaluation {
   std::vector<loop::MissedLoop> missed;
 };
 
+// What --sweep and --report found and wrote, for --json.
+struct SweepOutcome {
+  std::vector<loop::PrCurvePoint> curve;  // empty without --sweep
+  std::string swept;                      // the parameter swept, or "score"
+  // loop::full_precision_point's parameter; none without a point at 100% precision.
+  std::optional<double> reached_at;
+  std::string report;  // the page written; empty without --report
+};
+
 // --sweep's values (loop::sweep_values), checked before anything is read.
 std::vector<double> evaluate_sweep_values(const EvaluateArguments& arguments);
-// Prints --sweep's curve and writes --report.
-void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& evaluation);
+// Prints --sweep's curve (unless --json) and writes --report.
+SweepOutcome sweep_and_report(const EvaluateArguments& arguments, const Evaluation& evaluation);
 
 }  // namespace binbow::cli

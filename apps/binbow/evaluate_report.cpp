@@ -18,6 +18,7 @@
 #include "default_vocabulary.h"
 #include "evaluate.h"
 #include "interruption.h"
+#include "invocation.h"
 #include "progress.h"
 
 namespace binbow::cli {
@@ -71,7 +72,7 @@ std::vector<double> evaluate_sweep_values(const EvaluateArguments& arguments) {
   return loop::sweep_values(arguments.sweep_parameter, arguments.sweep_values);
 }
 
-void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& evaluation) {
+SweepOutcome sweep_and_report(const EvaluateArguments& arguments, const Evaluation& evaluation) {
   const loop::LoopRun* run = evaluation.run;
   const loop::GroundTruth& truth = *evaluation.truth;
   const std::vector<loop::Detection>& detections = *evaluation.detections;
@@ -89,12 +90,13 @@ void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& eval
     try {
       inputs = std::make_unique<RunInputs>(read_run_inputs(*run));
     } catch (const Error& e) {  // the report is still worth writing
-      std::fprintf(stderr, "note: no similarity matrix in the report: %s\n", e.what());
+      note("note: no similarity matrix in the report: %s\n", e.what());
     }
   }
 
-  std::vector<loop::PrCurvePoint> curve;
-  std::string swept;
+  SweepOutcome outcome;
+  std::vector<loop::PrCurvePoint>& curve = outcome.curve;
+  std::string& swept = outcome.swept;
   if (arguments.sweep) {
     if (run) {
       StageProgress progress;
@@ -105,16 +107,20 @@ void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& eval
       progress.finish();
       swept = arguments.sweep_parameter;
     } else {
-      std::fprintf(stderr,
-                   "note: no run record %s; the curve thresholds the scores of %s instead of "
-                   "re-running detection\n",
-                   run_path.c_str(), arguments.detections.c_str());
+      note(
+          "note: no run record %s; the curve thresholds the scores of %s instead of "
+          "re-running detection\n",
+          run_path.c_str(), arguments.detections.c_str());
       curve = loop::pr_curve_by_score(detections, truth);
       swept = "score";
     }
-    std::printf("recall at 100%% precision: %.6g\n", loop::recall_at_full_precision(curve));
     if (const loop::PrCurvePoint* best = loop::full_precision_point(curve))
-      std::printf("reached at %s: %.6g\n", swept.c_str(), best->parameter);
+      outcome.reached_at = best->parameter;
+  }
+  if (arguments.sweep && !arguments.json) {
+    std::printf("recall at 100%% precision: %.6g\n", loop::recall_at_full_precision(curve));
+    if (outcome.reached_at)
+      std::printf("reached at %s: %.6g\n", swept.c_str(), *outcome.reached_at);
     const int width = std::max<int>(8, static_cast<int>(swept.size()));
     std::printf("%-*s %10s %10s %10s\n", width, swept.c_str(), "precision", "recall", "detections");
     for (const auto& p : curve)
@@ -126,6 +132,8 @@ void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& eval
   if (!arguments.report.empty()) {
     loop::LoopReport report;
     report.title = "binbow loop detection: evaluation";
+    report.provenance = {BINBOW_VERSION, invocation().started_utc, invocation().command_line};
+    if (run) report.run_provenance = run->provenance;
     report.facts = {{"detections", arguments.detections}, {"ground truth", arguments.ground_truth}};
     report.has_result = true;
     report.result = result;
@@ -167,7 +175,7 @@ void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& eval
         report.explanations_note = explained.note;
         if (!explained.note.empty()) std::fprintf(stderr, "warning: %s\n", explained.note.c_str());
       } catch (const Error& e) {  // the report is still worth writing
-        std::fprintf(stderr, "note: no explanations in the report: %s\n", e.what());
+        note("note: no explanations in the report: %s\n", e.what());
       }
       progress.finish();
     }
@@ -182,9 +190,10 @@ void sweep_and_report(const EvaluateArguments& arguments, const Evaluation& eval
       report.loops.push_back(std::move(entry));
     }
     throw_if_interrupted();
-    const std::string page = loop::write_loop_report(arguments.report, report);
-    std::fprintf(stderr, "report: %s\n", page.c_str());
+    outcome.report = loop::write_loop_report(arguments.report, report);
+    note("report: %s\n", outcome.report.c_str());
   }
+  return outcome;
 }
 
 }  // namespace binbow::cli

@@ -77,6 +77,7 @@ void draw_features(const cv::Mat& image, const vision::Features& features,
 void run_features(const FeaturesArguments& arguments) {
   check_options_apply(arguments);
   if (!arguments.draw.empty()) {
+    refuse_standard_output("--draw", arguments.draw);
     if (!vision::media_module().have_image_writer(arguments.draw)) {
       throw CLI::ValidationError(
           "--draw",
@@ -138,7 +139,9 @@ void add_features_command(CLI::App& app) {
                    "Timed runs after a warm-up; the median is printed")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
-  command->add_option("--draw", arguments->draw, "Write the image with its keypoints to this file");
+  command->add_option(
+      "--draw", arguments->draw,
+      std::string("Write the image with its keypoints to this file") + kOutputFolderParentsHelp);
   add_image_source_options(command, arguments->source);
   command->callback([arguments] { run_features(*arguments); });
 }

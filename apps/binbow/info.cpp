@@ -1,5 +1,5 @@
 // `binbow info FILE`: what a vocabulary (any readable format), database or
-// loop detector state holds, as `key: value` lines. `binbow info --system`:
+// loop detector state holds, as `key: value` lines (--json: one object). `binbow info --system`:
 // the CPU features binbow's kernels depend on and the Hamming kernel set in use,
 // so that a timing can be reported with the kernel that produced it.
 #include <cstdio>
@@ -14,6 +14,7 @@
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "formats/loader.h"
+#include "info_fields.h"
 #include "trained_on_option.h"
 #include "vision_commands.h"
 
@@ -21,22 +22,23 @@ namespace binbow::cli {
 
 namespace {
 
-void print_vocabulary(const Vocabulary& v) {
-  std::printf("kind: vocabulary\n");
-  std::printf("descriptor: %s\n", v.descriptor().empty() ? "unknown" : v.descriptor().c_str());
-  std::printf("descriptor_bits: %zu\n", v.code_size() * 8);
-  std::printf("branching: %u\n", v.branching());
-  std::printf("levels: %u\n", v.levels());
-  std::printf("nodes: %zu\n", v.node_count());
-  std::printf("words: %zu\n", v.word_count());
-  std::printf("weighting: %s\n", to_string(v.weighting()));
-  std::printf("scoring: %s\n", to_string(v.scoring()));
-  std::printf("checksum: %08x\n", v.checksum());
+void describe_vocabulary(const Vocabulary& v, InfoFields& fields) {
+  fields.add("kind", "vocabulary");
+  fields.add("descriptor", v.descriptor().empty() ? "unknown" : v.descriptor());
+  fields.add("descriptor_bits", v.code_size() * 8);
+  fields.add("branching", v.branching());
+  fields.add("levels", v.levels());
+  fields.add("nodes", v.node_count());
+  fields.add("words", v.word_count());
+  fields.add("weighting", to_string(v.weighting()));
+  fields.add("scoring", to_string(v.scoring()));
+  fields.add("checksum", hex_checksum(v.checksum()));
 }
 
 // A loop detector state (.bbld): what to resume it with. False for any other
 // file; only a state loads the module with the loop detector.
-bool print_if_loop_state(const std::string& path, const std::string& vocab_argument) {
+bool describe_if_loop_state(const std::string& path, const std::string& vocab_argument,
+                            InfoFields& fields) {
   // Only a regular file is opened here: a FIFO would block (the readers
   // below refuse it with a clear error).
   std::error_code error;
@@ -44,18 +46,33 @@ bool print_if_loop_state(const std::string& path, const std::string& vocab_argum
   char magic[8] = {};
   std::ifstream in(path, std::ios::binary);
   if (!in.read(magic, sizeof magic) || std::memcmp(magic, "BINBOWLD", 8) != 0) return false;
-  vision_commands().print_loop_state_info(path, vocab_argument);
+  vision_commands().describe_loop_state(path, vocab_argument, fields);
   return true;
 }
 
-void print_system_info() {
+void describe_system(InfoFields& fields) {
   for (const CpuFeature& feature : cpu_features())
-    std::printf("cpu_%s: %s\n", feature.name, feature.present ? "yes" : "no");
+    fields.add(std::string("cpu_") + feature.name, feature.present ? "yes" : "no");
   std::string supported;
   for (const std::string& name : supported_hamming_kernels())
     supported += (supported.empty() ? "" : " ") + name;
-  std::printf("hamming_kernels_supported: %s\n", supported.c_str());
-  std::printf("hamming_kernel: %s\n", hamming_kernel_name());
+  fields.add("hamming_kernels_supported", supported);
+  fields.add("hamming_kernel", hamming_kernel_name());
+}
+
+void describe(const std::string& path, bool header_only, const std::string& vocab,
+              const std::string& descriptor, bool system, InfoFields& fields) {
+  if (system) return describe_system(fields);
+  if (path.empty()) throw CLI::RequiredError("FILE");
+  if (!descriptor.empty()) check_known_descriptor(descriptor);
+  if (describe_if_loop_state(path, vocab, fields)) return;
+  if (describe_database(path, !header_only, vocab, descriptor, fields)) return;
+  // The format the loader settled on: inside a .gz it is known only after
+  // decompressing (ORB-SLAM and VINS binary files are told apart by size).
+  const detail::LoadedVocabulary loaded =
+      load_vocabulary_trained_on(path, VocabularyFormat::kAuto, descriptor);
+  fields.add("format", to_string(loaded.format));
+  describe_vocabulary(loaded.vocabulary, fields);
 }
 
 }  // namespace
@@ -83,18 +100,14 @@ void add_info_command(CLI::App& app) {
                 "Print the CPU features binbow uses and the Hamming kernel set in use")
       ->excludes(file)
       ->excludes(header);
-  cmd->callback([path, header_only, vocab, descriptor, system] {
-    if (*system) return print_system_info();
-    if (path->empty()) throw CLI::RequiredError("FILE");
-    if (!descriptor->empty()) check_known_descriptor(*descriptor);
-    if (print_if_loop_state(*path, *vocab)) return;
-    if (print_database_info(*path, !*header_only, *vocab, *descriptor)) return;
-    // The format the loader settled on: inside a .gz it is known only after
-    // decompressing (ORB-SLAM and VINS binary files are told apart by size).
-    const detail::LoadedVocabulary loaded =
-        load_vocabulary_trained_on(*path, VocabularyFormat::kAuto, *descriptor);
-    std::printf("format: %s\n", to_string(loaded.format));
-    print_vocabulary(loaded.vocabulary);
+  auto json = std::make_shared<bool>(false);
+  cmd->add_flag("--json", *json,
+                "Print the fields as one JSON object (numbers as numbers), with "
+                "\"binbow_version\"");
+  cmd->callback([path, header_only, vocab, descriptor, system, json] {
+    InfoFields fields;
+    describe(*path, *header_only, *vocab, *descriptor, *system, fields);
+    fields.print(*json);
   });
 }
 

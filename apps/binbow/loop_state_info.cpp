@@ -11,6 +11,8 @@
 #include "binbow/vocabulary.h"
 #include "commands.h"
 #include "default_vocabulary.h"
+#include "info_fields.h"
+#include "invocation.h"
 #include "saved_state_descriptor.h"
 
 namespace binbow::cli {
@@ -40,11 +42,11 @@ void verify_loop_state(const std::string& path, const loop::LoopDetectorFileInfo
       }
     }
     if (vocabulary.empty()) {
-      std::fprintf(stderr,
-                   "note: %s: the header, the parameters and the previous BoW vector are checked; "
-                   "the database, features and the rest need the state's vocabulary (checksum "
-                   "%08x): give --vocab to check them\n",
-                   path.c_str(), info.vocabulary_checksum);
+      note(
+          "note: %s: the header, the parameters and the previous BoW vector are checked; "
+          "the database, features and the rest need the state's vocabulary (checksum "
+          "%08x): give --vocab to check them\n",
+          path.c_str(), info.vocabulary_checksum);
       return;
     }
   } else {
@@ -56,21 +58,22 @@ void verify_loop_state(const std::string& path, const loop::LoopDetectorFileInfo
 
 }  // namespace
 
-void print_loop_state_info(const std::string& path, const std::string& vocab_argument) {
+void describe_loop_state(const std::string& path, const std::string& vocab_argument,
+                         InfoFields& fields) {
   const loop::LoopDetectorFileInfo info = loop::LoopDetector::inspect(path);
   check_saved_descriptor(path, info);
   verify_loop_state(path, info, vocab_argument);
-  std::printf("kind: loop detector state\n");
-  std::printf("version: %u\n", info.version);
-  std::printf("vocabulary: %s\n", info.online ? "online" : "fixed");
-  std::printf("descriptor: %s\n", info.descriptor.empty() ? "unknown" : info.descriptor.c_str());
-  std::printf("descriptor_bits: %zu\n", info.code_size * 8);
-  std::printf("frames: %zu\n", info.frames);
-  std::printf("forgotten_frames: %zu\n", info.forgotten_frames);
+  fields.add("kind", "loop detector state");
+  fields.add("version", info.version);
+  fields.add("vocabulary", info.online ? "online" : "fixed");
+  fields.add("descriptor", info.descriptor.empty() ? "unknown" : info.descriptor);
+  fields.add("descriptor_bits", info.code_size * 8);
+  fields.add("frames", info.frames);
+  fields.add("forgotten_frames", info.forgotten_frames);
   if (!info.online) {
-    std::printf("vocabulary_checksum: %08x\n", info.vocabulary_checksum);
-    std::printf("vocabulary_words: %zu\n", info.vocabulary_words);
-    std::printf("vocabulary_levels: %u\n", info.vocabulary_levels);
+    fields.add("vocabulary_checksum", hex_checksum(info.vocabulary_checksum));
+    fields.add("vocabulary_words", info.vocabulary_words);
+    fields.add("vocabulary_levels", info.vocabulary_levels);
   }
 }
 

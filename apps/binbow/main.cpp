@@ -1,12 +1,15 @@
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "binbow/error.h"
 #include "commands.h"
 #include "interruption.h"
+#include "invocation.h"
 #include "unsigned_options.h"
 #include "vision_commands.h"
 
@@ -22,12 +25,25 @@ std::string command_path(const CLI::App& app) {
   return path;
 }
 
+// argv without the app's own flags before the command's name (`binbow
+// --quiet detect-loops ...`), for the decisions taken before parsing that
+// look at the command's name.
+std::vector<const char*> without_leading_flags(int argc, const char* const* argv) {
+  std::vector<const char*> words(argv, argv + argc);
+  while (words.size() > 1 &&
+         (std::strcmp(words[1], "-q") == 0 || std::strcmp(words[1], "--quiet") == 0))
+    words.erase(words.begin() + 1);
+  return words;
+}
+
 // Every command, in the order --help lists them; those of the vision module
 // only when the command line needs them (vision_commands.h), so that the
 // others start without OpenCV.
-void add_commands(CLI::App& app, int argc, const char* const* argv) {
+void add_commands(CLI::App& app, const std::vector<const char*>& words) {
   using namespace binbow::cli;
-  const VisionCommands* vision = needs_vision_commands(argc, argv) ? &vision_commands() : nullptr;
+  const VisionCommands* vision = needs_vision_commands(static_cast<int>(words.size()), words.data())
+                                     ? &vision_commands()
+                                     : nullptr;
   add_info_command(app);
   if (vision) vision->add_build_vocab_command(app);
   if (vision) vision->add_features_command(app);
@@ -40,6 +56,16 @@ void add_commands(CLI::App& app, int argc, const char* const* argv) {
   if (vision) vision->add_make_route_command(app);
 }
 
+// -q/--quiet on the app and on every command, where a user writes it
+// (before or after the command's name), all setting Invocation::quiet.
+void add_quiet_flag(CLI::App& command) {
+  command.add_flag("-q,--quiet", binbow::cli::own_invocation().quiet,
+                   "No progress and no informational lines; results asked for, warnings and "
+                   "errors still print");
+  for (CLI::App* subcommand : command.get_subcommands([](CLI::App*) { return true; }))
+    add_quiet_flag(*subcommand);
+}
+
 int fail(const std::string& message) {
   std::fprintf(stderr, "binbow: error: %s\n", message.c_str());
   return 1;
@@ -47,9 +73,9 @@ int fail(const std::string& message) {
 
 // The commands that can run for minutes, whose loops have check points
 // (interruption.h): a signal stops them there, their temporaries removed.
-bool stops_at_check_points(int argc, const char* const* argv) {
-  const std::string command = argc >= 2 ? argv[1] : "";
-  const std::string subcommand = argc >= 3 ? argv[2] : "";
+bool stops_at_check_points(const std::vector<const char*>& words) {
+  const std::string command = words.size() >= 2 ? words[1] : "";
+  const std::string subcommand = words.size() >= 3 ? words[2] : "";
   return command == "detect-loops" || command == "evaluate" ||
          (command == "db" && (subcommand == "build" || subcommand == "add"));
 }
@@ -68,12 +94,17 @@ int interrupted(int signal) {
 // A long command stopped by SIGINT or SIGTERM prints "binbow: interrupted"
 // and exits with 130 or 143.
 int main(int argc, char** argv) {
-  if (stops_at_check_points(argc, argv)) binbow::cli::stop_at_check_points();
+  const std::vector<const char*> words = without_leading_flags(argc, argv);
+  if (stops_at_check_points(words)) binbow::cli::stop_at_check_points();
+  binbow::cli::Invocation& invocation = binbow::cli::own_invocation();
+  invocation.command_line = binbow::cli::shell_quoted({argv, argv + argc});
+  invocation.started_utc = binbow::cli::utc_now();
   CLI::App app{"binbow: fast place recognition and loop closure with bags of binary words"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "binbow " BINBOW_VERSION);
   try {
-    add_commands(app, argc, argv);
+    add_commands(app, words);
+    add_quiet_flag(app);
   } catch (const binbow::Error& e) {
     return fail(e.what());
   }

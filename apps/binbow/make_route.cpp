@@ -7,6 +7,7 @@
 
 #include "binbow/loop/route.h"
 #include "commands.h"
+#include "invocation.h"
 #include "output_options.h"
 #include "progress.h"
 
@@ -37,13 +38,13 @@ void run_make_route(const MakeRouteArguments& arguments) {
       ++visits;
       revisits += route.frames[i].revisit ? 1 : 0;
     }
-  std::printf(
-      "photographs: %zu\nplaces: %zu\nframes: %zu\nvisits: %zu\nrevisits: %zu\n"
-      "ground-truth pairs: %zu\n",
-      route.photographs.size(), route.places.size(), route.frames.size(), visits, revisits,
-      route.loop_pairs().size());
-  std::printf("frames: %s/frames\nground truth: %s/ground_truth.txt\n", arguments.output.c_str(),
-              arguments.output.c_str());
+  print_summary(false,
+                "photographs: %zu\nplaces: %zu\nframes: %zu\nvisits: %zu\nrevisits: %zu\n"
+                "ground-truth pairs: %zu\n",
+                route.photographs.size(), route.places.size(), route.frames.size(), visits,
+                revisits, route.loop_pairs().size());
+  print_summary(false, "frames: %s/frames\nground truth: %s/ground_truth.txt\n",
+                arguments.output.c_str(), arguments.output.c_str());
 }
 
 }  // namespace
@@ -62,7 +63,9 @@ void add_make_route_command(CLI::App& app) {
       ->required();
   command
       ->add_option("-o,--output", arguments->output,
-                   "New or empty directory: frames/, ground_truth.txt, route.csv, places.csv")
+                   std::string("New or empty directory: frames/, ground_truth.txt, route.csv, "
+                               "places.csv") +
+                       kOutputFolderHelp)
       ->required();
   command->add_option("--frames", o.frames, "Frames of the route")->capture_default_str();
   command->add_option("--seed", o.seed, "Seed of everything random")->capture_default_str();

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "interruption.h"
+#include "invocation.h"
 
 namespace binbow::cli {
 
@@ -21,6 +22,7 @@ Progress::~Progress() {
 void Progress::update(std::size_t done) {
   throw_if_interrupted();
   done_ = done;
+  if (invocation().quiet) return;
   const auto now = std::chrono::steady_clock::now();
   const double seconds = std::chrono::duration<double>(now - start_).count();
   if (tty_) {
@@ -51,6 +53,7 @@ void Progress::update(std::size_t done) {
 void Progress::finish() {
   if (finished_) return;
   finished_ = true;
+  if (invocation().quiet) return;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   if (tty_) std::fprintf(stderr, "\r\033[K");

@@ -1,6 +1,7 @@
 // A progress line on stderr: redrawn in place on a terminal. Elsewhere (a log
 // file, CI) no redraws: a plain line every kLogInterval while a stage runs,
 // so that short runs log only the closing "LABEL: N done in Ts" line.
+// Nothing with --quiet (invocation.h).
 #pragma once
 
 #include <chrono>

@@ -14,6 +14,7 @@
 #include "binbow/error.h"
 #include "core/module_entry.h"
 #include "interruption.h"
+#include "invocation.h"
 
 namespace binbow::cli {
 namespace fs = std::filesystem;
@@ -45,6 +46,7 @@ const VisionCommands& load(const std::string& given) {
                                  sizeof(VisionCommands), kVisionCommandsVersion, BINBOW_VERSION);
   if (!reason.empty()) throw Error(load_error(path, reason));
   commands->watch_interruption_flag(&interruption_flag());
+  commands->watch_invocation(&own_invocation());
   return *commands;
 }
 

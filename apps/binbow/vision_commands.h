@@ -23,11 +23,13 @@
 #include <CLI/CLI.hpp>
 
 #include "evaluate.h"
+#include "info_fields.h"
+#include "invocation.h"
 
 namespace binbow::cli {
 
 // Raised whenever VisionCommands changes.
-inline constexpr int kVisionCommandsVersion = 2;
+inline constexpr int kVisionCommandsVersion = 3;
 
 struct VisionCommands {
   int version;
@@ -42,15 +44,20 @@ struct VisionCommands {
   void (*add_demo_command)(CLI::App& app);
   void (*add_make_route_command)(CLI::App& app);
   // `binbow info` of a loop detector state (.bbld): checks and describes it.
-  void (*print_loop_state_info)(const std::string& path, const std::string& vocab_argument);
+  void (*describe_loop_state)(const std::string& path, const std::string& vocab_argument,
+                              InfoFields& fields);
   // The descriptor size in bytes of extractor `name` (vision::make_extractor).
   std::size_t (*descriptor_code_size)(const std::string& name);
   // `binbow evaluate --sweep` and `--report` (evaluate.h).
   std::vector<double> (*evaluate_sweep_values)(const EvaluateArguments& arguments);
-  void (*sweep_and_report)(const EvaluateArguments& arguments, const Evaluation& evaluation);
+  SweepOutcome (*sweep_and_report)(const EvaluateArguments& arguments,
+                                   const Evaluation& evaluation);
   // Makes the module's check points read the executable's signal flag
   // (interruption.h); called once the module is loaded.
   void (*watch_interruption_flag)(const std::atomic<int>* flag) noexcept;
+  // Makes the module's invocation() the executable's (invocation.h): the
+  // command line, the start time and --quiet that main() set.
+  void (*watch_invocation)(const Invocation* invocation) noexcept;
 };
 
 // Whether the command line names a command (or asks for the help or the

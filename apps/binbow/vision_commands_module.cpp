@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "evaluate.h"
 #include "interruption.h"
+#include "invocation.h"
 #include "vision_commands.h"
 
 namespace binbow::cli {
@@ -26,11 +27,12 @@ constexpr VisionCommands kCommands{
     add_bench_command,
     add_demo_command,
     add_make_route_command,
-    print_loop_state_info,
+    describe_loop_state,
     descriptor_code_size,
     evaluate_sweep_values,
     sweep_and_report,
-    watch_interruption_flag};
+    watch_interruption_flag,
+    watch_invocation};
 // clang-format on
 
 }  // namespace

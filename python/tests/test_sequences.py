@@ -1,8 +1,12 @@
 """binbow.detect_loops and binbow.write_report: the CLI's detect-loops from Python."""
 import csv
+import html
 import json
+import pathlib
 import pickle
 import re
+import shlex
+import sys
 
 import numpy as np
 import pytest
@@ -165,6 +169,15 @@ def test_write_report_draws_the_cli_page(tmp_path, results):
     headings = re.compile(r"<h2[^>]*>([^<]*)")
     assert headings.findall(text) == headings.findall(cli_text)
     assert text.count("data:image/") == cli_text.count("data:image/") > 0
+
+
+def test_write_report_says_who_wrote_it_when_and_how(tmp_path, results):
+    _, text = report_facts(pathlib.Path(binbow.write_report(tmp_path / "r", results)))
+    match = re.search(r"<p class='provenance' id='provenance'>Written by binbow (\S+) on "
+                      r"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ): <code>([^<]*)</code>", text)
+    assert match, text[:2000]
+    assert match.group(1) == binbow.__version__
+    assert shlex.split(html.unescape(match.group(3)))[1:] == sys.argv
 
 
 def test_write_report_with_ground_truth_and_plain_lists(tmp_path, results):

@@ -60,17 +60,25 @@ CliRun run_in(const TempDir& dir, unsigned threads, const std::string& arguments
 }
 
 // The run record without its timings, which no two runs share.
+// The record without what differs from run to run: the times, and the
+// provenance (the date, and the command line that names --threads).
 nlohmann::json record_without_timing(const std::string& loops_csv) {
   nlohmann::json record = nlohmann::json::parse(read_text(loops_csv + ".run.json"));
   EXPECT_TRUE(record.contains("timing_ms"));
+  EXPECT_TRUE(record.contains("provenance"));
   record.erase("timing_ms");
+  record.erase("provenance");
   return record;
 }
 
 std::string report_without_timing(const std::string& directory) {
   const std::string html = read_text(directory + "/index.html");
   EXPECT_NE(html.find("<table id='timing'>"), std::string::npos);
-  return std::regex_replace(html, std::regex("<table id='timing'>.*?</table>"), "");
+  EXPECT_NE(html.find("<p class='provenance' id='provenance'>"), std::string::npos);
+  return std::regex_replace(
+      html,
+      std::regex("<table id='timing'>.*?</table>|<p class='provenance' id='provenance'>.*?</p>"),
+      "");
 }
 
 // The corridor's 84 frames as a list whose frame 30 is cut to half its bytes.

@@ -264,6 +264,31 @@ LoopRun run_description() {
   return run;
 }
 
+TEST(RunRecord, KeepsItsProvenanceAndReadsRecordsWithout) {
+  test::TempDir dir;
+  const std::string csv = dir.file("loops.csv");
+  LoopRun description = run_description();
+  description.provenance = {"9.8.7", "2026-11-29T10:26:19Z", "binbow detect-loops -o 'a b.csv' f"};
+  {
+    LoopRunFiles files(csv, description);
+    files.add(SequenceFrame{});
+    files.commit();
+  }
+  const std::string record = LoopRun::path_for(csv);
+  const LoopRun run = LoopRun::load(record);
+  EXPECT_EQ(run.provenance.binbow_version, "9.8.7");
+  EXPECT_EQ(run.provenance.date, "2026-11-29T10:26:19Z");
+  EXPECT_EQ(run.provenance.command, "binbow detect-loops -o 'a b.csv' f");
+  // Written only when known: a record without it reads as before.
+  {
+    LoopRunFiles files(csv, run_description());
+    files.add(SequenceFrame{});
+    files.commit();
+  }
+  EXPECT_EQ(read_text(record).find("provenance"), std::string::npos);
+  EXPECT_TRUE(LoopRun::load(record).provenance.empty());
+}
+
 TEST(RunRecord, KeepsEachFramesCorrespondencesAndReadsOlderRecords) {
   test::TempDir dir;
   const std::string csv = dir.file("loops.csv");
@@ -442,6 +467,34 @@ TEST(PrCurveChart, PointLabelsStayInsideThePlotAndApart) {
     anchors.emplace_back(x, y);
   }
   EXPECT_EQ(anchors.size(), report.curve.size());
+}
+
+// The texts of the chart's point labels, in the order drawn.
+std::vector<std::string> point_labels(const std::string& chart) {
+  std::vector<std::string> labels;
+  for (std::size_t at = chart.find("class='pt'"); at != std::string::npos;
+       at = chart.find("class='pt'", at + 1)) {
+    const std::size_t begin = chart.find('>', at) + 1;
+    labels.push_back(chart.substr(begin, chart.find('<', begin) - begin));
+  }
+  return labels;
+}
+
+TEST(PrCurveChart, EachPointIsLabelledWithItsOwnValues) {
+  LoopReport report;
+  report.curve_parameter = "alpha";
+  // 0.5 and 0.8 to 1 land on one point; 0.6 and 0.7, between them in the
+  // sweep, land elsewhere: a label "α=0.5–1" would claim them too.
+  report.curve = {point(0.5, 1, 0.4), point(0.6, 1, 0.5), point(0.7, 0.9, 0.6),
+                  point(0.8, 1, 0.4), point(0.9, 1, 0.4), point(1.0, 1, 0.4)};
+  test::TempDir dir;
+  const std::string chart = pr_chart(read_text(write_loop_report(dir.file("r"), report)));
+  EXPECT_EQ(point_labels(chart), (std::vector<std::string>{"α=0.5, 0.8–1", "α=0.6", "α=0.7"}))
+      << chart;
+  // Two neighbours are listed, not made a range.
+  report.curve = {point(0.2, 1, 0.4), point(0.3, 1, 0.4), point(0.4, 0.9, 0.6)};
+  EXPECT_EQ(point_labels(pr_chart(read_text(write_loop_report(dir.file("s"), report)))),
+            (std::vector<std::string>{"α=0.2, 0.3", "α=0.4"}));
 }
 
 // Pixels of the similarity figure in the red of false loops.

@@ -17,6 +17,7 @@
 #include "binbow/loop/evaluation.h"
 #include "binbow/loop/explanation.h"
 #include "binbow/loop/misses.h"
+#include "binbow/loop/provenance.h"
 #include "binbow/loop/run_record.h"
 #include "binbow/loop/sequence.h"
 #include "binbow/loop/similarity.h"
@@ -32,6 +33,11 @@ struct ReportLoop {
 
 struct LoopReport {
   std::string title;
+  // Shown under the title: the binbow, date and command that wrote the page
+  // (id 'provenance') and, for an evaluation, those of the detection run it
+  // judges, from its run record (id 'run-provenance'). Empty: not shown.
+  Provenance provenance;
+  Provenance run_provenance;
   std::vector<std::pair<std::string, std::string>> facts;  // shown as a two-column table
   std::string params_json;                                 // empty: not known
   std::vector<StageTiming> timing;                         // empty: not measured

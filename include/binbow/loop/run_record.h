@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/provenance.h"
 #include "binbow/loop/sequence.h"
 #include "binbow/vision/image_source.h"
 
@@ -75,6 +76,9 @@ std::vector<StageTiming> stage_timings(const std::vector<SequenceFrame>& frames)
 std::string format_timing_table(const std::vector<StageTiming>& timing);
 
 struct LoopRun {
+  // Which binbow ran, when and with what command ("provenance" in the
+  // record; empty in records written before the key existed).
+  Provenance provenance;
   std::vector<std::string> inputs;  // absolute paths
   std::string vocabulary;           // absolute path; empty with online_vocabulary
   // The run grew its words (LoopDetector::online) instead of reading a
@@ -128,7 +132,7 @@ bool check_loops_csv_of_run(const LoopRun& run, const std::string& run_path,
 // loops.csv written in place (/dev/null, /dev/stdout, a FIFO) has no record.
 class LoopRunFiles {
  public:
-  // Starts both files; `description` gives the inputs, vocabulary,
+  // Starts both files; `description` gives the provenance, inputs, vocabulary,
   // descriptor, max_features, params_json and source recorded (its frames,
   // loops and timing are not used). Throws FileError naming the file that
   // cannot be created.

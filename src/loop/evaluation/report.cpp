@@ -132,6 +132,18 @@ std::string join(const std::vector<std::string>& parts) {
   return out;
 }
 
+// "Written by binbow 0.9.0 on 2026-11-29T10:26:19Z: binbow evaluate ...",
+// as much of it as is known; nothing when nothing is.
+std::string provenance_paragraph(const std::string& id, const std::string& lead,
+                                 const Provenance& provenance) {
+  if (provenance.empty()) return "";
+  std::string text = "<p class='provenance' id='" + id + "'>" + lead;
+  if (!provenance.binbow_version.empty()) text += " binbow " + escape(provenance.binbow_version);
+  if (!provenance.date.empty()) text += " on " + escape(provenance.date);
+  if (!provenance.command.empty()) text += ": <code>" + escape(provenance.command) + "</code>";
+  return text + "</p>\n";
+}
+
 // "α" for alpha; other parameters by their name.
 std::string parameter_symbol(const std::string& parameter) {
   return parameter == "alpha" ? "α" : parameter;
@@ -139,6 +151,29 @@ std::string parameter_symbol(const std::string& parameter) {
 
 std::string parameter_value(double value) {
   return format("%.4g", value);
+}
+
+// The swept values `here` (drawn at one point) as a label: "0.5", or
+// "0.5, 0.8–0.9" where 0.8 and 0.9 are neighbours among all the values
+// `swept` (sorted) and 0.5 is not.
+std::string point_values(std::vector<double> here, const std::vector<double>& swept) {
+  std::sort(here.begin(), here.end());
+  std::string text;
+  for (std::size_t first = 0; first < here.size();) {
+    // The run of `here` that follows `swept` without a gap.
+    std::size_t rank = static_cast<std::size_t>(
+        std::lower_bound(swept.begin(), swept.end(), here[first]) - swept.begin());
+    std::size_t last = first;
+    while (last + 1 < here.size() && rank + 1 < swept.size() && swept[rank + 1] == here[last + 1]) {
+      ++last;
+      ++rank;
+    }
+    if (!text.empty()) text += ", ";
+    text += parameter_value(here[first]);
+    if (last > first) text += (last == first + 1 ? ", " : "–") + parameter_value(here[last]);
+    first = last + 1;
+  }
+  return text;
 }
 
 std::string pr_curve_svg(const LoopReport& report) {
@@ -172,9 +207,14 @@ std::string pr_curve_svg(const LoopReport& report) {
     svg << "<polyline fill='none' stroke='#1f5fbf' stroke-width='2' points='";
     for (const auto& p : points) svg << x(p.result.recall) << ',' << y(p.result.precision) << ' ';
     svg << "'/>";
-    // Points at the same place share one label naming the range of values.
+    // Points at the same place share one label that names each of their
+    // values: a range a–b only for values that are neighbours in the sweep,
+    // never one that spans a value drawn elsewhere.
     // Labels run downwards from their point, pushed right where points are
     // closer than a line of text, with a leader line back to the point.
+    std::vector<double> swept;
+    for (const auto& p : points) swept.push_back(p.parameter);
+    std::sort(swept.begin(), swept.end());
     constexpr double kLineHeight = 11;
     double previous_label_x = -1e9;
     for (std::size_t first = 0; first < points.size();) {
@@ -185,13 +225,9 @@ std::string pr_curve_svg(const LoopReport& report) {
         ++last;
       const auto& p = points[first];
       const double px = x(p.result.recall), py = y(p.result.precision);
-      double low = p.parameter, high = p.parameter;
-      for (std::size_t i = first; i <= last; ++i) {
-        low = std::min(low, points[i].parameter);
-        high = std::max(high, points[i].parameter);
-      }
-      const std::string values =
-          low == high ? parameter_value(low) : parameter_value(low) + "–" + parameter_value(high);
+      std::vector<double> here;
+      for (std::size_t i = first; i <= last; ++i) here.push_back(points[i].parameter);
+      const std::string values = point_values(here, swept);
       svg << "<circle cx='" << px << "' cy='" << py << "' r='3.5' fill='#1f5fbf'><title>" << symbol
           << " = " << values << ": precision " << format("%.3f", p.result.precision) << ", recall "
           << format("%.3f", p.result.recall) << ", " << p.result.detections
@@ -710,7 +746,10 @@ std::string write_loop_report(const std::string& directory, const LoopReport& re
        << "tr.best td{background:#e3f4e6;font-weight:bold}td.s{white-space:nowrap}"
        << "figure.explain{border-top:1px solid #ddd;padding-top:8px}figcaption .why{color:#444}"
        << "ol.steps{font-size:13px;margin:4px 0}p.legend{font-size:13px;margin:4px 0}"
+       << "p.provenance{font-size:13px;color:#555}p.provenance code{word-break:break-all}"
        << "</style></head><body>\n<h1>" << escape(report.title) << "</h1>\n";
+  html << provenance_paragraph("provenance", "Written by", report.provenance);
+  html << provenance_paragraph("run-provenance", "Loops detected by", report.run_provenance);
 
   if (!report.facts.empty()) {
     html << "<table>";

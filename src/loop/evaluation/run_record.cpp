@@ -98,6 +98,13 @@ bool is_frame_status(const std::string& status) {
     if (status == to_string(s)) return true;
   return false;
 }
+
+Json provenance_json(const Provenance& provenance) {
+  return {{"binbow_version", provenance.binbow_version},
+          {"date", provenance.date},
+          {"command", provenance.command}};
+}
+
 }  // namespace
 
 struct LoopRunFiles::Impl {
@@ -110,8 +117,12 @@ struct LoopRunFiles::Impl {
     for (const char* stage : kStageNames) timing.push_back({stage, {}});
     // The keys of a version 1 record, written one value at a time; "frames"
     // stays open until commit().
-    write("{\"format\":\"binbow-loop-run\",\"version\":1,\"inputs\":" +
-          json_text(Json(run.inputs)) + ",\"vocabulary\":" + json_text(Json(run.vocabulary)) +
+    write("{\"format\":\"binbow-loop-run\",\"version\":1" +
+          (run.provenance.empty()
+               ? std::string()
+               : ",\"provenance\":" + json_text(provenance_json(run.provenance))) +
+          ",\"inputs\":" + json_text(Json(run.inputs)) +
+          ",\"vocabulary\":" + json_text(Json(run.vocabulary)) +
           (run.online_vocabulary
                ? ",\"online_vocabulary\":true,\"online_options\":" +
                      Json{{"new_word_distance", run.online_options.new_word_distance},
@@ -271,6 +282,10 @@ LoopRun LoopRun::load(const std::string& path) {
     const Json j = Json::parse(text);
     if (j.at("format") != "binbow-loop-run" || j.at("version") != 1)
       throw FileError(path, "not a binbow detect-loops run record (version 1)");
+    if (j.contains("provenance")) {  // absent from records written before it was added
+      const Json& p = j.at("provenance");
+      run.provenance = {p.value("binbow_version", ""), p.value("date", ""), p.value("command", "")};
+    }
     run.inputs = j.at("inputs").get<std::vector<std::string>>();
     run.vocabulary = j.at("vocabulary").get<std::string>();
     // Written only for runs without a vocabulary file.
