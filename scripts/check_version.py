@@ -41,7 +41,8 @@ def read_version(source):
     text = path.read_text(encoding="utf-8")
     version = text.strip()
     if not VERSION_PATTERN.fullmatch(version) or text != version + "\n":
-        raise SystemExit(f"check_version: {path} must hold one line major.minor.patch, not {text!r}")
+        raise SystemExit(f"check_version: {path} must hold one line major.minor.patch, "
+                         f"not {text!r}")
     return version
 
 
@@ -81,7 +82,8 @@ def check_sources(source, check):
 
     # pyproject.toml leaves the version to setup.py, which reads VERSION.
     if not re.search(r'^dynamic = \[[^]]*"version"', pyproject, re.MULTILINE):
-        check.fail("pyproject.toml", 'the version must be dynamic = ["version"] (setup.py reads VERSION)')
+        check.fail("pyproject.toml",
+                   'the version must be dynamic = ["version"] (setup.py reads VERSION)')
     if re.search(r"^version\s*=", pyproject, re.MULTILINE):
         check.fail("pyproject.toml", "has a version of its own")
     # setup.py makes its build folder (BINBOW_PIP_BUILD_DIR): a scratch one here.
@@ -98,9 +100,11 @@ def check_sources(source, check):
     consumers = sorted((source / "tests" / "package").glob("*/CMakeLists.txt"))
     pins = 0
     for consumer in consumers:
-        for pin in re.findall(r"find_package\(binbow ([0-9][0-9.]*)", consumer.read_text(encoding="utf-8")):
+        text = consumer.read_text(encoding="utf-8")
+        for pin in re.findall(r"find_package\(binbow ([0-9][0-9.]*)", text):
             pins += 1
-            check.expect(f"{consumer.relative_to(source)} find_package(binbow {pin})", pin, check.minor)
+            place = f"{consumer.relative_to(source)} find_package(binbow {pin})"
+            check.expect(place, pin, check.minor)
     if not pins:
         check.fail("tests/package/*/CMakeLists.txt", "no find_package(binbow major.minor) found")
 

@@ -111,8 +111,8 @@ def check_license_metadata(dist_info):
     assert "License: BSD-3-Clause" in lines, metadata[:2000]
     assert "Classifier: License :: OSI Approved :: BSD License" in metadata, metadata[:2000]
     # Who makes it and where it lives, as pyproject.toml says.
-    assert any(line.startswith("Author-email: binbow maintainers") for line in lines), metadata[:2000]
-    assert any(line.startswith("Project-URL: Homepage, https://") for line in lines), metadata[:2000]
+    for start in ("Author-email: binbow maintainers", "Project-URL: Homepage, https://"):
+        assert any(line.startswith(start) for line in lines), (start, metadata[:2000])
     for name in ("LICENSE", "THIRD_PARTY.md"):
         found = list(dist_info.rglob(name))
         assert found, f"no {name} in {dist_info}"
@@ -265,7 +265,8 @@ def test_build_progress_reads_ninja_and_make():
 def test_the_build_output_is_streamed_and_its_progress_reported():
     setup_script = load_setup_script()
     steps = [f"[{step}/20] Building CXX object {step}.o" for step in range(1, 21)]
-    program = "import sys\nfor line in sys.argv[1:]: print(line, flush=True)\nprint('note', file=sys.stderr)"
+    program = ("import sys\nfor line in sys.argv[1:]: print(line, flush=True)\n"
+               "print('note', file=sys.stderr)")
     output, terminal = io.StringIO(), io.StringIO()
     setup_script.run_reporting([sys.executable, "-c", program, *steps], "building", output=output,
                                terminal=terminal)

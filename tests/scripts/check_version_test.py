@@ -95,7 +95,8 @@ def main():
         edit(changelog, r"^## Unreleased\n", f"## Unreleased\n\n## {version} — 2026-12-01\n")
         result = check(checker, work, "--release")
         if result.returncode != 0:
-            failures.append(f"--release with a {version} section fails:\n{result.stdout}{result.stderr}")
+            failures.append(f"--release with a {version} section fails:\n"
+                            f"{result.stdout}{result.stderr}")
 
     if failures:
         for failure in failures:
