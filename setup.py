@@ -9,16 +9,24 @@ with its license notice) binbow/share/binbow, where the CLI looks for it
 (<exe>/../share/binbow); the `binbow` console script and `python -m binbow`
 exec that CLI (binbow/_cli.py). The image/video module (OpenCV's imgcodecs and
 videoio, loaded on first use) is binbow/lib/binbow/binbow_media.so. The
-version is the one of CMakeLists.txt's project(VERSION). More CMake
+version is the file VERSION's, as CMake's project(). More CMake
 arguments come from the CMAKE_ARGS environment variable (as scikit-build and
 conda-build read it), e.g. CMAKE_ARGS="-DBINBOW_WARNINGS_AS_ERRORS=ON".
+
+The build happens outside the source tree (build_base()), and the C++ build,
+about 15 minutes on 2 cores, reports its progress: CMake's and Ninja's output
+goes to setup.py's output (shown by pip install -v), and a progress line to
+the terminal, which pip without -v leaves to its own spinner otherwise.
 """
 import os
+import hashlib
 import re
 import shlex
 import shutil
 import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 from setuptools import Extension, setup
@@ -26,17 +34,78 @@ from setuptools.command.build_ext import build_ext
 from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
-# setuptools' own folders (and the CMake build in it), apart from the
-# developers' CMake build folder and out of the source tree's python/.
-BUILD_BASE = "build/python-package"
 
 
 def project_version():
-    text = (ROOT / "CMakeLists.txt").read_text(encoding="utf-8")
-    match = re.search(r"project\(\s*binbow\s+VERSION\s+([0-9][0-9.]*)", text)
-    if not match:
-        sys.exit("setup.py: no project(binbow VERSION x.y.z) in CMakeLists.txt")
-    return match.group(1)
+    version = (ROOT / "VERSION").read_text(encoding="utf-8").strip()
+    if not re.fullmatch(r"[0-9]+\.[0-9]+\.[0-9]+", version):
+        sys.exit(f"setup.py: VERSION must hold major.minor.patch, not {version!r}")
+    return version
+
+
+def build_base(environ=os.environ, source=ROOT):
+    """setuptools' build folder (and the CMake build in it), outside the source tree.
+
+    pip builds in the source tree itself: a folder in it would mix with the
+    developers' CMake build/ and leave the wheel's build behind in the
+    checkout. $BINBOW_PIP_BUILD_DIR chooses the folder; by default it is one
+    per user and checkout in the temporary folder, so that installing again
+    reuses the CMake build.
+    """
+    chosen = environ.get("BINBOW_PIP_BUILD_DIR")
+    if chosen:
+        return Path(chosen).resolve()
+    checkout = hashlib.sha256(str(source).encode()).hexdigest()[:12]
+    return Path(tempfile.gettempdir()) / f"binbow-pip-build-{os.getuid()}-{checkout}"
+
+
+# Ninja's "[12/136] Building ..." and Make's "[ 45%] Building ...".
+NINJA_STEP = re.compile(r"^\[(\d+)/(\d+)\]")
+MAKE_STEP = re.compile(r"^\[\s*(\d+)%\]")
+
+
+def build_progress(line):
+    """The percentage done that a line of the build's output shows, or None."""
+    match = NINJA_STEP.match(line)
+    if match:
+        done, total = int(match.group(1)), int(match.group(2))
+        return 100 * done // total if total else None
+    match = MAKE_STEP.match(line)
+    return int(match.group(1)) if match else None
+
+
+def open_terminal():
+    """The terminal, when pip hides this process's output from it; else None."""
+    if sys.stdout.isatty():
+        return None
+    try:
+        return open("/dev/tty", "w", encoding="utf-8")
+    except OSError:
+        return None
+
+
+def run_reporting(command, what, output=sys.stdout, terminal=None, step=5):
+    """Runs `command`, its output line by line to `output` and its progress to `terminal`."""
+    print(f"setup.py: {what}: {shlex.join(command)}", file=output, flush=True)
+    started = time.monotonic()
+    reported = None
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                          errors="replace") as process:
+        for line in process.stdout:
+            output.write(line)
+            output.flush()
+            percent = build_progress(line)
+            # Every `step` percent: some twenty lines over the whole build.
+            if terminal is not None and percent is not None and (
+                    reported is None or percent >= reported + step or
+                    (percent == 100 and reported != 100)):
+                minutes, seconds = divmod(int(time.monotonic() - started), 60)
+                terminal.write(f"binbow: {what}: {percent}% ({minutes}:{seconds:02d})\n")
+                terminal.flush()
+                reported = percent
+    if process.returncode != 0:
+        sys.exit(f"setup.py: {what} failed (exit status {process.returncode}): "
+                 f"{shlex.join(command)}")
 
 
 class BuildWithCMake(build_ext):
@@ -58,12 +127,17 @@ class BuildWithCMake(build_ext):
             configure.append("-DCMAKE_CXX_COMPILER_LAUNCHER=ccache")
         configure += shlex.split(os.environ.get("CMAKE_ARGS", ""))
         jobs = self.parallel or os.cpu_count() or 1
-        subprocess.run(configure, check=True)
-        subprocess.run(
-            ["cmake", "--build", str(build_dir), "--target", "binbow_python", "binbow",
-             "-j", str(jobs)],
-            check=True,
-        )
+        terminal = open_terminal()
+        if terminal is not None:
+            terminal.write(f"binbow: building the C++ module and CLI in {build_dir} "
+                           "(about 15 minutes on 2 cores; pip install -v shows every step)\n")
+        try:
+            run_reporting(configure, "configuring with CMake", terminal=terminal)
+            run_reporting(["cmake", "--build", str(build_dir), "--target", "binbow_python",
+                           "binbow", "-j", str(jobs)], "building with CMake", terminal=terminal)
+        finally:
+            if terminal is not None:
+                terminal.close()
         built = sorted((build_dir / "python" / "binbow").glob("_binbow*.so"))
         if not built:
             sys.exit(f"setup.py: CMake built no _binbow module in {build_dir / 'python' / 'binbow'}")
@@ -116,10 +190,12 @@ class BuildWithData(build_py):
         )
 
 
-Path(BUILD_BASE).mkdir(parents=True, exist_ok=True)
-setup(
-    version=project_version(),
-    options={"build": {"build_base": BUILD_BASE}, "egg_info": {"egg_base": BUILD_BASE}},
-    ext_modules=[Extension("binbow._binbow", sources=[])],
-    cmdclass={"build_ext": BuildWithCMake, "build_py": BuildWithData},
-)
+if __name__ == "__main__":
+    base = build_base()
+    base.mkdir(parents=True, exist_ok=True)
+    setup(
+        version=project_version(),
+        options={"build": {"build_base": str(base)}, "egg_info": {"egg_base": str(base)}},
+        ext_modules=[Extension("binbow._binbow", sources=[])],
+        cmdclass={"build_ext": BuildWithCMake, "build_py": BuildWithData},
+    )

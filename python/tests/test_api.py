@@ -7,8 +7,7 @@ from conftest import SOURCE_DIR
 
 
 def test_version_is_the_project_version():
-    text = (SOURCE_DIR / "CMakeLists.txt").read_text(encoding="utf-8")
-    assert binbow.__version__ == re.search(r"project\(binbow VERSION ([0-9.]+)", text).group(1)
+    assert binbow.__version__ == (SOURCE_DIR / "VERSION").read_text(encoding="utf-8").strip()
 
 
 def public_members():

@@ -1,5 +1,10 @@
 """The package installs: pip install from the source tree, and cmake --install.
 
+Those tests are marked `packaging` (ctest's python.packaging). The others run
+with the module's tests: the Python metadata, and setup.py's own logic (its
+build folder outside the source tree, the progress it reports), called
+without a build.
+
 Each installed copy is imported by a clean interpreter (-I: no PYTHONPATH, no
 user site, not this source tree) from another folder, and must give the
 project's version and the bundled default vocabularies. Its `binbow` command
@@ -10,18 +15,18 @@ binbow's license and the third-party notices.
 pip is needed (Debian's python3-pip, installed by scripts/install-deps.sh);
 where it cannot be installed, BINBOW_SKIP_PIP_TEST=1 skips the pip test alone.
 """
+import importlib.util
+import io
 import os
-import re
 import signal
 import subprocess
 import sys
 import tarfile
+import tomllib
 
 import pytest
 
 from conftest import SOURCE_DIR, cli, require_env
-
-pytestmark = pytest.mark.packaging
 
 CHECK = """
 import sys, numpy as np, binbow
@@ -42,8 +47,7 @@ print("imported", binbow.__file__, binbow.__version__)
 
 
 def project_version():
-    text = (SOURCE_DIR / "CMakeLists.txt").read_text(encoding="utf-8")
-    return re.search(r"project\(\s*binbow\s+VERSION\s+([0-9.]+)", text).group(1)
+    return (SOURCE_DIR / "VERSION").read_text(encoding="utf-8").strip()
 
 
 def import_installed(site_dir, cwd, extra_env=None):
@@ -102,14 +106,20 @@ def check_info_of_bundled_vocabulary(command, vocabulary, env, cwd):
 
 def check_license_metadata(dist_info):
     metadata = (dist_info / "METADATA").read_text(encoding="utf-8")
-    assert "License: BSD-3-Clause" in metadata.splitlines(), metadata[:2000]
+    lines = metadata.splitlines()
+    assert f"Version: {project_version()}" in lines, metadata[:2000]
+    assert "License: BSD-3-Clause" in lines, metadata[:2000]
     assert "Classifier: License :: OSI Approved :: BSD License" in metadata, metadata[:2000]
+    # Who makes it and where it lives, as pyproject.toml says.
+    for start in ("Author-email: binbow maintainers", "Project-URL: Homepage, https://"):
+        assert any(line.startswith(start) for line in lines), (start, metadata[:2000])
     for name in ("LICENSE", "THIRD_PARTY.md"):
         found = list(dist_info.rglob(name))
         assert found, f"no {name} in {dist_info}"
         assert found[0].read_bytes() == (SOURCE_DIR / name).read_bytes(), found[0]
 
 
+@pytest.mark.packaging
 def test_pip_install_from_the_source_tree(tmp_path):
     pip = subprocess.run([sys.executable, "-m", "pip", "--version"], capture_output=True)
     if pip.returncode != 0:
@@ -160,6 +170,7 @@ def test_pip_install_from_the_source_tree(tmp_path):
     assert interrupted.returncode == -signal.SIGINT, (interrupted.returncode, rest, errors)
 
 
+@pytest.mark.packaging
 def test_sdist_carries_the_sources_and_the_licenses(tmp_path):
     result = subprocess.run([sys.executable, "setup.py", "-q", "sdist", "-d", str(tmp_path)],
                             cwd=SOURCE_DIR, capture_output=True, text=True)
@@ -175,8 +186,12 @@ def test_sdist_carries_the_sources_and_the_licenses(tmp_path):
                  "data/vocab/orb_default.bbw"):
         assert name in names, f"the sdist has no {name}"
     assert "License: BSD-3-Clause" in pkg_info.splitlines(), pkg_info[:2000]
+    assert "Author-email: binbow maintainers" in pkg_info, pkg_info[:2000]
+    assert "Project-URL: Homepage, https://" in pkg_info, pkg_info[:2000]
+    assert "VERSION" in names, "the sdist has no VERSION, which setup.py and CMake read"
 
 
+@pytest.mark.packaging
 def test_cmake_install_puts_the_package_in_the_prefix(tmp_path):
     build_dir = require_env("BINBOW_BUILD_DIR")
     cmake = os.environ.get("CMAKE_COMMAND", "cmake")
@@ -201,3 +216,69 @@ def test_cmake_install_puts_the_package_in_the_prefix(tmp_path):
     check_command_is_the_cli(command, env, tmp_path)
     check_info_of_bundled_vocabulary(command, moved / "share/binbow/vocab/orb_default.bbw", env,
                                      tmp_path)
+
+
+def load_setup_script():
+    """setup.py as a module: its functions, without running setup()."""
+    spec = importlib.util.spec_from_file_location("binbow_setup_script", SOURCE_DIR / "setup.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_python_metadata_says_who_what_and_where():
+    project = tomllib.loads((SOURCE_DIR / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    assert project["dynamic"] == ["version"], "the version is VERSION's, read by setup.py"
+    assert load_setup_script().project_version() == project_version()
+    assert project["license"] == {"text": "BSD-3-Clause"}
+    for field in ("authors", "maintainers"):
+        (person,) = project[field]
+        assert person["name"] and "@" in person["email"], person
+        assert not person["email"].endswith((".invalid", ".example")), person
+    for name in ("Homepage", "Documentation", "Changelog", "Issues"):
+        assert project["urls"][name].startswith("https://"), project["urls"]
+    classifiers = project["classifiers"]
+    for expected in ("Development Status :: ", "License :: OSI Approved :: BSD License",
+                     "Operating System :: POSIX :: Linux", "Programming Language :: C++",
+                     "Programming Language :: Python :: 3", "Topic :: Scientific/Engineering"):
+        assert any(c.startswith(expected) for c in classifiers), (expected, classifiers)
+
+
+def test_pip_builds_outside_the_source_tree(tmp_path):
+    setup_script = load_setup_script()
+    default = setup_script.build_base({}, SOURCE_DIR)
+    assert default.is_absolute() and SOURCE_DIR not in default.parents, default
+    # One folder per checkout, so that two checkouts do not share a CMake build.
+    assert setup_script.build_base({}, tmp_path / "other checkout") != default
+    chosen = tmp_path / "chosen"
+    assert setup_script.build_base({"BINBOW_PIP_BUILD_DIR": str(chosen)}, SOURCE_DIR) == chosen
+
+
+def test_build_progress_reads_ninja_and_make():
+    progress = load_setup_script().build_progress
+    assert progress("[34/136] Building CXX object src/core/a.cpp.o\n") == 25
+    assert progress("[136/136] Linking CXX executable bin/binbow\n") == 100
+    assert progress("[ 45%] Building CXX object src/core/a.cpp.o\n") == 45
+    assert progress("-- Configuring done\n") is None
+
+
+def test_the_build_output_is_streamed_and_its_progress_reported():
+    setup_script = load_setup_script()
+    steps = [f"[{step}/20] Building CXX object {step}.o" for step in range(1, 21)]
+    program = ("import sys\nfor line in sys.argv[1:]: print(line, flush=True)\n"
+               "print('note', file=sys.stderr)")
+    output, terminal = io.StringIO(), io.StringIO()
+    setup_script.run_reporting([sys.executable, "-c", program, *steps], "building", output=output,
+                               terminal=terminal)
+    # Every line of the build, its errors included, in setup.py's output (pip install -v).
+    for line in steps + ["note"]:
+        assert line + "\n" in output.getvalue(), output.getvalue()
+    # The terminal gets one line every 5 percent, and the end.
+    reported = terminal.getvalue().splitlines()
+    assert [line.split(": ")[2].split("%")[0] for line in reported] == [
+        str(percent) for percent in range(5, 101, 5)], reported
+    assert all(line.startswith("binbow: building: ") for line in reported), reported
+
+    with pytest.raises(SystemExit, match="building failed \\(exit status 3\\)"):
+        setup_script.run_reporting([sys.executable, "-c", "raise SystemExit(3)"], "building",
+                                   output=io.StringIO())

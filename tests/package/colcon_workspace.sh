@@ -3,7 +3,8 @@
 # workspace's src/ would be) and src/binbow_colcon_consumer
 # (tests/package/colcon_consumer, a package.xml depending on binbow) are built
 # by `colcon build`; the consumer then runs from the install space with the
-# vocabulary binbow installed, and so does binbow's CLI. colcon finds binbow
+# vocabulary binbow installed, and so does binbow's CLI; binbow's package.xml and
+# ament index marker are installed for ROS 2's tools. colcon finds binbow
 # at the checkout's own path, so that binbow compiles with the same paths and
 # flags as a Release build of the checkout, whose objects a compiler cache
 # then reuses.
@@ -14,12 +15,12 @@ fail() { echo "colcon_workspace.sh: error: $*" >&2; exit 1; }
 command -v colcon >/dev/null 2>&1 ||
   fail "colcon is not installed (Debian: colcon python3-colcon-cmake python3-colcon-ros, see scripts/install-deps.sh)"
 
-# colcon and rosdep read the version from package.xml; it must be project()'s.
-project_version=$(sed -nE 's/^project\(binbow VERSION ([0-9.]+).*/\1/p' "$repo/CMakeLists.txt")
+# colcon and rosdep read the version from package.xml; it must be VERSION's.
+project_version=$(cat "$repo/VERSION")
 package_version=$(sed -nE 's|^ *<version>([^<]+)</version>.*|\1|p' "$repo/package.xml")
-[ -n "$project_version" ] || fail "no project(binbow VERSION ...) in $repo/CMakeLists.txt"
+[ -n "$project_version" ] || fail "no version in $repo/VERSION"
 [ "$project_version" = "$package_version" ] ||
-  fail "package.xml has version '$package_version' but CMakeLists.txt has $project_version"
+  fail "package.xml has version '$package_version' but VERSION has $project_version"
 
 workspace=$(mktemp -d)
 trap 'rm -rf "$workspace"' EXIT
@@ -39,6 +40,14 @@ colcon build --base-paths "$repo" src --event-handlers console_cohesion+ --paral
 for package in binbow binbow_colcon_consumer; do
   [ -d "install/$package" ] || fail "colcon did not build and install the package $package"
 done
+
+# ROS 2's tools (ros2 pkg, ament_index_python) find packages by the ament
+# index marker and read their manifest from share/<package>.
+for file in share/ament_index/resource_index/packages/binbow share/binbow/package.xml; do
+  [ -f "install/binbow/$file" ] || fail "binbow's install space has no $file"
+done
+cmp -s "$repo/package.xml" install/binbow/share/binbow/package.xml ||
+  fail "the installed package.xml is not the checkout's"
 
 # The install space as a ROS 2 user gets it (setup scripts are not -u clean).
 set +u

@@ -1,5 +1,7 @@
-# Installs the build tree into a scratch prefix, runs the installed CLI, then
-# builds and runs separate consumer projects: one of binbow::core alone
+# With the build tree installed in the scratch prefix PREFIX (install.cmake),
+# checks the files for other tools (ROS 2's manifest and index marker, the
+# pkg-config files, parsed strictly), runs the installed CLI, then builds and
+# runs separate consumer projects: one of binbow::core alone
 # (find_package COMPONENTS core), one of binbow::vision exactly as the README
 # shows, the same two sources built with nothing but the compiler and
 # pkg-config, and one of binbow::dbow2 written as ORB-SLAM2 uses DBoW2, built
@@ -10,7 +12,9 @@
 # With SHARED, every
 # program must link binbow's shared libraries.
 file(REMOVE_RECURSE ${WORK_DIR})
-set(prefix ${WORK_DIR}/prefix)
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(prefix ${PREFIX})
+include(${CMAKE_CURRENT_LIST_DIR}/check_pc_files.cmake)
 
 function(run what)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -31,7 +35,37 @@ function(expect_linkage program library)
   endif()
 endfunction()
 
-run("installing binbow" ${CMAKE_COMMAND} --install ${BINBOW_BUILD_DIR} --prefix ${prefix})
+# ROS 2's tools find an installed package by its ament index marker, and read
+# its manifest in share/<package>.
+foreach(file ${DATADIR}/ament_index/resource_index/packages/binbow ${DATADIR}/binbow/package.xml)
+  if(NOT EXISTS ${prefix}/${file})
+    message(FATAL_ERROR "the install did not put ${file} in the prefix")
+  endif()
+endforeach()
+file(READ ${SOURCE_DIR}/package.xml source_manifest)
+file(READ ${prefix}/${DATADIR}/binbow/package.xml installed_manifest)
+if(NOT installed_manifest STREQUAL source_manifest)
+  message(FATAL_ERROR "the installed package.xml is not the source's")
+endif()
+
+# The pkg-config files as installed: strictly parsed, and validated by
+# pkg-config itself where it can (pkgconf's --validate).
+file(GLOB pc_files ${prefix}/${LIBDIR}/pkgconfig/*.pc)
+list(LENGTH pc_files pc_count)
+if(NOT pc_count EQUAL 3)
+  message(FATAL_ERROR "expected binbow.pc, binbow-vision.pc and binbow-dbow2.pc installed: ${pc_files}")
+endif()
+binbow_check_pc_files("${pc_files}")
+set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
+execute_process(COMMAND pkg-config --help OUTPUT_VARIABLE help ERROR_VARIABLE help)
+if(help MATCHES "--validate")
+  foreach(pc_file ${pc_files})
+    run("pkg-config --validate ${pc_file}" pkg-config --validate ${pc_file})
+  endforeach()
+else()
+  message(STATUS "pkg-config has no --validate: the strict parse alone checked the .pc files")
+endif()
+
 set(vocabulary ${prefix}/share/binbow/vocab/orb_default.bbw)
 set(sample ${prefix}/share/binbow/samples/rtabmap/samples)
 foreach(path ${vocabulary} ${sample})
@@ -141,7 +175,6 @@ run("building the dbow2_names consumer" ${CMAKE_COMMAND} --build ${names_build})
 run_dbow2_names_consumers(${names_build} CMake)
 
 # pkg-config: binbow (core) and binbow-vision.
-set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
 foreach(consumer core vision)
   if(consumer STREQUAL "core")
     set(module binbow)
