@@ -52,8 +52,8 @@ endif()
 # pkg-config itself where it can (pkgconf's --validate).
 file(GLOB pc_files ${prefix}/${LIBDIR}/pkgconfig/*.pc)
 list(LENGTH pc_files pc_count)
-if(NOT pc_count EQUAL 3)
-  message(FATAL_ERROR "expected binbow.pc, binbow-vision.pc and binbow-dbow2.pc installed: ${pc_files}")
+if(NOT pc_count EQUAL 4)
+  message(FATAL_ERROR "expected binbow.pc, binbow-vision.pc, binbow-dbow2.pc and binbow-dbow2-names.pc installed: ${pc_files}")
 endif()
 binbow_check_pc_files("${pc_files}")
 set(ENV{PKG_CONFIG_PATH} ${prefix}/${LIBDIR}/pkgconfig)
@@ -109,13 +109,16 @@ foreach(consumer core vision)
   message(STATUS "CMake ${consumer}: ${output}")
 endforeach()
 
+# The DBoW2 layer's consumers below are built without optimisation (no build
+# type, -O0): they check what compiles and links, and their numbers do not
+# depend on it.
 # binbow::dbow2: an ORB-SLAM text vocabulary made by the installed CLI, and
 # DBoW2's own numbers to reproduce.
 set(orbvoc ${WORK_DIR}/ORBvoc.txt)
 run("converting the vocabulary for the dbow2 consumer" ${cli} convert ${vocabulary} ${orbvoc})
 set(build ${WORK_DIR}/dbow2-cmake)
 run("configuring the dbow2 consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/dbow2
-    -B ${build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+    -B ${build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=)
 run("building the dbow2 consumer" ${CMAKE_COMMAND} --build ${build})
 run("running the dbow2 consumer" ${build}/consumer ${orbvoc} ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
 if(NOT output MATCHES "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0")
@@ -130,7 +133,7 @@ foreach(minimum 2.8.12 3.0 3.5)
   set(build ${WORK_DIR}/dbow2-cmake-${minimum})
   run("configuring the dbow2 consumer as a CMake ${minimum} project" ${CMAKE_COMMAND}
       -S ${CONSUMER_SOURCE_DIR}/dbow2 -B ${build} -DCMAKE_PREFIX_PATH=${prefix}
-      -DCMAKE_BUILD_TYPE=Release -DCONSUMER_CMAKE_MINIMUM=${minimum})
+      -DCMAKE_BUILD_TYPE= -DCONSUMER_CMAKE_MINIMUM=${minimum})
   run("building the dbow2 consumer as a CMake ${minimum} project" ${CMAKE_COMMAND} --build ${build})
   run("running the dbow2 consumer built as a CMake ${minimum} project" ${build}/consumer ${orbvoc}
       ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
@@ -170,7 +173,7 @@ function(run_dbow2_names_consumers directory how)
 endfunction()
 set(names_build ${WORK_DIR}/dbow2_names-cmake)
 run("configuring the dbow2_names consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/dbow2_names
-    -B ${names_build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+    -B ${names_build} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=)
 run("building the dbow2_names consumer" ${CMAKE_COMMAND} --build ${names_build})
 run_dbow2_names_consumers(${names_build} CMake)
 
@@ -216,7 +219,7 @@ run("pkg-config binbow-dbow2" pkg-config --cflags --libs binbow-dbow2)
 string(STRIP "${output}" flags)
 separate_arguments(flags UNIX_COMMAND "${flags}")
 set(program ${WORK_DIR}/dbow2-pkgconfig)
-run("building the dbow2 consumer with pkg-config" ${CXX} -std=c++11 -O1
+run("building the dbow2 consumer with pkg-config" ${CXX} -std=c++11 -O0
     -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2/main.cpp -o ${program} ${flags}
     -Wl,-rpath,${prefix}/${LIBDIR})
 run("running the dbow2 consumer (pkg-config)" ${program} ${orbvoc}
@@ -243,7 +246,7 @@ foreach(program ${programs})
   if(program STREQUAL "orbslam3_serialization")
     set(extra -lboost_serialization)
   endif()
-  run("building the dbow2_names consumer ${program} with pkg-config" ${CXX} -std=c++11 -O1
+  run("building the dbow2_names consumer ${program} with pkg-config" ${CXX} -std=c++11 -O0
       -I${CONSUMER_SOURCE_DIR}/../compat ${CONSUMER_SOURCE_DIR}/dbow2_names/${program}.cpp
       -o ${names_programs}/${program} ${flags} ${extra} -Wl,-rpath,${prefix}/${LIBDIR})
 endforeach()
@@ -260,7 +263,7 @@ set(vins_expect "numbers equal to DBoW2's: [1-9][0-9]*, mismatches: 0, newest en
 set(golden ${CONSUMER_SOURCE_DIR}/../compat/dbow2_golden.txt)
 set(build ${WORK_DIR}/vins-cmake)
 run("configuring the vins consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR}/vins -B ${build}
-    -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+    -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=)
 run("building the vins consumer" ${CMAKE_COMMAND} --build ${build})
 run("running the vins consumer" ${build}/consumer ${vins_vocabulary} ${golden})
 if(NOT output MATCHES "${vins_expect}")
@@ -272,7 +275,7 @@ run("pkg-config binbow-dbow2-names" pkg-config --cflags --libs binbow-dbow2-name
 string(STRIP "${output}" flags)
 separate_arguments(flags UNIX_COMMAND "${flags}")
 set(program ${WORK_DIR}/vins-pkgconfig)
-run("building the vins consumer with pkg-config" ${CXX} -std=c++14 -O1
+run("building the vins consumer with pkg-config" ${CXX} -std=c++14 -O0
     -I${CONSUMER_SOURCE_DIR}/../compat -I${CONSUMER_SOURCE_DIR}/../compat_vins
     ${CONSUMER_SOURCE_DIR}/vins/main.cpp -o ${program} ${flags} -Wl,-rpath,${prefix}/${LIBDIR})
 run("running the vins consumer (pkg-config)" ${program} ${vins_vocabulary} ${golden})
