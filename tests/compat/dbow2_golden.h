@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -18,6 +19,19 @@
 #include "binbow/compat/DBoW2.h"
 
 namespace dbow2_golden {
+
+// The consumer programs' tally of numbers that differ from DBoW2's; check()
+// names each one on stderr.
+inline int& mismatches() {
+  static int count = 0;
+  return count;
+}
+inline void check(bool ok, const std::string& what) {
+  if (!ok) {
+    std::fprintf(stderr, "mismatch: %s\n", what.c_str());
+    ++mismatches();
+  }
+}
 
 struct Query {
   std::string scoring;

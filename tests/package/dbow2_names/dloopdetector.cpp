@@ -23,14 +23,7 @@ typedef int vector;
 
 namespace {
 
-int failures = 0;
-
-void check(bool ok, const std::string& what) {
-  if (!ok) {
-    std::fprintf(stderr, "mismatch: %s\n", what.c_str());
-    ++failures;
-  }
-}
+using dbow2_golden::check;
 
 }  // namespace
 
@@ -73,6 +66,6 @@ int main(int argc, char** argv) {
                 dbow2_golden::close(ret[r].Score, query.results[r].second, 1e-6),
             "query result");
   }
-  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared, failures);
-  return failures == 0 ? 0 : 1;
+  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared, dbow2_golden::mismatches());
+  return dbow2_golden::mismatches() == 0 ? 0 : 1;
 }

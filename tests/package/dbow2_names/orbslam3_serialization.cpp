@@ -25,14 +25,7 @@ static_assert(__cplusplus == 201103L, "this consumer must build as C++11");
 
 namespace {
 
-int failures = 0;
-
-void check(bool ok, const std::string& what) {
-  if (!ok) {
-    std::fprintf(stderr, "mismatch: %s\n", what.c_str());
-    ++failures;
-  }
-}
+using dbow2_golden::check;
 
 struct KeyFrame {
   DBoW2::BowVector mBowVec;
@@ -138,6 +131,6 @@ int main(int argc, char** argv) {
     check(out.str() == text,
           "text archive as ORB-SLAM3's copy writes it, image " + std::to_string(i));
   }
-  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared, failures);
-  return failures == 0 ? 0 : 1;
+  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared, dbow2_golden::mismatches());
+  return dbow2_golden::mismatches() == 0 ? 0 : 1;
 }
