@@ -66,6 +66,7 @@ int main(int argc, char** argv) {
                 dbow2_golden::close(ret[r].Score, query.results[r].second, 1e-6),
             "query result");
   }
-  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared, dbow2_golden::mismatches());
+  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared,
+              dbow2_golden::mismatches());
   return dbow2_golden::mismatches() == 0 ? 0 : 1;
 }

@@ -131,6 +131,7 @@ int main(int argc, char** argv) {
     check(out.str() == text,
           "text archive as ORB-SLAM3's copy writes it, image " + std::to_string(i));
   }
-  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared, dbow2_golden::mismatches());
+  std::printf("numbers equal to DBoW2's: %d, mismatches: %d\n", compared,
+              dbow2_golden::mismatches());
   return dbow2_golden::mismatches() == 0 ? 0 : 1;
 }
