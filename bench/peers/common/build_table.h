@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,34 @@ inline double binbow_error(const binbow::Vocabulary& v, const std::vector<cv::Ma
   cv::Mat all;
   for (const cv::Mat& m : images) all.push_back(m);
   return v.mean_quantisation_error(view(all));
+}
+
+// One repetition of binbow's row: the build on row.threads threads, its CPU
+// time, words and quantisation error.
+inline void measure_binbow_build(const std::vector<cv::Mat>& images, BuildRow& row) {
+  double cpu_s;
+  const binbow::Vocabulary v = binbow_build(images, row.threads, cpu_s);
+  row.cpu_s.push_back(cpu_s);
+  row.words = std::to_string(v.word_count());
+  char error[32];
+  std::snprintf(error, sizeof error, "%.2f", binbow_error(v, images));
+  row.error = error;
+}
+
+// The build harnesses' one argument, --reps N (default 1); -1 after printing
+// the usage for anything else.
+inline int build_repetitions(int argc, char** argv) {
+  int reps = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--reps" && i + 1 < argc) {
+      reps = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: build_harness [--reps N]\n");
+      return -1;
+    }
+  }
+  return reps;
 }
 
 inline void print_build_table(const std::vector<BuildRow>& rows) {

@@ -16,32 +16,16 @@
 #include "vocabulary_creator.h"
 
 int main(int argc, char** argv) {
-  int reps = 1;
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // tables appear as they are made, even through tee
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--reps" && i + 1 < argc) {
-      reps = std::atoi(argv[++i]);
-    } else {
-      std::fprintf(stderr, "usage: build_harness [--reps N]\n");
-      return 2;
-    }
-  }
+  const int reps = peers::build_repetitions(argc, argv);
+  if (reps < 0) return 2;
   const std::vector<cv::Mat> images = peers::training_set();
 
   peers::BuildRow one{"binbow", 1, {}}, two{"binbow", 2, {}}, fbow1{"fbow", 1, {}},
       fbow2{"fbow", 2, {}};
   for (int rep = 0; rep < reps; ++rep) {
     auto run_binbow = [&] {
-      for (peers::BuildRow* row : {&one, &two}) {
-        double cpu_s;
-        const binbow::Vocabulary v = peers::binbow_build(images, row->threads, cpu_s);
-        row->cpu_s.push_back(cpu_s);
-        row->words = std::to_string(v.word_count());
-        char error[32];
-        std::snprintf(error, sizeof error, "%.2f", peers::binbow_error(v, images));
-        row->error = error;
-      }
+      for (peers::BuildRow* row : {&one, &two}) peers::measure_binbow_build(images, *row);
     };
     auto run_fbow = [&] {
       for (peers::BuildRow* row : {&fbow1, &fbow2}) {
