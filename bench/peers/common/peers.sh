@@ -22,6 +22,20 @@ declare -A PEER_COMMIT=(
 # Every peer: CMake's Release (-O3 -DNDEBUG) plus this.
 PEER_CXX_FLAGS=${PEER_CXX_FLAGS:--march=native}
 
+# peer_binbow SCRIPT REPO: binbow's side of a harness. Sets `build` (the
+# Release build tree BINBOW_BUILD, default REPO/build) and `binbow` (its CLI),
+# exports BINBOW_SHARED_DATA (default: ../shared/data beside REPO), and stops,
+# naming SCRIPT, when the CLI or libbinbow_core.a is missing.
+peer_binbow() {
+  local script=$1 repo=$2 f
+  build=$(realpath "${BINBOW_BUILD:-$repo/build}")
+  binbow=$build/bin/binbow
+  export BINBOW_SHARED_DATA=${BINBOW_SHARED_DATA:-$repo/../shared/data}
+  for f in "$binbow" "$build/src/libbinbow_core.a"; do
+    [ -e "$f" ] || { echo "$script: no $f (build binbow's Release first, or set BINBOW_BUILD)" >&2; exit 1; }
+  done
+}
+
 # peer_source OWNER/NAME: the URL or folder to clone OWNER/NAME from.
 peer_source() {
   local owner_name=$1 name=${1#*/} override

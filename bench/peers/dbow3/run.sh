@@ -20,13 +20,9 @@ here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../../.." && pwd)
 # shellcheck source=../common/peers.sh
 source "$here/../common/peers.sh"
-build=$(realpath "${BINBOW_BUILD:-$repo/build}")
+build="" binbow="" # set by peer_binbow
+peer_binbow dbow3/run.sh "$repo"
 work=$(realpath -m "${WORK:-$build/peers}")
-binbow=$build/bin/binbow
-export BINBOW_SHARED_DATA=${BINBOW_SHARED_DATA:-$repo/../shared/data}
-for f in "$binbow" "$build/src/libbinbow_core.a"; do
-  [ -e "$f" ] || { echo "dbow3/run.sh: no $f (build binbow's Release first, or set BINBOW_BUILD)" >&2; exit 1; }
-done
 
 setup() {
   mkdir -p "$work/src" "$work/build"
