@@ -1,6 +1,9 @@
 """binbow.distributed.ShardedDatabase on a local Dask cluster of worker processes."""
+import contextlib
 import json
+import os
 import pickle
+import signal
 import warnings
 
 import numpy as np
@@ -23,6 +26,21 @@ def client():
     with distributed.Client(cluster) as dask_client:
         yield dask_client
     cluster.close()
+
+
+@contextlib.contextmanager
+def own_cluster():
+    """A client of two worker processes of the test's own, for a test that kills one: the
+    module's shared cluster stays whole."""
+    distributed = require_module("distributed", "python3-distributed")
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as dask_client:
+        yield dask_client
+
+
+def kill_worker(dask_client, worker):
+    os.kill(dask_client.run(os.getpid, workers=[worker])[worker], signal.SIGKILL)
 
 
 def sharded_module():
@@ -356,22 +374,15 @@ def test_the_same_mistakes_give_database_s_errors(client, vocabulary):
 
 def test_a_lost_worker_is_a_binbow_error_and_the_last_save_stays(vocabulary, tmp_path):
     """A worker dies: calls raise binbow.Error, save refuses before writing anything."""
-    import os
-    import signal
-
-    distributed = require_module("distributed", "python3-distributed")
     module = sharded_module()
     images = random_images(13, 6)
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as dask_client:
+    with own_cluster() as dask_client:
         sharded = module.ShardedDatabase(dask_client, vocabulary, shards=2, timeout=20)
         sharded.add_many(images[:4], [f"l{i}" for i in range(4)])
         sharded.save(tmp_path)
         saved = {p.name: p.read_bytes() for p in saved_files(tmp_path)}
         sharded.add_many(images[4:])  # a newer generation, on both shards
-        worker = sharded.workers[1]
-        os.kill(dask_client.run(os.getpid, workers=[worker])[worker], signal.SIGKILL)
+        kill_worker(dask_client, sharded.workers[1])
         with pytest.raises(binbow.Error, match="shard 1"):
             sharded.query(images[1])
         for call in (lambda: sharded.save(tmp_path), lambda: sharded.add(images[0]),
@@ -389,21 +400,14 @@ def test_the_call_that_meets_a_killed_worker_names_the_shard_and_what_to_do(voca
                                                                            first):
     """Whichever call meets the dead worker first, it raises binbow.Error (never Dask's own
     exception) naming the shard and the way back; every later call says the shard was lost."""
-    import os
-    import signal
-
-    distributed = require_module("distributed", "python3-distributed")
     module = sharded_module()
     images = random_images(16, 4)
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as dask_client:
+    with own_cluster() as dask_client:
         sharded = module.ShardedDatabase(dask_client, vocabulary, shards=2, timeout=20)
         sharded.add_many(images)
         calls = {"query": lambda: sharded.query(images[0]), "len": lambda: len(sharded),
                  "save": lambda: sharded.save(tmp_path / "saved")}
-        worker = sharded.workers[1]
-        os.kill(dask_client.run(os.getpid, workers=[worker])[worker], signal.SIGKILL)
+        kill_worker(dask_client, sharded.workers[1])
         with pytest.raises(binbow.Error, match=r"^ShardedDatabase[.: ].*shard 1 .*"
                                                r"ShardedDatabase\.load\)$") as raised:
             calls[first]()
