@@ -377,14 +377,14 @@ py::tuple frame_state(const loop::SequenceFrame& frame) {
                         std::array<double, 5>{t.transform_ms, t.query_ms, t.islands_ms,
                                               t.verification_ms, t.insertion_ms},
                         r.features, frame.unreadable, static_cast<int>(r.fit_evidence),
-                        static_cast<int>(r.accepted_by));
+                        static_cast<int>(r.accepted_by), r.localised, r.localised_from);
 }
 
 loop::SequenceFrame frame_from_state(const py::tuple& state) {
   constexpr int kLastStatus = static_cast<int>(loop::LoopStatus::kNoGeometricConsistency);
   // 20 fields before `unreadable` was added, 21 before the fit's evidence and
-  // what accepted the loop.
-  if (state.size() != 20 && state.size() != 21 && state.size() != 23)
+  // what accepted the loop, 23 before localisation.
+  if (state.size() != 20 && state.size() != 21 && state.size() != 23 && state.size() != 25)
     throw py::value_error("invalid pickled binbow.LoopResult");
   loop::SequenceFrame frame;
   frame.file = state[0].cast<std::string>();
@@ -424,6 +424,10 @@ loop::SequenceFrame frame_from_state(const py::tuple& state) {
                             std::to_string(accepted_by));
     r.fit_evidence = static_cast<vision::FitEvidence>(evidence);
     r.accepted_by = static_cast<loop::LoopEvidence>(accepted_by);
+  }
+  if (state.size() > 23) {
+    r.localised = state[23].cast<bool>();
+    r.localised_from = state[24].cast<EntryId>();
   }
   return frame;
 }
@@ -510,6 +514,14 @@ void bind_detection(py::module_& m) {
           "What accepted the loop: \"strong-fit\", \"strong-fit-alone\" (before temporal\n"
           "consistency), \"near-previous-loop\", \"revisit-pace\",\n"
           "\"neighbour\", \"unchecked\" (no geometric check), or \"none\" (no loop).")
+      .def_property_readonly(
+          "localised_from",
+          [](const loop::SequenceFrame& f) -> std::optional<EntryId> {
+            if (!f.result.localised) return std::nullopt;
+            return f.result.localised_from;
+          },
+          "The entry of the island first accepted, when the loop moved from it to `match`\n"
+          "(LoopDetectorParams.localise_in_island); None otherwise.")
       .def_property_readonly(
           "inliers", [](const loop::SequenceFrame& f) { return inlier_array(f.result.inliers); },
           "RANSAC inliers as an int64 (M, 2) array: feature of the frame, feature of the match\n"

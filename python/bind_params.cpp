@@ -185,6 +185,9 @@ const std::vector<Field>& fields() {
       real_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance,
                  "How far a weak loop may stray from the revisit's pace, as a fraction of the "
                  "queries since the loop before it, [0, 1]."),
+      bool_field("localise_in_island", &P::localise_in_island,
+                 "An accepted loop moves to the entry of its island that is also accepted with\n"
+                 "more inliers and more of the view reappearing where the fit puts it."),
   };
   return table;
 }

@@ -77,6 +77,10 @@ struct TrailCheck {
   // otherwise needs min_inliers) to be consistent, so it needs no
   // corroboration, and nothing corroborates a weaker one.
   bool before_temporal_consistency = false;
+  // vision::view_agreement() of the fit, measured for the checks that
+  // localisation compares (LoopDetectorParams::localise_in_island); -1 when
+  // not measured.
+  double view_agreement = -1;
 
   // Whether the check let the entry through: a consistent fit, corroborated when needed.
   bool accepted() const noexcept {

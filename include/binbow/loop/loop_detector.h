@@ -68,12 +68,14 @@ inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  //
 // defaults are the paper's (and DLoopDetector's) at a frequency of 1 Hz,
 // except binbow's measured departures, each switchable back:
 // accept_single_candidate, exhaustive_fallback, skip_featureless_frames,
-// fundamental_estimator, reject_degenerate_fits, min_uncorroborated_inliers and
-// strong_fits_skip_temporal_check (docs/loop-detection.md has their effect).
+// fundamental_estimator, reject_degenerate_fits, min_uncorroborated_inliers,
+// strong_fits_skip_temporal_check and localise_in_island
+// (docs/loop-detection.md has their effect).
 // The DLoopDetector rules: {"accept_single_candidate": true,
 // "exhaustive_fallback": false, "skip_featureless_frames": false,
 // "fundamental_estimator": "ransac", "reject_degenerate_fits": false,
-// "min_uncorroborated_inliers": 0, "strong_fits_skip_temporal_check": false}.
+// "min_uncorroborated_inliers": 0, "strong_fits_skip_temporal_check": false,
+// "localise_in_island": false}.
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
@@ -191,6 +193,18 @@ struct LoopDetectorParams {
   // a few frames cannot wait for k + 1 of them. Weaker fits still need the
   // temporal test. Off when min_uncorroborated_inliers is 0.
   bool strong_fits_skip_temporal_check = true;
+  // binbow's addition, on by default: once a loop is accepted, the other
+  // candidates of its island are checked too, and the loop moves to the one
+  // that is also accepted with more inliers and a larger
+  // vision::view_agreement() than the accepted entry (the most inliers of
+  // such). The island's best η is the place; which of its images was taken
+  // from where the camera is now is a question for the geometry. Along a
+  // corridor of repeated lamps and doors, the image a few metres back
+  // shares the most words with the query and fits a dozen of its repeated
+  // objects, while the image from the same spot fits many more features and
+  // shows the rest of the view again. Costs a geometric check per other
+  // candidate of the island, for detections only.
+  bool localise_in_island = true;
   int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
   int corroboration_horizon = 10;  // frames (10 f) [1, 1e6]
   // Fraction of the queries since the loop before it. [0, 1]
@@ -278,6 +292,10 @@ struct LoopResult {
   LoopCorroboration corroboration;
   // What accepted the loop (kNone unless detection()).
   LoopEvidence accepted_by = LoopEvidence::kNone;
+  // Whether localisation (LoopDetectorParams::localise_in_island) moved the
+  // loop from localised_from, the island's entry first accepted, to match.
+  bool localised = false;
+  EntryId localised_from = 0;
   // The fit's evidence (vision::FitDeterminacy::evidence; kNone before any check).
   vision::FitEvidence fit_evidence = vision::FitEvidence::kNone;
   LoopStageTimes times;

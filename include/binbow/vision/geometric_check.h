@@ -219,4 +219,24 @@ FundamentalCheckResult check_fundamental(Span<Keypoint> first, Span<Keypoint> se
                                          const std::vector<Correspondence>& correspondences,
                                          const FundamentalCheckParams& params = {});
 
+// How much of the two views a fit explains. The homography that most of the
+// inliers follow (RANSAC) maps every feature of one image into the other; of
+// those that land within the other image's keypoints' bounding box, the
+// share that finds there, within kReappearanceRadius pixels, a feature whose
+// descriptor differs in at most kReappearanceBits of its bits. The smaller
+// share of the two directions; 0 with fewer than 4 distinct inliers or
+// without such a homography.
+//
+// Repeated structure (lamps, doors, alarms along a corridor) fits two views
+// a few metres apart: the repeated objects are the inliers, and the rest of
+// each view does not reappear where the fit puts it. A view from the same
+// place shows much of itself again. The homography is exact for views from
+// one place and approximate with parallax, so shares compare fits of one
+// query with neighbouring images of one place, not fits of unrelated pairs.
+inline constexpr double kReappearanceRadius = 6.0;  // pixels
+inline constexpr double kReappearanceBits = 0.25;   // of the descriptor's bits
+double view_agreement(Span<Keypoint> first, const DescriptorView& first_descriptors,
+                      Span<Keypoint> second, const DescriptorView& second_descriptors,
+                      const std::vector<Correspondence>& inliers);
+
 }  // namespace binbow::vision

@@ -81,8 +81,7 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
                                                bool strong_fit_only) const {
   TrailCheck out;
   out.entry = match;
-  const Span<Keypoint> match_keypoints{frames[match].keypoints.data(),
-                                       frames[match].keypoints.size()};
+  const Span<Keypoint> match_keypoints = keypoints_of(match);
   const DescriptorView match_descriptors = descriptors_of(match);
   FundamentalCheckParams check;
   check.min_inliers = params.min_inliers;
@@ -381,6 +380,47 @@ void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_
   }
 }
 
+void LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> query_keypoints,
+                                            const DescriptorView& query_descriptors,
+                                            const FeatureVector& query_nodes,
+                                            bool before_temporal_consistency) const {
+  if (!result.detection() || !params.localise_in_island ||
+      params.geometric_check == GeometricCheck::kNone)
+    return;
+  std::vector<detail::Candidate> others;
+  for (const detail::Candidate& c : candidates)
+    if (c.entry >= result.island_first && c.entry <= result.island_last && c.entry != result.match)
+      others.push_back(c);
+  if (others.empty()) return;
+  std::stable_sort(
+      others.begin(), others.end(),
+      [](const detail::Candidate& a, const detail::Candidate& b) { return a.score > b.score; });
+  const auto agreement = [&](const LoopResult& r) {
+    const double share =
+        vision::view_agreement(query_keypoints, query_descriptors, keypoints_of(r.match),
+                               descriptors_of(r.match), r.inliers);
+    if (trail != nullptr) trail->checks.back().view_agreement = share;
+    return share;
+  };
+  const double accepted_agreement = agreement(result);
+  const double factor = normalisation_factor(result);
+  LoopResult best = result;
+  for (const detail::Candidate& c : others) {
+    LoopResult attempt = result;
+    attempt.match = c.entry;
+    attempt.normalised_score = c.score;
+    attempt.score = c.score * factor;
+    verify(attempt, query_keypoints, query_descriptors, query_nodes, before_temporal_consistency);
+    if (attempt.detection() && attempt.inliers.size() > best.inliers.size() &&
+        agreement(attempt) > accepted_agreement)
+      best = std::move(attempt);
+  }
+  if (best.match == result.match) return;
+  best.localised = true;
+  best.localised_from = result.match;
+  result = std::move(best);
+}
+
 void LoopDetector::Impl::record_islands() {
   // Runs of every length: the trail shows the short ones the detector dropped.
   std::vector<detail::Candidate> all = candidates;
@@ -483,6 +523,7 @@ LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorVie
       result.times.islands_ms = milliseconds_since(clock);
       if (result.status == LoopStatus::kNoGeometricConsistency) {
         d.verify_island(result, keypoints, descriptors, nodes);
+        d.localise_in_island(result, keypoints, descriptors, nodes, false);
         result.times.verification_ms = milliseconds_since(clock);
       } else if (result.status == LoopStatus::kNoTemporalConsistency &&
                  d.params.strong_fits_skip_temporal_check &&
@@ -490,6 +531,7 @@ LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorVie
                  d.params.geometric_check != GeometricCheck::kNone) {
         LoopResult strong = result;
         d.verify(strong, keypoints, descriptors, nodes, true);
+        d.localise_in_island(strong, keypoints, descriptors, nodes, true);
         if (strong.detection()) result = std::move(strong);
         result.times.verification_ms = milliseconds_since(clock);
       }

@@ -60,6 +60,9 @@ struct LoopDetector::Impl {
   LoopDecisionTrail* trail = nullptr;
 
   bool keeps_features() const { return params.geometric_check != GeometricCheck::kNone; }
+  Span<vision::Keypoint> keypoints_of(EntryId frame) const {
+    return {frames[frame].keypoints.data(), frames[frame].keypoints.size()};
+  }
   DescriptorView descriptors_of(EntryId frame) const {
     const FrameFeatures& f = frames[frame];
     return {f.descriptors.data(), f.keypoints.size(), code_size};
@@ -78,6 +81,11 @@ struct LoopDetector::Impl {
   std::vector<QueryResult> query(const BowVector& bow, LoopResult& result) const;
   bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
   void select_island(const std::vector<QueryResult>& found, LoopResult& result);
+  // LoopDetectorParams::localise_in_island, for a loop `result` accepted by
+  // verify() with before_temporal_consistency.
+  void localise_in_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                          const DescriptorView& query_descriptors, const FeatureVector& query_nodes,
+                          bool before_temporal_consistency) const;
   void verify_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
                      const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
   // before_temporal_consistency: only a strong fit (min_uncorroborated_inliers) is a loop.

@@ -129,6 +129,7 @@ const std::vector<Field>& fields() {
       number_field("corroboration_distance", &P::corroboration_distance),
       number_field("corroboration_horizon", &P::corroboration_horizon),
       number_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance),
+      bool_field("localise_in_island", &P::localise_in_island),
   };
   return table;
 }
