@@ -188,6 +188,8 @@ const std::vector<Field>& fields() {
       bool_field("localise_in_island", &P::localise_in_island,
                  "An accepted loop moves to the entry of its island that is also accepted with\n"
                  "more inliers and more of the view reappearing where the fit puts it."),
+      int_field("max_localisation_checks", &P::max_localisation_checks,
+                "Other candidates of the island localisation checks, best first, [1, 50]."),
   };
   return table;
 }

@@ -6,6 +6,7 @@
 // features. Without localisation 67 → 32 is a false loop.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <utility>
@@ -43,7 +44,7 @@ void write_upscaled_frames(const test::TempDir& dir) {
 
 struct Detection {
   std::vector<LoopResult> results;
-  LoopDecisionTrail query_trail;  // kQuery's
+  std::vector<LoopDecisionTrail> trails;  // one per frame
 };
 
 Detection detect(const std::string& folder, bool localise) {
@@ -56,11 +57,8 @@ Detection detect(const std::string& folder, bool localise) {
   vision::Frame frame;
   Detection run;
   while (source.next(frame)) {
-    const vision::Features features = extractor->extract(frame.image);
-    if (detector.size() == kQuery)
-      run.results.push_back(detector.process(features, run.query_trail));
-    else
-      run.results.push_back(detector.process(features));
+    run.trails.emplace_back();
+    run.results.push_back(detector.process(extractor->extract(frame.image), run.trails.back()));
   }
   return run;
 }
@@ -120,7 +118,7 @@ TEST_F(Localisation, TheLoopMovesToTheImageFromTheSamePlace) {
   // agreement each was compared by: the image from the same place shows
   // more of the view again.
   double from = -1, to = -1;
-  for (const TrailCheck& c : with_->query_trail.checks) {
+  for (const TrailCheck& c : with_->trails[kQuery].checks) {
     if (c.entry == 32) from = c.view_agreement;
     if (c.entry == r.match) to = c.view_agreement;
   }
@@ -140,6 +138,31 @@ TEST_F(Localisation, LosesNoTrueLoopAndMovesOnlyWithinTheIsland) {
     EXPECT_LE(r.match, r.island_last) << "frame " << r.query;
   }
   EXPECT_GE(moved, 1u);
+}
+
+// A fit that explains most of both views is the place itself: its island's
+// other images are not checked. Every loop that was checked against them
+// was first accepted with a fit that explains less.
+TEST_F(Localisation, AFitExplainingMostOfBothViewsIsLeftWhereItIs) {
+  std::size_t left = 0, localised = 0;
+  for (std::size_t i = 0; i < with_->results.size(); ++i) {
+    const LoopResult& r = with_->results[i];
+    if (!r.detection()) continue;
+    const std::vector<TrailCheck>& checks = with_->trails[i].checks;
+    const auto first_measured = std::find_if(
+        checks.begin(), checks.end(), [](const TrailCheck& c) { return c.view_agreement >= 0; });
+    if (first_measured == checks.end()) continue;  // an island of one candidate
+    const bool checked_others = first_measured + 1 != checks.end();
+    if (first_measured->view_agreement >= kViewExplained) {
+      ++left;
+      EXPECT_FALSE(checked_others) << "frame " << i;
+      EXPECT_FALSE(r.localised) << "frame " << i;
+    } else {
+      localised += checked_others;
+    }
+  }
+  EXPECT_GE(left, 1u);
+  EXPECT_GE(localised, 1u);
 }
 
 }  // namespace

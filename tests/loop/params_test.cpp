@@ -44,6 +44,8 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_EQ(p.corroboration_distance, 4);
   EXPECT_EQ(p.corroboration_horizon, 10);
   EXPECT_DOUBLE_EQ(p.corroboration_pace_tolerance, 0.25);
+  EXPECT_TRUE(p.localise_in_island);
+  EXPECT_EQ(p.max_localisation_checks, 8);
   const LoopDetectorParams f2 = LoopDetectorParams::for_frequency(2);
   EXPECT_EQ(f2.dislocal, 40);
   EXPECT_EQ(f2.max_db_results, 100);
@@ -71,6 +73,8 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.corroboration_distance = 7;
   p.corroboration_horizon = 9;
   p.corroboration_pace_tolerance = 0.5;
+  p.localise_in_island = false;
+  p.max_localisation_checks = 3;
   const LoopDetectorParams q = LoopDetectorParams::from_json(p.to_json());
   EXPECT_EQ(q.to_json(), p.to_json());
   EXPECT_EQ(q.dislocal, 60);
@@ -211,6 +215,8 @@ TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
         Bound{"max_distance_between_queries", 1, 0},
         Bound{"direct_index_levels", kMaxDirectIndexLevels, kMaxDirectIndexLevels + 1.0},
         Bound{"max_verified_entries", kMaxVerifiedEntries, kMaxVerifiedEntries + 1.0},
+        Bound{"max_localisation_checks", kMaxLocalisationChecks, kMaxLocalisationChecks + 1.0},
+        Bound{"max_localisation_checks", 1, 0},
         Bound{"max_neighbor_ratio", 1, 0},
         Bound{"max_match_distance", 1, 1.5},
         Bound{"min_inliers", kMaxMinInliers, kMaxMinInliers + 1.0},

@@ -77,9 +77,12 @@ struct TrailCheck {
   // otherwise needs min_inliers) to be consistent, so it needs no
   // corroboration, and nothing corroborates a weaker one.
   bool before_temporal_consistency = false;
-  // vision::view_agreement() of the fit, measured for the checks that
-  // localisation compares (LoopDetectorParams::localise_in_island); -1 when
-  // not measured.
+  // A localisation check (LoopDetectorParams::localise_in_island): the
+  // inliers of the accepted fit it had to exceed (0 for any other check).
+  // Such a check matches through the direct index only.
+  std::size_t rival_inliers = 0;
+  // vision::view_agreement() of the fit, measured for the accepted fit and
+  // the checks that localisation compares with it; -1 when not measured.
   double view_agreement = -1;
 
   // Whether the check let the entry through: a consistent fit, corroborated when needed.

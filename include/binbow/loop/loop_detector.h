@@ -50,14 +50,18 @@ GeometricCheck parse_geometric_check(const std::string& name);
 // from_json() and the LoopDetector constructor). The upper bounds bound the
 // work a parameter file can ask for: per frame, at most 2 ×
 // max_verified_entries RANSAC runs (the direct index, then the exhaustive
-// fallback) of at most max_ransac_iterations iterations each. See also
-// docs/limits.md.
-inline constexpr double kMaxFrequency = 10000;        // Hz
-inline constexpr double kMaxScoreThreshold = 1000;    // alpha, min_normalisation_score
-inline constexpr int kMaxFrameDistance = 1'000'000;   // every frame-count parameter
-inline constexpr int kMaxConsistentQueries = 1000;    // k
-inline constexpr int kMaxDirectIndexLevels = 16;      // direct_index_levels
-inline constexpr int kMaxVerifiedEntries = 10;        // max_verified_entries
+// fallback) and max_localisation_checks more (the direct index only) of at
+// most max_ransac_iterations iterations each. See also docs/limits.md.
+inline constexpr double kMaxFrequency = 10000;       // Hz
+inline constexpr double kMaxScoreThreshold = 1000;   // alpha, min_normalisation_score
+inline constexpr int kMaxFrameDistance = 1'000'000;  // every frame-count parameter
+inline constexpr int kMaxConsistentQueries = 1000;   // k
+inline constexpr int kMaxDirectIndexLevels = 16;     // direct_index_levels
+inline constexpr int kMaxVerifiedEntries = 10;       // max_verified_entries
+inline constexpr int kMaxLocalisationChecks = 50;    // max_localisation_checks
+// A fit whose vision::view_agreement() reaches this explains most of both
+// views: localise_in_island leaves such a loop where it is.
+inline constexpr double kViewExplained = 0.5;
 inline constexpr int kMaxMinInliers = 10'000;         // min_inliers
 inline constexpr double kMinReprojectionError = 0.1;  // pixels
 inline constexpr double kMaxReprojectionError = 100;  // pixels
@@ -193,20 +197,24 @@ struct LoopDetectorParams {
   // a few frames cannot wait for k + 1 of them. Weaker fits still need the
   // temporal test. Off when min_uncorroborated_inliers is 0.
   bool strong_fits_skip_temporal_check = true;
-  // binbow's addition, on by default: once a loop is accepted, the other
-  // candidates of its island are checked too, and the loop moves to the one
-  // that is also accepted with more inliers and a larger
-  // vision::view_agreement() than the accepted entry (the most inliers of
-  // such). The island's best η is the place; which of its images was taken
-  // from where the camera is now is a question for the geometry. Along a
-  // corridor of repeated lamps and doors, the image a few metres back
-  // shares the most words with the query and fits a dozen of its repeated
-  // objects, while the image from the same spot fits many more features and
-  // shows the rest of the view again. Costs a geometric check per other
-  // candidate of the island, for detections only.
+  // binbow's addition, on by default: a loop whose fit explains less than
+  // most of the two views (vision::view_agreement() below kViewExplained)
+  // is checked against the other candidates of its island too (the
+  // max_localisation_checks best η), and moves to the one that is also
+  // accepted with more inliers and a larger view_agreement() (the most
+  // inliers of such). The island's best η is the place; which of its
+  // images was taken from where the camera is now is a question for the
+  // geometry. Along a corridor of repeated lamps and doors, the image a few
+  // metres back shares the most words with the query and fits a dozen of
+  // its repeated objects, which explain little of either view, while the
+  // image from the same spot fits many more features and shows much of the
+  // view again. These checks match through the direct index only (no
+  // exhaustive fallback), and run RANSAC only with more correspondences
+  // than the accepted fit has inliers.
   bool localise_in_island = true;
-  int corroboration_distance = 4;  // frames (4 f) [1, 1e6]
-  int corroboration_horizon = 10;  // frames (10 f) [1, 1e6]
+  int max_localisation_checks = 8;  // [1, 50]
+  int corroboration_distance = 4;   // frames (4 f) [1, 1e6]
+  int corroboration_horizon = 10;   // frames (10 f) [1, 1e6]
   // Fraction of the queries since the loop before it. [0, 1]
   double corroboration_pace_tolerance = 0.25;
 

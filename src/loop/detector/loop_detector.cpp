@@ -78,9 +78,11 @@ DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
 TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
                                                const DescriptorView& query_descriptors,
                                                const FeatureVector& query_nodes, EntryId match,
-                                               bool strong_fit_only) const {
+                                               bool strong_fit_only,
+                                               std::size_t rival_inliers) const {
   TrailCheck out;
   out.entry = match;
+  out.rival_inliers = rival_inliers;
   const Span<Keypoint> match_keypoints = keypoints_of(match);
   const DescriptorView match_descriptors = descriptors_of(match);
   FundamentalCheckParams check;
@@ -94,6 +96,9 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
   check.reject_degenerate = params.reject_degenerate_fits;
   if (strong_fit_only)
     check.min_inliers = std::max(check.min_inliers, params.min_uncorroborated_inliers);
+  if (rival_inliers > 0)
+    check.min_inliers =
+        static_cast<int>(std::max(static_cast<std::size_t>(check.min_inliers), rival_inliers + 1));
 
   MatchOptions matching;
   matching.max_neighbor_ratio = params.max_neighbor_ratio;
@@ -111,7 +116,7 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
   FundamentalCheckResult fit =
       check_fundamental(query_keypoints, match_keypoints, correspondences, check);
   if (!fit.consistent && params.geometric_check == GeometricCheck::kDirectIndex &&
-      params.exhaustive_fallback) {
+      params.exhaustive_fallback && rival_inliers == 0) {
     correspondences = match_exhaustive(query_descriptors, match_descriptors, matching);
     fit = check_fundamental(query_keypoints, match_keypoints, correspondences, check);
     out.exhaustive_fallback_used = true;
@@ -123,15 +128,15 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
 
 void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoints,
                                 const DescriptorView& query_descriptors,
-                                const FeatureVector& query_nodes,
-                                bool before_temporal_consistency) const {
+                                const FeatureVector& query_nodes, bool before_temporal_consistency,
+                                std::size_t rival_inliers) const {
   if (params.geometric_check == GeometricCheck::kNone) {
     result.status = LoopStatus::kLoopDetected;
     result.accepted_by = LoopEvidence::kUnchecked;
     return;
   }
   TrailCheck check = geometric_check(query_keypoints, query_descriptors, query_nodes, result.match,
-                                     before_temporal_consistency);
+                                     before_temporal_consistency, rival_inliers);
   if (check.exhaustive_fallback_used) result.exhaustive_fallback_used = true;
   const FundamentalCheckResult& fit = check.fit;
   result.correspondences = fit.correspondences;
@@ -352,6 +357,19 @@ void LoopDetector::Impl::select_island(const std::vector<QueryResult>& found, Lo
                                                        : LoopStatus::kNoTemporalConsistency;
 }
 
+// The candidates of result's island other than its match, best η first.
+std::vector<detail::Candidate> LoopDetector::Impl::other_island_candidates(
+    const LoopResult& result) const {
+  std::vector<detail::Candidate> others;
+  for (const detail::Candidate& c : candidates)
+    if (c.entry >= result.island_first && c.entry <= result.island_last && c.entry != result.match)
+      others.push_back(c);
+  std::stable_sort(
+      others.begin(), others.end(),
+      [](const detail::Candidate& a, const detail::Candidate& b) { return a.score > b.score; });
+  return others;
+}
+
 // Section V-D for the island's best entry, then (max_verified_entries > 1)
 // its other entries, best η first: the island, not its best entry, is what
 // passed the temporal test, and its other images show the same place.
@@ -360,13 +378,7 @@ void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_
                                        const FeatureVector& query_nodes) {
   verify(result, query_keypoints, query_descriptors, query_nodes);
   if (result.detection() || params.max_verified_entries <= 1) return;
-  std::vector<detail::Candidate> others;
-  for (const detail::Candidate& c : candidates)
-    if (c.entry >= result.island_first && c.entry <= result.island_last && c.entry != result.match)
-      others.push_back(c);
-  std::stable_sort(
-      others.begin(), others.end(),
-      [](const detail::Candidate& a, const detail::Candidate& b) { return a.score > b.score; });
+  const std::vector<detail::Candidate> others = other_island_candidates(result);
   const double factor = normalisation_factor(result);
   const std::size_t tries =
       std::min(others.size(), static_cast<std::size_t>(params.max_verified_entries - 1));
@@ -387,14 +399,9 @@ void LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> q
   if (!result.detection() || !params.localise_in_island ||
       params.geometric_check == GeometricCheck::kNone)
     return;
-  std::vector<detail::Candidate> others;
-  for (const detail::Candidate& c : candidates)
-    if (c.entry >= result.island_first && c.entry <= result.island_last && c.entry != result.match)
-      others.push_back(c);
+  std::vector<detail::Candidate> others = other_island_candidates(result);
   if (others.empty()) return;
-  std::stable_sort(
-      others.begin(), others.end(),
-      [](const detail::Candidate& a, const detail::Candidate& b) { return a.score > b.score; });
+  others.resize(std::min(others.size(), static_cast<std::size_t>(params.max_localisation_checks)));
   const auto agreement = [&](const LoopResult& r) {
     const double share =
         vision::view_agreement(query_keypoints, query_descriptors, keypoints_of(r.match),
@@ -403,6 +410,7 @@ void LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> q
     return share;
   };
   const double accepted_agreement = agreement(result);
+  if (accepted_agreement >= kViewExplained) return;
   const double factor = normalisation_factor(result);
   LoopResult best = result;
   for (const detail::Candidate& c : others) {
@@ -410,7 +418,8 @@ void LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> q
     attempt.match = c.entry;
     attempt.normalised_score = c.score;
     attempt.score = c.score * factor;
-    verify(attempt, query_keypoints, query_descriptors, query_nodes, before_temporal_consistency);
+    verify(attempt, query_keypoints, query_descriptors, query_nodes, before_temporal_consistency,
+           best.inliers.size());
     if (attempt.detection() && attempt.inliers.size() > best.inliers.size() &&
         agreement(attempt) > accepted_agreement)
       best = std::move(attempt);

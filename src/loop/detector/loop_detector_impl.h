@@ -81,6 +81,7 @@ struct LoopDetector::Impl {
   std::vector<QueryResult> query(const BowVector& bow, LoopResult& result) const;
   bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
   void select_island(const std::vector<QueryResult>& found, LoopResult& result);
+  std::vector<detail::Candidate> other_island_candidates(const LoopResult& result) const;
   // LoopDetectorParams::localise_in_island, for a loop `result` accepted by
   // verify() with before_temporal_consistency.
   void localise_in_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
@@ -89,17 +90,19 @@ struct LoopDetector::Impl {
   void verify_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
                      const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
   // before_temporal_consistency: only a strong fit (min_uncorroborated_inliers) is a loop.
+  // rival_inliers > 0 (localisation): only a fit with more inliers counts, and
+  // the direct index alone is tried.
   void verify(LoopResult& result, Span<vision::Keypoint> query_keypoints,
               const DescriptorView& query_descriptors, const FeatureVector& query_nodes,
-              bool before_temporal_consistency = false) const;
+              bool before_temporal_consistency = false, std::size_t rival_inliers = 0) const;
   // Stage 6 for one pair: correspondences, then the fundamental matrix.
   // strong_fit_only: only a fit of min_uncorroborated_inliers inliers counts,
   // so a direct-index fit with fewer is retried by exhaustive matching as an
-  // inconsistent one is.
+  // inconsistent one is. rival_inliers: as verify()'s.
   TrailCheck geometric_check(Span<vision::Keypoint> query_keypoints,
                              const DescriptorView& query_descriptors,
                              const FeatureVector& query_nodes, EntryId match,
-                             bool strong_fit_only = false) const;
+                             bool strong_fit_only = false, std::size_t rival_inliers = 0) const;
   LoopResult run(Span<vision::Keypoint> keypoints, const DescriptorView& descriptors);
   // Record in `trail` the islands of `candidates` (short ones too), and the
   // temporal test of the chosen island (the window's state before it).

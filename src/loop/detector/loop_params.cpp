@@ -130,6 +130,7 @@ const std::vector<Field>& fields() {
       number_field("corroboration_horizon", &P::corroboration_horizon),
       number_field("corroboration_pace_tolerance", &P::corroboration_pace_tolerance),
       bool_field("localise_in_island", &P::localise_in_island),
+      number_field("max_localisation_checks", &P::max_localisation_checks),
   };
   return table;
 }
@@ -241,6 +242,7 @@ void LoopDetectorParams::validate() const {
   in_range("max_distance_between_queries", max_distance_between_queries, 1, kMaxFrameDistance);
   in_range("direct_index_levels", direct_index_levels, 0, kMaxDirectIndexLevels);
   in_range("max_verified_entries", max_verified_entries, 1, kMaxVerifiedEntries);
+  in_range("max_localisation_checks", max_localisation_checks, 1, kMaxLocalisationChecks);
   in_range("max_neighbor_ratio", max_neighbor_ratio, 0, 1, true);
   in_range("max_match_distance", max_match_distance, 0, 1);
   // A fundamental matrix needs 8 points.

@@ -103,6 +103,7 @@ std::vector<double> default_sweep_values(const std::string& parameter) {
       {"max_distance_between_queries", {1, 2, 3, 4, 5, 8}},                           // 2
       {"direct_index_levels", {0, 1, 2, 3, 4, 5, 6}},                                 // 2
       {"max_verified_entries", {1, 2, 3, 4, 5, 10}},                                  // 1
+      {"max_localisation_checks", {1, 2, 4, 8, 16, 32, 50}},                          // 8
       {"max_neighbor_ratio", {0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 1}},   // 0.6
       {"max_match_distance", {0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.75, 1}},        // 1
       {"min_inliers", {8, 10, 12, 14, 16, 20, 25, 30, 40, 50}},                       // 12
