@@ -39,9 +39,18 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
   // for min_uncorroborated_inliers where it otherwise asks for min_inliers.
   const bool strong_only =
       check.before_temporal_consistency && params.min_uncorroborated_inliers > params.min_inliers;
-  const double min_inliers = strong_only ? params.min_uncorroborated_inliers : params.min_inliers;
-  const std::string parameter = strong_only ? "min_uncorroborated_inliers" : "min_inliers";
-  const std::string note = strong_only ? "before temporal consistency" : "";
+  // A localisation check must beat the accepted fit's inliers.
+  const bool rival = check.rival_inliers > 0;
+  const double min_inliers =
+      rival ? std::max<double>(params.min_inliers, static_cast<double>(check.rival_inliers) + 1)
+      : strong_only ? params.min_uncorroborated_inliers
+                    : params.min_inliers;
+  const std::string parameter = rival         ? "the accepted fit's inliers + 1"
+                                : strong_only ? "min_uncorroborated_inliers"
+                                              : "min_inliers";
+  const std::string note = rival         ? "localisation"
+                           : strong_only ? "before temporal consistency"
+                                         : "";
   std::vector<CheckMeasure> measures;
   // check_fundamental fits nothing below max(8, min_inliers) correspondences.
   const double needed = std::max(8.0, min_inliers);
@@ -117,6 +126,7 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
     list += (list.empty() ? "" : ", ") + to_string(m);
   }
   if (measures.front().passed) text += ", " + std::to_string(check.fit.inliers.size()) + " inliers";
+  if (check.view_agreement >= 0) text += ", view agreement " + number(check.view_agreement);
   if (check.fit.consistent && check.corroboration.needed) {
     const std::string weak = std::to_string(check.fit.inliers.size()) +
                              " inliers < min_uncorroborated_inliers " +
@@ -214,7 +224,7 @@ class Explainer {
     if (matches_.empty())
       lost(ExplainedStage::kNoGroundTruth, "the query has no ground-truth loop");
     if (e_.false_loop) {
-      const TrailCheck* accepted = t_.checks.empty() ? nullptr : &t_.checks.back();
+      const TrailCheck* accepted = accepted_check();
       const bool alone = accepted != nullptr && accepted->before_temporal_consistency;
       std::string why = "false loop with " + std::to_string(t_.match) + " (η " +
                         number(accepted != nullptr ? accepted->normalised_score : 0) +
@@ -432,6 +442,14 @@ class Explainer {
     explain_checks();
   }
 
+  // The check that accepted the loop: the last accepted check of its match
+  // (localisation checks may follow it); null without one.
+  const TrailCheck* accepted_check() const {
+    for (auto c = t_.checks.rbegin(); c != t_.checks.rend(); ++c)
+      if (static_cast<long long>(c->entry) == t_.match && c->accepted()) return &*c;
+    return nullptr;
+  }
+
   void explain_checks() {
     if (p_.geometric_check == GeometricCheck::kNone) {
       step("no geometric check (geometric_check none): the island's best entry is the loop");
@@ -456,10 +474,9 @@ class Explainer {
       return;
     }
     if (t_.checks.empty()) return;
-    const TrailCheck& last = t_.checks.back();
-    if (last.accepted())
+    if (const TrailCheck* accepted = accepted_check())
       lost(ExplainedStage::kWrongLoopAccepted,
-           "entry " + std::to_string(last.entry) +
+           "entry " + std::to_string(accepted->entry) +
                " of the chosen island (not a ground-truth match) passed the geometric check");
     else
       lost(ExplainedStage::kOtherEntryVerified,
