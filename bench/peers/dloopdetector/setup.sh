@@ -35,7 +35,7 @@ dld_setup() {
     format=bytes
     [ $descriptor = brief ] && format=bits
     [ -f "$work/${descriptor}_default.yml.gz" ] ||
-      "$binbow" convert "$repo/data/vocab/${descriptor}_default.bbw" \
+      "$binbow" -q convert "$repo/data/vocab/${descriptor}_default.bbw" \
         "$work/${descriptor}_default.yml.gz" --descriptors $format >/dev/null
   done
 }
