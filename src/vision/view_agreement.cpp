@@ -1,5 +1,8 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
 
 #include <opencv2/calib3d.hpp>
 
@@ -13,56 +16,52 @@ namespace {
 // RANSAC threshold of the homography of the inliers, pixels (point to point).
 constexpr double kHomographyTolerance = 3.0;
 
-// Keypoints of one image bucketed in square cells of kReappearanceRadius, so
-// that the features near a point are found without visiting every feature.
-class KeypointGrid {
+// The finite keypoints of one image sorted by x, so that the features near a
+// point are found by a binary search, whatever the coordinates (a grid sized
+// by their extent would let one stray coordinate decide its memory).
+class KeypointIndex {
  public:
-  explicit KeypointGrid(Span<Keypoint> keypoints) : keypoints_(keypoints) {
-    min_x_ = max_x_ = keypoints[0].x;
-    min_y_ = max_y_ = keypoints[0].y;
-    for (const Keypoint& k : keypoints) {
-      min_x_ = std::min(min_x_, k.x);
-      max_x_ = std::max(max_x_, k.x);
-      min_y_ = std::min(min_y_, k.y);
-      max_y_ = std::max(max_y_, k.y);
-    }
-    columns_ = cell(max_x_ - min_x_) + 1;
-    rows_ = cell(max_y_ - min_y_) + 1;
-    cells_.resize(static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_));
+  explicit KeypointIndex(Span<Keypoint> keypoints) : keypoints_(keypoints) {
     for (std::size_t i = 0; i < keypoints.size(); ++i)
-      cells_[static_cast<std::size_t>(cell(keypoints[i].y - min_y_)) * columns_ +
-             static_cast<std::size_t>(cell(keypoints[i].x - min_x_))]
-          .push_back(static_cast<std::uint32_t>(i));
+      if (std::isfinite(keypoints[i].x) && std::isfinite(keypoints[i].y))
+        by_x_.push_back(static_cast<std::uint32_t>(i));
+    std::sort(by_x_.begin(), by_x_.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return keypoints[a].x < keypoints[b].x; });
+    for (const std::uint32_t i : by_x_) {
+      min_y_ = std::min(min_y_, static_cast<double>(keypoints[i].y));
+      max_y_ = std::max(max_y_, static_cast<double>(keypoints[i].y));
+    }
   }
 
+  // Whether (x, y) lies within the keypoints' bounding box (false for
+  // non-finite coordinates).
   bool covers(double x, double y) const {
-    return x >= min_x_ && x <= max_x_ && y >= min_y_ && y <= max_y_;
+    return !by_x_.empty() && x >= keypoints_[by_x_.front()].x && x <= keypoints_[by_x_.back()].x &&
+           y >= min_y_ && y <= max_y_;
   }
 
   // Calls visit(i) for every keypoint within kReappearanceRadius of (x, y).
   template <typename Visit>
   void near(double x, double y, Visit visit) const {
-    const int cx = cell(x - min_x_), cy = cell(y - min_y_);
-    for (int row = std::max(cy - 1, 0); row <= std::min(cy + 1, rows_ - 1); ++row)
-      for (int column = std::max(cx - 1, 0); column <= std::min(cx + 1, columns_ - 1); ++column)
-        for (const std::uint32_t i :
-             cells_[static_cast<std::size_t>(row) * columns_ + static_cast<std::size_t>(column)])
-          if (std::hypot(keypoints_[i].x - x, keypoints_[i].y - y) <= kReappearanceRadius) visit(i);
+    auto it =
+        std::lower_bound(by_x_.begin(), by_x_.end(), x - kReappearanceRadius,
+                         [&](std::uint32_t i, double value) { return keypoints_[i].x < value; });
+    for (; it != by_x_.end() && keypoints_[*it].x <= x + kReappearanceRadius; ++it)
+      if (std::hypot(keypoints_[*it].x - x, keypoints_[*it].y - y) <= kReappearanceRadius)
+        visit(*it);
   }
 
  private:
-  static int cell(double offset) { return static_cast<int>(offset / kReappearanceRadius); }
-
   Span<Keypoint> keypoints_;
-  float min_x_ = 0, max_x_ = 0, min_y_ = 0, max_y_ = 0;
-  int columns_ = 1, rows_ = 1;
-  std::vector<std::vector<std::uint32_t>> cells_;
+  std::vector<std::uint32_t> by_x_;
+  double min_y_ = std::numeric_limits<double>::infinity();
+  double max_y_ = -std::numeric_limits<double>::infinity();
 };
 
 // The share of `from`'s features that `mapping` puts within `to`'s extent
 // and that find a similar feature of `to` there.
 double reappearing_share(Span<Keypoint> from, const DescriptorView& from_descriptors,
-                         const KeypointGrid& to, const DescriptorView& to_descriptors,
+                         const KeypointIndex& to, const DescriptorView& to_descriptors,
                          const cv::Matx33d& mapping) {
   const auto max_bits = static_cast<std::uint32_t>(kReappearanceBits * 8.0 *
                                                    static_cast<double>(to_descriptors.code_size));
@@ -96,8 +95,11 @@ double view_agreement(Span<Keypoint> first, const DescriptorView& first_descript
   if (points < 4) return 0;
   std::vector<cv::Point2d> p, q;
   for (const Correspondence& c : inliers) {
-    p.emplace_back(first[c.first].x, first[c.first].y);
-    q.emplace_back(second[c.second].x, second[c.second].y);
+    const Keypoint &a = first[c.first], &b = second[c.second];
+    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y))
+      return 0;
+    p.emplace_back(a.x, a.y);
+    q.emplace_back(b.x, b.y);
   }
   const cv::Mat found = cv::findHomography(p, q, cv::RANSAC, kHomographyTolerance);
   if (found.rows != 3 || found.cols != 3) return 0;
@@ -106,10 +108,10 @@ double view_agreement(Span<Keypoint> first, const DescriptorView& first_descript
   bool invertible = false;
   const cv::Matx33d inverse = homography.inv(cv::DECOMP_LU, &invertible);
   if (!invertible) return 0;
-  const KeypointGrid first_grid(first), second_grid(second);
+  const KeypointIndex first_index(first), second_index(second);
   return std::min(
-      reappearing_share(first, first_descriptors, second_grid, second_descriptors, homography),
-      reappearing_share(second, second_descriptors, first_grid, first_descriptors, inverse));
+      reappearing_share(first, first_descriptors, second_index, second_descriptors, homography),
+      reappearing_share(second, second_descriptors, first_index, first_descriptors, inverse));
 }
 
 }  // namespace binbow::vision

@@ -5,7 +5,9 @@
 // repeated objects.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -102,6 +104,21 @@ TEST(ViewAgreement, FewerThanFourDistinctInliersAgreeOnNothing) {
   p.inliers.resize(3);
   EXPECT_EQ(agreement(p), 0.0);
   p.inliers.clear();
+  EXPECT_EQ(agreement(p), 0.0);
+}
+
+TEST(ViewAgreement, StrayCoordinatesChangeNothingElse) {
+  // A caller's keypoints far away or not numbers at all (LoopDetector takes
+  // any): they land nowhere, and cost no memory by their distance.
+  Pair p = views(true);
+  std::mt19937 rng(3);
+  p.second.add(1e30, 5, random_code(rng));
+  p.second.add(std::nan(""), 5, random_code(rng));
+  p.first.add(-1e30, std::numeric_limits<double>::infinity(), random_code(rng));
+  EXPECT_GT(agreement(p), 0.85);
+  // Inliers that are not numbers give no homography.
+  p.inliers.push_back({static_cast<std::uint32_t>(p.first.keypoints.size() - 1),
+                       static_cast<std::uint32_t>(p.second.keypoints.size() - 1)});
   EXPECT_EQ(agreement(p), 0.0);
 }
 
