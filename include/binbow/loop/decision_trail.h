@@ -18,6 +18,8 @@
 
 namespace binbow::loop {
 
+struct LoopDetectorParams;
+
 enum class LoopStatus : std::uint8_t;
 
 // One database result of the query (pipeline stage 2), whether or not it
@@ -84,6 +86,12 @@ struct TrailCheck {
   // vision::view_agreement() of the fit, measured for the accepted fit and
   // the checks that localisation compares with it; -1 when not measured.
   double view_agreement = -1;
+
+  // The inliers the check asked of its fit under `params`: min_inliers;
+  // before temporal consistency at least min_uncorroborated_inliers; in
+  // localisation more than rival_inliers. The detector asks it and the
+  // explanations measure by it.
+  int inliers_asked(const LoopDetectorParams& params) const;
 
   // Whether the check let the entry through: a consistent fit, corroborated when needed.
   bool accepted() const noexcept {

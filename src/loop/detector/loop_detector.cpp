@@ -75,6 +75,14 @@ DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
   return options;
 }
 
+int TrailCheck::inliers_asked(const LoopDetectorParams& params) const {
+  int asked = params.min_inliers;
+  if (before_temporal_consistency) asked = std::max(asked, params.min_uncorroborated_inliers);
+  if (rival_inliers > 0)
+    asked = static_cast<int>(std::max(static_cast<std::size_t>(asked), rival_inliers + 1));
+  return asked;
+}
+
 TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
                                                const DescriptorView& query_descriptors,
                                                const FeatureVector& query_nodes, EntryId match,
@@ -82,11 +90,12 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
                                                std::size_t rival_inliers) const {
   TrailCheck out;
   out.entry = match;
+  out.before_temporal_consistency = strong_fit_only;
   out.rival_inliers = rival_inliers;
   const Span<Keypoint> match_keypoints = keypoints_of(match);
   const DescriptorView match_descriptors = descriptors_of(match);
   FundamentalCheckParams check;
-  check.min_inliers = params.min_inliers;
+  check.min_inliers = out.inliers_asked(params);
   check.max_reprojection_error = params.max_reprojection_error;
   check.confidence = params.ransac_confidence;
   check.max_iterations = params.max_ransac_iterations;
@@ -94,11 +103,6 @@ TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
   check.min_inlier_ratio = params.min_inlier_ratio;
   check.min_inlier_spread = params.min_inlier_spread;
   check.reject_degenerate = params.reject_degenerate_fits;
-  if (strong_fit_only)
-    check.min_inliers = std::max(check.min_inliers, params.min_uncorroborated_inliers);
-  if (rival_inliers > 0)
-    check.min_inliers =
-        static_cast<int>(std::max(static_cast<std::size_t>(check.min_inliers), rival_inliers + 1));
 
   MatchOptions matching;
   matching.max_neighbor_ratio = params.max_neighbor_ratio;
@@ -154,7 +158,6 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
     corroborate(result, query_keypoints, query_descriptors, query_nodes);
   check.normalised_score = result.normalised_score;
   check.corroboration = result.corroboration;
-  check.before_temporal_consistency = before_temporal_consistency;
   const bool accepted = check.accepted();
   result.status = accepted                      ? LoopStatus::kLoopDetected
                   : before_temporal_consistency ? LoopStatus::kNoTemporalConsistency
@@ -370,6 +373,16 @@ std::vector<detail::Candidate> LoopDetector::Impl::other_island_candidates(
   return others;
 }
 
+// result with another candidate of its island as its match, to be verified.
+LoopResult LoopDetector::Impl::with_match(const LoopResult& result,
+                                          const detail::Candidate& candidate) const {
+  LoopResult attempt = result;
+  attempt.match = candidate.entry;
+  attempt.normalised_score = candidate.score;
+  attempt.score = candidate.score * normalisation_factor(result);
+  return attempt;
+}
+
 // Section V-D for the island's best entry, then (max_verified_entries > 1)
 // its other entries, best η first: the island, not its best entry, is what
 // passed the temporal test, and its other images show the same place.
@@ -379,14 +392,10 @@ void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_
   verify(result, query_keypoints, query_descriptors, query_nodes);
   if (result.detection() || params.max_verified_entries <= 1) return;
   const std::vector<detail::Candidate> others = other_island_candidates(result);
-  const double factor = normalisation_factor(result);
   const std::size_t tries =
       std::min(others.size(), static_cast<std::size_t>(params.max_verified_entries - 1));
   for (std::size_t i = 0; i < tries && !result.detection(); ++i) {
-    LoopResult attempt = result;
-    attempt.match = others[i].entry;
-    attempt.normalised_score = others[i].score;
-    attempt.score = others[i].score * factor;
+    LoopResult attempt = with_match(result, others[i]);
     verify(attempt, query_keypoints, query_descriptors, query_nodes);
     if (attempt.detection()) result = std::move(attempt);
   }
@@ -411,13 +420,9 @@ void LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> q
   };
   const double accepted_agreement = agreement(result);
   if (accepted_agreement >= kViewExplained) return;
-  const double factor = normalisation_factor(result);
   LoopResult best = result;
   for (const detail::Candidate& c : others) {
-    LoopResult attempt = result;
-    attempt.match = c.entry;
-    attempt.normalised_score = c.score;
-    attempt.score = c.score * factor;
+    LoopResult attempt = with_match(result, c);
     verify(attempt, query_keypoints, query_descriptors, query_nodes, before_temporal_consistency,
            best.inliers.size());
     if (attempt.detection() && attempt.inliers.size() > best.inliers.size() &&

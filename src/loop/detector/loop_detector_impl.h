@@ -82,6 +82,7 @@ struct LoopDetector::Impl {
   bool passes_normalisation(const std::vector<QueryResult>& found, LoopResult& result) const;
   void select_island(const std::vector<QueryResult>& found, LoopResult& result);
   std::vector<detail::Candidate> other_island_candidates(const LoopResult& result) const;
+  LoopResult with_match(const LoopResult& result, const detail::Candidate& candidate) const;
   // LoopDetectorParams::localise_in_island, for a loop `result` accepted by
   // verify() with before_temporal_consistency.
   void localise_in_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,

@@ -35,16 +35,12 @@ std::string matches_text(const std::vector<std::uint32_t>& matches) {
 std::vector<CheckMeasure> check_measures(const TrailCheck& check,
                                          const LoopDetectorParams& params) {
   const double correspondences = static_cast<double>(check.correspondences.size());
-  // Before temporal consistency only a strong fit counts, so the check asks
-  // for min_uncorroborated_inliers where it otherwise asks for min_inliers.
+  // Before temporal consistency only a strong fit counts, and a localisation
+  // check must beat the accepted fit: the check asks for that many inliers.
+  const bool rival = check.rival_inliers > 0;
   const bool strong_only =
       check.before_temporal_consistency && params.min_uncorroborated_inliers > params.min_inliers;
-  // A localisation check must beat the accepted fit's inliers.
-  const bool rival = check.rival_inliers > 0;
-  const double min_inliers =
-      rival ? std::max<double>(params.min_inliers, static_cast<double>(check.rival_inliers) + 1)
-      : strong_only ? params.min_uncorroborated_inliers
-                    : params.min_inliers;
+  const double min_inliers = check.inliers_asked(params);
   const std::string parameter = rival         ? "the accepted fit's inliers + 1"
                                 : strong_only ? "min_uncorroborated_inliers"
                                               : "min_inliers";
