@@ -174,6 +174,9 @@ const std::vector<Field>& fields() {
       int_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers,
                 "Fewer inliers need corroboration (a loop just before, or a neighbour of the "
                 "match), [0, 10000] (0: off)."),
+      real_field("min_uncorroborated_view_agreement", &P::min_uncorroborated_view_agreement,
+                 "A fit with min_uncorroborated_inliers inliers or more that explains less than\n"
+                 "this share of both views (view agreement) needs corroboration, [0, 1] (0: off)."),
       bool_field("strong_fits_skip_temporal_check", &P::strong_fits_skip_temporal_check,
                  "A fit with min_uncorroborated_inliers inliers or more is a loop without\n"
                  "temporal consistency."),

@@ -220,6 +220,7 @@ class LoopDetectorParams:
     min_inlier_spread: float
     reject_degenerate_fits: bool
     min_uncorroborated_inliers: int
+    min_uncorroborated_view_agreement: float
     strong_fits_skip_temporal_check: bool
     corroboration_distance: int
     corroboration_horizon: int

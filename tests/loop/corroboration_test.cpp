@@ -122,7 +122,9 @@ std::vector<LoopResult> sample_results(const LoopDetectorParams& params) {
 
 // What accepted each loop is recorded: on rtabmap-samples every loop says
 // which evidence took it, and a loop with min_uncorroborated_inliers or more
-// stands on its fit, which determines the fundamental matrix or a homography.
+// stands on its fit, which determines the fundamental matrix or a homography,
+// unless the fit explains little of the views and was corroborated
+// (min_uncorroborated_view_agreement).
 TEST(Corroboration, EveryLoopSaysWhatAcceptedIt) {
   std::size_t loops = 0, weak = 0;
   for (const LoopResult& r : sample_results(LoopDetectorParams{})) {
@@ -134,7 +136,7 @@ TEST(Corroboration, EveryLoopSaysWhatAcceptedIt) {
     EXPECT_TRUE(r.fit_evidence == vision::FitEvidence::kFundamental ||
                 r.fit_evidence == vision::FitEvidence::kHomography)
         << "query " << r.query << ": " << vision::to_string(r.fit_evidence);
-    if (r.inliers.size() >= 16) {
+    if (r.inliers.size() >= 16 && !r.corroboration.view_unexplained) {
       EXPECT_EQ(r.accepted_by, LoopEvidence::kStrongFit) << "query " << r.query;
     } else {
       ++weak;
@@ -169,6 +171,11 @@ TEST(Corroboration, AStrongFitIsSoughtByExhaustiveMatchingBeforeTheTemporalTest)
       if (!check.before_temporal_consistency || check.rival_inliers > 0) continue;
       ++early;
       const std::string text = describe_check(check, detector.params());
+      // A strong fit explaining little of the views: min_uncorroborated_view_agreement.
+      if (check.corroboration.view_unexplained) {
+        EXPECT_NE(text.find("min_uncorroborated_view_agreement 0.5"), std::string::npos) << text;
+        continue;
+      }
       EXPECT_NE(text.find("min_uncorroborated_inliers 16"), std::string::npos)
           << "query " << trail.query << ": " << text;
       if (check.accepted()) continue;
@@ -182,7 +189,8 @@ TEST(Corroboration, AStrongFitIsSoughtByExhaustiveMatchingBeforeTheTemporalTest)
 
 // With a temporal test no query can pass (k beyond the sequence), only fits
 // of min_uncorroborated_inliers inliers or more are loops, each accepted on
-// its own; without strong_fits_skip_temporal_check there is none.
+// its own or, when it explains little of the views, with a second image;
+// without strong_fits_skip_temporal_check there is none.
 TEST(Corroboration, StrongFitsSkipTheTemporalTestWeakOnesDoNot) {
   LoopDetectorParams params;
   params.k = 1000;
@@ -193,7 +201,10 @@ TEST(Corroboration, StrongFitsSkipTheTemporalTestWeakOnesDoNot) {
     for (const LoopResult& r : sample_results(params)) {
       if (!r.detection()) continue;
       ++found;
-      EXPECT_EQ(r.accepted_by, LoopEvidence::kStrongFitAlone) << "query " << r.query;
+      if (r.corroboration.view_unexplained)
+        EXPECT_TRUE(r.corroboration.corroborated) << "query " << r.query;
+      else
+        EXPECT_EQ(r.accepted_by, LoopEvidence::kStrongFitAlone) << "query " << r.query;
       EXPECT_GE(r.inliers.size(), 16u) << "query " << r.query;
       EXPECT_LE(r.consistent_queries, params.k);
     }

@@ -39,6 +39,8 @@ TEST(LoopDetectorParams, DefaultsAreThePapers) {
   EXPECT_DOUBLE_EQ(p.min_inlier_ratio, 0);
   EXPECT_DOUBLE_EQ(p.min_inlier_spread, 0);
   EXPECT_EQ(p.min_uncorroborated_inliers, 16);
+  EXPECT_DOUBLE_EQ(p.min_uncorroborated_view_agreement, kViewExplained);
+  EXPECT_DOUBLE_EQ(kViewExplained, 0.5);
   EXPECT_TRUE(p.reject_degenerate_fits);
   EXPECT_TRUE(p.strong_fits_skip_temporal_check);
   EXPECT_EQ(p.corroboration_distance, 4);
@@ -68,6 +70,7 @@ TEST(LoopDetectorParams, JsonRoundTrip) {
   p.min_inlier_ratio = 0.5;
   p.min_inlier_spread = 0.25;
   p.min_uncorroborated_inliers = 0;
+  p.min_uncorroborated_view_agreement = 0.25;
   p.reject_degenerate_fits = false;
   p.strong_fits_skip_temporal_check = false;
   p.corroboration_distance = 7;
@@ -229,6 +232,8 @@ TEST(LoopDetectorParams, EveryFieldIsBoundedBothWays) {
         Bound{"min_inlier_spread", 1, 1.5},
         Bound{"min_inlier_spread", 0, -0.1},
         Bound{"min_uncorroborated_inliers", 0, -1},
+        Bound{"min_uncorroborated_view_agreement", 1, 1.5},
+        Bound{"min_uncorroborated_view_agreement", 0, -0.1},
         Bound{"corroboration_distance", 1, 0},
         Bound{"corroboration_horizon", 1, 0},
         Bound{"corroboration_pace_tolerance", 1, 1.5},

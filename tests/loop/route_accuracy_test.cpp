@@ -42,7 +42,11 @@ void expect_no_false_loop(const test::TempDir& dir, const std::string& descripto
   EXPECT_GT(std::stoul(line_value(out, "true positives")), 0u) << out;
   EXPECT_EQ(line_value(out, "false positives"), "0") << out;
   // A revisit of 5 to 12 frames cannot wait for k + 1 consistent queries:
-  // recall stays near 0.33 unless strong fits skip the temporal test.
+  // recall stays near 0.33 unless strong fits skip the temporal test. Under
+  // the revisits' blur and noise many of those fits explain little of the
+  // views and stand on a neighbour of the match that fits the same query
+  // features (min_uncorroborated_view_agreement); rejecting them would bring
+  // ORB's recall down to 0.42.
   EXPECT_GE(std::stod(line_value(out, "recall")), 0.5) << out;
   // Each false loop, for whoever looks into it: the frames, score and inliers.
   const GroundTruth truth = GroundTruth::load(truth_file);

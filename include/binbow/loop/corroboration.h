@@ -1,5 +1,6 @@
-// How a loop with few inliers was corroborated (LoopDetectorParams::
-// min_uncorroborated_inliers), as LoopResult and the decision trail report it.
+// How a loop with a weak fit was corroborated (LoopDetectorParams::
+// min_uncorroborated_inliers, min_uncorroborated_view_agreement), as
+// LoopResult and the decision trail report it.
 #pragma once
 
 #include <cstddef>
@@ -21,8 +22,16 @@ namespace binbow::loop {
 // features of the query: the neighbouring frame sees what the match sees, so
 // a fit on the same query features repeats the match's evidence (a
 // repeated structure fits both alike) instead of adding to it.
+//
+// A fit of min_uncorroborated_inliers inliers or more needs corroboration
+// too when it explains less of the two views than
+// min_uncorroborated_view_agreement (view_unexplained; the agreement is the
+// trail's TrailCheck::view_agreement), before or after the temporal test.
+// Its neighbour corroborates with any consistent, non-degenerate fit: what
+// it must show is a second viewpoint on the place, not other features.
 struct LoopCorroboration {
   bool needed = false;
+  bool view_unexplained = false;
   bool has_previous_loop = false;
   EntryId previous_loop_query = 0;
   EntryId previous_loop_match = 0;
@@ -41,9 +50,10 @@ enum class LoopEvidence : std::uint8_t {
   kStrongFit,  // a fit with min_uncorroborated_inliers inliers or more (or the rule off)
   // Such a fit before the temporal test passed (strong_fits_skip_temporal_check).
   kStrongFitAlone,
-  kNearPreviousLoop,  // a weak fit near the latest loop (corroboration_distance)
-  kRevisitPace,       // a weak fit at the revisit's pace since the latest loop
-  kNeighbour,         // a weak fit that a neighbour of the match corroborates with other features
+  // A weak fit (few inliers, or explaining little of the views), corroborated:
+  kNearPreviousLoop,  // near the latest loop (corroboration_distance)
+  kRevisitPace,       // at the revisit's pace since the latest loop
+  kNeighbour,         // by a neighbour of the match, with other features
 };
 
 // "none", "unchecked", "strong-fit", "strong-fit-alone", "near-previous-loop",

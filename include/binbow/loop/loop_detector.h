@@ -11,8 +11,9 @@
 //   4. the best entry of that island and the query have a fundamental matrix
 //      with enough RANSAC inliers (geometric consistency; binbow's default
 //      estimator is MAGSAC++, see LoopDetectorParams), and a weak one (fewer
-//      than min_uncorroborated_inliers) follows a loop near the same match or
-//      is confirmed by a neighbour of the match.
+//      than min_uncorroborated_inliers, or one that explains little of the
+//      two views) follows a loop near the same match or is confirmed by a
+//      neighbour of the match.
 #pragma once
 
 #include <cstddef>
@@ -60,7 +61,8 @@ inline constexpr int kMaxDirectIndexLevels = 16;     // direct_index_levels
 inline constexpr int kMaxVerifiedEntries = 10;       // max_verified_entries
 inline constexpr int kMaxLocalisationChecks = 50;    // max_localisation_checks
 // A fit whose vision::view_agreement() reaches this explains most of both
-// views: localise_in_island leaves such a loop where it is.
+// views: localise_in_island leaves such a loop where it is, and it is the
+// default of min_uncorroborated_view_agreement.
 inline constexpr double kViewExplained = 0.5;
 inline constexpr int kMaxMinInliers = 10'000;         // min_inliers
 inline constexpr double kMinReprojectionError = 0.1;  // pixels
@@ -73,13 +75,14 @@ inline constexpr std::size_t kMaxLoopParamsFileBytes = std::size_t{1} << 20;  //
 // except binbow's measured departures, each switchable back:
 // accept_single_candidate, exhaustive_fallback, skip_featureless_frames,
 // fundamental_estimator, reject_degenerate_fits, min_uncorroborated_inliers,
-// strong_fits_skip_temporal_check and localise_in_island
-// (docs/loop-detection.md has their effect).
+// min_uncorroborated_view_agreement, strong_fits_skip_temporal_check and
+// localise_in_island (docs/loop-detection.md has their effect).
 // The DLoopDetector rules: {"accept_single_candidate": true,
 // "exhaustive_fallback": false, "skip_featureless_frames": false,
 // "fundamental_estimator": "ransac", "reject_degenerate_fits": false,
 // "min_uncorroborated_inliers": 0, "strong_fits_skip_temporal_check": false,
-// "localise_in_island": false}.
+// "localise_in_island": false} (min_uncorroborated_view_agreement applies
+// only with min_uncorroborated_inliers: without it every fit stands alone).
 // for_frequency() scales the frame-count parameters to another image rate as
 // DLoopDetector does. Every number must be finite.
 struct LoopDetectorParams {
@@ -189,13 +192,32 @@ struct LoopDetectorParams {
   // Loops with at least this many inliers stand alone. 0: off (the paper).
   // [0, 1e4]
   int min_uncorroborated_inliers = 16;
+  // binbow's addition, on by default: a fit of min_uncorroborated_inliers
+  // inliers or more stands alone only when it also explains this share of
+  // both views (vision::view_agreement(), after localise_in_island). One that
+  // explains less, before or after the temporal test, is a loop only when a
+  // second image agrees: the latest loop is near it or at the revisit's pace
+  // (as for a weak fit), or a neighbour of the match (match − 1 or match + 1)
+  // passes the geometric check with the query, on any of its features. Along
+  // a corridor of repeated doors and lamps, the image at the next door along
+  // can fit a dozen or two of the query's features, as many as a true
+  // revisit, but nothing else of either view; when the images of the
+  // query's own spot cannot show more (occluded, blurred), localisation has
+  // nothing to move such a fit to. That alignment of repeated objects holds
+  // from one viewpoint, where a place really seen again is seen from the
+  // frames beside the match too (revisits under blur and noise often
+  // explain less than half of the view, and their neighbours fit). 0: off;
+  // off too when min_uncorroborated_inliers is 0. [0, 1]
+  double min_uncorroborated_view_agreement = kViewExplained;
   // binbow's addition, on by default: when the temporal test fails, the best
   // island's best entry is checked anyway, and a fit with at least
   // min_uncorroborated_inliers inliers (non-degenerate) is a loop on its
-  // own. Temporal consistency is corroboration by the next queries; a fit
-  // that needs no corroboration needs none of them either, and a revisit of
-  // a few frames cannot wait for k + 1 of them. Weaker fits still need the
-  // temporal test. Off when min_uncorroborated_inliers is 0.
+  // own, or with a second image when it explains little of the views
+  // (min_uncorroborated_view_agreement). Temporal consistency is
+  // corroboration by the next queries; a fit that needs no corroboration
+  // needs none of them either, and a revisit of a few frames cannot wait for
+  // k + 1 of them. Weaker fits still need the temporal test. Off when
+  // min_uncorroborated_inliers is 0.
   bool strong_fits_skip_temporal_check = true;
   // binbow's addition, on by default: a loop whose fit explains less than
   // most of the two views (vision::view_agreement() below kViewExplained)

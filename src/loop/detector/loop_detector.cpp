@@ -163,15 +163,18 @@ void LoopDetector::Impl::verify(LoopResult& result, Span<Keypoint> query_keypoin
                   : before_temporal_consistency ? LoopStatus::kNoTemporalConsistency
                                                 : LoopStatus::kNoGeometricConsistency;
   result.accepted_by = LoopEvidence::kNone;
-  if (accepted) {
-    const LoopCorroboration& c = result.corroboration;
+  if (accepted)
     result.accepted_by = before_temporal_consistency ? LoopEvidence::kStrongFitAlone
-                         : !c.needed                 ? LoopEvidence::kStrongFit
-                         : c.neighbour_checked       ? LoopEvidence::kNeighbour
-                         : c.previous_loop_at_pace   ? LoopEvidence::kRevisitPace
-                                                     : LoopEvidence::kNearPreviousLoop;
-  }
+                         : !result.corroboration.needed
+                             ? LoopEvidence::kStrongFit
+                             : detail::corroborating_evidence(result.corroboration);
   if (trail != nullptr) trail->checks.push_back(std::move(check));
+}
+
+LoopEvidence detail::corroborating_evidence(const LoopCorroboration& c) {
+  return c.neighbour_checked       ? LoopEvidence::kNeighbour
+         : c.previous_loop_at_pace ? LoopEvidence::kRevisitPace
+                                   : LoopEvidence::kNearPreviousLoop;
 }
 
 // Near the latest loop, or else at the revisit's pace since it: the match
@@ -219,7 +222,8 @@ void LoopDetector::Impl::corroborate(LoopResult& result, Span<Keypoint> query_ke
       result.corroboration.neighbour_shared_inliers = shared;
     }
     result.corroboration.neighbour_checked = true;
-    result.corroboration.corroborated = fit.consistent && 2 * shared <= fit.inliers.size();
+    result.corroboration.corroborated = fit.consistent && (result.corroboration.view_unexplained ||
+                                                           2 * shared <= fit.inliers.size());
   }
 }
 
@@ -401,38 +405,90 @@ void LoopDetector::Impl::verify_island(LoopResult& result, Span<Keypoint> query_
   }
 }
 
-void LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> query_keypoints,
-                                            const DescriptorView& query_descriptors,
-                                            const FeatureVector& query_nodes,
-                                            bool before_temporal_consistency) const {
-  if (!result.detection() || !params.localise_in_island ||
-      params.geometric_check == GeometricCheck::kNone)
-    return;
-  std::vector<detail::Candidate> others = other_island_candidates(result);
-  if (others.empty()) return;
-  others.resize(std::min(others.size(), static_cast<std::size_t>(params.max_localisation_checks)));
-  const auto agreement = [&](const LoopResult& r) {
-    const double share =
-        vision::view_agreement(query_keypoints, query_descriptors, keypoints_of(r.match),
-                               descriptors_of(r.match), r.inliers);
-    if (trail != nullptr) trail->checks.back().view_agreement = share;
-    return share;
+double LoopDetector::Impl::measure_view_agreement(const LoopResult& result,
+                                                  Span<Keypoint> query_keypoints,
+                                                  const DescriptorView& query_descriptors) const {
+  const double share =
+      vision::view_agreement(query_keypoints, query_descriptors, keypoints_of(result.match),
+                             descriptors_of(result.match), result.inliers);
+  if (trail != nullptr) trail->checks.back().view_agreement = share;
+  return share;
+}
+
+void LoopDetector::Impl::examine_view(LoopResult& result, Span<Keypoint> query_keypoints,
+                                      const DescriptorView& query_descriptors,
+                                      const FeatureVector& query_nodes,
+                                      bool before_temporal_consistency) const {
+  if (!result.detection() || params.geometric_check == GeometricCheck::kNone) return;
+  const auto strong = [&] {
+    return result.accepted_by == LoopEvidence::kStrongFit ||
+           result.accepted_by == LoopEvidence::kStrongFitAlone;
   };
-  const double accepted_agreement = agreement(result);
-  if (accepted_agreement >= kViewExplained) return;
+  // Without min_uncorroborated_inliers every fit stands alone (the paper).
+  const bool asks_explained_views =
+      params.min_uncorroborated_inliers > 0 && params.min_uncorroborated_view_agreement > 0;
+  std::vector<detail::Candidate> others;
+  if (params.localise_in_island) others = other_island_candidates(result);
+  if (!(asks_explained_views && strong()) && others.empty()) return;
+  double agreement = measure_view_agreement(result, query_keypoints, query_descriptors);
+  if (agreement < kViewExplained && !others.empty())
+    agreement = localise_in_island(result, query_keypoints, query_descriptors, query_nodes,
+                                   before_temporal_consistency, others, agreement);
+  if (asks_explained_views && strong() && agreement < params.min_uncorroborated_view_agreement)
+    corroborate_unexplained_view(result, query_keypoints, query_descriptors, query_nodes,
+                                 before_temporal_consistency);
+}
+
+double LoopDetector::Impl::localise_in_island(LoopResult& result, Span<Keypoint> query_keypoints,
+                                              const DescriptorView& query_descriptors,
+                                              const FeatureVector& query_nodes,
+                                              bool before_temporal_consistency,
+                                              std::vector<detail::Candidate> others,
+                                              double accepted_agreement) const {
+  others.resize(std::min(others.size(), static_cast<std::size_t>(params.max_localisation_checks)));
   LoopResult best = result;
+  double best_agreement = accepted_agreement;
   for (const detail::Candidate& c : others) {
     LoopResult attempt = with_match(result, c);
     verify(attempt, query_keypoints, query_descriptors, query_nodes, before_temporal_consistency,
            best.inliers.size());
-    if (attempt.detection() && attempt.inliers.size() > best.inliers.size() &&
-        agreement(attempt) > accepted_agreement)
-      best = std::move(attempt);
+    if (!attempt.detection() || attempt.inliers.size() <= best.inliers.size()) continue;
+    const double agreement = measure_view_agreement(attempt, query_keypoints, query_descriptors);
+    if (agreement <= accepted_agreement) continue;
+    best = std::move(attempt);
+    best_agreement = agreement;
   }
-  if (best.match == result.match) return;
+  if (best.match == result.match) return accepted_agreement;
   best.localised = true;
   best.localised_from = result.match;
   result = std::move(best);
+  return best_agreement;
+}
+
+// The accepted strong fit explains too little of the views to stand alone:
+// corroborated, or no loop. The trail's check of the match (the last one
+// accepted) records the outcome.
+void LoopDetector::Impl::corroborate_unexplained_view(LoopResult& result,
+                                                      Span<Keypoint> query_keypoints,
+                                                      const DescriptorView& query_descriptors,
+                                                      const FeatureVector& query_nodes,
+                                                      bool before_temporal_consistency) const {
+  TrailCheck* check = nullptr;
+  if (trail != nullptr)
+    for (auto c = trail->checks.rbegin(); c != trail->checks.rend() && check == nullptr; ++c)
+      if (c->entry == result.match && c->accepted()) check = &*c;
+  result.corroboration = {};
+  result.corroboration.needed = true;
+  result.corroboration.view_unexplained = true;
+  corroborate(result, query_keypoints, query_descriptors, query_nodes);
+  if (check != nullptr) check->corroboration = result.corroboration;
+  if (result.corroboration.corroborated) {
+    result.accepted_by = detail::corroborating_evidence(result.corroboration);
+    return;
+  }
+  result.status = before_temporal_consistency ? LoopStatus::kNoTemporalConsistency
+                                              : LoopStatus::kNoGeometricConsistency;
+  result.accepted_by = LoopEvidence::kNone;
 }
 
 void LoopDetector::Impl::record_islands() {
@@ -537,7 +593,7 @@ LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorVie
       result.times.islands_ms = milliseconds_since(clock);
       if (result.status == LoopStatus::kNoGeometricConsistency) {
         d.verify_island(result, keypoints, descriptors, nodes);
-        d.localise_in_island(result, keypoints, descriptors, nodes, false);
+        d.examine_view(result, keypoints, descriptors, nodes, false);
         result.times.verification_ms = milliseconds_since(clock);
       } else if (result.status == LoopStatus::kNoTemporalConsistency &&
                  d.params.strong_fits_skip_temporal_check &&
@@ -545,7 +601,7 @@ LoopResult LoopDetector::Impl::run(Span<Keypoint> keypoints, const DescriptorVie
                  d.params.geometric_check != GeometricCheck::kNone) {
         LoopResult strong = result;
         d.verify(strong, keypoints, descriptors, nodes, true);
-        d.localise_in_island(strong, keypoints, descriptors, nodes, true);
+        d.examine_view(strong, keypoints, descriptors, nodes, true);
         if (strong.detection()) result = std::move(strong);
         result.times.verification_ms = milliseconds_since(clock);
       }

@@ -21,6 +21,8 @@ DatabaseOptions database_options(const LoopDetectorParams& params);
 std::size_t shared_query_features(Span<vision::Keypoint> query_keypoints,
                                   const std::vector<vision::Correspondence>& first,
                                   const std::vector<vision::Correspondence>& second);
+// What accepted a weak fit that `c` corroborated.
+LoopEvidence corroborating_evidence(const LoopCorroboration& c);
 }  // namespace detail
 
 struct LoopDetector::Impl {
@@ -83,11 +85,28 @@ struct LoopDetector::Impl {
   void select_island(const std::vector<QueryResult>& found, LoopResult& result);
   std::vector<detail::Candidate> other_island_candidates(const LoopResult& result) const;
   LoopResult with_match(const LoopResult& result, const detail::Candidate& candidate) const;
-  // LoopDetectorParams::localise_in_island, for a loop `result` accepted by
-  // verify() with before_temporal_consistency.
-  void localise_in_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
-                          const DescriptorView& query_descriptors, const FeatureVector& query_nodes,
-                          bool before_temporal_consistency) const;
+  // For a loop `result` accepted by verify() with before_temporal_consistency:
+  // its fit's view agreement, when localisation or
+  // min_uncorroborated_view_agreement asks for it; localise_in_island; then
+  // corroborate_unexplained_view for a strong fit that explains too little.
+  void examine_view(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                    const DescriptorView& query_descriptors, const FeatureVector& query_nodes,
+                    bool before_temporal_consistency) const;
+  // vision::view_agreement() of result's fit, recorded in the trail's last check.
+  double measure_view_agreement(const LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                                const DescriptorView& query_descriptors) const;
+  // LoopDetectorParams::localise_in_island over `others` (the island's other
+  // candidates, best η first) for a loop whose fit has accepted_agreement;
+  // returns the agreement of the fit it ends with.
+  double localise_in_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                            const DescriptorView& query_descriptors,
+                            const FeatureVector& query_nodes, bool before_temporal_consistency,
+                            std::vector<detail::Candidate> others, double accepted_agreement) const;
+  // LoopDetectorParams::min_uncorroborated_view_agreement.
+  void corroborate_unexplained_view(LoopResult& result, Span<vision::Keypoint> query_keypoints,
+                                    const DescriptorView& query_descriptors,
+                                    const FeatureVector& query_nodes,
+                                    bool before_temporal_consistency) const;
   void verify_island(LoopResult& result, Span<vision::Keypoint> query_keypoints,
                      const DescriptorView& query_descriptors, const FeatureVector& query_nodes);
   // before_temporal_consistency: only a strong fit (min_uncorroborated_inliers) is a loop.

@@ -125,6 +125,7 @@ const std::vector<Field>& fields() {
       number_field("min_inlier_spread", &P::min_inlier_spread),
       bool_field("reject_degenerate_fits", &P::reject_degenerate_fits),
       number_field("min_uncorroborated_inliers", &P::min_uncorroborated_inliers),
+      number_field("min_uncorroborated_view_agreement", &P::min_uncorroborated_view_agreement),
       bool_field("strong_fits_skip_temporal_check", &P::strong_fits_skip_temporal_check),
       number_field("corroboration_distance", &P::corroboration_distance),
       number_field("corroboration_horizon", &P::corroboration_horizon),
@@ -254,6 +255,7 @@ void LoopDetectorParams::validate() const {
   in_range("min_inlier_ratio", min_inlier_ratio, 0, 1);
   in_range("min_inlier_spread", min_inlier_spread, 0, 1);
   in_range("min_uncorroborated_inliers", min_uncorroborated_inliers, 0, kMaxMinInliers);
+  in_range("min_uncorroborated_view_agreement", min_uncorroborated_view_agreement, 0, 1);
   in_range("corroboration_distance", corroboration_distance, 1, kMaxFrameDistance);
   in_range("corroboration_horizon", corroboration_horizon, 1, kMaxFrameDistance);
   in_range("corroboration_pace_tolerance", corroboration_pace_tolerance, 0, 1);

@@ -86,12 +86,17 @@ std::vector<CheckMeasure> check_measures(const TrailCheck& check,
                                 : narrow.empty()      ? ", which determine it"
                                                       : narrow)});
   }
-  // Fewer inliers pass only when corroborated (by the latest loop or a neighbour).
+  // Fewer inliers, or a fit explaining less of the views, pass only when
+  // corroborated (by the latest loop or a neighbour).
   const double alone = params.min_uncorroborated_inliers;
   if (alone > 0 && !check.before_temporal_consistency && check.fit.consistent &&
       (check.corroboration.needed || inliers >= alone))
     measures.push_back({"inliers alone", inliers, "min_uncorroborated_inliers", alone,
-                        !check.corroboration.needed || check.corroboration.corroborated, true, ""});
+                        inliers >= alone || check.corroboration.corroborated, true, ""});
+  if (check.corroboration.view_unexplained)
+    measures.push_back(
+        {"view agreement alone", check.view_agreement, "min_uncorroborated_view_agreement",
+         params.min_uncorroborated_view_agreement, check.corroboration.corroborated, false, ""});
   return measures;
 }
 
@@ -124,10 +129,14 @@ std::string describe_check(const TrailCheck& check, const LoopDetectorParams& pa
   if (measures.front().passed) text += ", " + std::to_string(check.fit.inliers.size()) + " inliers";
   if (check.view_agreement >= 0) text += ", view agreement " + number(check.view_agreement);
   if (check.fit.consistent && check.corroboration.needed) {
-    const std::string weak = std::to_string(check.fit.inliers.size()) +
-                             " inliers < min_uncorroborated_inliers " +
-                             std::to_string(params.min_uncorroborated_inliers);
     const LoopCorroboration& c = check.corroboration;
+    const std::string weak = c.view_unexplained
+                                 ? "view agreement " + number(check.view_agreement) +
+                                       " < min_uncorroborated_view_agreement " +
+                                       number(params.min_uncorroborated_view_agreement)
+                                 : std::to_string(check.fit.inliers.size()) +
+                                       " inliers < min_uncorroborated_inliers " +
+                                       std::to_string(params.min_uncorroborated_inliers);
     const std::string near =
         "within corroboration_distance " + std::to_string(params.corroboration_distance);
     const std::string pace = "at the revisit's pace: corroboration_horizon " +

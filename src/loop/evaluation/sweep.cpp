@@ -113,6 +113,7 @@ std::vector<double> default_sweep_values(const std::string& parameter) {
       {"min_inlier_ratio", {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}},                        // 0
       {"min_inlier_spread", {0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4}},                     // 0
       {"min_uncorroborated_inliers", {0, 13, 14, 16, 18, 20, 25, 30}},                // 16
+      {"min_uncorroborated_view_agreement", {0, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7}},       // 0.5
       {"corroboration_distance", {1, 2, 3, 4, 5, 6, 8, 12}},                          // 4
       {"corroboration_horizon", {1, 4, 6, 8, 10, 12, 16, 20}},                        // 10
       {"corroboration_pace_tolerance", {0, 0.1, 0.2, 0.25, 0.3, 0.5, 0.75, 1}},       // 0.25
