@@ -18,9 +18,8 @@
 #include "binbow/loop/decision_trail.h"
 #include "binbow/loop/ground_truth.h"
 #include "binbow/loop/loop_detector.h"
-#include "binbow/vision/features.h"
 #include "binbow/vision/geometric_check.h"
-#include "binbow/vision/image_source.h"
+#include "loop/trailed_run.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -42,25 +41,10 @@ void write_upscaled_frames(const test::TempDir& dir) {
   }
 }
 
-struct Detection {
-  std::vector<LoopResult> results;
-  std::vector<LoopDecisionTrail> trails;  // one per frame
-};
-
-Detection detect(const std::string& folder, bool localise) {
+test::TrailedRun detect(const std::string& folder, bool localise) {
   LoopDetectorParams params;
   params.localise_in_island = localise;
-  LoopDetector detector(Vocabulary::load(test::source_path("data/vocab/brief_default.bbw")),
-                        params);
-  const auto extractor = vision::make_extractor("brief");
-  vision::ImageSource source({folder});
-  vision::Frame frame;
-  Detection run;
-  while (source.next(frame)) {
-    run.trails.emplace_back();
-    run.results.push_back(detector.process(extractor->extract(frame.image), run.trails.back()));
-  }
-  return run;
+  return test::run_with_trails(folder, "brief", params);
 }
 
 class Localisation : public ::testing::Test {
@@ -70,28 +54,25 @@ class Localisation : public ::testing::Test {
         new GroundTruth(GroundTruth::load(test::shared_data("rtabmap-samples/samples_GT.bmp")));
     const test::TempDir dir;
     write_upscaled_frames(dir);
-    without_ = new Detection(detect(dir.path(), false));
-    with_ = new Detection(detect(dir.path(), true));
+    without_ = new test::TrailedRun(detect(dir.path(), false));
+    with_ = new test::TrailedRun(detect(dir.path(), true));
   }
   static void TearDownTestSuite() {
     delete truth_;
     delete without_;
     delete with_;
   }
-  static std::size_t true_loops(const Detection& run) {
+  static std::size_t true_loops(const test::TrailedRun& run) {
     std::size_t n = 0;
     for (const LoopResult& r : run.results) n += r.detection() && truth_->is_loop(r.query, r.match);
     return n;
   }
-  static std::vector<std::pair<EntryId, EntryId>> false_loops(const Detection& run) {
-    std::vector<std::pair<EntryId, EntryId>> out;
-    for (const LoopResult& r : run.results)
-      if (r.detection() && !truth_->is_loop(r.query, r.match)) out.emplace_back(r.query, r.match);
-    return out;
+  static std::vector<std::pair<EntryId, EntryId>> false_loops(const test::TrailedRun& run) {
+    return test::false_loops(run, *truth_);
   }
   static inline GroundTruth* truth_ = nullptr;
-  static inline Detection* without_ = nullptr;
-  static inline Detection* with_ = nullptr;
+  static inline test::TrailedRun* without_ = nullptr;
+  static inline test::TrailedRun* with_ = nullptr;
 };
 
 TEST_F(Localisation, WithoutItTheImageAFewMetresBackIsAFalseLoop) {

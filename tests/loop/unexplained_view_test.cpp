@@ -22,8 +22,7 @@
 #include "binbow/loop/explanation.h"
 #include "binbow/loop/ground_truth.h"
 #include "binbow/loop/loop_detector.h"
-#include "binbow/vision/features.h"
-#include "binbow/vision/image_source.h"
+#include "loop/trailed_run.h"
 #include "support/test_support.h"
 
 namespace binbow::loop {
@@ -69,24 +68,6 @@ void write_occluded_frames(const test::TempDir& dir) {
   }
 }
 
-struct Detection {
-  std::vector<LoopResult> results;
-  std::vector<LoopDecisionTrail> trails;  // one per frame
-};
-
-Detection detect(const std::string& folder, const LoopDetectorParams& params) {
-  LoopDetector detector(Vocabulary::load(test::source_path("data/vocab/orb_default.bbw")), params);
-  const auto extractor = vision::make_extractor("orb");
-  vision::ImageSource source({folder});
-  vision::Frame frame;
-  Detection run;
-  while (source.next(frame)) {
-    run.trails.emplace_back();
-    run.results.push_back(detector.process(extractor->extract(frame.image), run.trails.back()));
-  }
-  return run;
-}
-
 LoopDetectorParams without_rule() {
   LoopDetectorParams params;
   params.min_uncorroborated_view_agreement = 0;
@@ -100,23 +81,20 @@ class UnexplainedView : public ::testing::Test {
         new GroundTruth(GroundTruth::load(test::shared_data("rtabmap-samples/samples_GT.bmp")));
     const test::TempDir dir;
     write_occluded_frames(dir);
-    without_ = new Detection(detect(dir.path(), without_rule()));
-    with_ = new Detection(detect(dir.path(), LoopDetectorParams{}));
+    without_ = new test::TrailedRun(test::run_with_trails(dir.path(), "orb", without_rule()));
+    with_ = new test::TrailedRun(test::run_with_trails(dir.path(), "orb", LoopDetectorParams{}));
   }
   static void TearDownTestSuite() {
     delete truth_;
     delete without_;
     delete with_;
   }
-  static std::vector<std::pair<EntryId, EntryId>> false_loops(const Detection& run) {
-    std::vector<std::pair<EntryId, EntryId>> out;
-    for (const LoopResult& r : run.results)
-      if (r.detection() && !truth_->is_loop(r.query, r.match)) out.emplace_back(r.query, r.match);
-    return out;
+  static std::vector<std::pair<EntryId, EntryId>> false_loops(const test::TrailedRun& run) {
+    return test::false_loops(run, *truth_);
   }
   static inline GroundTruth* truth_ = nullptr;
-  static inline Detection* without_ = nullptr;
-  static inline Detection* with_ = nullptr;
+  static inline test::TrailedRun* without_ = nullptr;
+  static inline test::TrailedRun* with_ = nullptr;
 };
 
 TEST_F(UnexplainedView, WithoutTheRuleTheNextDoorAlongIsAStrongFalseLoop) {
@@ -192,8 +170,8 @@ TEST_F(UnexplainedView, BeforeTheTemporalTestSuchAFitNeedsASecondImageToo) {
   off.min_uncorroborated_view_agreement = 0;
   const test::TempDir dir;
   write_occluded_frames(dir);
-  const Detection alone = detect(dir.path(), off);
-  const Detection ruled = detect(dir.path(), params);
+  const test::TrailedRun alone = test::run_with_trails(dir.path(), "orb", off);
+  const test::TrailedRun ruled = test::run_with_trails(dir.path(), "orb", params);
 
   const LoopResult& before = alone.results[kQuery];
   ASSERT_TRUE(before.detection()) << to_string(before.status);
