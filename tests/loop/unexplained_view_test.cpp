@@ -147,10 +147,9 @@ TEST_F(UnexplainedView, TrueRevisitsAreCorroboratedAndNoneIsLost) {
     true_with += truth_->is_loop(r.query, r.match);
     if (r.accepted_by == LoopEvidence::kStrongFit ||
         r.accepted_by == LoopEvidence::kStrongFitAlone) {
-      double agreement = -1;
-      for (const TrailCheck& c : with_->trails[i].checks)
-        if (c.entry == r.match && c.accepted()) agreement = c.view_agreement;
-      EXPECT_GE(agreement, kViewExplained) << "frame " << i;
+      const TrailCheck* check = with_->trails[i].accepted_check(r.match);
+      ASSERT_NE(check, nullptr) << "frame " << i;
+      EXPECT_GE(check->view_agreement, kViewExplained) << "frame " << i;
     } else {
       EXPECT_TRUE(r.corroboration.corroborated) << "frame " << i;
       corroborated += r.corroboration.view_unexplained;

@@ -53,7 +53,7 @@ enum class LoopEvidence : std::uint8_t {
   // A weak fit (few inliers, or explaining little of the views), corroborated:
   kNearPreviousLoop,  // near the latest loop (corroboration_distance)
   kRevisitPace,       // at the revisit's pace since the latest loop
-  kNeighbour,         // by a neighbour of the match, with other features
+  kNeighbour,         // by a neighbour of the match (on other features, when short of inliers)
 };
 
 // "none", "unchecked", "strong-fit", "strong-fit-alone", "near-previous-loop",

@@ -116,10 +116,16 @@ struct LoopDecisionTrail {
   bool temporal_tested = false;
   TrailTemporal temporal;
   // The checks run, in order: the island's best entry, then its other
-  // entries (max_verified_entries). Empty when no candidate got this far or
-  // with GeometricCheck::kNone.
+  // entries (max_verified_entries), then localisation's (localise_in_island).
+  // Empty when no candidate got this far or with GeometricCheck::kNone.
   std::vector<TrailCheck> checks;
   long long match = -1;  // LoopResult::match: the loop, or the best candidate; -1 none
+
+  // The last check that accepted `entry`; for the loop's match, the check
+  // that accepted the loop (localisation checks of other entries may follow
+  // it). Null when no check accepted it.
+  const TrailCheck* accepted_check(EntryId entry) const;
+  TrailCheck* accepted_check(EntryId entry);
 };
 
 }  // namespace binbow::loop

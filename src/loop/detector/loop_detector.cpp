@@ -75,14 +75,6 @@ DatabaseOptions detail::database_options(const LoopDetectorParams& params) {
   return options;
 }
 
-int TrailCheck::inliers_asked(const LoopDetectorParams& params) const {
-  int asked = params.min_inliers;
-  if (before_temporal_consistency) asked = std::max(asked, params.min_uncorroborated_inliers);
-  if (rival_inliers > 0)
-    asked = static_cast<int>(std::max(static_cast<std::size_t>(asked), rival_inliers + 1));
-  return asked;
-}
-
 TrailCheck LoopDetector::Impl::geometric_check(Span<Keypoint> query_keypoints,
                                                const DescriptorView& query_descriptors,
                                                const FeatureVector& query_nodes, EntryId match,
@@ -473,10 +465,7 @@ void LoopDetector::Impl::corroborate_unexplained_view(LoopResult& result,
                                                       const DescriptorView& query_descriptors,
                                                       const FeatureVector& query_nodes,
                                                       bool before_temporal_consistency) const {
-  TrailCheck* check = nullptr;
-  if (trail != nullptr)
-    for (auto c = trail->checks.rbegin(); c != trail->checks.rend() && check == nullptr; ++c)
-      if (c->entry == result.match && c->accepted()) check = &*c;
+  TrailCheck* check = trail != nullptr ? trail->accepted_check(result.match) : nullptr;
   result.corroboration = {};
   result.corroboration.needed = true;
   result.corroboration.view_unexplained = true;

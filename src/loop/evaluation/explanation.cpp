@@ -447,12 +447,9 @@ class Explainer {
     explain_checks();
   }
 
-  // The check that accepted the loop: the last accepted check of its match
-  // (localisation checks may follow it); null without one.
+  // The check that accepted the loop (or the wrong candidate); null without one.
   const TrailCheck* accepted_check() const {
-    for (auto c = t_.checks.rbegin(); c != t_.checks.rend(); ++c)
-      if (static_cast<long long>(c->entry) == t_.match && c->accepted()) return &*c;
-    return nullptr;
+    return t_.match < 0 ? nullptr : t_.accepted_check(static_cast<EntryId>(t_.match));
   }
 
   void explain_checks() {
