@@ -11,6 +11,7 @@
 
 #include "binbow/error.h"
 #include "binbow/loop/evaluation.h"
+#include "binbow/loop/false_loops.h"
 #include "binbow/loop/misses.h"
 #include "binbow/loop/run_record.h"
 #include "commands.h"
@@ -23,8 +24,8 @@
 namespace binbow::cli {
 namespace {
 
-void print_result(const loop::PrecisionRecall& result,
-                  const std::vector<loop::MissedLoop>& missed) {
+void print_result(const loop::PrecisionRecall& result, const std::vector<loop::MissedLoop>& missed,
+                  const std::vector<loop::FalseLoop>& wrong) {
   std::printf("precision: %.6g\nrecall: %.6g\n", result.precision, result.recall);
   std::printf(
       "detections: %zu\ntrue positives: %zu\nfalse positives: %zu\n"
@@ -34,6 +35,9 @@ void print_result(const loop::PrecisionRecall& result,
   std::printf("missed loops: %zu\n", missed.size());
   for (const loop::MissedLoop& miss : missed)
     std::printf("%s\n", loop::format_missed_loop(miss).c_str());
+  std::printf("false loops: %zu\n", wrong.size());
+  for (const loop::FalseLoop& loop : wrong)
+    std::printf("%s\n", loop::format_false_loop(loop).c_str());
   std::fflush(stdout);
 }
 
@@ -57,7 +61,8 @@ Json known(long long value) {
 // --json: the lines above and the sweep as one object (docs/cli.md).
 void print_json(const EvaluateArguments& arguments, const std::string& run_path,
                 const loop::LoopRun* run, const loop::PrecisionRecall& result,
-                const std::vector<loop::MissedLoop>& missed, const SweepOutcome& outcome) {
+                const std::vector<loop::MissedLoop>& missed,
+                const std::vector<loop::FalseLoop>& wrong, const SweepOutcome& outcome) {
   Json summary = {{"binbow_version", BINBOW_VERSION},
                   {"loops_csv", arguments.detections},
                   {"ground_truth", arguments.ground_truth},
@@ -75,6 +80,17 @@ void print_json(const EvaluateArguments& arguments, const std::string& run_path,
                       {"inliers", known(miss.inliers)},
                       {"features", known(miss.features)}});
   summary["missed_loops"] = misses;
+  Json false_loops = Json::array();
+  for (const loop::FalseLoop& loop : wrong)
+    false_loops.push_back(
+        {{"query", loop.query},
+         {"match", loop.match},
+         {"file", loop.file.empty() ? Json(nullptr) : Json(loop.file)},
+         {"inliers", loop.inliers},
+         {"score", loop.score},
+         {"accepted_by", loop.accepted_by.empty() ? Json(nullptr) : Json(loop.accepted_by)},
+         {"localised_from", known(loop.localised_from)}});
+  summary["false_loops"] = false_loops;
   if (arguments.sweep) {
     Json curve = Json::array();
     for (const loop::PrCurvePoint& point : outcome.curve) {
@@ -131,10 +147,13 @@ void run_evaluate(const EvaluateArguments& arguments) {
   const std::vector<loop::Detection> detections = loop::read_detections_csv(arguments.detections);
   loop::PrecisionRecall result;
   std::vector<loop::MissedLoop> missed;
+  std::vector<loop::FalseLoop> wrong;
+  const std::vector<loop::FrameRecord> no_record;
+  const std::vector<loop::FrameRecord>& frames = run ? run->frames : no_record;
   try {
     result = loop::evaluate_detections(detections, truth);
-    missed =
-        loop::missed_loops(run ? run->frames : std::vector<loop::FrameRecord>{}, detections, truth);
+    missed = loop::missed_loops(frames, detections, truth);
+    wrong = loop::false_loops(frames, detections, truth);
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(arguments.detections + ": " + e.what() + " (wrong --gt?)");
   }
@@ -143,7 +162,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
     std::fprintf(stderr, "warning: %zu frames were processed but the ground truth has %zu\n",
                  run->frames.size(), truth.frames());
 
-  if (!arguments.json) print_result(result, missed);
+  if (!arguments.json) print_result(result, missed, wrong);
 
   SweepOutcome outcome;
   if (arguments.sweep || !arguments.report.empty()) {
@@ -157,7 +176,7 @@ void run_evaluate(const EvaluateArguments& arguments) {
     evaluation.missed = missed;
     outcome = vision_commands().sweep_and_report(arguments, evaluation);
   }
-  if (arguments.json) print_json(arguments, run_path, run.get(), result, missed, outcome);
+  if (arguments.json) print_json(arguments, run_path, run.get(), result, missed, wrong, outcome);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// Explaining the misses: the missed-loop list against a hand-made ground
-// truth, the binned similarity matrix against scores computed pair by pair,
+// Explaining the misses: the missed-loop and false-loop lists against a
+// hand-made ground truth, the binned similarity matrix against scores computed pair by pair,
 // the precision–recall curve's drawing order, the sweepable parameters, the
 // run record's correspondences, and the report page that shows them.
 #include <gtest/gtest.h>
@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "binbow/error.h"
+#include "binbow/loop/false_loops.h"
 #include "binbow/loop/misses.h"
 #include "binbow/loop/report.h"
 #include "binbow/loop/run_record.h"
@@ -38,7 +39,15 @@ GroundTruth hand_made_truth() {
 
 FrameRecord frame(const std::string& status, long long match, std::size_t inliers,
                   long long correspondences) {
-  return {"f.png", status, match, 0.1, 0.5, inliers, correspondences};
+  FrameRecord record;
+  record.file = "f.png";
+  record.status = status;
+  record.match = match;
+  record.score = 0.1;
+  record.normalised_score = 0.5;
+  record.inliers = inliers;
+  record.correspondences = correspondences;
+  return record;
 }
 
 TEST(MissedLoops, EveryQueryWithAGroundTruthLoopAndNoTrueDetection) {
@@ -97,6 +106,39 @@ TEST(MissedLoops, WithoutARunRecordOnlyTheDetectionsAreKnown) {
   EXPECT_EQ(format_missed_loop(missed[2]),
             "  query 9: loop-detected, candidate 8 (wrong), correspondences unknown, 20 inliers");
   EXPECT_THROW(missed_loops({}, {{12, 0, "", "", 1, 12}}, truth), InvalidArgument);
+}
+
+TEST(FalseLoops, EveryDetectionTheGroundTruthDoesNotHoldWithItsEvidence) {
+  const GroundTruth truth = hand_made_truth();
+  std::vector<FrameRecord> frames(12, frame("no-database-results", -1, 0, 0));
+  frames[5] = frame("loop-detected", 0, 30, 40);
+  frames[5].accepted_by = "strong-fit";
+  frames[9] = frame("loop-detected", 8, 20, 25);
+  frames[9].accepted_by = "revisit-pace";
+  frames[10] = frame("loop-detected", 2, 18, 20);
+  frames[10].accepted_by = "strong-fit";
+  frames[10].localised_from = 3;
+  const std::vector<Detection> detections = {
+      {5, 0, "", "", 0.5, 30}, {9, 8, "q9", "", 0.4, 20}, {10, 2, "", "", 0.3, 18}};
+
+  const std::vector<FalseLoop> wrong = false_loops(frames, detections, truth);
+  ASSERT_EQ(wrong.size(), 2u);
+  EXPECT_EQ(wrong[0].query, 9u);
+  EXPECT_EQ(wrong[0].match, 8u);
+  EXPECT_EQ(wrong[0].file, "q9");
+  EXPECT_EQ(format_false_loop(wrong[0]),
+            "  query 9: match 8, 20 inliers, accepted by revisit-pace");
+  EXPECT_EQ(wrong[1].file, "f.png");
+  EXPECT_EQ(format_false_loop(wrong[1]),
+            "  query 10: match 2, 18 inliers, accepted by strong-fit, localised from 3");
+
+  // Without a record, or with one whose frame names another match (not this
+  // run's), the evidence is not known.
+  EXPECT_EQ(format_false_loop(false_loops({}, detections, truth)[0]),
+            "  query 9: match 8, 20 inliers, evidence unknown");
+  frames[9].match = 7;
+  EXPECT_EQ(false_loops(frames, detections, truth)[0].accepted_by, "");
+  EXPECT_THROW(false_loops({}, {{12, 0, "", "", 1, 12}}, truth), InvalidArgument);
 }
 
 Vocabulary small_vocabulary(std::mt19937_64& rng) {

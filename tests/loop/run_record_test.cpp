@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "binbow/error.h"
+#include "binbow/loop/corroboration.h"
 #include "binbow/loop/run_record.h"
 #include "support/test_support.h"
 
@@ -172,13 +173,15 @@ TEST(RunRecord, ValuesDetectLoopsNeverWritesAreRefused) {
       {"max_features", nlohmann::json::json_pointer("/max_features")},
       {"stride", nlohmann::json::json_pointer("/source/stride")},
       {"max_width", nlohmann::json::json_pointer("/source/max_width")},
-      {"status", nlohmann::json::json_pointer("/frames/1/status")}};
+      {"status", nlohmann::json::json_pointer("/frames/1/status")},
+      {"accepted_by", nlohmann::json::json_pointer("/frames/1/accepted_by")},
+      {"localised_from", nlohmann::json::json_pointer("/frames/1/localised_from")}};
   for (const auto& [field, pointer] : cases) {
     SCOPED_TRACE(field);
     nlohmann::json record = small_record();
-    record[pointer] = field == "status"   ? nlohmann::json("bogus")
-                      : field == "stride" ? nlohmann::json(0)
-                                          : nlohmann::json(-5);
+    record[pointer] = field == "status" || field == "accepted_by" ? nlohmann::json("bogus")
+                      : field == "stride"                         ? nlohmann::json(0)
+                                                                  : nlohmann::json(-5);
     write_text(path, record.dump());
     try {
       loop::LoopRun::load(path);
@@ -232,6 +235,52 @@ TEST(RunRecord, EvaluateRefusesALoopsFileThatIsNotTheRecords) {
   write_text(record, old.dump());
   EXPECT_EQ(test::run_cli(evaluate, &out), 0) << out;
   EXPECT_NE(out.find("warning: " + record), std::string::npos) << out;
+}
+
+// The record names what accepted every loop, and evaluate prints it for the
+// loops a ground truth calls false; records written before the key existed
+// leave the evidence unknown.
+TEST(RunRecord, EvaluateNamesTheEvidenceOfEachFalseLoop) {
+  const std::string samples = test::shared_data("rtabmap-samples/samples");
+  test::TempDir dir;
+  const std::string csv = dir.file("loops.csv");
+  const std::string record = csv + ".run.json";
+  std::string out;
+  ASSERT_EQ(test::run_cli(detect_loops_arguments(csv, samples), &out), 0) << out;
+  const loop::LoopRun run = loop::LoopRun::load(record);
+  std::size_t loops = 0;
+  for (const loop::FrameRecord& f : run.frames) {
+    SCOPED_TRACE(f.file);
+    loop::LoopEvidence evidence;
+    if (f.status == "loop-detected") {
+      ++loops;
+      ASSERT_TRUE(loop::parse_loop_evidence(f.accepted_by, &evidence)) << f.accepted_by;
+      EXPECT_NE(evidence, loop::LoopEvidence::kNone);
+    } else {
+      EXPECT_EQ(f.accepted_by, "");
+      EXPECT_EQ(f.localised_from, -1);
+    }
+  }
+  ASSERT_GT(loops, 10u);
+
+  // A ground truth that holds none of the loops: every one is false.
+  write_text(dir.file("none.txt"), "# 0-based\n1 0\n");
+  ASSERT_EQ(test::run_cli("evaluate --gt '" + dir.file("none.txt") + "' '" + csv + "'", &out), 0)
+      << out;
+  EXPECT_EQ(test::printed_number(out, "false loops"), double(loops)) << out;
+  const auto lines_with = [&](const std::string& text) {
+    std::size_t n = 0;
+    for (std::size_t at = out.find(text); at != std::string::npos; at = out.find(text, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(lines_with(" inliers, accepted by "), loops) << out;
+
+  nlohmann::json old = nlohmann::json::parse(read_text(record));
+  for (nlohmann::json& frame : old["frames"]) frame.erase("accepted_by");
+  write_text(record, old.dump());
+  ASSERT_EQ(test::run_cli("evaluate --gt '" + dir.file("none.txt") + "' '" + csv + "'", &out), 0)
+      << out;
+  EXPECT_EQ(lines_with(" inliers, evidence unknown"), loops) << out;
 }
 
 }  // namespace

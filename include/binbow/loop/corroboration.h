@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 #include "binbow/types.h"
 
@@ -59,5 +60,7 @@ enum class LoopEvidence : std::uint8_t {
 // "none", "unchecked", "strong-fit", "strong-fit-alone", "near-previous-loop",
 // "revisit-pace", "neighbour".
 const char* to_string(LoopEvidence evidence);
+// The evidence of that name; false (and *evidence untouched) for any other.
+bool parse_loop_evidence(const std::string& name, LoopEvidence* evidence);
 
 }  // namespace binbow::loop

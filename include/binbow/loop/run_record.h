@@ -37,6 +37,12 @@ struct FrameRecord {
   // -1 when not known (records written before the key existed).
   long long correspondences = -1;
   long long features = -1;  // keypoints of the frame (LoopResult::features); -1 not known
+  // Of a loop: what accepted it (to_string(LoopResult::accepted_by)), and the
+  // island entry localisation moved it from (LoopResult::localised_from; -1
+  // when it was not moved). Empty / -1 for other frames and in records
+  // written before the keys existed.
+  std::string accepted_by;
+  long long localised_from = -1;
 };
 
 // What the run record keeps of a frame.

@@ -32,26 +32,6 @@ double milliseconds_since(Clock::time_point& start) {
 
 }  // namespace
 
-const char* to_string(LoopEvidence evidence) {
-  switch (evidence) {
-    case LoopEvidence::kNone:
-      return "none";
-    case LoopEvidence::kUnchecked:
-      return "unchecked";
-    case LoopEvidence::kStrongFit:
-      return "strong-fit";
-    case LoopEvidence::kStrongFitAlone:
-      return "strong-fit-alone";
-    case LoopEvidence::kNearPreviousLoop:
-      return "near-previous-loop";
-    case LoopEvidence::kRevisitPace:
-      return "revisit-pace";
-    case LoopEvidence::kNeighbour:
-      return "neighbour";
-  }
-  return "?";
-}
-
 std::size_t detail::shared_query_features(Span<Keypoint> query_keypoints,
                                           const std::vector<Correspondence>& first,
                                           const std::vector<Correspondence>& second) {

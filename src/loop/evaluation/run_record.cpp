@@ -159,14 +159,17 @@ struct LoopRunFiles::Impl {
   void add_frame(const SequenceFrame& f) {
     const FrameRecord r = frame_record(f);
     // "correspondences" and "features" are new in version 1; readers treat them as optional.
-    const Json frame = {{"file", r.file},
-                        {"status", r.status},
-                        {"match", r.match},
-                        {"score", r.score},
-                        {"normalised_score", r.normalised_score},
-                        {"inliers", r.inliers},
-                        {"correspondences", r.correspondences},
-                        {"features", r.features}};
+    Json frame = {{"file", r.file},
+                  {"status", r.status},
+                  {"match", r.match},
+                  {"score", r.score},
+                  {"normalised_score", r.normalised_score},
+                  {"inliers", r.inliers},
+                  {"correspondences", r.correspondences},
+                  {"features", r.features}};
+    // Only loops carry these (newer than version 1's first records; optional to readers).
+    if (!r.accepted_by.empty()) frame["accepted_by"] = r.accepted_by;
+    if (r.localised_from >= 0) frame["localised_from"] = r.localised_from;
     write((frames == 0 ? "\n" : ",\n") + json_text(frame));
     ++frames;
     const std::array<double, kStageCount> stage_ms = f.stage_ms();
@@ -260,7 +263,9 @@ FrameRecord frame_record(const SequenceFrame& frame) {
           r.normalised_score,
           r.inliers.size(),
           static_cast<long long>(r.correspondences),
-          static_cast<long long>(r.features)};
+          static_cast<long long>(r.features),
+          r.detection() ? to_string(r.accepted_by) : "",
+          r.detection() && r.localised ? static_cast<long long>(r.localised_from) : -1};
 }
 
 std::vector<StageTiming> stage_timings(const std::vector<SequenceFrame>& frames) {
@@ -343,10 +348,29 @@ LoopRun LoopRun::load(const std::string& path) {
       if (!is_frame_status(status))
         throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
                                   " has the unknown status \"" + status + "\"");
-      run.frames.push_back(
-          {f.at("file").get<std::string>(), status, integer_at<long long>(f, "match", path),
-           f.at("score").get<double>(), f.at("normalised_score").get<double>(),
-           integer_at<std::size_t>(f, "inliers", path), correspondences, features});
+      FrameRecord frame;
+      frame.file = f.at("file").get<std::string>();
+      frame.status = status;
+      frame.match = integer_at<long long>(f, "match", path);
+      frame.score = f.at("score").get<double>();
+      frame.normalised_score = f.at("normalised_score").get<double>();
+      frame.inliers = integer_at<std::size_t>(f, "inliers", path);
+      frame.correspondences = correspondences;
+      frame.features = features;
+      if (f.contains("accepted_by")) {
+        frame.accepted_by = f.at("accepted_by").get<std::string>();
+        LoopEvidence evidence;
+        if (!parse_loop_evidence(frame.accepted_by, &evidence))
+          throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
+                                    " has the unknown accepted_by \"" + frame.accepted_by + "\"");
+      }
+      if (f.contains("localised_from")) {
+        frame.localised_from = integer_at<long long>(f, "localised_from", path);
+        if (frame.localised_from < 0)
+          throw FileError(path, "malformed run record: frame " + std::to_string(run.frames.size()) +
+                                    " has a negative localised_from");
+      }
+      run.frames.push_back(std::move(frame));
     }
     for (const Json& l : j.at("loops"))
       run.loops.push_back({integer_at<std::size_t>(l, "query", path),
