@@ -21,7 +21,8 @@
 # sets it (Parameters(rows, cols, 1), use_nss, alpha 0.3, k 1, GEOM_DI with
 # di_levels 2) and with its constructor's k 3; binbow with DLoopDetector's
 # rules (dld_rules_k1.json: k 1, no strong-fit or corroboration rules, no
-# degeneracy test, no exhaustive retry, OpenCV's RANSAC). ORB: cv::ORB with
+# degeneracy test, no exhaustive retry, OpenCV's RANSAC, only the island's
+# best entry checked, no localisation). ORB: cv::ORB with
 # binbow's settings on both sides; BRIEF: DLoopDetector's FAST + BRIEF256
 # pipeline (every FAST corner at threshold 20) against binbow's (the 300
 # strongest at threshold 10 whose tests lie inside the image). DLib seeds its
