@@ -46,9 +46,12 @@ class KeypointIndex {
     auto it =
         std::lower_bound(by_x_.begin(), by_x_.end(), x - kReappearanceRadius,
                          [&](std::uint32_t i, double value) { return keypoints_[i].x < value; });
-    for (; it != by_x_.end() && keypoints_[*it].x <= x + kReappearanceRadius; ++it)
-      if (std::hypot(keypoints_[*it].x - x, keypoints_[*it].y - y) <= kReappearanceRadius)
-        visit(*it);
+    // Squared distances: this runs for every feature of every loop, and std::hypot is slow.
+    constexpr double r2 = kReappearanceRadius * kReappearanceRadius;
+    for (; it != by_x_.end() && keypoints_[*it].x <= x + kReappearanceRadius; ++it) {
+      const double dx = keypoints_[*it].x - x, dy = keypoints_[*it].y - y;
+      if (dx * dx + dy * dy <= r2) visit(*it);
+    }
   }
 
  private:
