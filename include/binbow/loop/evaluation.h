@@ -24,6 +24,10 @@ struct PrecisionRecall {
   double recall = 0;
 };
 
+// Throws InvalidArgument naming the detection if its query or match is not
+// a frame of the ground truth (what every measure of detections checks first).
+void check_detection_inside(const Detection& detection, const GroundTruth& truth);
+
 // Throws InvalidArgument if a detection's index is outside the ground truth.
 // O(detections × log) time, memory linear in the detections.
 PrecisionRecall evaluate_detections(const std::vector<Detection>& detections,

@@ -405,7 +405,7 @@ void LoopDetector::Impl::examine_view(LoopResult& result, Span<Keypoint> query_k
   double agreement = measure_view_agreement(result, query_keypoints, query_descriptors);
   if (agreement < kViewExplained && !others.empty())
     agreement = localise_in_island(result, query_keypoints, query_descriptors, query_nodes,
-                                   before_temporal_consistency, others, agreement);
+                                   before_temporal_consistency, std::move(others), agreement);
   if (asks_explained_views && strong() && agreement < params.min_uncorroborated_view_agreement)
     corroborate_unexplained_view(result, query_keypoints, query_descriptors, query_nodes,
                                  before_temporal_consistency);

@@ -11,13 +11,6 @@
 namespace binbow::loop {
 namespace {
 
-void check_inside(const Detection& d, const GroundTruth& truth) {
-  if (d.query >= truth.frames() || d.match >= truth.frames())
-    throw InvalidArgument("detection (" + std::to_string(d.query) + ", " + std::to_string(d.match) +
-                          ") outside the ground truth's " + std::to_string(truth.frames()) +
-                          " frames");
-}
-
 // A true positive that also finds its query: the loop is with an earlier image.
 bool finds_query(const Detection& d, const GroundTruth& truth) {
   return d.match < d.query && truth.is_loop(d.query, d.match);
@@ -31,13 +24,20 @@ void set_ratios(PrecisionRecall& r) {
 
 }  // namespace
 
+void check_detection_inside(const Detection& d, const GroundTruth& truth) {
+  if (d.query >= truth.frames() || d.match >= truth.frames())
+    throw InvalidArgument("detection (" + std::to_string(d.query) + ", " + std::to_string(d.match) +
+                          ") outside the ground truth's " + std::to_string(truth.frames()) +
+                          " frames");
+}
+
 PrecisionRecall evaluate_detections(const std::vector<Detection>& detections,
                                     const GroundTruth& truth) {
   PrecisionRecall r;
   r.queries_with_loops = truth.queries_with_loops();
   std::vector<std::size_t> found;  // queries with a true positive, repeated
   for (const Detection& d : detections) {
-    check_inside(d, truth);
+    check_detection_inside(d, truth);
     ++r.detections;
     if (truth.is_loop(d.query, d.match)) {
       ++r.true_positives;
@@ -64,7 +64,7 @@ double recall_at_full_precision(const std::vector<PrCurvePoint>& curve) {
 std::vector<PrCurvePoint> pr_curve_by_score(const std::vector<Detection>& detections,
                                             const GroundTruth& truth) {
   for (const Detection& d : detections) {
-    check_inside(d, truth);
+    check_detection_inside(d, truth);
     if (std::isnan(d.score)) throw InvalidArgument("detection with a NaN score");
   }
   // Detections by decreasing score: lowering the threshold t adds them in this order.

@@ -1,6 +1,7 @@
 #include "binbow/loop/false_loops.h"
 
-#include "binbow/error.h"
+#include <string>
+#include <utility>
 
 namespace binbow::loop {
 
@@ -9,10 +10,7 @@ std::vector<FalseLoop> false_loops(const std::vector<FrameRecord>& frames,
                                    const GroundTruth& truth) {
   std::vector<FalseLoop> wrong;
   for (const Detection& d : detections) {
-    if (d.query >= truth.frames() || d.match >= truth.frames())
-      throw InvalidArgument("detection " + std::to_string(d.query) + " -> " +
-                            std::to_string(d.match) + " is outside the ground truth's " +
-                            std::to_string(truth.frames()) + " frames");
+    check_detection_inside(d, truth);
     if (truth.is_loop(d.query, d.match)) continue;
     FalseLoop loop{d.query, d.match, d.query_file, d.inliers, d.score, "", -1};
     // The record's frame is this detection's only if it names the same match.

@@ -2,7 +2,6 @@
 
 #include <unordered_map>
 
-#include "binbow/error.h"
 #include "binbow/loop/loop_detector.h"
 
 namespace binbow::loop {
@@ -14,10 +13,7 @@ std::vector<MissedLoop> missed_loops(const std::vector<FrameRecord>& frames,
   // detection. Keyed by query, so memory follows the detections, not the frames.
   std::unordered_map<std::size_t, const Detection*> outcome;
   for (const Detection& d : detections) {
-    if (d.query >= truth.frames() || d.match >= truth.frames())
-      throw InvalidArgument("detection " + std::to_string(d.query) + " -> " +
-                            std::to_string(d.match) + " is outside the ground truth's " +
-                            std::to_string(truth.frames()) + " frames");
+    check_detection_inside(d, truth);
     const Detection*& entry = outcome[d.query];
     if (entry == nullptr || truth.is_loop(d.query, d.match)) entry = &d;
   }
